@@ -1,0 +1,18 @@
+# Two targets do all the set-up on a fresh machine (see README.md).
+PY ?= python3
+
+.PHONY: demo test bench install
+
+install:
+	$(PY) -m pip install --quiet -e '.[test]'
+
+demo:
+	$(PY) -m pip install --quiet -e .
+	hapmotion demo -o out
+
+test:
+	bash scripts/setup-test-env
+	$(PY) -m pytest -q
+
+bench: install
+	$(PY) benchmarks/run_all.py

@@ -1,0 +1,133 @@
+"""The per-frame body frame (DESIGN.md section 2).
+
+Origin J_T (the torso centre, SPINE_NAVEL); ``right`` = shoulder_right - shoulder_left; ``up`` = neck - pelvis made
+orthogonal to ``right``; ``forward`` = ``up x right``, out of the performer's chest. For a performer facing +Z with
++Y up, right = -X, up = +Y and forward = +Z (right-handed: right x up = -forward).
+
+Everything the renderer decides (front/back, left/right, high/low) is decided in this frame, so a performer who
+turns around or a camera lying on its side changes nothing.
+
+The functions are compiled with numba so the renderer kernel and the vectorised helpers share one implementation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+_EPS = 1e-9
+
+
+@njit(cache=True)
+def body_axes(shoulder_left, shoulder_right, pelvis, neck, fallback):
+    """Orthonormal body axes for one frame.
+
+    Parameters
+    ----------
+    shoulder_left, shoulder_right, pelvis, neck:
+        ``(3,)`` world positions, metres.
+    fallback:
+        ``(3, 3)`` axes (rows right, up, forward) to return when this frame's are degenerate (shoulders on top of
+        each other, or the spine along the shoulder line).
+
+    Returns
+    -------
+    ``(3, 3)`` float64: rows ``right``, ``up``, ``forward`` as unit vectors in world coordinates, and a flag
+    (True when the fallback was used).
+    """
+    axes = np.empty((3, 3))
+    rx = shoulder_right[0] - shoulder_left[0]
+    ry = shoulder_right[1] - shoulder_left[1]
+    rz = shoulder_right[2] - shoulder_left[2]
+    rn = np.sqrt(rx * rx + ry * ry + rz * rz)
+    if not (rn > _EPS):
+        return fallback.copy(), True
+    rx /= rn
+    ry /= rn
+    rz /= rn
+    ux = neck[0] - pelvis[0]
+    uy = neck[1] - pelvis[1]
+    uz = neck[2] - pelvis[2]
+    d = ux * rx + uy * ry + uz * rz
+    ux -= d * rx
+    uy -= d * ry
+    uz -= d * rz
+    un = np.sqrt(ux * ux + uy * uy + uz * uz)
+    if not (un > _EPS):
+        return fallback.copy(), True
+    ux /= un
+    uy /= un
+    uz /= un
+    # forward = up x right
+    fx = uy * rz - uz * ry
+    fy = uz * rx - ux * rz
+    fz = ux * ry - uy * rx
+    axes[0, 0] = rx
+    axes[0, 1] = ry
+    axes[0, 2] = rz
+    axes[1, 0] = ux
+    axes[1, 1] = uy
+    axes[1, 2] = uz
+    axes[2, 0] = fx
+    axes[2, 1] = fy
+    axes[2, 2] = fz
+    return axes, False
+
+
+@njit(cache=True)
+def to_body(point, origin, axes):
+    """World point ``(3,)`` -> body coordinates ``(3,)`` (x right, y up, z forward), metres."""
+    out = np.empty(3)
+    dx = point[0] - origin[0]
+    dy = point[1] - origin[1]
+    dz = point[2] - origin[2]
+    for k in range(3):
+        out[k] = dx * axes[k, 0] + dy * axes[k, 1] + dz * axes[k, 2]
+    return out
+
+
+@njit(cache=True)
+def to_world(point, origin, axes):
+    """Body coordinates ``(3,)`` -> world point ``(3,)``, metres."""
+    out = np.empty(3)
+    for k in range(3):
+        out[k] = origin[k] + point[0] * axes[0, k] + point[1] * axes[1, k] + point[2] * axes[2, k]
+    return out
+
+
+DEFAULT_AXES = np.array([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+"""Axes used before any valid frame: a performer facing +Z, +Y up (right = -X)."""
+
+
+@njit(cache=True)
+def _frames_kernel(sl, sr, pelvis, neck, origin, out_axes, out_fallback):
+    prev = DEFAULT_AXES.copy()
+    for t in range(sl.shape[0]):
+        axes, used = body_axes(sl[t], sr[t], pelvis[t], neck[t], prev)
+        out_axes[t] = axes
+        out_fallback[t] = used
+        prev = axes
+
+
+def body_frames(motion) -> tuple[np.ndarray, np.ndarray]:
+    """Body frame of every frame of a :class:`~hapmotion.motion.Motion`.
+
+    Returns ``(origin (T, 3) world m, axes (T, 3, 3))`` where ``axes[t]`` rows are right, up, forward.
+    Degenerate frames reuse the previous frame's axes.
+    """
+    sl = np.ascontiguousarray(motion.joint("SHOULDER_LEFT"))
+    sr = np.ascontiguousarray(motion.joint("SHOULDER_RIGHT"))
+    pelvis = np.ascontiguousarray(motion.joint("PELVIS"))
+    neck = np.ascontiguousarray(motion.joint("NECK"))
+    origin = np.ascontiguousarray(motion.joint("SPINE_NAVEL"))
+    n = sl.shape[0]
+    axes = np.empty((n, 3, 3))
+    fallback = np.zeros(n, dtype=np.bool_)
+    _frames_kernel(sl, sr, pelvis, neck, origin, axes, fallback)
+    return origin.copy(), axes
+
+
+def points_to_body(points: np.ndarray, origin: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """World points ``(T, ..., 3)`` -> body coordinates with per-frame ``origin (T, 3)`` and ``axes (T, 3, 3)``."""
+    rel = points - origin.reshape((origin.shape[0],) + (1,) * (points.ndim - 2) + (3,))
+    return np.einsum("t...k,tjk->t...j", rel, axes)

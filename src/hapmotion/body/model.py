@@ -1,0 +1,135 @@
+"""BodyModel: the torso and vest surface, sized from the performer's skeleton.
+
+The vest is modelled as an elliptic cylinder around the spine in the body frame (x right, y up, z forward, origin
+J_T = SPINE_NAVEL), capped at the shoulder line (top) and a little above the pelvis (bottom)::
+
+        x^2/a^2 + z^2/b^2 <= 1,     y_bottom <= y <= y_top
+
+``a`` is half the shoulder width (the surface reaches the shoulder joints, where the sleeves sit) and ``b`` is
+0.3 x the shoulder width (about 11 cm for a 38 cm shoulder span: a typical adult chest half-depth). The vest rows
+run from just below the shoulder line (row 0, collar) to just above the pelvis (row 4, belly). Every number is
+relative to the performer's own skeleton, so a child-sized or a scaled skeleton gets a surface of its own size.
+
+These proportions are this project's choice (the paper gives no surface model; see docs/algorithm.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .frame import body_frames, points_to_body
+
+# Proportions relative to the shoulder width / torso length; see the module docstring.
+HALF_DEPTH_PER_SHOULDER_WIDTH = 0.30
+COLLAR_BELOW_SHOULDERS = 0.08  # row 0 sits this fraction of the torso length below the shoulder line
+BELLY_ABOVE_PELVIS = 0.12  # row 4 sits this fraction of the torso length above the pelvis
+SLEEVE_ZONE_DROP = 0.20  # side hits within this fraction of the torso length below the shoulder line reach a sleeve
+
+
+@dataclass(frozen=True)
+class BodyModel:
+    """Performer body dimensions in the body frame, metres.
+
+    Attributes
+    ----------
+    shoulder_width:
+        Distance between the shoulder joints.
+    shoulder_height:
+        Height of the shoulder midpoint above J_T (body y).
+    pelvis_height:
+        Height of the pelvis relative to J_T (usually negative).
+    """
+
+    shoulder_width: float = 0.38
+    shoulder_height: float = 0.33
+    pelvis_height: float = -0.12
+
+    @classmethod
+    def default(cls) -> "BodyModel":
+        """An average adult (used by live streams before the performer is known)."""
+        return cls()
+
+    @classmethod
+    def from_motion(cls, motion) -> "BodyModel":
+        """Median dimensions over all frames of a :class:`~hapmotion.motion.Motion`."""
+        origin, axes = body_frames(motion)
+        sl = motion.joint("SHOULDER_LEFT")
+        sr = motion.joint("SHOULDER_RIGHT")
+        pel = points_to_body(motion.joint("PELVIS")[:, None, :], origin, axes)[:, 0, :]
+        mid = points_to_body(((sl + sr) / 2)[:, None, :], origin, axes)[:, 0, :]
+        width = float(np.median(np.linalg.norm(sr - sl, axis=1)))
+        sh = float(np.median(mid[:, 1]))
+        ph = float(np.median(pel[:, 1]))
+        if not (width > 0.05):
+            width = cls.shoulder_width
+        if not (sh - ph > 0.1):  # a broken skeleton: keep the proportions of the default body
+            sh, ph = cls.shoulder_height, cls.pelvis_height
+        return cls(shoulder_width=width, shoulder_height=sh, pelvis_height=ph)
+
+    # ------------------------------------------------------------------ surface
+    @property
+    def half_width(self) -> float:
+        """``a``: half-width of the torso cylinder (x), metres."""
+        return 0.5 * self.shoulder_width
+
+    @property
+    def half_depth(self) -> float:
+        """``b``: half-depth of the torso cylinder (z), metres."""
+        return HALF_DEPTH_PER_SHOULDER_WIDTH * self.shoulder_width
+
+    @property
+    def torso_length(self) -> float:
+        return self.shoulder_height - self.pelvis_height
+
+    @property
+    def y_top(self) -> float:
+        """Top cap of the surface (shoulder line)."""
+        return self.shoulder_height
+
+    @property
+    def y_bottom(self) -> float:
+        """Bottom cap of the surface (just above the pelvis)."""
+        return self.pelvis_height + 0.5 * BELLY_ABOVE_PELVIS * self.torso_length
+
+    @property
+    def y_row_first(self) -> float:
+        """Height of vest row 0 (collar)."""
+        return self.shoulder_height - COLLAR_BELOW_SHOULDERS * self.torso_length
+
+    @property
+    def y_row_last(self) -> float:
+        """Height of the last vest row (belly)."""
+        return self.pelvis_height + BELLY_ABOVE_PELVIS * self.torso_length
+
+    @property
+    def y_sleeve_low(self) -> float:
+        """Side hits above this height (and far enough out) land on a shoulder sleeve."""
+        return self.shoulder_height - SLEEVE_ZONE_DROP * self.torso_length
+
+    @property
+    def target_point(self) -> np.ndarray:
+        """TP in body coordinates: centroid of the vest front and back centres and both shoulders (paper, Sec. 4)."""
+        y_mid = 0.5 * (self.y_row_first + self.y_row_last)
+        front = np.array([0.0, y_mid, self.half_depth])
+        back = np.array([0.0, y_mid, -self.half_depth])
+        left = np.array([-self.half_width, self.shoulder_height, 0.0])
+        right = np.array([self.half_width, self.shoulder_height, 0.0])
+        return (front + back + left + right) / 4.0
+
+    def as_array(self) -> np.ndarray:
+        """Surface numbers for the renderer kernel (see ``render.kernel`` for the order)."""
+        return np.array(
+            [
+                self.half_width,
+                self.half_depth,
+                self.y_bottom,
+                self.y_top,
+                self.y_row_first,
+                self.y_row_last,
+                self.y_sleeve_low,
+                *self.target_point,
+            ],
+            dtype=np.float64,
+        )

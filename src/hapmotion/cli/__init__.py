@@ -1,0 +1,92 @@
+"""The ``hapmotion`` command line: a click group; each command lives in its own module.
+
+User mistakes (:class:`~hapmotion.errors.HapMotionError`, missing or unreadable files) end with one line on
+stderr and exit code 2; no traceback. Ctrl-C exits with 130. An unexpected internal error prints one line too,
+with the full traceback only when ``HAPMOTION_DEBUG=1``.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import traceback
+
+import click
+
+from .. import __version__
+from ..errors import HapMotionError
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+@click.version_option(__version__, prog_name="hapmotion")
+def cli() -> None:
+    """Turn a performer's motion (and the music) into vibration for a bHaptics TactSuit X40 and two
+    Tactosy sleeves worn on the shoulders, following the HapMotion paper (motion salient triangle).
+
+    \b
+    Typical use:
+      hapmotion info dance.bvh                      what is in a recording
+      hapmotion render dance.bvh -o dance.tact      the haptic track (.tact .csv .json .npz)
+      hapmotion render dance.bvh --audio song.ogg -o show.csv   motion + music, mixed 2:3
+      hapmotion demo                                the bundled dance with bundled music
+    """
+
+
+def _register() -> None:
+    from . import demo, render
+
+    cli.add_command(render.command, "render")
+    cli.add_command(demo.command, "demo")
+    for name in ("info", "live", "view", "plot", "evaluate"):
+        module = _optional(name)
+        if module is not None:
+            cli.add_command(module.command, name)
+
+
+def _optional(name: str):
+    """Commands contributed by other parts of the package (they may not be installed in a trimmed build)."""
+    import importlib.util
+
+    spec = importlib.util.find_spec(f"hapmotion.cli.{name}")
+    if spec is None:
+        return None
+    import importlib
+
+    return importlib.import_module(f"hapmotion.cli.{name}")
+
+
+_register()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``hapmotion`` script."""
+    try:
+        cli.main(args=argv, prog_name="hapmotion", standalone_mode=False)
+    except click.exceptions.Abort:
+        click.echo("aborted", err=True)
+        return 130
+    except click.ClickException as err:
+        err.show()
+        return err.exit_code
+    except click.exceptions.Exit as err:
+        return err.exit_code
+    except HapMotionError as err:
+        click.echo(f"error: {err}", err=True)
+        return err.exit_code
+    except (FileNotFoundError, IsADirectoryError, PermissionError) as err:
+        click.echo(f"error: {err.filename}: {err.strerror}", err=True)
+        return 2
+    except KeyboardInterrupt:
+        click.echo("interrupted", err=True)
+        return 130
+    except Exception as err:  # a bug, not a user mistake: one line unless asked for details
+        if os.environ.get("HAPMOTION_DEBUG") == "1":
+            traceback.print_exc()
+        else:
+            click.echo(f"internal error: {type(err).__name__}: {err} (set HAPMOTION_DEBUG=1 for the traceback)", err=True)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,145 @@
+"""``hapmotion render``: a recording (and/or a song) to a haptic track file."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from ..errors import UsageError
+
+MODES = ("multimodal", "motion", "audio")
+
+
+def parse_param_overrides(items: tuple[str, ...]) -> dict:
+    """``("release_alpha=0.2", "phantom=energy")`` -> typed overrides for :class:`~hapmotion.render.Params`."""
+    from dataclasses import fields
+
+    from ..render.params import Params
+
+    types = {f.name: f.type for f in fields(Params)}
+    out: dict = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        key = key.strip()
+        if not sep or key not in types:
+            known = ", ".join(sorted(types))
+            raise UsageError(f"--param {item!r}: expected NAME=VALUE with NAME one of: {known}")
+        kind = types[key]
+        try:
+            if kind in ("bool", bool):
+                if value.lower() not in ("true", "false", "1", "0", "yes", "no"):
+                    raise ValueError(value)
+                out[key] = value.lower() in ("true", "1", "yes")
+            elif kind in ("float", float):
+                out[key] = float(value)
+            else:
+                out[key] = value
+        except ValueError:
+            raise UsageError(f"--param {item!r}: expected a {kind} value, found {value!r}") from None
+    return out
+
+
+def motion_reader_options(func):
+    """Reader options shared by the commands that read motion (from ``cli/info.py`` when present)."""
+    try:
+        from .info import motion_options
+    except ImportError:  # readers' CLI helpers not installed: plain path only
+        return func
+    return motion_options(func)
+
+
+def load_motion_cli(path: str, **opts):
+    try:
+        from .info import load_from_cli
+    except ImportError:
+        from ..readers import load_motion
+
+        return load_motion(path)
+    return load_from_cli(path, **opts)
+
+
+def progress_bar(total: int, label: str):
+    """A tqdm bar on stderr, shown only for long jobs on a terminal; returns (update callable, close callable)."""
+    from tqdm import tqdm
+
+    show = total >= 200_000 and sys.stderr.isatty()
+    bar = tqdm(total=total, desc=label, unit="frame", disable=not show, file=sys.stderr, leave=False)
+    return bar.update, bar.close
+
+
+@click.command()
+@click.argument("motion_file", required=False, type=click.Path(dir_okay=False))
+@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
+              help="Track file to write: .tact (bHaptics Designer; sleeves go to OUT.ForearmL/R.tact), .csv, .json, .npz.")
+@click.option("--method", type=click.Choice(["mst", "baseline"]), default="mst", show_default=True,
+              help="mst: the paper's motion salient triangle; baseline: the active hand itself.")
+@click.option("--preset", default="paper", show_default=True,
+              help="Parameter preset: paper (the paper's values) or energy (energy-preserving split, ERM-aware smoothing).")
+@click.option("--param", "params", multiple=True, metavar="NAME=VALUE",
+              help="Override one renderer parameter (repeatable), e.g. --param release_alpha=0.2.")
+@click.option("--no-mirror", is_flag=True, help="Feel the performer's left on the wearer's left (default: mirrored).")
+@click.option("--fps", type=click.FloatRange(min=1.0, max=1000.0), default=None,
+              help="Output rate: resample the motion to this many frames per second (default: the input's rate; "
+                   "60 with --audio and no motion).")
+@click.option("--layout", "layout_file", type=click.Path(dir_okay=False, exists=True), default=None,
+              help="Device layout JSON (default: X40 + two shoulder Tactosy).")
+@click.option("--audio", "audio_file", type=click.Path(dir_okay=False), default=None,
+              help="Music file (WAV, FLAC, Ogg, MP3) for the audio channel.")
+@click.option("--mode", type=click.Choice(MODES), default=None,
+              help="Which channels: motion, audio, or multimodal (both mixed). Default: multimodal with --audio, else motion.")
+@click.option("--mix", "mix_ratio", default="2:3", show_default=True, help="audio:motion ratio of the multimodal mix.")
+@click.option("--mix-domain", type=click.Choice(["linear", "energy"]), default="linear", show_default=True,
+              help="linear: the paper's weighted sum; energy: weighted sum of squared intensities.")
+@click.option("--audio-offset", type=float, default=0.0, show_default=True,
+              help="Seconds of music before the motion's first frame (negative: the music starts later).")
+@click.option("--length", type=click.Choice(["longer", "motion"]), default="longer", show_default=True,
+              help="Track length with both inputs: as long as the longer one, or cut to the motion.")
+@motion_reader_options
+def command(motion_file, output, method, preset, params, no_mirror, fps, layout_file, audio_file, mode, mix_ratio,
+            mix_domain, audio_offset, length, **reader_opts):
+    """Render MOTION_FILE (BVH, Azure Kinect JSON, AIST++ .pkl, CSV/NPZ joints) into a haptic track.
+
+    With --audio the music is rendered too and mixed with the motion (audio:motion = 2:3 by default, as in the
+    HapMotion paper); with --audio and no MOTION_FILE the track is the music alone.
+    """
+    from ..layout import load_layout
+    from ..render import render
+    from ..render.renderer import resolve_params
+
+    mode = mode or ("multimodal" if audio_file else "motion")
+    if mode in ("audio", "multimodal") and not audio_file:
+        raise UsageError(f"--mode {mode} needs --audio SONG")
+    if mode in ("motion", "multimodal") and not motion_file:
+        raise UsageError(f"--mode {mode} needs a MOTION_FILE")
+    overrides = parse_param_overrides(params)
+    if no_mirror:
+        overrides["mirror"] = False
+    prm = resolve_params(preset, None, **overrides)
+    layout = load_layout(layout_file) if layout_file else load_layout()
+    out_path = Path(output)
+
+    motion_track = None
+    if mode != "audio":
+        motion = load_motion_cli(motion_file, **reader_opts)
+        if fps is not None:
+            motion = motion.resample(fps)
+        update, close = progress_bar(motion.n_frames, "rendering")
+        try:
+            motion_track = render(motion, method=method, params=prm, layout=layout, progress=update)
+        finally:
+            close()
+        motion_track.meta["preset"] = preset
+    track = motion_track
+    if audio_file:
+        from ..audio import combine
+        from ..audio.mix import parse_mix_ratio
+
+        track = combine(motion_track, audio_file, mode=mode, ratio=parse_mix_ratio(mix_ratio), offset_s=audio_offset,
+                        fps=(fps or 60.0) if motion_track is None else motion_track.fps, domain=mix_domain,
+                        length=length, actuators=layout.actuators)
+    track.save(out_path)
+    peak = float(track.intensities.max()) if track.n_frames else 0.0
+    click.echo(f"wrote {out_path} ({track.n_frames} frames at {track.fps:g} fps, {track.duration:.2f} s, "
+               f"mode {mode}, peak {peak:.0f}%)")

@@ -1,0 +1,1 @@
+"""Bundled example recordings and music (see ATTRIBUTION.md beside this file)."""

@@ -1,0 +1,193 @@
+"""Device layouts as data: which devices, their grids, bHaptics addressing and where they sit on the body.
+
+A layout is a JSON file (``hapmotion/data/x40_shoulders.json`` is the default: TactSuit X40 + two Tactosy sleeves
+worn on the shoulders). Another vest with the same kinds of charts (a front grid, a back grid, shoulder grids) is a
+new file, not new code.
+
+Each device is a grid of ``rows x cols`` actuators addressed ``index = row * cols + col`` (bHaptics), mapped onto
+one *chart* of the body surface:
+
+- ``front`` / ``back``: the vest panels; columns spread over ``x_span`` (fractions of the torso half-width, wearer's
+  left first), rows from the collar (row 0) to the belly;
+- ``shoulder`` with ``side`` left/right: the top of that shoulder; columns from the front (``z_span[0]`` x half-depth)
+  to the back, rows from ``x_span[0]`` (nearer the neck) to ``x_span[1]`` (over the arm), in half-widths.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from .body.model import BodyModel
+from .errors import InputError
+
+CHART_FRONT, CHART_BACK, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT = 0, 1, 2, 3
+CHART_NAMES = ("front", "back", "shoulder_left", "shoulder_right")
+
+
+@dataclass(frozen=True)
+class Device:
+    """One haptic device (bHaptics position) of a layout."""
+
+    name: str
+    rows: int
+    cols: int
+    chart: int  # one of CHART_*
+    offset: int  # first column of this device in the track
+    sdk2_position: int
+    sdk2_offset: int
+    sdk2_length: int
+    x_span: tuple[float, float]
+    z_span: tuple[float, float]
+
+    @property
+    def size(self) -> int:
+        return self.rows * self.cols
+
+
+@dataclass(frozen=True)
+class Layout:
+    """A set of devices and their actuators, in track column order."""
+
+    name: str
+    devices: tuple[Device, ...]
+    tact_layouts: dict
+    description: str = ""
+
+    @property
+    def actuators(self) -> tuple[str, ...]:
+        """Actuator ids ``<device>_<index>`` in column order (the CSV schema order)."""
+        return tuple(f"{d.name}_{i}" for d in self.devices for i in range(d.size))
+
+    @property
+    def n_actuators(self) -> int:
+        return sum(d.size for d in self.devices)
+
+    def device(self, name: str) -> Device:
+        for d in self.devices:
+            if d.name == name:
+                return d
+        raise KeyError(name)
+
+    def chart_device(self, chart: int) -> Device:
+        for d in self.devices:
+            if d.chart == chart:
+                return d
+        raise KeyError(CHART_NAMES[chart])
+
+    # ------------------------------------------------------------------ tables for the renderer kernel
+    def chart_table(self) -> np.ndarray:
+        """``(4, 7)`` float64: per chart (front, back, shoulder L, shoulder R) rows, cols, offset, x_span, z_span."""
+        tab = np.zeros((4, 7))
+        for c in range(4):
+            d = self.chart_device(c)
+            tab[c] = (d.rows, d.cols, d.offset, d.x_span[0], d.x_span[1], d.z_span[0], d.z_span[1])
+        return tab
+
+    def mirror_map(self) -> np.ndarray:
+        """``(N,)`` int: column that column ``i`` goes to when the performer is mirrored left/right.
+
+        Vest panels flip their columns (col -> cols-1-col); the two shoulder sleeves swap (same row and col: the
+        columns run front to back on both, so front stays front).
+        """
+        out = np.arange(self.n_actuators)
+        left = self.chart_device(CHART_SHOULDER_LEFT)
+        right = self.chart_device(CHART_SHOULDER_RIGHT)
+        for d in self.devices:
+            for r in range(d.rows):
+                for c in range(d.cols):
+                    i = d.offset + r * d.cols + c
+                    if d.chart in (CHART_FRONT, CHART_BACK):
+                        out[i] = d.offset + r * d.cols + (d.cols - 1 - c)
+                    else:
+                        other = right if d is left else left
+                        out[i] = other.offset + r * other.cols + c
+        return out
+
+    # ------------------------------------------------------------------ geometry
+    def positions(self, body: BodyModel | None = None) -> np.ndarray:
+        """``(N, 3)`` actuator positions in body coordinates (x right, y up, z forward; metres, origin J_T).
+
+        Positions are on the performer-sized surface and *not* mirrored: the wearer's left is body -x.
+        """
+        body = body or BodyModel.default()
+        a, b = body.half_width, body.half_depth
+        out = np.zeros((self.n_actuators, 3))
+        for d in self.devices:
+            for r in range(d.rows):
+                for c in range(d.cols):
+                    i = d.offset + r * d.cols + c
+                    u = c / (d.cols - 1) if d.cols > 1 else 0.5
+                    v = r / (d.rows - 1) if d.rows > 1 else 0.5
+                    if d.chart in (CHART_FRONT, CHART_BACK):
+                        x = a * (d.x_span[0] + u * (d.x_span[1] - d.x_span[0]))
+                        y = body.y_row_first + v * (body.y_row_last - body.y_row_first)
+                        z = b * np.sqrt(max(0.0, 1.0 - (x / a) ** 2))
+                        out[i] = (x, y, z if d.chart == CHART_FRONT else -z)
+                    else:
+                        sign = -1.0 if d.chart == CHART_SHOULDER_LEFT else 1.0
+                        x = sign * a * (d.x_span[0] + v * (d.x_span[1] - d.x_span[0]))
+                        z = b * (d.z_span[0] + u * (d.z_span[1] - d.z_span[0]))
+                        out[i] = (x, body.y_top, z)
+        return out
+
+
+_CHART_CODES = {"front": CHART_FRONT, "back": CHART_BACK}
+
+
+def load_layout(path: "str | os.PathLike[str] | None" = None) -> Layout:
+    """Read a layout file (default: the bundled X40 + two shoulder Tactosy layout).
+
+    Raises :class:`~hapmotion.errors.InputError` naming the field when the file does not fit the schema.
+    """
+    if path is None:
+        text = resources.files("hapmotion").joinpath("data/x40_shoulders.json").read_text()
+        source = "x40_shoulders.json"
+    else:
+        source = os.fspath(path)
+        try:
+            text = Path(path).read_text()
+        except OSError as err:
+            raise InputError(source, None, f"cannot read layout: {err.strerror}") from None
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise InputError(source, f"line {err.lineno}", f"expected JSON: {err.msg}") from None
+    devices = []
+    offset = 0
+    seen_charts = set()
+    for k, dd in enumerate(doc.get("devices", [])):
+        place = f"field devices[{k}]"
+        try:
+            chart_name = dd["chart"]
+            if chart_name == "shoulder":
+                chart = CHART_SHOULDER_LEFT if dd["side"] == "left" else CHART_SHOULDER_RIGHT
+            else:
+                chart = _CHART_CODES[chart_name]
+            rows, cols = int(dd["rows"]), int(dd["cols"])
+            x_span = tuple(float(v) for v in dd["x_span"])
+            z_span = tuple(float(v) for v in dd.get("z_span", (0.0, 0.0)))
+            dev = Device(
+                name=str(dd["name"]), rows=rows, cols=cols, chart=chart, offset=offset,
+                sdk2_position=int(dd.get("sdk2_position", -1)), sdk2_offset=int(dd.get("sdk2_offset", 0)),
+                sdk2_length=int(dd.get("sdk2_length", rows * cols)), x_span=x_span, z_span=z_span,
+            )
+        except (KeyError, TypeError, ValueError) as err:
+            raise InputError(source, place, f"expected name, rows, cols, chart (front|back|shoulder), side, x_span: {err}") from None
+        if rows < 1 or cols < 1:
+            raise InputError(source, place, f"expected rows and cols >= 1, found {rows} x {cols}")
+        if chart in seen_charts:
+            raise InputError(source, place, f"expected one device per chart, found a second {CHART_NAMES[chart]}")
+        seen_charts.add(chart)
+        devices.append(dev)
+        offset += rows * cols
+    if len(seen_charts) != 4:
+        missing = [CHART_NAMES[c] for c in range(4) if c not in seen_charts]
+        raise InputError(source, "field devices", f"expected a front, a back and two shoulder charts, missing {', '.join(missing)}")
+    return Layout(name=str(doc.get("name", Path(source).stem)), devices=tuple(devices),
+                  tact_layouts=dict(doc.get("tact_layouts", {})), description=str(doc.get("description", "")))

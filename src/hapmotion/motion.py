@@ -1,0 +1,204 @@
+"""The one motion type every reader produces and every renderer consumes.
+
+World convention for :attr:`Motion.positions`: metres, right-handed, **+Y up** (readers rotate camera frames such
+as Azure Kinect's +Y-down frame into it). Horizontal axes are whatever the source used; the renderer never relies
+on them because it works in the per-frame body frame (``hapmotion.body.frame``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from .errors import InputError
+from .joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS
+
+
+@dataclass
+class Motion:
+    """A recorded or streamed skeleton on the canonical 32 Azure Kinect joints.
+
+    Attributes
+    ----------
+    positions:
+        ``(T, 32, 3)`` float64, metres, +Y up. Joints the source does not have and could not be derived are NaN in
+        every frame (``present[j]`` is False); all present joints are finite in every frame (gaps are filled by
+        :func:`fill_gaps`).
+    fps:
+        Frames per second (> 0).
+    present:
+        ``(32,)`` bool: the joint has data (read or derived).
+    derived:
+        ``(32,)`` bool: the joint was computed from others (e.g. SPINE_NAVEL for COCO-17), not read.
+    confidence:
+        ``(T, 32)`` float32 in 0..1: 1 = read with full confidence, 0.5 = derived or low-confidence, 0 = missing in
+        the source and filled (held or interpolated). Absent joints are 0.
+    meta:
+        Free-form facts for ``hapmotion info``: ``format``, ``skeleton``, ``path``, ``units``, ``source_joints``
+        (canonical name -> source name), ``notes`` (list of strings: skipped T-pose frames, chosen body id, ...),
+        ``filled_frames`` (count of joint-frames filled).
+    """
+
+    positions: np.ndarray
+    fps: float
+    present: np.ndarray
+    derived: np.ndarray
+    confidence: np.ndarray
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    # ------------------------------------------------------------------ basic facts
+    @property
+    def n_frames(self) -> int:
+        return int(self.positions.shape[0])
+
+    @property
+    def duration(self) -> float:
+        """Seconds covered by the frames (``n_frames / fps``)."""
+        return self.n_frames / self.fps
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return JOINTS
+
+    def joint(self, name: str) -> np.ndarray:
+        """``(T, 3)`` positions of one canonical joint (metres)."""
+        return self.positions[:, JOINT_INDEX[name], :]
+
+    @property
+    def times(self) -> np.ndarray:
+        """``(T,)`` seconds from the first frame."""
+        return np.arange(self.n_frames, dtype=np.float64) / self.fps
+
+    # ------------------------------------------------------------------ transforms
+    def slice(self, start: int, stop: int | None = None) -> "Motion":
+        """Frames ``start:stop`` as a new Motion (shares nothing with this one)."""
+        return replace(
+            self,
+            positions=self.positions[start:stop].copy(),
+            confidence=self.confidence[start:stop].copy(),
+            meta=dict(self.meta),
+        )
+
+    def resample(self, fps: float) -> "Motion":
+        """Linear resampling to a new frame rate; the first frame is kept, the duration is kept (floor).
+
+        Returns ``self`` when the rate is unchanged.
+        """
+        if fps <= 0 or not np.isfinite(fps):
+            raise ValueError(f"fps must be a positive number, got {fps}")
+        if abs(fps - self.fps) < 1e-9:
+            return self
+        n_new = max(1, int(np.floor((self.n_frames - 1) * fps / self.fps + 1e-9)) + 1)
+        t_new = np.arange(n_new) / fps
+        t_old = self.times
+        flat = self.positions.reshape(self.n_frames, -1)
+        out = np.empty((n_new, flat.shape[1]))
+        for k in range(flat.shape[1]):
+            out[:, k] = np.interp(t_new, t_old, flat[:, k])
+        conf = np.empty((n_new, N_JOINTS), dtype=np.float32)
+        for j in range(N_JOINTS):
+            conf[:, j] = np.interp(t_new, t_old, self.confidence[:, j])
+        meta = dict(self.meta)
+        meta.setdefault("notes", [])
+        meta["notes"] = list(meta["notes"]) + [f"resampled from {self.fps:g} to {fps:g} fps"]
+        return replace(self, positions=out.reshape(n_new, N_JOINTS, 3), fps=float(fps), confidence=conf, meta=meta)
+
+    def missing_render_joints(self) -> list[str]:
+        """Names of the joints the renderer needs that this motion lacks."""
+        return [j for j in RENDER_JOINTS if not self.present[JOINT_INDEX[j]]]
+
+
+def new_motion(
+    positions: np.ndarray,
+    fps: float,
+    *,
+    source: str,
+    valid: np.ndarray | None = None,
+    derived: np.ndarray | None = None,
+    confidence: np.ndarray | None = None,
+    meta: dict[str, Any] | None = None,
+) -> Motion:
+    """Build a validated :class:`Motion` from raw canonical positions; the readers' common exit.
+
+    Parameters
+    ----------
+    positions:
+        ``(T, 32, 3)`` metres, +Y up. Absent joints may hold anything (they are set to NaN).
+    fps:
+        Frame rate.
+    source:
+        File or stream name, for error messages.
+    valid:
+        ``(T, 32)`` bool, True where the value is a real observation. Non-finite values are always invalid.
+        Default: all finite values are valid.
+    derived:
+        ``(32,)`` bool, joints computed by the reader.
+    confidence:
+        ``(T, 32)`` in 0..1 for the valid samples (default 1, or 0.5 for derived joints).
+
+    A joint counts as present when it is valid in at least one frame. Invalid samples of present joints are filled
+    (interpolated inside a gap, held at the ends) and counted in ``meta["filled_frames"]``.
+
+    Raises :class:`InputError` for zero frames, a bad fps, a joint the renderer needs that is absent, or a
+    frame whose render joints are all invalid throughout.
+    """
+    pos = np.array(positions, dtype=np.float64, copy=True)
+    if pos.ndim != 3 or pos.shape[1:] != (N_JOINTS, 3):
+        raise InputError(source, None, f"expected positions of shape (T, {N_JOINTS}, 3), found {pos.shape}")
+    n = pos.shape[0]
+    if n == 0:
+        raise InputError(source, None, "expected at least one frame, found 0")
+    if not np.isfinite(fps) or fps <= 0:
+        raise InputError(source, "frame rate", f"expected a positive frame rate, found {fps}")
+    finite = np.isfinite(pos).all(axis=2)
+    ok = finite if valid is None else (np.asarray(valid, dtype=bool) & finite)
+    present = ok.any(axis=0)
+    der = np.zeros(N_JOINTS, dtype=bool) if derived is None else np.asarray(derived, dtype=bool).copy()
+    if confidence is None:
+        conf = np.where(der[None, :], 0.5, 1.0).astype(np.float32) * np.ones((n, 1), dtype=np.float32)
+    else:
+        conf = np.clip(np.asarray(confidence, dtype=np.float32), 0.0, 1.0).copy()
+    filled = fill_gaps(pos, ok, present)
+    conf[~ok] = 0.0
+    pos[:, ~present, :] = np.nan
+    conf[:, ~present] = 0.0
+    der &= present
+    meta = dict(meta or {})
+    meta.setdefault("path", source)
+    meta.setdefault("notes", [])
+    meta["filled_frames"] = int(filled)
+    meta["filled_by_joint"] = {JOINTS[j]: int((~ok[:, j]).sum()) for j in range(N_JOINTS) if present[j] and (~ok[:, j]).any()}
+    motion = Motion(positions=pos, fps=float(fps), present=present, derived=der, confidence=conf, meta=meta)
+    missing = motion.missing_render_joints()
+    if missing:
+        names = meta.get("source_joints_available")
+        hint = f" (the file has: {', '.join(names)})" if names else ""
+        raise InputError(
+            source,
+            "joints " + ", ".join(missing),
+            f"expected hands, shoulders, spine, pelvis and neck (read or derivable), found none for these{hint}",
+        )
+    return motion
+
+
+def fill_gaps(pos: np.ndarray, ok: np.ndarray, present: np.ndarray) -> int:
+    """Fill invalid samples of present joints in place: linear interpolation inside a gap, hold at the ends.
+
+    ``pos`` is ``(T, J, 3)``, ``ok`` ``(T, J)`` bool, ``present`` ``(J,)`` bool. Returns the number of joint-frames
+    filled.
+    """
+    n = pos.shape[0]
+    t = np.arange(n)
+    count = 0
+    for j in np.flatnonzero(present):
+        good = ok[:, j]
+        if good.all():
+            continue
+        bad = ~good
+        count += int(bad.sum())
+        for k in range(3):
+            # np.interp holds the end values outside the known range: exactly "hold at the ends".
+            pos[bad, j, k] = np.interp(t[bad], t[good], pos[good, j, k])
+    return count

@@ -1,0 +1,158 @@
+"""Every parameter of the motion renderer in one documented object, and the named presets.
+
+The ``paper`` preset follows the HapMotion paper (Jung et al., Virtual Reality 28:13, 2024, Section 4) as closely
+as its text can be followed; where the text is silent the value is this project's reading, marked "(ours)" and
+explained in docs/algorithm.md. The ``energy`` preset keeps the paper's pipeline and changes the parts that
+docs/rendering-research.md shows to lose energy or to be jumpy (see docs/metrics.md for the measured evidence).
+
+Rates: values given "at 60 Hz" are per-frame constants of the paper's 60 Hz stream; the renderer converts them so
+that the same *time* behaviour holds at any frame rate (exactly the paper's numbers at 60 Hz).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields, replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import UsageError
+
+REFERENCE_FPS = 60.0
+"""The paper's stream rate (Azure Kinect joints at 60 Hz in Unity); per-frame constants are defined at this rate."""
+
+METHODS = ("mst", "baseline")
+PHANTOMS = ("paper", "energy")
+IDLE_CHOICES = ("keep", "farther")
+
+
+@dataclass(frozen=True)
+class Params:
+    """Motion renderer parameters (units in each field's comment)."""
+
+    # --- Section 4, step 3-4: active joint choice -------------------------------------------------------------
+    threshold_window_s: float = 0.05
+    """Acceleration threshold = mean acceleration over this many seconds of previous frames (paper: 3 frames at
+    60 Hz = 0.05 s)."""
+    accel_floor: float = 0.5
+    """m/s^2. A hand counts as above its threshold only if its acceleration also exceeds this floor (ours: the paper
+    gives none; without it, sensor noise on a still hand flips the active joint)."""
+    idle_choice: str = "keep"
+    """Neither hand above threshold: ``keep`` the last choice (paper) or re-pick the hand ``farther`` from J_T."""
+
+    # --- step 5: weights and the dynamic point (Eq. 1) --------------------------------------------------------
+    weight_gain: float = 1.0
+    """Extra weight of an active hand per unit of relative excess acceleration ((a - thr) / thr) (ours)."""
+    weight_extra_max: float = 2.0
+    """Cap on the extra weight (so an active hand's weight is 1..3) (ours)."""
+
+    # --- step 6: locating on the vest --------------------------------------------------------------------------
+    near_m: float = 0.13
+    """Below this distance from J_T the dynamic point is on the body: map to the nearest surface point (paper)."""
+    far_m: float = 1.85
+    """Beyond this distance the dynamic point is pulled back to it (out-of-range projection, paper)."""
+    mirror: bool = True
+    """The audience feels the performer mirrored left/right (paper's default)."""
+    side_blend: float = 0.5
+    """Front/back crossfade band for hits on the sides and caps, as a fraction of the torso half-depth (ours;
+    0 = hard switch)."""
+
+    # --- step 7: intensity from distance (Eq. 2) ---------------------------------------------------------------
+    intensity_far_m: float = 0.0
+    """Distance (m) that gives the full base level in Eq. 2; 0 = ``far_m`` (paper: D normalised over 13..185 cm).
+    A dynamic point inside the triangle rarely gets farther than about 0.6 m from J_T, so the paper's range leaves
+    most of the intensity scale unused; presets beyond the paper may set the performer's reach here (ours)."""
+    base_level: float = 6.0
+    """C: bHaptics intensity level scaling the normalised distance (paper: level 6)."""
+    attack_alpha: float = 0.5
+    """alpha of Eq. 2 at 60 Hz when the intensity rises (paper: 0.5 both ways)."""
+    release_alpha: float = 0.5
+    """alpha of Eq. 2 at 60 Hz when the intensity falls (paper: 0.5)."""
+
+    # --- step 8: acceleration boost and phantom split ----------------------------------------------------------
+    boost_levels: float = 2.0
+    """Up to this many levels added while the active hand is above its threshold (paper: up to 2)."""
+    boost_full_ratio: float = 1.0
+    """The boost reaches its maximum when the acceleration exceeds the threshold by this fraction of it (ours)."""
+    max_level: float = 8.0
+    """Ceiling of base + boost (paper: maximum level 8)."""
+    percent_per_level: float = 10.0
+    """Level to bHaptics intensity percent: level 10 = 100 % (ours; the paper's levels have no published scale)."""
+    phantom: str = "paper"
+    """``paper``: 1D ``K(1-a), K a``; 2D main x 0.5, neighbours by the 1D rule, diagonal their mean.
+    ``energy``: square-root bilinear split (constant total energy, energy centroid on the target)."""
+    phantom_1d_tolerance: float = 0.05
+    """``paper`` split: a point within this fraction of the motor pitch from a grid line uses the 1D rule (ours)."""
+
+    # --- beyond the paper --------------------------------------------------------------------------------------
+    perceptual_exponent: float = 0.0
+    """Stevens exponent beta: output = 100 (x/100)^(1/beta), mapping perceived magnitude to drive; 0 = off."""
+    dead_zone: float = 0.0
+    """Percent. Non-zero outputs are lifted to ``dead_zone + (100 - dead_zone) x / 100`` so they clear the ERM
+    start threshold; outputs below 0.5 % are set to 0. 0 = off."""
+    actuator_release_s: float = 0.0
+    """Per-actuator release time constant, seconds: outputs rise at once and decay no faster than this
+    (smooths location jumps for slow ERMs); 0 = off."""
+
+    def __post_init__(self) -> None:
+        if self.idle_choice not in IDLE_CHOICES:
+            raise UsageError(f"idle_choice must be one of {', '.join(IDLE_CHOICES)}, not {self.idle_choice!r}")
+        if self.phantom not in PHANTOMS:
+            raise UsageError(f"phantom must be one of {', '.join(PHANTOMS)}, not {self.phantom!r}")
+        for name in ("attack_alpha", "release_alpha"):
+            v = getattr(self, name)
+            if not 0.0 < v <= 1.0:
+                raise UsageError(f"{name} must be in (0, 1], not {v}")
+        if self.intensity_far_m and self.intensity_far_m <= self.near_m:
+            raise UsageError(f"intensity_far_m must be 0 or more than near_m, not {self.intensity_far_m}")
+        if not 0.0 <= self.near_m < self.far_m:
+            raise UsageError(f"need 0 <= near_m < far_m, got {self.near_m} and {self.far_m}")
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, float) and not np.isfinite(v):
+                raise UsageError(f"{f.name} must be finite, not {v}")
+
+    def replace(self, **changes: Any) -> "Params":
+        """A copy with some fields changed (unknown names raise UsageError)."""
+        names = {f.name for f in fields(self)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise UsageError(f"unknown renderer parameter(s): {', '.join(unknown)}")
+        return replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+PRESETS: dict[str, Params] = {
+    "paper": Params(),
+    "energy": Params(
+        phantom="energy",
+        attack_alpha=0.6,
+        release_alpha=0.15,
+        actuator_release_s=0.06,
+        dead_zone=8.0,
+        perceptual_exponent=0.0,
+    ),
+}
+"""Named parameter sets. ``paper``: the paper's values. ``energy``: energy-preserving phantom split, asymmetric
+attack/release smoothing, ERM-aware output mapping (see docs/metrics.md for the evidence)."""
+
+
+def get_preset(name: str) -> Params:
+    """The preset of that name; UsageError listing the known ones otherwise."""
+    try:
+        return PRESETS[name]
+    except KeyError:
+        raise UsageError(f"unknown preset {name!r}; choose one of {', '.join(PRESETS)}") from None
+
+
+def alpha_at(alpha_60: float, fps: float) -> float:
+    """Per-frame smoothing factor at ``fps`` with the same time constant as ``alpha_60`` at 60 Hz.
+
+    A one-pole filter ``y += alpha (x - y)`` has time constant ``-1 / (fps ln(1 - alpha))``
+    (rendering-research.md 2.6); keeping it gives ``1 - (1 - alpha_60) ** (60 / fps)``.
+    """
+    if alpha_60 >= 1.0:
+        return 1.0
+    return 1.0 - (1.0 - alpha_60) ** (REFERENCE_FPS / fps)

@@ -1,0 +1,227 @@
+"""Renderer (sans-I/O, one frame at a time) and ``render`` (a whole recording at once).
+
+Both drive the same compiled frame loop (:mod:`hapmotion.render.kernel`), so ``render(motion)`` equals stepping a
+``Renderer`` through the frames, number for number.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..body.model import BodyModel
+from ..errors import UsageError
+from ..joints import JOINT_INDEX
+from ..layout import Layout, load_layout
+from ..motion import Motion
+from ..track import HapticTrack
+from . import kernel as K
+from .params import METHODS, Params, alpha_at, get_preset
+
+_KERNEL_IDX = np.array([JOINT_INDEX[n] for n in K.KERNEL_JOINTS], dtype=np.intp)
+
+
+def resolve_params(preset: str | Params | None, params: Params | None = None, **overrides: Any) -> Params:
+    """The parameter set for a call: a preset name or a Params object, then field overrides."""
+    if params is not None:
+        base = params
+    elif isinstance(preset, Params):
+        base = preset
+    else:
+        base = get_preset(preset or "paper")
+    return base.replace(**overrides) if overrides else base
+
+
+def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
+    """The kernel's parameter vector for a method at a frame rate."""
+    if method not in METHODS:
+        raise UsageError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    if not (np.isfinite(fps) and fps > 0):
+        raise UsageError(f"fps must be a positive number, not {fps}")
+    p = np.zeros(K.N_PARAMS)
+    p[K.P_METHOD] = 1.0 if method == "baseline" else 0.0
+    p[K.P_WINDOW] = min(K.MAX_WINDOW, max(1, int(round(params.threshold_window_s * fps))))
+    p[K.P_FLOOR] = params.accel_floor
+    p[K.P_IDLE_FARTHER] = 1.0 if params.idle_choice == "farther" else 0.0
+    p[K.P_W_GAIN] = params.weight_gain
+    p[K.P_W_MAX] = params.weight_extra_max
+    p[K.P_NEAR] = params.near_m
+    p[K.P_FAR] = params.far_m
+    p[K.P_SIDE_BLEND] = params.side_blend
+    p[K.P_C] = params.base_level
+    p[K.P_ATTACK] = alpha_at(params.attack_alpha, fps)
+    p[K.P_RELEASE] = alpha_at(params.release_alpha, fps)
+    p[K.P_BOOST] = params.boost_levels
+    p[K.P_BOOST_FULL] = max(params.boost_full_ratio, 1e-9)
+    p[K.P_MAX_LEVEL] = params.max_level
+    p[K.P_PCT] = params.percent_per_level
+    p[K.P_PHANTOM_ENERGY] = 1.0 if params.phantom == "energy" else 0.0
+    p[K.P_TOL] = params.phantom_1d_tolerance
+    p[K.P_BETA] = params.perceptual_exponent
+    p[K.P_DEAD] = params.dead_zone
+    p[K.P_REL_DECAY] = float(np.exp(-1.0 / (fps * params.actuator_release_s))) if params.actuator_release_s > 0 else 0.0
+    p[K.P_FPS] = fps
+    p[K.P_IFAR] = params.intensity_far_m if params.intensity_far_m > 0 else params.far_m
+    return p
+
+
+def _debug_dict(dbg_f: np.ndarray, dbg_i: np.ndarray) -> dict[str, np.ndarray]:
+    return {
+        "dynamic_point": dbg_f[..., K.D_DP:K.D_DP + 3],
+        "hit_point": dbg_f[..., K.D_HIT:K.D_HIT + 3],
+        "hit_body": dbg_f[..., K.D_HIT_BODY:K.D_HIT_BODY + 3],
+        "target_point": dbg_f[..., K.D_TP:K.D_TP + 3],
+        "level": dbg_f[..., K.D_LEVEL],
+        "uv": dbg_f[..., K.D_U:K.D_V + 1],
+        "distance": dbg_f[..., K.D_DIST],
+        "motion_energy": dbg_f[..., K.D_ENERGY],
+        "active": dbg_i[..., K.DI_ACTIVE_L:K.DI_ACTIVE_R + 1],
+        "chart": dbg_i[..., K.DI_CHART],
+    }
+
+
+class Renderer:
+    """Sans-I/O motion-to-tactile renderer: feed it frames, get actuator intensities.
+
+    Parameters
+    ----------
+    method:
+        ``"mst"`` (motion salient triangle, the paper's method) or ``"baseline"`` (the active hand itself).
+    preset:
+        Preset name (``"paper"``, ``"energy"``) or a :class:`Params`.
+    mirror:
+        Audience feels the performer mirrored left/right (default from the preset: True).
+    fps:
+        Frame rate of the frames that will be given to :meth:`step`.
+    body:
+        Performer dimensions; default an average adult (``BodyModel.default()``).
+    layout:
+        Device layout; default X40 + two shoulder Tactosy.
+    params:
+        Explicit parameters (overrides ``preset``).
+    """
+
+    def __init__(
+        self,
+        method: str = "mst",
+        preset: str | Params = "paper",
+        *,
+        mirror: bool | None = None,
+        fps: float = 60.0,
+        body: BodyModel | None = None,
+        layout: Layout | None = None,
+        params: Params | None = None,
+    ):
+        self.params = resolve_params(preset, params)
+        if mirror is not None:
+            self.params = self.params.replace(mirror=bool(mirror))
+        self.method = method
+        self.fps = float(fps)
+        self.body = body or BodyModel.default()
+        self.layout = layout or load_layout()
+        self._prm = pack_params(self.params, method, self.fps)
+        self._surf = self.body.as_array()
+        self._charts = self.layout.chart_table()
+        n = self.layout.n_actuators
+        self._mirror = self.layout.mirror_map() if self.params.mirror else np.arange(n)
+        self._state = K.new_state(n)
+        self._out = np.zeros((1, n))
+        self._dbg_f = np.zeros((1, K.N_DEBUG_F))
+        self._dbg_i = np.zeros((1, K.N_DEBUG_I), dtype=np.int8)
+        self._frame = np.zeros((1, len(K.KERNEL_JOINTS), 3))
+
+    @property
+    def actuators(self) -> tuple[str, ...]:
+        return self.layout.actuators
+
+    def reset(self) -> None:
+        """Forget all history: the next frame is rendered as a first frame."""
+        self._state = K.new_state(self.layout.n_actuators)
+
+    def turn_off_row(self) -> np.ndarray:
+        """``(N,)`` zeros: what sinks get when the stream stops."""
+        return np.zeros(self.layout.n_actuators)
+
+    def step(self, frame: np.ndarray) -> np.ndarray:
+        """Render one frame.
+
+        Parameters
+        ----------
+        frame:
+            ``(32, 3)`` canonical joint positions, metres, +Y up; NaN for joints not received.
+
+        Returns
+        -------
+        ``(N,)`` float64 intensities 0..100 (a new array). :attr:`last_debug` holds this frame's debug values.
+        """
+        f = np.asarray(frame, dtype=np.float64)
+        if f.shape != (32, 3):
+            raise ValueError(f"frame must be (32, 3), got {f.shape}")
+        self._frame[0] = f[_KERNEL_IDX]
+        K.render_frames(self._frame, self._prm, self._surf, self._charts, self._mirror, self._state,
+                        self._out, self._dbg_f, self._dbg_i)
+        return self._out[0].copy()
+
+    @property
+    def last_debug(self) -> dict[str, np.ndarray]:
+        """Debug values of the last stepped frame (same keys as ``HapticTrack.debug``, one frame each)."""
+        return {k: np.array(v[0]) for k, v in _debug_dict(self._dbg_f, self._dbg_i).items()}
+
+    def run(self, positions: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Render many frames at once, continuing from the current state.
+
+        ``positions`` is ``(T, 32, 3)``; returns ``(intensities (T, N), debug dict)``.
+        """
+        pos = np.asarray(positions, dtype=np.float64)
+        if pos.ndim != 3 or pos.shape[1:] != (32, 3):
+            raise ValueError(f"positions must be (T, 32, 3), got {pos.shape}")
+        joints = np.ascontiguousarray(pos[:, _KERNEL_IDX, :])
+        n = joints.shape[0]
+        out = np.zeros((n, self.layout.n_actuators))
+        dbg_f = np.zeros((n, K.N_DEBUG_F))
+        dbg_i = np.zeros((n, K.N_DEBUG_I), dtype=np.int8)
+        K.render_frames(joints, self._prm, self._surf, self._charts, self._mirror, self._state, out, dbg_f, dbg_i)
+        return out, _debug_dict(dbg_f, dbg_i)
+
+
+def render(
+    motion: Motion,
+    method: str = "mst",
+    preset: str | Params = "paper",
+    *,
+    mirror: bool | None = None,
+    params: Params | None = None,
+    layout: Layout | None = None,
+    body: BodyModel | None = None,
+    progress: Any = None,
+    chunk: int = 100_000,
+) -> HapticTrack:
+    """Render a whole recording into a :class:`HapticTrack` (one row per motion frame, same fps).
+
+    The performer's body size is measured from the motion (``BodyModel.from_motion``) unless ``body`` is given.
+    ``progress`` is an optional callable ``progress(frames_done)`` called after each chunk (for progress bars).
+    """
+    body = body or BodyModel.from_motion(motion)
+    r = Renderer(method, preset, mirror=mirror, fps=motion.fps, body=body, layout=layout, params=params)
+    parts_out, parts_dbg = [], []
+    for start in range(0, motion.n_frames, chunk):
+        out, dbg = r.run(motion.positions[start:start + chunk])
+        parts_out.append(out)
+        parts_dbg.append(dbg)
+        if progress is not None:
+            progress(out.shape[0])
+    intensities = np.concatenate(parts_out)
+    debug = {k: np.concatenate([d[k] for d in parts_dbg]) for k in parts_dbg[0]}
+    meta = {
+        "method": method,
+        "preset": preset if isinstance(preset, str) else "custom",
+        "mirror": r.params.mirror,
+        "params": r.params.to_dict(),
+        "body": {"shoulder_width": body.shoulder_width, "shoulder_height": body.shoulder_height,
+                 "pelvis_height": body.pelvis_height},
+        "source": motion.meta.get("path"),
+        "mode": "motion",
+    }
+    return HapticTrack(intensities=intensities, fps=motion.fps, actuators=r.actuators, layout=r.layout.name,
+                       meta=meta, debug=debug)

@@ -1,0 +1,101 @@
+"""HapticTrack: the rendered vibration, one row of actuator intensities per frame.
+
+A track is what every renderer (motion, audio, their mix) returns and what every writer and sink takes. Its
+columns follow the device layout's actuator order, which for the default layout is the CSV schema order
+``VestFront_0..19, VestBack_0..19, ForearmL_0..5, ForearmR_0..5``.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+
+@dataclass
+class HapticTrack:
+    """Actuator intensities over time.
+
+    Attributes
+    ----------
+    intensities:
+        ``(T, N)`` float64, 0..100 (bHaptics Player units), finite. Row ``t`` is held from ``t / fps`` to
+        ``(t + 1) / fps`` seconds.
+    fps:
+        Rows per second.
+    actuators:
+        ``N`` actuator ids such as ``"VestFront_5"`` (``<device>_<index>``), in column order.
+    layout:
+        Name of the device layout the ids belong to (e.g. ``"x40_shoulders"``).
+    meta:
+        Facts about how it was made: method, preset, mode, source files, parameters.
+    debug:
+        Optional per-frame arrays from the renderer for viewers and metrics (all with first dimension T):
+        ``dynamic_point`` (T, 3) world m, ``hit_point`` (T, 3) world m, ``hit_body`` (T, 3) body-frame m,
+        ``target_point`` (T, 3) world m, ``active`` (T, 2) int8 (1 = that hand, left/right, is active), ``level`` (T,)
+        bHaptics levels, ``chart`` (T,) int8, ``uv`` (T, 2), ``distance`` (T,) m, ``motion_energy`` (T,).
+    """
+
+    intensities: np.ndarray
+    fps: float
+    actuators: tuple[str, ...]
+    layout: str = "x40_shoulders"
+    meta: dict[str, Any] = field(default_factory=dict)
+    debug: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        arr = np.asarray(self.intensities, dtype=np.float64)
+        if arr.ndim != 2 or arr.shape[1] != len(self.actuators):
+            raise ValueError(f"intensities must be (T, {len(self.actuators)}), got {arr.shape}")
+        if not np.isfinite(arr).all():
+            raise ValueError("intensities must be finite (no NaN or inf)")
+        self.intensities = np.clip(arr, 0.0, 100.0)
+        self.actuators = tuple(self.actuators)
+        self.fps = float(self.fps)
+
+    # ------------------------------------------------------------------ facts
+    @property
+    def n_frames(self) -> int:
+        return int(self.intensities.shape[0])
+
+    @property
+    def duration(self) -> float:
+        return self.n_frames / self.fps
+
+    @property
+    def times(self) -> np.ndarray:
+        """``(T,)`` start time of each row, seconds."""
+        return np.arange(self.n_frames, dtype=np.float64) / self.fps
+
+    def device_columns(self, device: str) -> np.ndarray:
+        """Column indices of one device (``"VestFront"``, ``"ForearmL"``, ...), in index order."""
+        cols = [i for i, a in enumerate(self.actuators) if a.rsplit("_", 1)[0] == device]
+        cols.sort(key=lambda i: int(self.actuators[i].rsplit("_", 1)[1]))
+        return np.asarray(cols, dtype=np.intp)
+
+    def devices(self) -> list[str]:
+        """Device names in first-appearance order."""
+        seen: list[str] = []
+        for a in self.actuators:
+            d = a.rsplit("_", 1)[0]
+            if d not in seen:
+                seen.append(d)
+        return seen
+
+    def with_intensities(self, intensities: np.ndarray, **meta: Any) -> "HapticTrack":
+        """A copy with other intensities (same fps, actuators, layout); ``meta`` entries are added."""
+        m = dict(self.meta)
+        m.update(meta)
+        return replace(self, intensities=intensities, meta=m, debug=dict(self.debug))
+
+    # ------------------------------------------------------------------ files
+    def save(self, path: "str | os.PathLike[str]") -> None:
+        """Write the track; the format follows the extension (``.csv``, ``.json``, ``.npz``, ``.tact``).
+
+        The file appears whole or not at all (written to a temporary file, then renamed).
+        """
+        from .writers import save_track
+
+        save_track(self, path)

@@ -1,0 +1,45 @@
+"""Track files: ``save_track`` / ``load_track`` by extension (.csv, .json, .npz, .tact).
+
+Every writer goes through :func:`atomic_path`, so an output file appears whole or not at all.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from ..errors import InputError, UsageError
+from ..track import HapticTrack
+from .atomic import atomic_path
+from .csv_track import read_csv, write_csv
+from .json_track import read_json, write_json
+from .npz_track import read_npz, write_npz
+from .tact import read_tact, tact_paths, write_tact
+
+WRITERS = {".csv": write_csv, ".json": write_json, ".npz": write_npz, ".tact": write_tact}
+READERS = {".csv": read_csv, ".json": read_json, ".npz": read_npz, ".tact": read_tact}
+
+__all__ = ["WRITERS", "READERS", "atomic_path", "load_track", "save_track", "tact_paths"]
+
+
+def _ext(path: "str | os.PathLike[str]", table: dict) -> str:
+    ext = Path(path).suffix.lower()
+    if ext not in table:
+        raise UsageError(
+            f"{os.fspath(path)}: unknown track extension {ext or '(none)'!r}; expected one of {', '.join(table)}"
+        )
+    return ext
+
+
+def save_track(track: HapticTrack, path: "str | os.PathLike[str]") -> None:
+    """Write ``track`` in the format its extension names. ``.tact`` also writes one file per sleeve (see tact.py)."""
+    WRITERS[_ext(path, WRITERS)](track, Path(path))
+
+
+def load_track(path: "str | os.PathLike[str]") -> HapticTrack:
+    """Read a track written by :func:`save_track` (CSV files from other tools work if they follow the schema)."""
+    ext = _ext(path, READERS)
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(p, None, "expected a track file, found nothing there")
+    return READERS[ext](p)

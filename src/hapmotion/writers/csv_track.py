@@ -1,0 +1,48 @@
+"""CSV track schema (stable; other tools rely on it).
+
+Header ``time_s,<actuator ids in column order>``; for the default layout
+``time_s,VestFront_0,...,VestFront_19,VestBack_0,...,VestBack_19,ForearmL_0,...,ForearmL_5,ForearmR_0,...,ForearmR_5``.
+One row per frame; ``time_s`` is the frame start in seconds (6 decimals); intensities 0..100 with 2 decimals.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..track import HapticTrack
+from .atomic import atomic_path
+
+
+def write_csv(track: HapticTrack, path: Path) -> None:
+    header = "time_s," + ",".join(track.actuators)
+    data = np.column_stack([track.times, track.intensities])
+    fmt = ["%.6f"] + ["%.2f"] * track.intensities.shape[1]
+    with atomic_path(path) as tmp:
+        np.savetxt(tmp, data, delimiter=",", header=header, comments="", fmt=fmt)
+
+
+def read_csv(path: Path) -> HapticTrack:
+    with open(path, encoding="utf-8") as fh:
+        header = fh.readline().strip()
+    cols = header.split(",")
+    if not cols or cols[0] != "time_s" or len(cols) < 2:
+        raise InputError(path, "line 1", f"expected a header starting with time_s and actuator ids, found {header[:60]!r}")
+    try:
+        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    except ValueError as err:
+        raise InputError(path, None, f"expected {len(cols)} numbers per row: {err}") from None
+    if data.shape[0] == 0:
+        raise InputError(path, None, "expected at least one row, found 0")
+    if data.shape[1] != len(cols):
+        raise InputError(path, "line 2", f"expected {len(cols)} values per row, found {data.shape[1]}")
+    if not np.isfinite(data).all():
+        row = int(np.flatnonzero(~np.isfinite(data).all(axis=1))[0])
+        raise InputError(path, f"line {row + 2}", "expected finite numbers, found NaN or inf")
+    times = data[:, 0]
+    # the whole span is more precise than one 6-decimal step (1/60 s is written 0.016667)
+    span = float(times[-1] - times[0])
+    fps = round((len(times) - 1) / span, 4) if len(times) > 1 and span > 0 else 60.0
+    return HapticTrack(intensities=data[:, 1:], fps=fps, actuators=tuple(cols[1:]), meta={"source": str(path)})

@@ -1,0 +1,60 @@
+"""JSON track: ``{"format": "hapmotion-track", "version": 1, "fps", "layout", "actuators", "meta", "frames"}``.
+
+``frames`` is a list of rows (one per frame) of intensities 0..100 rounded to 2 decimals, in ``actuators`` order.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..track import HapticTrack
+from .atomic import atomic_path
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj
+
+
+def write_json(track: HapticTrack, path: Path) -> None:
+    doc = {
+        "format": "hapmotion-track",
+        "version": 1,
+        "fps": track.fps,
+        "layout": track.layout,
+        "actuators": list(track.actuators),
+        "meta": _jsonable(track.meta),
+        "frames": np.round(track.intensities, 2).tolist(),
+    }
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(doc, separators=(",", ":")), encoding="utf-8")
+
+
+def read_json(path: Path) -> HapticTrack:
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as err:
+        raise InputError(path, f"line {err.lineno}", f"expected JSON: {err.msg}") from None
+    if not isinstance(doc, dict) or doc.get("format") != "hapmotion-track":
+        raise InputError(path, "field format", "expected \"hapmotion-track\"")
+    try:
+        frames = np.asarray(doc["frames"], dtype=np.float64)
+        actuators = tuple(doc["actuators"])
+        fps = float(doc["fps"])
+    except (KeyError, TypeError, ValueError) as err:
+        raise InputError(path, "field frames/actuators/fps", f"expected a list of rows, ids and a rate: {err}") from None
+    if frames.ndim != 2 or frames.shape[1] != len(actuators) or frames.shape[0] == 0:
+        raise InputError(path, "field frames", f"expected rows of {len(actuators)} values, found shape {frames.shape}")
+    return HapticTrack(intensities=frames, fps=fps, actuators=actuators, layout=str(doc.get("layout", "")),
+                       meta=dict(doc.get("meta") or {}))
