@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..body.frame import DEFAULT_AXES, body_axes, to_body, to_world
+from ..body.frame import DEFAULT_AXES, body_axes_into, to_body_into, to_world_into
 
 # ---- joints given to the kernel, (T, 7, 3) world metres
 J_HAND_L, J_HAND_R, J_SHOULDER_L, J_SHOULDER_R, J_TORSO, J_PELVIS, J_NECK = range(7)
@@ -62,6 +62,14 @@ def new_state(n_actuators: int) -> np.ndarray:
 @njit(cache=True)
 def _clip(x, lo, hi):
     return lo if x < lo else (hi if x > hi else x)
+
+
+@njit(cache=True)
+def _dist(p, q):
+    dx = p[0] - q[0]
+    dy = p[1] - q[1]
+    dz = p[2] - q[2]
+    return np.sqrt(dx * dx + dy * dy + dz * dz)
 
 
 @njit(cache=True)
@@ -196,8 +204,19 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
     fps = prm[P_FPS]
     window = int(prm[P_WINDOW])
     raw = np.zeros(n_act)
-    jt = np.empty(7 * 3).reshape(7, 3)
-    axes_prev = state[ST_AXES:ST_AXES + 9].copy().reshape(3, 3)
+    jt = np.empty((7, 3))
+    axes = state[ST_AXES:ST_AXES + 9].copy().reshape(3, 3)
+    # scratch, allocated once: the loop itself allocates nothing
+    acc = np.zeros(2)
+    thr = np.zeros(2)
+    excess = np.zeros(2)
+    above = np.zeros(2, dtype=np.bool_)
+    prev_dp = np.zeros(3)
+    dp = np.zeros(3)
+    p = np.zeros(3)
+    hit = np.zeros(3)
+    hit_w = np.zeros(3)
+    tp_w = np.zeros(3)
     a_att = prm[P_ATTACK]
     a_rel = prm[P_RELEASE]
     c_level = prm[P_C]
@@ -232,15 +251,14 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             continue
 
         # ---- step 1-2: body frame, J_T
-        axes, _fallback = body_axes(jt[J_SHOULDER_L], jt[J_SHOULDER_R], jt[J_PELVIS], jt[J_NECK], axes_prev)
-        axes_prev = axes
+        body_axes_into(jt[J_SHOULDER_L], jt[J_SHOULDER_R], jt[J_PELVIS], jt[J_NECK], axes)  # keeps last if degenerate
         torso = jt[J_TORSO]
         seen = state[ST_SEEN]
 
         # ---- step 3-4: hand accelerations relative to J_T and their thresholds
-        acc = np.zeros(2)
         energy = 0.0
         for h in range(2):
+            acc[h] = 0.0
             for k in range(3):
                 rel = jt[h, k] - torso[k]
                 vel = (rel - state[ST_PREV_REL + 3 * h + k]) * fps if seen >= 1.0 else 0.0
@@ -251,7 +269,8 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
                 state[ST_PREV_VEL + 3 * h + k] = vel
             acc[h] = np.sqrt(acc[h])
         n_hist = int(state[ST_HIST_COUNT])
-        thr = np.full(2, np.inf)
+        thr[0] = np.inf
+        thr[1] = np.inf
         if n_hist > 0:
             m = n_hist if n_hist < window else window
             for h in range(2):
@@ -267,15 +286,15 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
                 state[ST_HIST + h * MAX_WINDOW + pos] = acc[h]
             state[ST_HIST_POS] = (pos + 1) % MAX_WINDOW
             state[ST_HIST_COUNT] = n_hist + 1 if n_hist + 1 < MAX_WINDOW else MAX_WINDOW
-        above = np.zeros(2, dtype=np.bool_)
-        excess = np.zeros(2)
         for h in range(2):
+            above[h] = False
+            excess[h] = 0.0
             if acc[h] > thr[h] and acc[h] > prm[P_FLOOR]:
                 above[h] = True
                 excess[h] = _clip((acc[h] - thr[h]) / max(thr[h], 1e-9), 0.0, 1e9)
 
-        dist_l = np.sqrt(((jt[J_HAND_L] - torso) ** 2).sum())
-        dist_r = np.sqrt(((jt[J_HAND_R] - torso) ** 2).sum())
+        dist_l = _dist(jt[J_HAND_L], torso)
+        dist_r = _dist(jt[J_HAND_R], torso)
         if above[0] and above[1]:
             choice = 3
         elif above[0]:
@@ -291,14 +310,13 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         state[ST_CHOICE] = choice
 
         # ---- step 5: triangle, weights, dynamic point (Eq. 1)
-        prev_dp = state[ST_PREV_DP:ST_PREV_DP + 3].copy()
-        if seen < 1.0:
-            prev_dp[:] = torso
+        for k in range(3):
+            prev_dp[k] = state[ST_PREV_DP + k] if seen >= 1.0 else torso[k]
         if choice == 3:
             va = jt[J_HAND_L]
             vr = jt[J_HAND_R]
-            d_l = np.sqrt(((jt[J_HAND_L] - prev_dp) ** 2).sum())
-            d_r = np.sqrt(((jt[J_HAND_R] - prev_dp) ** 2).sum())
+            d_l = _dist(jt[J_HAND_L], prev_dp)
+            d_r = _dist(jt[J_HAND_R], prev_dp)
             # the extra weight goes to the hand farther from the dynamic point
             if d_l >= d_r:
                 w_a = 1.0 + prm[P_W_GAIN] * min(excess[0], prm[P_W_MAX])
@@ -323,7 +341,6 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             boost_excess = excess[1]
             hand = jt[J_HAND_R]
         w_t = 1.0
-        dp = np.empty(3)
         if prm[P_METHOD] > 0.5:  # baseline: the active hand itself
             for k in range(3):
                 dp[k] = hand[k]
@@ -335,7 +352,7 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             state[ST_PREV_DP + k] = dp[k]
 
         # ---- step 7-8: intensity from distance (Eq. 2) and the acceleration boost
-        dist = np.sqrt(((dp - torso) ** 2).sum())
+        dist = _dist(dp, torso)
         d_norm = _clip((dist - prm[P_NEAR]) / (prm[P_IFAR] - prm[P_NEAR]), 0.0, 1.0)
         target = d_norm * c_level
         prev_level = state[ST_LEVEL]
@@ -346,13 +363,12 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         total_level = min(level + boost, prm[P_MAX_LEVEL])
 
         # ---- step 6: locate the point on the vest
-        p = to_body(dp, torso, axes)
+        to_body_into(dp, torso, axes, p)
         if dist > prm[P_FAR]:  # out-of-range projection
             for k in range(3):
                 p[k] *= prm[P_FAR] / dist
         a = surf[S_A]
         b = surf[S_B]
-        hit = np.empty(3)
         face = FACE_SIDE
         direct = dist < prm[P_NEAR]
         if not direct:
@@ -425,8 +441,8 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             state[ST_OUT + dest] = x
 
         # ---- debug
-        hit_w = to_world(hit, torso, axes)
-        tp_w = to_world(tp_body, torso, axes)
+        to_world_into(hit, torso, axes, hit_w)
+        to_world_into(tp_body, torso, axes, tp_w)
         for k in range(3):
             dbg_f[t, D_DP + k] = dp[k]
             dbg_f[t, D_HIT + k] = hit_w[k]
@@ -441,4 +457,4 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         dbg_i[t, DI_ACTIVE_R] = 1 if (choice == 2 or choice == 3) else 0
         dbg_i[t, DI_CHART] = main_chart
         state[ST_SEEN] = seen + 1.0
-    state[ST_AXES:ST_AXES + 9] = axes_prev.ravel()
+    state[ST_AXES:ST_AXES + 9] = axes.ravel()

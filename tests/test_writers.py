@@ -1,0 +1,130 @@
+"""Track files: the CSV schema, the .tact structure bHaptics tools expect, round trips and atomic writes."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from synthetic import motion_from_frames, waving
+
+import hapmotion
+from hapmotion.errors import InputError, UsageError
+from hapmotion.layout import load_layout
+from hapmotion.track import HapticTrack
+from hapmotion.writers import load_track, save_track
+
+EXPECTED_HEADER = (
+    "time_s,"
+    + ",".join(f"VestFront_{i}" for i in range(20)) + ","
+    + ",".join(f"VestBack_{i}" for i in range(20)) + ","
+    + ",".join(f"ForearmL_{i}" for i in range(6)) + ","
+    + ",".join(f"ForearmR_{i}" for i in range(6))
+)
+
+
+@pytest.fixture(scope="module")
+def track() -> HapticTrack:
+    return hapmotion.render(motion_from_frames(waving(n=180)))
+
+
+def test_layout_ids_are_the_csv_schema_order():
+    assert "time_s," + ",".join(load_layout().actuators) == EXPECTED_HEADER
+
+
+def test_csv_schema(track, tmp_path):
+    path = tmp_path / "t.csv"
+    track.save(path)
+    lines = path.read_text().splitlines()
+    assert lines[0] == EXPECTED_HEADER
+    assert len(lines) == 1 + track.n_frames  # one row per input frame
+    first = [float(v) for v in lines[1].split(",")]
+    assert first[0] == 0.0 and len(first) == 53
+    last_time = float(lines[-1].split(",")[0])
+    assert last_time == pytest.approx((track.n_frames - 1) / track.fps, abs=1e-6)
+    back = load_track(path)
+    np.testing.assert_allclose(back.intensities, track.intensities, atol=0.005)
+    assert back.fps == pytest.approx(60.0)
+
+
+@pytest.mark.parametrize("ext", [".json", ".npz"])
+def test_json_and_npz_round_trip(track, tmp_path, ext):
+    path = tmp_path / f"t{ext}"
+    track.save(path)
+    back = load_track(path)
+    tol = 0.005 if ext == ".json" else 0.0
+    np.testing.assert_allclose(back.intensities, track.intensities, atol=tol)
+    assert back.actuators == track.actuators
+    assert back.fps == track.fps
+    if ext == ".npz":
+        assert set(back.debug) == set(track.debug)
+
+
+def test_tact_files_follow_the_designer_format(track, tmp_path):
+    path = tmp_path / "show.tact"
+    track.save(path)
+    vest = json.loads(path.read_text())
+    arms = {side: json.loads((tmp_path / f"show.Forearm{side}.tact").read_text()) for side in "LR"}
+    proj = vest["project"]
+    assert proj["layout"]["type"] == "Tactot"
+    assert set(proj["layout"]["layouts"]) == {"VestFront", "VestBack"}
+    assert len(proj["layout"]["layouts"]["VestFront"]) == 20
+    assert vest["intervalMillis"] == 20 and vest["size"] == 20
+    effect = proj["tracks"][0]["effects"][0]
+    assert effect["offsetTime"] == round(track.duration * 1000)
+    for pos, mode in effect["modes"].items():
+        assert mode["mode"] == "DOT_MODE"
+        cols = track.device_columns(pos)
+        for fb in mode["dotMode"]["feedback"]:
+            assert 0 <= fb["startTime"] < fb["endTime"] <= effect["offsetTime"]
+            for pt in fb["pointList"]:
+                assert 0 <= pt["index"] < 20
+                assert 0.0 < pt["intensity"] <= 1.0
+                # the value is the track's at the span's first frame
+                frame = round(fb["startTime"] * track.fps / 1000)
+                assert pt["intensity"] * 100 == pytest.approx(track.intensities[frame, cols[pt["index"]]], abs=0.5)
+    for side, doc in arms.items():
+        assert doc["project"]["layout"]["type"] == "Tactosy2"
+        assert list(doc["project"]["layout"]["layouts"]) == [f"Forearm{side}"]
+    back = load_track(path)
+    np.testing.assert_allclose(back.intensities, track.intensities, atol=0.5 + 1e-9)
+
+
+def test_failed_write_leaves_nothing_behind(track, tmp_path, monkeypatch):
+    path = tmp_path / "t.json"
+
+    def boom(*args, **kwargs):
+        raise RuntimeError("disk full")
+
+    monkeypatch.setattr("hapmotion.writers.json_track.json.dumps", boom)
+    with pytest.raises(RuntimeError):
+        track.save(path)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_tact_is_all_or_nothing(track, tmp_path, monkeypatch):
+    calls = {"n": 0}
+    real = json.dumps
+
+    def fail_third(*args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise RuntimeError("disk full")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr("hapmotion.writers.tact.json.dumps", fail_third)
+    with pytest.raises(RuntimeError):
+        track.save(tmp_path / "show.tact")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_unknown_extension_and_missing_folder(track, tmp_path):
+    with pytest.raises(UsageError, match="unknown track extension '.mp4'"):
+        save_track(track, tmp_path / "x.mp4")
+    with pytest.raises(InputError, match="expected an existing folder"):
+        save_track(track, tmp_path / "nope" / "x.csv")
+
+
+def test_track_refuses_nan():
+    with pytest.raises(ValueError):
+        HapticTrack(np.full((2, 52), np.nan), 60.0, load_layout().actuators)
