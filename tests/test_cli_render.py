@@ -1,0 +1,112 @@
+"""``hapmotion render`` / ``demo`` as a user runs them: files written, one-line errors, nothing half-written."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hapmotion.cli import main
+from hapmotion.writers import load_track
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+PUNCH = DATA / "motion" / "dataset-1_punch_normal_001.bvh"
+
+
+def run(args, capsys):
+    code = main([str(a) for a in args])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.mark.parametrize("ext", ["csv", "json", "npz", "tact"])
+def test_render_writes_each_format(tmp_path, capsys, ext):
+    out = tmp_path / f"punch.{ext}"
+    code, stdout, err = run(["render", PUNCH, "-o", out], capsys)
+    assert code == 0, err
+    assert out.is_file() and "wrote" in stdout
+    track = load_track(out)
+    assert track.n_frames == 224 and track.intensities.shape[1] == 52
+
+
+def test_render_options_change_the_result(tmp_path, capsys):
+    paths = {}
+    for name, extra in {
+        "mst": [],
+        "baseline": ["--method", "baseline"],
+        "energy": ["--preset", "energy"],
+        "nomirror": ["--no-mirror"],
+        "fps60": ["--fps", "60"],
+        "param": ["--param", "release_alpha=0.1"],
+    }.items():
+        paths[name] = tmp_path / f"{name}.npz"
+        code, _, err = run(["render", PUNCH, "-o", paths[name], *extra], capsys)
+        assert code == 0, err
+    tracks = {k: load_track(p) for k, p in paths.items()}
+    base = tracks["mst"].intensities
+    for k in ("baseline", "energy", "nomirror", "param"):
+        assert not np.array_equal(tracks[k].intensities, base), k
+    assert tracks["fps60"].fps == 60.0 and tracks["fps60"].n_frames == 447  # 224 frames at 30 fps -> 60 fps
+    assert tracks["nomirror"].meta["mirror"] is False
+
+
+@pytest.mark.parametrize(
+    "setup, args_tail, expect",
+    [
+        ("empty.bvh", "", "empty.bvh"),
+        ("notes.txt", "hello", "expected one of the extensions"),
+        ("truncated.bvh", "TRUNC", "line"),
+    ],
+)
+def test_bad_input_is_one_line_and_leaves_no_output(tmp_path, capsys, setup, args_tail, expect):
+    src = tmp_path / setup
+    if args_tail == "TRUNC":
+        lines = PUNCH.read_text().splitlines()
+        lines[-1] = " ".join(lines[-1].split()[:-3])  # the last frame misses three channel values
+        src.write_text("\n".join(lines) + "\n")
+    else:
+        src.write_text(args_tail)
+    out = tmp_path / "out.csv"
+    code, stdout, err = run(["render", src, "-o", out], capsys)
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1, err
+    assert "Traceback" not in err
+    assert expect in err
+    assert str(src.name) in err
+    assert not out.exists()
+    assert list(tmp_path.glob("*.part")) == []
+
+
+def test_missing_file_and_bad_options(tmp_path, capsys):
+    code, _, err = run(["render", tmp_path / "nope.bvh", "-o", tmp_path / "x.csv"], capsys)
+    assert code == 2 and "nope.bvh" in err and len(err.strip().splitlines()) == 1
+    code, _, err = run(["render", PUNCH, "-o", tmp_path / "x.mp4"], capsys)
+    assert code == 2 and ".mp4" in err
+    code, _, err = run(["render", PUNCH, "-o", tmp_path / "x.csv", "--preset", "loud"], capsys)
+    assert code == 2 and "unknown preset 'loud'" in err
+    code, _, err = run(["render", PUNCH, "-o", tmp_path / "x.csv", "--param", "speed=3"], capsys)
+    assert code == 2 and "--param 'speed=3'" in err
+    code, _, err = run(["render", "-o", tmp_path / "x.csv"], capsys)
+    assert code == 2 and "MOTION_FILE" in err
+    assert not list(tmp_path.iterdir())
+
+
+def test_help_explains_the_commands(capsys):
+    code, out, _ = run(["--help"], capsys)
+    assert code == 0
+    for word in ("render", "info", "demo", "live", "view", "plot", "evaluate"):
+        assert word in out
+    code, out, _ = run(["render", "--help"], capsys)
+    out = " ".join(out.split())  # help text is wrapped to the terminal width
+    assert code == 0 and "--method" in out and "--no-mirror" in out and "wearer's left" in out
+
+
+def test_console_script_runs_in_a_fresh_process(tmp_path):
+    out = tmp_path / "p.csv"
+    proc = subprocess.run([sys.executable, "-m", "hapmotion", "render", str(PUNCH), "-o", str(out)],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert out.read_text().splitlines()[0].startswith("time_s,VestFront_0,")
