@@ -110,3 +110,45 @@ def test_console_script_runs_in_a_fresh_process(tmp_path):
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert out.read_text().splitlines()[0].startswith("time_s,VestFront_0,")
+
+
+SONG = DATA / "audio" / "vibe_ace.ogg"  # 61.5 s
+
+
+def test_audio_only_track_at_a_chosen_rate(tmp_path, capsys):
+    out = tmp_path / "music.csv"
+    code, stdout, err = run(["render", "--audio", SONG, "-o", out, "--fps", "50"], capsys)
+    assert code == 0, err
+    track = load_track(out)
+    assert track.fps == 50.0
+    assert track.n_frames == pytest.approx(61.5 * 50, abs=60)
+    assert "mode audio" in stdout
+    assert track.intensities.max() > 50  # kicks drive the motors hard
+
+
+def test_multimodal_lengths_and_mix(tmp_path, capsys):
+    longer, cut, motion_only = tmp_path / "a.npz", tmp_path / "b.npz", tmp_path / "c.npz"
+    assert run(["render", PUNCH, "--audio", SONG, "-o", longer], capsys)[0] == 0
+    assert run(["render", PUNCH, "--audio", SONG, "-o", cut, "--length", "motion"], capsys)[0] == 0
+    assert run(["render", PUNCH, "-o", motion_only], capsys)[0] == 0
+    a, b, c = load_track(longer), load_track(cut), load_track(motion_only)
+    assert a.fps == b.fps == 30.0
+    assert a.n_frames > 1800  # as long as the song
+    assert b.n_frames == c.n_frames == 224  # cut to the motion
+    assert a.meta["mode"] == "multimodal"
+    # with the music mixed in, the vest vibrates more often than with the motion alone
+    assert (b.intensities.max(axis=1) > 0).mean() >= (c.intensities.max(axis=1) > 0).mean()
+    assert not np.array_equal(b.intensities, c.intensities)
+
+
+def test_bad_audio_and_mix_options(tmp_path, capsys):
+    out = tmp_path / "x.csv"
+    code, _, err = run(["render", PUNCH, "--audio", SONG, "-o", out, "--mix", "2:x"], capsys)
+    assert code == 2 and "2:x" in err and len(err.strip().splitlines()) == 1
+    bad = tmp_path / "song.ogg"
+    bad.write_bytes(b"not audio at all")
+    code, _, err = run(["render", PUNCH, "--audio", bad, "-o", out], capsys)
+    assert code == 2 and "song.ogg" in err and len(err.strip().splitlines()) == 1
+    code, _, err = run(["render", PUNCH, "-o", out, "--mode", "audio"], capsys)
+    assert code == 2 and "--audio" in err
+    assert not out.exists()

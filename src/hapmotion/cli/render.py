@@ -50,14 +50,15 @@ def motion_reader_options(func):
     return motion_options(func)
 
 
-def load_motion_cli(path: str, **opts):
+def load_motion_cli(path: str, motion_opts: dict | None = None):
+    """Read a motion file with the reader options the command received (``motion_opts``)."""
     try:
         from .info import load_from_cli
     except ImportError:
         from ..readers import load_motion
 
         return load_motion(path)
-    return load_from_cli(path, **opts)
+    return load_from_cli(path, **(motion_opts or {}))
 
 
 def progress_bar(total: int, label: str):
@@ -88,17 +89,18 @@ def progress_bar(total: int, label: str):
 @click.option("--audio", "audio_file", type=click.Path(dir_okay=False), default=None,
               help="Music file (WAV, FLAC, Ogg, MP3) for the audio channel.")
 @click.option("--mode", type=click.Choice(MODES), default=None,
-              help="Which channels: motion, audio, or multimodal (both mixed). Default: multimodal with --audio, else motion.")
+              help="Which channels: motion, audio, or multimodal (both mixed). Default: multimodal with a motion file and "
+                   "--audio, audio with --audio alone, else motion.")
 @click.option("--mix", "mix_ratio", default="2:3", show_default=True, help="audio:motion ratio of the multimodal mix.")
 @click.option("--mix-domain", type=click.Choice(["linear", "energy"]), default="linear", show_default=True,
               help="linear: the paper's weighted sum; energy: weighted sum of squared intensities.")
 @click.option("--audio-offset", type=float, default=0.0, show_default=True,
-              help="Seconds of music before the motion's first frame (negative: the music starts later).")
+              help="Seconds to delay the music against the motion (negative: skip the start of the song).")
 @click.option("--length", type=click.Choice(["longer", "motion"]), default="longer", show_default=True,
               help="Track length with both inputs: as long as the longer one, or cut to the motion.")
 @motion_reader_options
 def command(motion_file, output, method, preset, params, no_mirror, fps, layout_file, audio_file, mode, mix_ratio,
-            mix_domain, audio_offset, length, **reader_opts):
+            mix_domain, audio_offset, length, motion_opts=None):
     """Render MOTION_FILE (BVH, Azure Kinect JSON, AIST++ .pkl, CSV/NPZ joints) into a haptic track.
 
     With --audio the music is rendered too and mixed with the motion (audio:motion = 2:3 by default, as in the
@@ -108,7 +110,8 @@ def command(motion_file, output, method, preset, params, no_mirror, fps, layout_
     from ..render import render
     from ..render.renderer import resolve_params
 
-    mode = mode or ("multimodal" if audio_file else "motion")
+    if mode is None:
+        mode = "motion" if not audio_file else ("multimodal" if motion_file else "audio")
     if mode in ("audio", "multimodal") and not audio_file:
         raise UsageError(f"--mode {mode} needs --audio SONG")
     if mode in ("motion", "multimodal") and not motion_file:
@@ -122,7 +125,7 @@ def command(motion_file, output, method, preset, params, no_mirror, fps, layout_
 
     motion_track = None
     if mode != "audio":
-        motion = load_motion_cli(motion_file, **reader_opts)
+        motion = load_motion_cli(motion_file, motion_opts)
         if fps is not None:
             motion = motion.resample(fps)
         update, close = progress_bar(motion.n_frames, "rendering")
@@ -138,7 +141,7 @@ def command(motion_file, output, method, preset, params, no_mirror, fps, layout_
 
         track = combine(motion_track, audio_file, mode=mode, ratio=parse_mix_ratio(mix_ratio), offset_s=audio_offset,
                         fps=(fps or 60.0) if motion_track is None else motion_track.fps, domain=mix_domain,
-                        length=length, actuators=layout.actuators)
+                        length=length, actuators=layout)
     track.save(out_path)
     peak = float(track.intensities.max()) if track.n_frames else 0.0
     click.echo(f"wrote {out_path} ({track.n_frames} frames at {track.fps:g} fps, {track.duration:.2f} s, "

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
+import secrets
 from pathlib import Path
 from typing import Iterator
 
@@ -21,12 +21,13 @@ def atomic_path(path: "str | os.PathLike[str]") -> Iterator[Path]:
     folder = target.parent if str(target.parent) else Path(".")
     if not folder.is_dir():
         raise InputError(target, None, f"expected an existing folder {folder}, found none")
+    tmp_path = folder / f".{target.name}.{secrets.token_hex(4)}.part"
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=folder)
+        # a plain exclusive create, so the file gets the user's umask permissions (mkstemp would give 0600)
+        with open(tmp_path, "xb"):
+            pass
     except OSError as err:
         raise InputError(target, None, f"cannot write there: {err.strerror}") from None
-    os.close(fd)
-    tmp_path = Path(tmp)
     try:
         yield tmp_path
         os.replace(tmp_path, target)
