@@ -22,8 +22,8 @@ KERNEL_JOINTS = ("HAND_LEFT", "HAND_RIGHT", "SHOULDER_LEFT", "SHOULDER_RIGHT", "
 # ---- parameter vector (float64), filled by render.renderer.pack_params
 (P_METHOD, P_WINDOW, P_FLOOR, P_IDLE_FARTHER, P_W_GAIN, P_W_MAX, P_NEAR, P_FAR, P_SIDE_BLEND, P_C,
  P_ATTACK, P_RELEASE, P_BOOST, P_BOOST_FULL, P_MAX_LEVEL, P_PCT, P_PHANTOM_ENERGY, P_TOL, P_BETA, P_DEAD,
- P_REL_DECAY, P_FPS, P_IFAR) = range(23)
-N_PARAMS = 23
+ P_REL_DECAY, P_FPS, P_IFAR, P_SILENCE) = range(24)
+N_PARAMS = 24
 
 # ---- surface vector (float64): BodyModel.as_array()
 S_A, S_B, S_YBOT, S_YTOP, S_YROW0, S_YROWN, S_YSLEEVE, S_TPX, S_TPY, S_TPZ = range(10)
@@ -391,6 +391,9 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
 
         # ---- which chart, where on it
         amp = total_level * prm[P_PCT]
+        if prm[P_BETA] > 0.0 and amp > 0.0:
+            # perceived magnitude -> drive, before the split so the split's energy rule still holds
+            amp = 100.0 * (min(amp, 100.0) / 100.0) ** (1.0 / prm[P_BETA])
         sl_x0 = charts[2, 3]
         sl_x1 = charts[2, 4]
         on_sleeve = (face == FACE_TOP or (face == FACE_SIDE and hit[1] >= surf[S_YSLEEVE])) and abs(hit[0]) >= sl_x0 * a
@@ -423,19 +426,20 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
                 _split(1, u, v, 1.0 - w_front, amp, charts, prm, raw)
             main_chart = 0 if w_front >= 0.5 else 1
 
-        # ---- beyond the paper: perceptual mapping, ERM dead zone, per-actuator release; mirror; clip
+        # ---- beyond the paper: ERM dead zone, per-actuator release; mirror; clip
         decay = prm[P_REL_DECAY]
+        silence = prm[P_SILENCE]
+        # a released tail ends where a motor would stall anyway
+        tail_end = prm[P_DEAD] if prm[P_DEAD] > silence else silence
         for k in range(n_act):
             x = raw[k]
-            if prm[P_BETA] > 0.0 and x > 0.0:
-                x = 100.0 * (min(x, 100.0) / 100.0) ** (1.0 / prm[P_BETA])
             if prm[P_DEAD] > 0.0:
-                x = 0.0 if x < 0.5 else prm[P_DEAD] + (100.0 - prm[P_DEAD]) * min(x, 100.0) / 100.0
+                x = 0.0 if x < silence else prm[P_DEAD] + (100.0 - prm[P_DEAD]) * min(x, 100.0) / 100.0
             x = _clip(x, 0.0, 100.0)
             dest = mirror_map[k]
             if decay > 0.0:
                 held = state[ST_OUT + dest] * decay
-                if held > x:
+                if held > x and held >= tail_end:
                     x = held
             out[t, dest] = x
             state[ST_OUT + dest] = x

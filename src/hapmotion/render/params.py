@@ -86,10 +86,14 @@ class Params:
 
     # --- beyond the paper --------------------------------------------------------------------------------------
     perceptual_exponent: float = 0.0
-    """Stevens exponent beta: output = 100 (x/100)^(1/beta), mapping perceived magnitude to drive; 0 = off."""
+    """Stevens exponent beta: the level's drive 100 (x/100)^(1/beta), mapping perceived magnitude to drive,
+    applied before the phantom split; 0 = off."""
     dead_zone: float = 0.0
-    """Percent. Non-zero outputs are lifted to ``dead_zone + (100 - dead_zone) x / 100`` so they clear the ERM
-    start threshold; outputs below 0.5 % are set to 0. 0 = off."""
+    """Percent. Outputs of at least ``silence_floor`` are lifted to ``dead_zone + (100 - dead_zone) x / 100`` so
+    they clear the ERM start threshold; smaller ones are set to 0. 0 = off."""
+    silence_floor: float = 0.5
+    """Percent. With a dead zone, outputs below this are silence rather than lifted (the Player takes integer
+    percents, so less than 0.5 % rounds to 0 anyway); released tails also end here or at the dead zone."""
     actuator_release_s: float = 0.0
     """Per-actuator release time constant, seconds: outputs rise at once and decay no faster than this
     (smooths location jumps for slow ERMs); 0 = off."""
@@ -129,10 +133,9 @@ PRESETS: dict[str, Params] = {
     "energy": Params(
         phantom="energy",
         attack_alpha=0.6,
-        release_alpha=0.15,
-        actuator_release_s=0.06,
-        dead_zone=8.0,
-        perceptual_exponent=0.0,
+        release_alpha=0.3,
+        dead_zone=10.0,
+        intensity_far_m=0.5,
     ),
 }
 """Named parameter sets. ``paper``: the paper's values. ``energy``: energy-preserving phantom split, asymmetric

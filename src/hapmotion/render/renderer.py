@@ -63,6 +63,7 @@ def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
     p[K.P_REL_DECAY] = float(np.exp(-1.0 / (fps * params.actuator_release_s))) if params.actuator_release_s > 0 else 0.0
     p[K.P_FPS] = fps
     p[K.P_IFAR] = params.intensity_far_m if params.intensity_far_m > 0 else params.far_m
+    p[K.P_SILENCE] = params.silence_floor
     return p
 
 

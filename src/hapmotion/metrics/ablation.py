@@ -1,0 +1,115 @@
+"""Which knob of the ``energy`` preset does what: score renderer variants on recordings and the sweep bench.
+
+Each variant is the ``paper`` preset with some parameters changed; every variant is rendered with both methods on
+every recording and scored (:func:`hapmotion.metrics.scorecard.score_track`), and the table shows the mean over
+recordings and methods (median for the lags), so one line per knob setting answers "what did this change do". The numbers quoted in
+docs/metrics.md come from::
+
+    python -m hapmotion.metrics.ablation ../shared/data/motion/*.bvh ../shared/data/motion/*.pkl
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..render.params import PRESETS, Params
+from .scorecard import COLUMNS, PERCENT_KEYS, score_track
+from .sweep import run_bench
+
+SHOWN = ("reach_r", "reach_lag_ms", "locus_cm", "locus_skin_cm", "constancy_db", "sparc", "toggles_s", "hf_power",
+         "dead_zone", "skin_rms")
+
+PAPER = PRESETS["paper"]
+
+PROPOSED: dict[str, Any] = {"phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.3, "dead_zone": 10.0,
+                            "actuator_release_s": 0.0}
+"""The energy preset values docs/metrics.md argues for (changes from ``paper``)."""
+
+CURRENT = {f: getattr(PRESETS["energy"], f) for f in ("phantom", "attack_alpha", "release_alpha", "dead_zone",
+                                                       "actuator_release_s", "perceptual_exponent")}
+"""The ``energy`` preset as params.py defines it today (changes from ``paper``)."""
+
+VARIANTS: dict[str, dict[str, Any]] = {
+    "paper": {},
+    "+ energy split": {"phantom": "energy"},
+    "+ attack 0.6 / release 0.15": {"phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.15},
+    "+ dead zone 8": {"phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.15, "dead_zone": 8.0},
+    "+ actuator release 0.06 s": {
+        "phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.15, "dead_zone": 8.0, "actuator_release_s": 0.06},
+    "energy (params.py)": CURRENT,
+    "proposed energy": PROPOSED,
+}
+"""Cumulative steps from ``paper`` towards the ``energy`` preset, the preset itself and the proposal; :func:`main`
+adds variants given on the command line as ``NAME=VALUE,...`` on top of the proposal."""
+
+
+def score_variants(motions: dict[str, Any], variants: dict[str, dict[str, Any]],
+                   methods: Sequence[str] = ("mst", "baseline")) -> dict[str, dict[str, float]]:
+    """Mean of every metric over recordings and methods, per variant; the median for the lags, which are only as
+    steady as the correlation behind them (a weakly coupled or periodic recording can put its peak anywhere in the
+    +-1 s window). ``None`` values are left out."""
+    from ..render import render
+
+    out: dict[str, dict[str, float]] = {}
+    for name, changes in variants.items():
+        params = PAPER.replace(**changes)
+        acc: dict[str, list[float]] = {c.key: [] for c in COLUMNS}
+        for motion in motions.values():
+            for method in methods:
+                s = score_track(render(motion, method=method, params=params), motion)
+                for k, v in s.items():
+                    if v is not None and k in acc:
+                        acc[k].append(v)
+        out[name] = {k: float(np.median(v) if k.endswith("lag_ms") else np.mean(v)) for k, v in acc.items() if v}
+        bench = run_bench({name: params}, ("row", "diagonal"))
+        out[name]["bench_row_db"] = bench[0]["range_db"]
+        out[name]["bench_diag_db"] = bench[1]["range_db"]
+        out[name]["bench_skin_row_db"] = bench[0]["range_skin_db"]
+    return out
+
+
+def markdown(results: dict[str, dict[str, float]]) -> str:
+    """The ablation table in Markdown (percent columns x100)."""
+    cols = [c for c in COLUMNS if c.key in SHOWN]
+    head = ["variant"] + [f"{c.header} ({c.unit})" if c.unit else c.header for c in cols]
+    head += ["bench row (dB)", "bench diagonal (dB)", "bench row, skin (dB)"]
+    lines = ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    for name, r in results.items():
+        cells = [name]
+        for c in cols:
+            v = r.get(c.key)
+            cells.append("–" if v is None else format(100 * v if c.key in PERCENT_KEYS else v, c.fmt))
+        cells += [format(r[k], ".2f") if r.get(k) is not None else "–"
+                  for k in ("bench_row_db", "bench_diag_db", "bench_skin_row_db")]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _parse(spec: str) -> tuple[str, dict[str, Any]]:
+    from ..cli.render import parse_param_overrides
+
+    return spec, parse_param_overrides(tuple(spec.split(",")))
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """``python -m hapmotion.metrics.ablation MOTION... [-- NAME=VALUE,...]...``: print the ablation table."""
+    from ..readers import load_motion
+
+    args = list(sys.argv[1:] if argv is None else argv)
+    extra = []
+    if "--" in args:
+        k = args.index("--")
+        args, extra = args[:k], args[k + 1:]
+    motions = {p: load_motion(p) for p in args}
+    variants = dict(VARIANTS)
+    for spec in extra:
+        name, changes = _parse(spec)
+        variants[f"proposed, {name}"] = {**PROPOSED, **changes}
+    print(markdown(score_variants(motions, variants)))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,410 @@
+"""hapmotion's own motion tables, CSV and NPZ, so any tool can feed us (format in docs/formats.md).
+
+CSV: a header ``time_s,<JOINT>_x,<JOINT>_y,<JOINT>_z,...[,<JOINT>_conf]`` with canonical joint names (case-insensitive,
+``SPINE_NAVAL`` accepted), then one row per frame. Metres and +Y up unless the ``units``/``scale``/``up`` options say
+otherwise. An empty cell or ``nan`` is a missing sample (a gap); ``_conf`` is 0..1 and 0 also marks a gap.
+``time_s`` must increase with uniform steps (within 1 %); the frame rate is 1 / median step, or the ``fps`` option
+(then ``time_s`` is not needed).
+
+NPZ: ``positions`` (T, J, 3) metres, ``joints`` (J,) names, ``fps`` scalar; optional ``confidence`` (T, J) 0..1 and
+``derived`` (J,) bool.
+
+:func:`save_motion_table` writes both (atomically), so a motion read from any format can be converted.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+import re
+import tempfile
+import zipfile
+from typing import Any, Optional
+
+import numpy as np
+
+from ..errors import InputError, UsageError
+from ..joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS, canonical
+from ..motion import Motion, new_motion
+from ._common import (
+    apply_up_axis,
+    check_fps_option,
+    check_skip_option,
+    derive_missing,
+    read_bytes,
+    units_or_default,
+)
+
+UNIFORM_TOLERANCE = 0.01
+"""Largest relative deviation of a ``time_s`` step from the median step."""
+
+_COLUMN = re.compile(r"^(?P<joint>.+)_(?P<part>x|y|z|conf)$", re.I)
+
+
+# ------------------------------------------------------------------------------------------------------ helpers
+
+
+def _assemble(
+    path: str,
+    names: list[str],
+    xyz: np.ndarray,
+    conf: Optional[np.ndarray],
+    fps: float,
+    *,
+    fmt: str,
+    units: Optional[str],
+    scale: Optional[float],
+    up: Optional[str],
+    skip_frames: Optional[int],
+    derived_in: Optional[np.ndarray] = None,
+    notes: Optional[list[str]] = None,
+) -> Motion:
+    """Common tail of both table readers. ``xyz`` is ``(T, J, 3)`` in file units, ``names`` canonical."""
+    notes = list(notes or [])
+    metres, unit_text = units_or_default(units, scale, (1.0, "m"))
+    skip = check_skip_option(skip_frames, xyz.shape[0], path)
+    if skip:
+        xyz = xyz[skip:]
+        conf = conf[skip:] if conf is not None else None
+        notes.append(f"skipped the first {skip} frames (option skip_frames)")
+    cols = [JOINT_INDEX[n] for n in names]
+    positions = np.full((xyz.shape[0], N_JOINTS, 3), np.nan)
+    positions[:, cols] = apply_up_axis(xyz * metres, up, path)
+    if up is not None and str(up).strip().lower().lstrip("+") != "y":
+        notes.append(f"up axis {up} rotated to +Y")
+    valid = np.isfinite(positions).all(axis=2)
+    confidence = None
+    if conf is not None:
+        full = np.ones((xyz.shape[0], N_JOINTS), dtype=np.float32)
+        c = np.where(np.isnan(conf), 0.0, conf)
+        full[:, cols] = c
+        valid[:, cols] &= c > 0
+        confidence = full
+    derived = np.zeros(N_JOINTS, dtype=bool)
+    if derived_in is not None:
+        derived[cols] = derived_in
+    new_derived, derived_from = derive_missing(positions, only=RENDER_JOINTS)
+    derived |= new_derived
+    if new_derived.any():
+        valid |= new_derived[None, :] & np.isfinite(positions).all(axis=2)
+        if confidence is not None:
+            confidence[:, new_derived] = 0.5  # as new_motion does for derived joints without a confidence
+    meta = {
+        "format": fmt,
+        "skeleton": f"canonical joints ({len(names)} in the file)",
+        "units": unit_text,
+        "metres_per_unit": metres,
+        "source_joints": {n: n for n in JOINTS if n in names},
+        "derived_from": derived_from,
+        "skipped_frames": skip or 0,
+        "source_joints_available": list(names),
+        "notes": notes,
+    }
+    return new_motion(positions, fps, source=path, derived=derived, valid=valid, confidence=confidence, meta=meta)
+
+
+# ---------------------------------------------------------------------------------------------------------- CSV
+
+
+def _parse_header(path: str, header: str, line_no: int) -> tuple[Optional[int], list[str], dict[str, list[int]],
+                                                                  dict[str, int]]:
+    """(time column or None, joint names in order, joint -> [x, y, z] columns, joint -> conf column)."""
+    cells = [c.strip() for c in header.split(",")]
+    time_col = None
+    parts: dict[str, dict[str, int]] = {}
+    order: list[str] = []
+    seen: set[str] = set()
+    for k, cell in enumerate(cells):
+        where = f"line {line_no}, column {k + 1}"
+        low = cell.lower()
+        if low in seen:
+            raise InputError(path, where, f"expected unique column names, found '{cell}' twice")
+        seen.add(low)
+        if low == "time_s":
+            time_col = k
+            continue
+        m = _COLUMN.match(cell)
+        joint = None
+        if m:
+            try:
+                joint = canonical(m.group("joint"))
+            except KeyError:
+                joint = None
+        if joint is None:
+            raise InputError(path, where, f"expected time_s or <JOINT>_x/_y/_z/_conf with a canonical joint name "
+                             f"(PELVIS, SPINE_NAVEL, ..., HAND_LEFT, ...), found '{cell}'")
+        if joint not in parts:
+            parts[joint] = {}
+            order.append(joint)
+        key = m.group("part").lower()
+        if key in parts[joint]:
+            raise InputError(path, where, f"expected one {joint}_{key} column, found another one ('{cell}')")
+        parts[joint][key] = k
+    xyz_cols: dict[str, list[int]] = {}
+    conf_cols: dict[str, int] = {}
+    for joint in order:
+        have = parts[joint]
+        lacking = [a for a in "xyz" if a not in have]
+        if lacking:
+            raise InputError(path, f"line {line_no}", f"expected {joint}_x, {joint}_y and {joint}_z columns, found "
+                             f"no {', '.join(f'{joint}_{a}' for a in lacking)}")
+        xyz_cols[joint] = [have["x"], have["y"], have["z"]]
+        if "conf" in have:
+            conf_cols[joint] = have["conf"]
+    if not order:
+        raise InputError(path, f"line {line_no}", "expected <JOINT>_x, <JOINT>_y, <JOINT>_z columns, found none")
+    return time_col, order, xyz_cols, conf_cols
+
+
+def _cell(path: str, line_no: int, column: str, text: str) -> float:
+    t = text.strip()
+    if t == "" or t.lower() == "nan":
+        return math.nan
+    try:
+        v = float(t)
+    except ValueError:
+        raise InputError(path, f"line {line_no}", f"expected a number in column {column}, found '{t}'") from None
+    if math.isinf(v):
+        raise InputError(path, f"line {line_no}", f"expected a finite number in column {column}, found '{t}'")
+    return v
+
+
+def _csv_values(path: str, lines: list[str], first_line: int, header: list[str]) -> tuple[np.ndarray, list[int]]:
+    """``(R, C)`` values of the data lines and their 1-based line numbers; empty cells and ``nan`` are NaN.
+
+    Well-formed tables go through ``np.loadtxt`` in one call; anything it refuses (empty cells, bad text, ragged
+    rows) or an ``inf`` is read again cell by cell, which also finds the line and column to name in the error.
+    """
+    numbers = [first_line + k for k, ln in enumerate(lines) if ln.strip()]
+    if not numbers:
+        return np.empty((0, len(header))), numbers
+    try:
+        fast = np.loadtxt(lines, delimiter=",", ndmin=2, dtype=np.float64, comments=None)
+    except ValueError:
+        fast = None
+    if fast is not None and fast.shape == (len(numbers), len(header)) and not np.isinf(fast).any():
+        return fast, numbers
+    rows: list[list[float]] = []
+    numbers = []
+    numbers: list[int] = []
+    width = len(header)
+    for k, line in enumerate(lines):
+        if not line.strip():
+            continue
+        line_no = first_line + k
+        cells = line.split(",")
+        if len(cells) != width:
+            raise InputError(path, f"line {line_no}", f"expected {width} comma-separated values, found {len(cells)}")
+        rows.append([_cell(path, line_no, header[c], cells[c]) for c in range(width)])
+        numbers.append(line_no)
+    return np.array(rows, dtype=np.float64).reshape(len(rows), width), numbers
+
+
+def read_csv(
+    path: str | os.PathLike[str],
+    *,
+    units: Optional[str] = None,
+    scale: Optional[float] = None,
+    skip_frames: Optional[int] = None,
+    fps: Optional[float] = None,
+    up: Optional[str] = None,
+) -> Motion:
+    """Read a hapmotion CSV motion table (see the module docstring and docs/formats.md)."""
+    path = os.fspath(path)
+    check_fps_option(fps)
+    try:
+        text = read_bytes(path).decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise InputError(path, None, "expected UTF-8 text, found binary data") from None
+    lines = text.splitlines()
+    head = next((k for k, ln in enumerate(lines) if ln.strip()), None)
+    if head is None:
+        raise InputError(path, "line 1", "expected a header line (time_s,<JOINT>_x,...), found an empty file")
+    time_col, names, xyz_cols, conf_cols = _parse_header(path, lines[head], head + 1)
+    header = [c.strip() for c in lines[head].split(",")]
+    values, line_numbers = _csv_values(path, lines[head + 1:], head + 2, header)
+    if values.shape[0] == 0:
+        raise InputError(path, f"line {head + 2}", "expected at least one data row, found none")
+    notes: list[str] = []
+
+    if fps is not None:
+        rate = float(fps)
+        unused = " (time_s not used)" if time_col is not None else ""
+        notes.append(f"frame rate {rate:g} fps from the option{unused}")
+    elif time_col is None:
+        raise InputError(path, f"line {head + 1}", "expected a time_s column (or give the frame rate as an option)")
+    else:
+        rate = _rate_from_times(path, values[:, time_col], line_numbers)
+
+    xyz = values[:, [c for n in names for c in xyz_cols[n]]].reshape(-1, len(names), 3)
+    conf = None
+    if conf_cols:
+        conf = np.ones((values.shape[0], len(names)))
+        for j, n in enumerate(names):
+            if n in conf_cols:
+                conf[:, j] = values[:, conf_cols[n]]
+        bad = np.argwhere((conf < 0) | (conf > 1))
+        if len(bad):
+            r, j = bad[0]
+            raise InputError(path, f"line {line_numbers[r]}", f"expected {names[j]}_conf between 0 and 1, found "
+                             f"{conf[r, j]:g}")
+    return _assemble(path, names, xyz, conf, rate, fmt="hapmotion CSV", units=units, scale=scale, up=up,
+                     skip_frames=skip_frames, notes=notes)
+
+
+def _rate_from_times(path: str, t: np.ndarray, line_numbers: list[int]) -> float:
+    """Frames per second from a ``time_s`` column: increasing, uniform within 1 %."""
+    nan = np.flatnonzero(np.isnan(t))
+    if len(nan):
+        raise InputError(path, f"line {line_numbers[nan[0]]}", "expected a time in time_s, found an empty cell")
+    if len(t) < 2:
+        raise InputError(path, f"line {line_numbers[0]}", "expected at least two rows to measure the frame rate "
+                         "from time_s, found one (give the frame rate as an option)")
+    dt = np.diff(t)
+    bad = np.flatnonzero(dt <= 0)
+    if len(bad):
+        r = bad[0] + 1
+        raise InputError(path, f"line {line_numbers[r]}", f"expected time_s greater than {t[r - 1]:.9g} (the row "
+                         f"before), found {t[r]:.9g}")
+    step = float(np.median(dt))
+    off = np.flatnonzero(np.abs(dt - step) > UNIFORM_TOLERANCE * step)
+    if len(off):
+        r = off[0] + 1
+        raise InputError(path, f"line {line_numbers[r]}", f"expected a time step of {step:.6g} s (within 1 %), "
+                         f"found {dt[r - 1]:.6g} s; resample the table to a uniform rate or give fps")
+    return 1.0 / step
+
+
+# ---------------------------------------------------------------------------------------------------------- NPZ
+
+
+def read_npz(
+    path: str | os.PathLike[str],
+    *,
+    units: Optional[str] = None,
+    scale: Optional[float] = None,
+    skip_frames: Optional[int] = None,
+    fps: Optional[float] = None,
+    up: Optional[str] = None,
+) -> Motion:
+    """Read a hapmotion NPZ motion table (arrays ``positions``, ``joints``, ``fps``; optional ``confidence``,
+    ``derived``)."""
+    path = os.fspath(path)
+    check_fps_option(fps)
+    raw = read_bytes(path)
+    try:
+        with np.load(io.BytesIO(raw), allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+    except (zipfile.BadZipFile, EOFError, OSError) as err:
+        raise InputError(path, None, f"expected an .npz archive, found data that is not one ({err})") from None
+    except ValueError as err:
+        raise InputError(path, None, f"expected plain numeric/text arrays, found {err}") from None
+
+    def need(key: str) -> np.ndarray:
+        if key not in arrays:
+            raise InputError(path, f"field {key}", f"expected an array '{key}', found arrays "
+                             f"{', '.join(sorted(arrays)) or 'none'}")
+        return arrays[key]
+
+    pos = need("positions")
+    if pos.dtype.kind not in "fiu" or pos.ndim != 3 or pos.shape[2] != 3:
+        raise InputError(path, "field positions", f"expected a numeric array of shape (T, J, 3), found "
+                         f"{pos.dtype} {pos.shape}")
+    if pos.shape[0] == 0:
+        raise InputError(path, "field positions", "expected at least one frame, found 0")
+    if np.isinf(pos).any():
+        f, j, _ = np.argwhere(np.isinf(pos))[0]
+        raise InputError(path, f"field positions[{f}, {j}]", "expected finite values (NaN = missing), found inf")
+    joints = need("joints")
+    if joints.dtype.kind not in "US" or joints.shape != (pos.shape[1],):
+        raise InputError(path, "field joints", f"expected {pos.shape[1]} joint names (one per positions column), "
+                         f"found {joints.dtype} {joints.shape}")
+    names: list[str] = []
+    for k, raw_name in enumerate(joints):
+        name = raw_name.decode() if isinstance(raw_name, bytes) else str(raw_name)
+        try:
+            canon = canonical(name)
+        except KeyError:
+            raise InputError(path, f"field joints[{k}]", f"expected a canonical joint name, found '{name}'") from None
+        if canon in names:
+            raise InputError(path, f"field joints[{k}]", f"expected unique joint names, found '{name}' again")
+        names.append(canon)
+    notes: list[str] = []
+    if fps is not None:
+        rate = float(fps)
+        notes.append(f"frame rate {rate:g} fps from the option")
+    else:
+        f = need("fps")
+        if f.shape != () or f.dtype.kind not in "fiu" or not (float(f) > 0 and math.isfinite(float(f))):
+            raise InputError(path, "field fps", f"expected a positive number, found {f!r}")
+        rate = float(f)
+    conf = None
+    if "confidence" in arrays:
+        conf = arrays["confidence"]
+        if conf.dtype.kind not in "fiu" or conf.shape != pos.shape[:2]:
+            raise InputError(path, "field confidence", f"expected shape {pos.shape[:2]} numbers, found "
+                             f"{conf.dtype} {conf.shape}")
+        if ((conf < 0) | (conf > 1)).any():
+            raise InputError(path, "field confidence", "expected values between 0 and 1")
+    derived = None
+    if "derived" in arrays:
+        derived = arrays["derived"]
+        if derived.dtype != bool or derived.shape != (pos.shape[1],):
+            raise InputError(path, "field derived", f"expected {pos.shape[1]} booleans, found {derived.dtype} "
+                             f"{derived.shape}")
+    return _assemble(path, names, pos.astype(np.float64), conf, rate, fmt="hapmotion NPZ", units=units,
+                     scale=scale, up=up, skip_frames=skip_frames, derived_in=derived, notes=notes)
+
+
+# ------------------------------------------------------------------------------------------------------ writing
+
+
+def save_motion_table(motion: Motion, path: str | os.PathLike[str]) -> None:
+    """Write ``motion`` as a hapmotion table, ``.csv`` or ``.npz`` by extension, atomically.
+
+    Only present joints are written, in canonical order. CSV: ``time_s`` = frame / fps, then ``_x, _y, _z, _conf``
+    per joint, 17 significant digits (exact float64 round trip; confidence is float32, 9 digits). NPZ: the arrays of
+    docs/formats.md plus ``derived``. The file appears complete or not at all (temp file + ``os.replace``).
+    """
+    path = os.fspath(path)
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in (".csv", ".npz"):
+        raise UsageError(f"{path}: expected a .csv or .npz file name for a motion table")
+    cols = np.flatnonzero(motion.present)
+    names = [JOINTS[j] for j in cols]
+    pos = motion.positions[:, cols]
+    conf = motion.confidence[:, cols].astype(np.float32)
+
+    def write(f: Any) -> None:
+        if ext == ".npz":
+            np.savez_compressed(f, positions=pos, joints=np.array(names), fps=np.float64(motion.fps),
+                                confidence=conf, derived=motion.derived[cols])
+            return
+        header = ["time_s"] + [f"{n}_{p}" for n in names for p in ("x", "y", "z", "conf")]
+        f.write((",".join(header) + "\n").encode())
+        table = np.empty((motion.n_frames, 1 + 4 * len(names)))
+        table[:, 0] = motion.times
+        block = table[:, 1:].reshape(motion.n_frames, len(names), 4)
+        block[:, :, :3] = pos
+        block[:, :, 3] = conf
+        fmt = ["%.17g"] + ["%.17g", "%.17g", "%.17g", "%.9g"] * len(names)
+        np.savetxt(f, table, fmt=fmt, delimiter=",")
+
+    atomic_write(path, write)
+
+
+def atomic_write(path: str, write) -> None:
+    """Call ``write(binary file)`` on a temp file beside ``path``, then rename it over ``path``."""
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=os.path.splitext(path)[1], dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise

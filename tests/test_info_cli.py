@@ -1,0 +1,134 @@
+"""``hapmotion info`` and the shared reader options, run through click's CliRunner inside a small group that reports
+HapMotionError the way the real ``hapmotion`` group does (one line on stderr, exit code 2)."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import click
+import pytest
+from click.testing import CliRunner
+
+from hapmotion.cli.info import MOTION_OPTION_NAMES, command, load_from_cli, motion_options
+from hapmotion.errors import HapMotionError, UsageError
+
+from readers_support import DATA
+
+
+class Group(click.Group):
+    """Like the hapmotion group: a HapMotionError becomes one line on stderr and its exit code."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except HapMotionError as err:
+            click.echo(f"hapmotion: error: {err}", err=True)
+            sys.exit(err.exit_code)
+
+
+@click.group(cls=Group)
+def cli():
+    pass
+
+
+cli.add_command(command)
+
+
+@click.command("probe")
+@click.argument("input")
+@motion_options
+@click.option("--flag", is_flag=True)
+def probe(input, motion_opts, flag):
+    """A second command reusing the decorator, as render/live/view will."""
+    click.echo(json.dumps({"input": input, "opts": motion_opts, "flag": flag}))
+
+
+cli.add_command(probe)
+
+
+def run(*args):
+    return CliRunner().invoke(cli, list(map(str, args)))
+
+
+def test_info_table():
+    r = run("info", DATA / "01_01.bvh")
+    assert r.exit_code == 0, r.output
+    lines = r.output.splitlines()
+    labels = [ln.split("  ")[0] for ln in lines]
+    assert labels[:3] == ["format", "skeleton", "path"]
+    value_col = lines[0].index("BVH")
+    assert all(len(ln) > value_col and ln[value_col - 1] == " " for ln in lines)  # one aligned value column
+    text = r.output
+    assert lines[3].split() == ["frames", "2751"] and lines[4].split() == ["fps", "120"]
+    assert "CMU units (x0.0564444 -> m" in text and "skipped the leading T-pose frame 0" in text
+    assert "HAND_LEFT <- LeftHand" in text and "NECK <- Neck1" in text
+
+
+def test_info_json_and_options():
+    r = run("info", DATA / "dataset-1_punch_normal_001.bvh", "--json", "--skip-frames", "24", "--fps-in", "60",
+            "--units", "CM")
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.output)
+    assert s["frames"] == 200 and s["fps"] == 60.0 and s["frames_skipped"] == 24
+    assert s["joints_found"]["HAND_LEFT"] == "Hand_L" and s["joints_derived"] == {}
+    assert s["units"] == "cm (x0.01 -> m) (option)"
+
+
+def test_info_kinect_body_option(tmp_path):
+    from test_readers_kinect import kinect_document  # the fixture generator of the Kinect tests
+
+    import hapmotion
+
+    clip = hapmotion.load_motion(DATA / "dataset-1_punch_normal_001.bvh").slice(0, 30)
+    path = tmp_path / "k.json"
+    path.write_text(json.dumps(kinect_document(clip)))
+    r = run("info", path, "--body-id", "3", "--json")
+    assert r.exit_code == 0, r.output
+    assert "body 3 (option body_id); body ids found: 7, 3" in json.loads(r.output)["notes"]
+
+
+@pytest.mark.parametrize("args, message", [
+    (["info", "missing.bvh"], "missing.bvh: file not found"),
+    (["info", DATA / "SOURCES.md"], "expected one of the extensions .bvh"),
+    (["info", DATA / "01_01.bvh", "--body-id", "2"], "--body-id does not apply to BVH files (.bvh); it applies to "
+     ".json"),
+    (["info", DATA / "gBR_sBM_cAll_d04_mBR0_ch03.pkl", "--up", "z"], "--up does not apply to AIST++"),
+    (["info", DATA / "01_01.bvh", "--units", "cm", "--scale", "0.1"], "give either units or scale"),
+])
+def test_errors_are_one_line_exit_2(args, message):
+    r = run(*args)
+    assert r.exit_code == 2
+    assert r.stderr.count("\n") == 1 and message in r.stderr and "Traceback" not in r.output + r.stderr
+
+
+def test_bad_file_error_names_the_line(tmp_path):
+    lines = (DATA / "01_01.bvh").read_text().split("\n")
+    lines[300] += " 1.5"
+    bad = tmp_path / "bad.bvh"
+    bad.write_text("\n".join(lines))
+    r = run("info", bad)
+    assert r.exit_code == 2
+    assert r.stderr.strip() == f"hapmotion: error: {bad}: line 301: expected 96 channel values, found 97"
+
+
+def test_decorator_gathers_options_for_other_commands():
+    r = run("probe", "x.bvh", "--fps-in", "30", "--up", "z", "--flag")
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.output)
+    assert out["flag"] is True and out["input"] == "x.bvh"
+    assert out["opts"] == {"units": None, "scale": None, "skip_frames": None, "body_id": None, "fps_in": 30.0,
+                           "up": "z"}
+    assert tuple(out["opts"]) == MOTION_OPTION_NAMES
+    helps = run("probe", "--help").output
+    for opt in ("--units", "--scale", "--skip-frames", "--body-id", "--fps-in", "--up", "--flag"):
+        assert opt in helps
+    r = run("probe", "x.bvh", "--skip-frames", "-1")
+    assert r.exit_code == 2 and "--skip-frames" in r.output
+
+
+def test_load_from_cli_maps_fps_in():
+    m = load_from_cli(str(DATA / "dataset-1_punch_normal_001.bvh"), fps_in=10.0, skip_frames=None)
+    assert m.fps == 10.0
+    with pytest.raises(UsageError):
+        load_from_cli(str(DATA / "dataset-1_punch_normal_001.bvh"), body_id=1)

@@ -1,0 +1,248 @@
+"""hapmotion CSV/NPZ motion tables: round trips (hypothesis and real clips), derived joints, errors, atomic writes."""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+import hapmotion
+from hapmotion.errors import InputError, UsageError
+from hapmotion.joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS
+from hapmotion.motion import new_motion
+from hapmotion.readers import save_motion_table
+from hapmotion.readers.table import atomic_write
+from readers_support import DATA, assert_input_error
+
+OPTIONAL = [j for j in JOINTS if j not in RENDER_JOINTS]
+
+
+@st.composite
+def motions(draw):
+    """Random motions on the render joints plus any other joints, with gaps and confidences."""
+    n = draw(st.integers(2, 12))
+    names = list(RENDER_JOINTS) + sorted(draw(st.sets(st.sampled_from(OPTIONAL), max_size=6)))
+    fps = draw(st.floats(1.0, 240.0))
+    xyz = draw(arrays(np.float64, (n, len(names), 3), elements=st.floats(-20, 20, allow_nan=False, width=64)))
+    valid = draw(arrays(np.bool_, (n, len(names))))
+    valid[draw(st.integers(0, n - 1))] = True  # every joint observed at least once
+    conf = draw(arrays(np.float32, (n, len(names)), elements=st.floats(0.0625, 1.0, width=32)))
+    derived = draw(arrays(np.bool_, (len(names),)))
+    pos = np.full((n, N_JOINTS, 3), np.nan)
+    cols = [JOINT_INDEX[j] for j in names]
+    pos[:, cols] = xyz
+    full_valid = np.zeros((n, N_JOINTS), bool)
+    full_valid[:, cols] = valid
+    full_conf = np.zeros((n, N_JOINTS), np.float32)
+    full_conf[:, cols] = conf
+    full_derived = np.zeros(N_JOINTS, bool)
+    full_derived[cols] = derived
+    return new_motion(pos, fps, source="generated", valid=full_valid, confidence=full_conf, derived=full_derived)
+
+
+def same_motion(a, b, *, fps_rel=0.0, derived=True):
+    assert a.n_frames == b.n_frames
+    assert b.fps == pytest.approx(a.fps, rel=fps_rel, abs=0)
+    np.testing.assert_array_equal(a.present, b.present)
+    np.testing.assert_array_equal(a.positions, b.positions)  # NaN == NaN for absent joints
+    np.testing.assert_array_equal(a.confidence, b.confidence)
+    if derived:
+        np.testing.assert_array_equal(a.derived, b.derived)
+
+
+@pytest.mark.parametrize("ext", [".csv", ".npz"])
+@settings(max_examples=40, deadline=None)
+@given(motion=motions())
+def test_round_trip(ext, motion):
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / f"m{ext}"
+        save_motion_table(motion, path)
+        back = hapmotion.load_motion(path)
+    # CSV has no column for "derived"; its fps comes back from time_s steps, to rounding
+    same_motion(motion, back, fps_rel=1e-9, derived=ext == ".npz")
+
+
+@pytest.mark.parametrize("name", ["gBR_sBM_cAll_d04_mBR0_ch03.pkl", "01_01.bvh"])
+def test_real_clips_convert(tmp_path, name):
+    src = hapmotion.load_motion(DATA / name)
+    for ext in (".csv", ".npz"):
+        save_motion_table(src, tmp_path / f"m{ext}")
+        back = hapmotion.load_motion(tmp_path / f"m{ext}")
+        same_motion(src, back, fps_rel=1e-12, derived=ext == ".npz")
+    header = (tmp_path / "m.csv").read_text().split("\n", 1)[0].split(",")
+    assert header[:5] == ["time_s", "PELVIS_x", "PELVIS_y", "PELVIS_z", "PELVIS_conf"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.csv", "m.npz"]  # no temp files left behind
+
+
+# -------------------------------------------------------------------------------------------- hand-written CSV
+
+HEADER = ("time_s,WRIST_LEFT_x,WRIST_LEFT_y,WRIST_LEFT_z,wrist_right_x,wrist_right_y,wrist_right_z,"
+          "SHOULDER_LEFT_x,SHOULDER_LEFT_y,SHOULDER_LEFT_z,SHOULDER_RIGHT_x,SHOULDER_RIGHT_y,SHOULDER_RIGHT_z,"
+          "HIP_LEFT_x,HIP_LEFT_y,HIP_LEFT_z,HIP_RIGHT_x,HIP_RIGHT_y,HIP_RIGHT_z,WRIST_LEFT_conf")
+
+
+def row(t, dx=0.0, conf=1.0):
+    v = [t, 0.3 + dx, 1.0, 0.2, -0.3, 1.0, 0.2, 0.2, 1.4, 0, -0.2, 1.4, 0, 0.1, 0.9, 0, -0.1, 0.9, 0, conf]
+    return ",".join(f"{x:g}" for x in v)
+
+
+def csv(tmp_path, lines, name="t.csv"):
+    path = tmp_path / name
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_minimal_csv_derives_render_joints(tmp_path):
+    path = csv(tmp_path, [HEADER] + [row(k / 50, dx=0.01 * k) for k in range(10)])
+    m = hapmotion.load_motion(path)
+    assert m.fps == pytest.approx(50.0) and m.n_frames == 10
+    for j, rule in (("HAND_LEFT", "WRIST_LEFT"), ("PELVIS", "mid(HIP_LEFT, HIP_RIGHT)"),
+                    ("NECK", "mid(SHOULDER_LEFT, SHOULDER_RIGHT)")):
+        assert m.derived[JOINT_INDEX[j]] and m.meta["derived_from"][j] == rule
+    assert m.derived[JOINT_INDEX["SPINE_NAVEL"]] and not m.present[JOINT_INDEX["SPINE_CHEST"]]
+    np.testing.assert_allclose(m.joint("PELVIS")[0], [0, 0.9, 0])
+    np.testing.assert_allclose(m.joint("NECK")[0], [0, 1.4, 0])
+    np.testing.assert_allclose(m.joint("SPINE_NAVEL")[0], [0, 0.9 + 0.38 * 0.5, 0])
+    np.testing.assert_allclose(m.joint("HAND_LEFT")[:, 0], 0.3 + 0.01 * np.arange(10))
+
+
+def test_gaps_from_empty_cells_nan_and_zero_confidence(tmp_path):
+    lines = [HEADER] + [row(k / 50, dx=0.01 * k) for k in range(10)]
+    cells = lines[3].split(",")
+    cells[1] = ""  # WRIST_LEFT_x empty in frame 2
+    lines[3] = ",".join(cells)
+    lines[5] = row(4 / 50, dx=0.04, conf=0)  # frame 4: confidence 0
+    cells = lines[7].split(",")
+    cells[4] = "NaN"  # frame 6: wrist_right_x
+    lines[7] = ",".join(cells)
+    m = hapmotion.load_motion(csv(tmp_path, lines))
+    assert m.meta["filled_by_joint"]["WRIST_LEFT"] == 2 and m.meta["filled_by_joint"]["WRIST_RIGHT"] == 1
+    np.testing.assert_allclose(m.joint("WRIST_LEFT")[:, 0], 0.3 + 0.01 * np.arange(10))  # linear: refilled exactly
+    assert m.confidence[4, JOINT_INDEX["WRIST_LEFT"]] == 0 and m.confidence[3, JOINT_INDEX["WRIST_LEFT"]] == 1
+
+
+def test_csv_options(tmp_path):
+    lines = [HEADER.replace("time_s,", "")] + [row(0, dx=0.01 * k).split(",", 1)[1] for k in range(5)]
+    path = csv(tmp_path, lines)
+    with pytest.raises(InputError, match=r"t\.csv: line 1: expected a time_s column"):
+        hapmotion.load_motion(path)
+    m = hapmotion.load_motion(path, fps=25, units="cm", skip_frames=1)
+    assert m.fps == 25 and m.n_frames == 4
+    np.testing.assert_allclose(m.joint("SHOULDER_LEFT")[0], [0.002, 0.014, 0])
+    z = hapmotion.load_motion(path, fps=25, up="z")
+    # Z-up file: (x, y, z) -> (x, z, -y); the shoulder (0.2, 1.4, 0) becomes (0.2, 0, -1.4)
+    np.testing.assert_allclose(z.joint("SHOULDER_LEFT")[0], [0.2, 0, -1.4])
+
+
+@pytest.mark.parametrize("lines, place, problem", [
+    ([HEADER, row(0), row(0.02), row(0.05), row(0.06)], "line 4", "expected a time step of 0.02 s (within 1 %), "
+     "found 0.03 s"),
+    ([HEADER, row(0), row(0.02), row(0.01)], "line 4", "expected time_s greater than 0.02"),
+    ([HEADER, row(0), ",".join(row(0.02).split(",")[:-1])], "line 3", "expected 20 comma-separated values, found 19"),
+    ([HEADER, row(0), row(0.02).replace("1.4", "high", 1)], "line 3", "expected a number in column "
+     "SHOULDER_LEFT_y, found 'high'"),
+    ([HEADER, row(0), row(0.02).replace("1.4", "inf", 1)], "line 3", "expected a finite number"),
+    ([HEADER, row(0), row(0.02, conf=1.5)], "line 3", "expected WRIST_LEFT_conf between 0 and 1, found 1.5"),
+    ([HEADER.replace("HIP_LEFT_x", "HIP_LFET_x"), row(0)], "line 1, column 14", "found 'HIP_LFET_x'"),
+    ([HEADER.replace(",HIP_RIGHT_z", ""), row(0)], "line 1", "found no HIP_RIGHT_z"),
+    ([HEADER.replace("HIP_RIGHT_z", "hip_right_Y"), row(0)], "line 1, column 19", "expected unique column "
+     "names, found 'hip_right_Y' twice"),
+    (["time_s,SPINE_NAVEL_x,SPINE_NAVAL_x", "0,1,1"], "line 1, column 3", "expected one SPINE_NAVEL_x column, found "
+     "another one ('SPINE_NAVAL_x')"),
+    ([HEADER, row(0)], "line 2", "expected at least two rows to measure the frame rate"),
+    ([HEADER], "line 2", "expected at least one data row"),
+    ([""], "line 1", "expected a header line"),
+    (["time_s,foo", "0,1"], "line 1, column 2", "found 'foo'"),
+])
+def test_csv_errors(tmp_path, lines, place, problem):
+    assert_input_error(csv(tmp_path, lines), place, problem)
+
+
+def test_csv_without_render_joints_names_them(tmp_path):
+    path = csv(tmp_path, ["time_s,HEAD_x,HEAD_y,HEAD_z", "0,0,1.6,0", "0.1,0,1.6,0"])
+    with pytest.raises(InputError, match="joints HAND_LEFT, HAND_RIGHT, SHOULDER_LEFT, SHOULDER_RIGHT"):
+        hapmotion.load_motion(path)
+
+
+# ----------------------------------------------------------------------------------------------------------- NPZ
+
+
+def npz(tmp_path, **arrays_):
+    path = tmp_path / "t.npz"
+    np.savez(path, **arrays_)
+    return path
+
+
+def good_arrays():
+    names = np.array(["pelvis", "SPINE_NAVAL", "NECK", "SHOULDER_LEFT", "SHOULDER_RIGHT", "HAND_LEFT", "HAND_RIGHT"])
+    pos = np.random.default_rng(0).normal(size=(6, len(names), 3))
+    return {"positions": pos, "joints": names, "fps": np.float64(60.0)}
+
+
+def test_npz_minimal_and_confidence(tmp_path):
+    a = good_arrays()
+    conf = np.ones((6, 7))
+    conf[2, 5] = 0  # HAND_LEFT missing in frame 2
+    m = hapmotion.load_motion(npz(tmp_path, **a, confidence=conf))
+    assert m.fps == 60 and m.n_frames == 6 and m.present.sum() == 7
+    np.testing.assert_array_equal(m.joint("SPINE_NAVEL"), a["positions"][:, 1])
+    assert m.meta["filled_by_joint"] == {"HAND_LEFT": 1}
+    np.testing.assert_allclose(m.joint("HAND_LEFT")[2], 0.5 * (a["positions"][1, 5] + a["positions"][3, 5]))
+
+
+@pytest.mark.parametrize("change, place, problem", [
+    (lambda a: a.pop("positions"), "field positions", "expected an array 'positions'"),
+    (lambda a: a.__setitem__("positions", a["positions"][:, :, :2]), "field positions", "shape (T, J, 3)"),
+    (lambda a: a.__setitem__("joints", a["joints"][:-1]), "field joints", "expected 7 joint names"),
+    (lambda a: a["joints"].__setitem__(2, "NEK"), "field joints[2]", "found 'NEK'"),
+    (lambda a: a["joints"].__setitem__(2, "PELVIS"), "field joints[2]", "expected unique joint names"),
+    (lambda a: a.__setitem__("fps", np.float64(-1)), "field fps", "expected a positive number"),
+    (lambda a: a.pop("fps"), "field fps", "expected an array 'fps'"),
+    (lambda a: a.__setitem__("confidence", np.ones((6, 3))), "field confidence", "expected shape (6, 7)"),
+    (lambda a: a["positions"].__setitem__((4, 1, 0), np.inf), "field positions[4, 1]", "found inf"),
+])
+def test_npz_errors(tmp_path, change, place, problem):
+    a = good_arrays()
+    change(a)
+    assert_input_error(npz(tmp_path, **a), place, problem)
+
+
+def test_npz_object_array_and_garbage_refused(tmp_path):
+    a = good_arrays()
+    a["joints"] = np.array(list(a["joints"]), dtype=object)
+    path = npz(tmp_path, **a)
+    with pytest.raises(InputError, match=r"t\.npz: expected plain numeric/text arrays"):
+        hapmotion.load_motion(path)
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(b"PK\x03\x04 broken")
+    with pytest.raises(InputError, match=r"bad\.npz: expected an \.npz archive"):
+        hapmotion.load_motion(bad)
+
+
+# ------------------------------------------------------------------------------------------------------ writing
+
+
+def test_atomic_write_leaves_nothing_on_failure(tmp_path):
+    target = tmp_path / "out.csv"
+    target.write_text("old content")
+
+    def fail(f):
+        f.write(b"partial")
+        raise RuntimeError("disk full")
+
+    with pytest.raises(RuntimeError):
+        atomic_write(str(target), fail)
+    assert target.read_text() == "old content"
+    assert [p.name for p in tmp_path.iterdir()] == ["out.csv"]
+
+
+def test_save_rejects_other_extensions(tmp_path):
+    m = hapmotion.load_motion(DATA / "dataset-1_punch_normal_001.bvh")
+    with pytest.raises(UsageError, match="expected a .csv or .npz"):
+        save_motion_table(m, tmp_path / "m.txt")
+    assert not list(tmp_path.iterdir())
