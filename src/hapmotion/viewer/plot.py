@@ -1,0 +1,212 @@
+"""Static figure of a track (matplotlib, Agg): actuator heat map over time, total intensity, motion energy.
+
+Made to be printed: white background, "off" motors white, a colour scale monotonic in lightness (survives greyscale
+printing), group boundaries and names on the heat map (vest front, vest back, left and right shoulder), every
+vest row labelled with its actuator indices, and text no smaller than 8 pt at the default A4-landscape size.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import UsageError
+from ..track import HapticTrack
+from ..writers.atomic import atomic_path
+from .colors import plot_cmap, scale_top
+from .signals import ENERGY_UNITS, total_intensity, track_motion_energy
+
+MAX_COLUMNS = 3000
+"""Heat map columns drawn at most; longer tracks are max-pooled so a short pulse never disappears."""
+
+FIGSIZE_IN = (11.69, 8.27)  # A4 landscape
+FORMATS = (".png", ".pdf", ".svg")
+
+GROUP_NAMES = {"VestFront": "vest front", "VestBack": "vest back", "ForearmL": "left shoulder\n(ForearmL)",
+               "ForearmR": "right shoulder\n(ForearmR)"}
+
+
+def pool_max(values: np.ndarray, max_columns: int = MAX_COLUMNS) -> tuple[np.ndarray, int]:
+    """Max over consecutive frames so that at most ``max_columns`` rows remain.
+
+    ``values`` is ``(T, ...)``; returns the pooled array ``(ceil(T / k), ...)`` and the pool size ``k``.
+    """
+    n = values.shape[0]
+    k = max(1, int(np.ceil(n / max_columns)))
+    if k == 1:
+        return values, 1
+    pad = (-n) % k
+    if pad:
+        values = np.concatenate([values, np.repeat(values[-1:], pad, axis=0)])
+    return values.reshape(-1, k, *values.shape[1:]).max(axis=1), k
+
+
+def _groups(track: HapticTrack) -> list[tuple[str, int, int]]:
+    """``(device, first column, count)`` in column order."""
+    out: list[tuple[str, int, int]] = []
+    for i, a in enumerate(track.actuators):
+        dev = a.rsplit("_", 1)[0]
+        if out and out[-1][0] == dev:
+            out[-1] = (dev, out[-1][1], out[-1][2] + 1)
+        else:
+            out.append((dev, i, 1))
+    return out
+
+
+def _row_ticks(track: HapticTrack, groups) -> tuple[list[float], list[str]]:
+    """One tick per grid row of each device, labelled with that row's actuator indices ("0-3")."""
+    from ..layout import load_layout
+
+    cols = {}
+    try:
+        cols = {d.name: d.cols for d in load_layout().devices}
+    except Exception:  # noqa: BLE001 - an unknown layout only loses the per-row labels
+        pass
+    pos, labels = [], []
+    for dev, start, count in groups:
+        step = cols.get(dev, count)
+        for r0 in range(0, count, step):
+            r1 = min(count, r0 + step) - 1
+            pos.append(start + (r0 + r1) / 2)
+            labels.append(f"{r0}-{r1}" if r1 > r0 else f"{r0}")
+    return pos, labels
+
+
+def plot_track(
+    track: HapticTrack,
+    path: "str | os.PathLike[str]",
+    *,
+    title: str | None = None,
+    audio=None,
+    start_s: float | None = None,
+    end_s: float | None = None,
+    dpi: int = 150,
+    vmax: "float | str" = "auto",
+) -> Path:
+    """Draw ``track`` to ``path`` (.png, .pdf or .svg; written atomically) and return the path.
+
+    Parameters
+    ----------
+    track:
+        Intensities ``(T, N)`` 0..100; ``debug["motion_energy"]`` is drawn when present.
+    audio:
+        Optional :class:`hapmotion.viewer.page.AudioPart`: adds the waveform with its onsets.
+    start_s, end_s:
+        Time window to draw (default: the whole track).
+    vmax:
+        Intensity at the top of the colour scale; ``"auto"``: the smallest of
+        :data:`~hapmotion.viewer.colors.SCALE_TOPS` at or above the drawn peak, so weak tracks stay readable
+        (the colour bar always says which scale is used).
+    """
+    import matplotlib
+    from matplotlib.figure import Figure  # object API: no pyplot state, no backend switch for the caller
+
+    out = Path(path)
+    if out.suffix.lower() not in FORMATS:
+        raise UsageError(f"{out}: the figure format follows the extension; use one of {', '.join(FORMATS)}")
+    if track.n_frames == 0:
+        raise UsageError("the track has no frames to plot")
+    t_all = track.times
+    lo = 0.0 if start_s is None else float(start_s)
+    hi = track.duration if end_s is None else float(end_s)
+    if not (np.isfinite(lo) and np.isfinite(hi)) or hi <= lo:
+        raise UsageError(f"the time window must have start < end, got {lo:g}..{hi:g} s")
+    f0 = max(0, int(np.floor(lo * track.fps)))
+    f1 = min(track.n_frames, int(np.ceil(hi * track.fps)))
+    if f1 <= f0:
+        raise UsageError(f"the window {lo:g}..{hi:g} s is outside the track (0..{track.duration:.2f} s)")
+    sel = slice(f0, f1)
+    t = t_all[sel]
+    x0, x1 = f0 / track.fps, f1 / track.fps
+    inten = track.intensities[sel]
+    groups = _groups(track)
+    if vmax == "auto":
+        top = scale_top(float(inten.max()))
+    else:
+        top = float(vmax)
+        if not (0 < top <= 100):
+            raise UsageError(f"the colour scale top must be in 0..100, got {vmax}")
+
+    n_panels = 3 + (audio is not None)
+    ratios = [5.0, 1.3, 1.1] + ([1.1] if audio is not None else [])
+    with matplotlib.rc_context({"font.size": 9, "axes.titlesize": 10, "axes.labelsize": 9}):
+        fig = Figure(figsize=FIGSIZE_IN, layout="constrained")
+        axes = fig.subplots(n_panels, 1, sharex=True, gridspec_kw=dict(height_ratios=ratios))
+        _draw(fig, axes, track, sel, t, x0, x1, inten, groups, audio, title, top)
+        with atomic_path(out) as tmp:
+            fig.savefig(tmp, dpi=dpi, format=out.suffix.lower().lstrip("."), facecolor="white")
+    return out
+
+
+def _draw(fig, axes, track, sel, t, x0, x1, inten, groups, audio, title, top) -> None:
+    from matplotlib.ticker import FuncFormatter
+
+    energy, energy_note = track_motion_energy(track)
+    ax_heat, ax_total, ax_energy = axes[0], axes[1], axes[2]
+
+    pooled, k = pool_max(inten)
+    img = ax_heat.imshow(pooled.T, aspect="auto", interpolation="nearest", cmap=plot_cmap(), vmin=0.5, vmax=top,
+                         extent=(x0, x0 + pooled.shape[0] * k / track.fps, track.intensities.shape[1] - 0.5, -0.5))
+    for dev, start, count in groups:
+        if start > 0:
+            ax_heat.axhline(start - 0.5, color="black", linewidth=1.2)
+        ax_heat.text(-0.075, start + (count - 1) / 2, GROUP_NAMES.get(dev, dev), ha="right", va="center",
+                     transform=ax_heat.get_yaxis_transform(), fontsize=9, fontweight="bold")
+    ticks, labels = _row_ticks(track, groups)
+    ax_heat.set_yticks(ticks, labels, fontsize=8)
+    pool_note = f"; max over {k} frames per column" if k > 1 else ""
+    ax_heat.set_title(f"actuator intensity (white = off; rows labelled with their actuator indices, first row at the "
+                      f"collar / neck side{pool_note})", loc="left")
+    over = bool(inten.max() > top)
+    bar = fig.colorbar(img, ax=ax_heat, pad=0.01, fraction=0.025, extend="both" if over else "min")
+    bar.set_label(f"intensity (Player units; colour scale 0..{top:g}{', darkest above' if over else ''})")
+
+    total = total_intensity(inten)
+    ax_total.fill_between(t, total, step="post", color="#5b8fb9", alpha=0.35, linewidth=0)
+    ax_total.step(t, total, where="post", color="#1f4e79", linewidth=0.9)
+    ax_total.set_ylabel("total\n(sum of all)")
+    ax_total.set_ylim(0, max(1.0, float(total.max()) * 1.08))
+    ax_total.set_title(f"total intensity (sum over {inten.shape[1]} actuators; peak {total.max():.0f})", loc="left")
+
+    if energy is not None:
+        e = energy[sel]
+        ax_energy.plot(t, e, color="#6a3d9a", linewidth=0.9)
+        ax_energy.set_ylim(0, max(1e-9, float(np.percentile(e, 99.5)) * 1.15))
+        ax_energy.set_ylabel(f"energy\n({ENERGY_UNITS})")
+        ax_energy.set_title("motion energy (renderer: 0.5 |v|² of both hands relative to the torso; "
+                            "axis clipped at the 99.5th percentile)", loc="left")
+    else:
+        ax_energy.set_yticks([])
+        ax_energy.text(0.5, 0.5, f"motion energy: {energy_note}", transform=ax_energy.transAxes, ha="center",
+                       va="center", color="0.35")
+        ax_energy.set_title("motion energy", loc="left")
+
+    if audio is not None:
+        ax_audio = axes[3]
+        w = np.asarray(audio.waveform)
+        ta = np.arange(w.shape[0]) / audio.waveform_fps
+        keep = (ta >= x0) & (ta < x1)
+        ax_audio.fill_between(ta[keep], w[keep, 0], w[keep, 1], color="#4a7fb0", linewidth=0, step="post")
+        onsets = audio.onsets[(audio.onsets >= x0) & (audio.onsets < x1)]
+        ax_audio.vlines(onsets, 0.85, 1.0, color="#d9480f", linewidth=0.9, label="onsets")
+        ax_audio.set_ylim(-1, 1)
+        ax_audio.set_ylabel("audio")
+        ax_audio.set_title(f"music: {audio.name} (waveform; onsets as ticks, {onsets.size} shown)", loc="left")
+
+    long = (x1 - x0) > 180
+    fmt = FuncFormatter(lambda v, _: f"{int(v // 60)}:{v % 60:04.1f}" if long else f"{v:g}")
+    axes[-1].xaxis.set_major_formatter(fmt)
+    axes[-1].set_xlabel("time (min:s)" if long else "time (s)")
+    axes[-1].set_xlim(x0, x1)
+    for ax in axes:
+        ax.grid(axis="x", color="0.85", linewidth=0.6)
+        ax.set_axisbelow(True)
+    meta = track.meta or {}
+    facts = [str(meta[k]) for k in ("method", "preset") if meta.get(k)]
+    if meta.get("mirror") is not None:
+        facts.append("mirrored" if meta["mirror"] else "not mirrored")
+    head = title or str(meta.get("source") or "track")
+    fig.suptitle(f"{head}   ({', '.join(facts + [f'{track.fps:g} fps', f'{track.duration:.1f} s'])})",
+                 fontsize=11, fontweight="bold")
