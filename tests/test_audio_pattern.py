@@ -57,7 +57,8 @@ def test_kick_is_full_drive_and_ducks_the_continuous_part():
     tr = audio_track(_analysis(env, onsets=[0.5]))           # onset in frame 30
     col = tr.intensities[:, 0]
     assert col[30] == 100.0 and col[31] == 100.0             # 2 frames = 33 ms at 60 fps
-    assert col[32] == pytest.approx(30.0) and col[34] == pytest.approx(30.0)   # 60 ducked by 50 % for 50 ms
+    # after the kick the 50 % duck ramps back over 50 ms (3 frames): depth 0.5 * (1 - k/4) for k = 1, 2, 3
+    np.testing.assert_allclose(col[32:35], [60 * (1 - 0.375), 60 * (1 - 0.25), 60 * (1 - 0.125)])
     assert col[35] == pytest.approx(60.0) and col[29] == pytest.approx(60.0)
     assert tr.debug["audio_kick"].tolist() == [0] * 30 + [1, 1] + [0] * 28
 

@@ -224,3 +224,18 @@ def test_target_jumps_per_second():
     valid = np.ones(120, dtype=bool)
     valid[60] = False  # the move lands on an invalid frame: not counted
     assert M.jumps_per_s(p, FPS, valid=valid) == 0.0
+
+
+def test_kick_threshold_does_not_grow_with_the_number_of_motors():
+    """The rise is read on the RMS over the actuators, so the 0.1 threshold means the same on 3 or 52 motors.
+
+    A bed at 0.2 on all 52 motors from frame 10 (rise 0.2: a kick from silence), a 3 % bed step at frame 20
+    (RMS rise 0.03: not a kick), a whole-vest kick at frame 50 (rise 0.77), and one motor of 52 rising by 0.5 at
+    frame 80 (RMS 0.23 -> sqrt((51 0.23^2 + 0.73^2) / 52) = 0.247, rise 0.017: not a kick).
+    """
+    amp = np.zeros((100, 52))
+    amp[10:] = 0.2
+    amp[20:, :] += 0.03
+    amp[50:52, :] = 1.0
+    amp[80:, 7] += 0.5
+    np.testing.assert_allclose(M.kick_times(amp, FPS), [10 / FPS, 50 / FPS])

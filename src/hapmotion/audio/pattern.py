@@ -5,7 +5,7 @@ Per frame ``t`` and actuator ``i`` (bHaptics intensity 0..100)::
     env[t, i]  = |(w_bass[i] * envelope[t], w_mid[i] * mid_envelope[t])|      clipped to 1
     cont[t, i] = 0                                            if env < off_below
                  min_level + (max_level - min_level) * env    otherwise            (dead-zone lift, headroom)
-    cont[t, i] *= 1 - duck                                    during a kick and duck_tail_s after it
+    cont[t, i] *= 1 - depth[t]            depth = duck during a kick, then ramping back to 0 over duck_tail_s
     I[t, i]    = max(cont[t, i], kick_level * w_kick[i] * kick[t])
 
 The spatial mapping (which actuator gets which signal) only looks at each id's device name, so it works on any
@@ -91,6 +91,27 @@ def kick_frames(onset_times: np.ndarray, fps: float, n_frames: int, params: Audi
     return frames_active(starts, n_kick, n_frames), frames_active(starts, n_duck, n_frames)
 
 
+def duck_depth(onset_times: np.ndarray, fps: float, n_frames: int, params: AudioParams) -> np.ndarray:
+    """``(n_frames,)`` how much the continuous part is ducked, 0..``duck``.
+
+    ``duck`` for the kick's frames, then a linear ramp back to 0 over ``ceil(duck_tail_s * fps)`` frames, so the
+    bed returns gradually: a one-step return would be a second, spurious onset 50-100 ms after every kick (the
+    metrics measured onset precision 0.46-0.50 with the step). Overlapping kicks take the deeper duck.
+    """
+    p = params
+    depth = np.zeros(n_frames)
+    if p.duck <= 0 or p.kick_s <= 0 or len(onset_times) == 0:
+        return depth
+    starts = np.floor((np.asarray(onset_times, dtype=np.float64) - p.kick_lead_s) * fps + 1e-9).astype(np.int64)
+    n_kick = max(1, math.ceil(p.kick_s * fps - 1e-9))
+    n_tail = math.ceil(p.duck_tail_s * fps - 1e-9) if p.duck_tail_s > 0 else 0
+    profile = np.concatenate([np.full(n_kick, p.duck), p.duck * (1.0 - np.arange(1, n_tail + 1) / (n_tail + 1))])
+    idx = starts[:, None] + np.arange(profile.size)[None, :]
+    ok = (idx >= 0) & (idx < n_frames)
+    np.maximum.at(depth, idx[ok], np.broadcast_to(profile, idx.shape)[ok])
+    return depth
+
+
 def actuators_of(layout: Any) -> tuple[tuple[str, ...], str]:
     """Ids and layout name from ``None`` (default 52), a Layout-like object with ``.actuators``, or a list of ids."""
     if layout is None:
@@ -109,8 +130,8 @@ def audio_intensities(an: AudioAnalysis, actuators: Sequence[str], params: Audio
     env = np.hypot(an.envelope[:, None] * w[None, :, 0], an.mid_envelope[:, None] * w[None, :, 1])
     env = np.minimum(env, 1.0)
     cont = np.where(env >= p.off_below, p.min_level + (p.max_level - p.min_level) * env, 0.0)
-    kick, duck = kick_frames(an.onset_times, an.fps, an.n_frames, p)
-    cont *= np.where(duck, 1.0 - p.duck, 1.0)[:, None]
+    kick, _ = kick_frames(an.onset_times, an.fps, an.n_frames, p)
+    cont *= (1.0 - duck_depth(an.onset_times, an.fps, an.n_frames, p))[:, None]
     kicks = p.kick_level * w[None, :, 2] * kick[:, None]
     return np.maximum(cont, kicks), kick
 

@@ -483,15 +483,17 @@ def dead_zone_rate(intensities: np.ndarray, dead_zone: float) -> float | None:
 def kick_times(amplitude: np.ndarray, fps: float, min_rise: float = 0.1, min_gap_s: float = 0.05) -> np.ndarray:
     """Times of the tactile kicks in a track: sharp rises of its total amplitude.
 
-    ``S_t = sqrt(sum_i A_ti^2)`` (the vest's total amplitude); a kick is a local maximum of the rise
-    ``S_t - S_{t-1}`` of at least ``min_rise`` (full scale; Meta's emphasis detector uses a 0.1 rise,
-    rendering-research.md 3.2), at least ``min_gap_s`` after the previous kick (50 ms, Google's minimum peak
-    spacing, 3.3). The kick's time is the start of the row where the rise happens (``t / fps``).
+    ``S_t = sqrt(mean_i A_ti^2)`` (the vest's RMS amplitude, 0..1 whatever the number of motors); a kick is a
+    local maximum of the rise ``S_t - S_{t-1}`` of at least ``min_rise`` (full scale; Meta's emphasis detector
+    uses a 0.1 rise of its single 0..1 amplitude, rendering-research.md 3.2, hence the mean over actuators: with
+    a sum, a 1.4 % step of a bed on 52 motors would already count), at least ``min_gap_s`` after the previous
+    kick (50 ms, Google's minimum peak spacing, 3.3). The kick's time is the start of the row where the rise
+    happens (``t / fps``).
 
     ``amplitude``: ``(T, N)`` 0..1. Returns ``(K,)`` seconds, increasing.
     """
     a = np.asarray(amplitude, dtype=np.float64)
-    s = np.sqrt(energy(a))
+    s = np.sqrt(energy(a) / max(1, a.shape[1]))
     rise = np.diff(s, prepend=0.0)
     dist = max(1, int(np.ceil(min_gap_s * fps - 1e-9)))
     peaks, _ = signal.find_peaks(np.concatenate(([-np.inf], rise, [-np.inf])), height=min_rise, distance=dist)
