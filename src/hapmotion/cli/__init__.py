@@ -61,7 +61,8 @@ _register()
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``hapmotion`` script."""
     try:
-        cli.main(args=argv, prog_name="hapmotion", standalone_mode=False)
+        # without standalone mode click returns ctx.exit(n)'s code instead of exiting
+        rv = cli.main(args=argv, prog_name="hapmotion", standalone_mode=False)
     except click.exceptions.Abort:
         click.echo("aborted", err=True)
         return 130
@@ -85,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             click.echo(f"internal error: {type(err).__name__}: {err} (set HAPMOTION_DEBUG=1 for the traceback)", err=True)
         return 1
-    return 0
+    return rv if isinstance(rv, int) else 0
 
 
 if __name__ == "__main__":  # pragma: no cover

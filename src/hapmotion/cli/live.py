@@ -1,0 +1,149 @@
+"""``hapmotion live``: performer motion in, vest vibration out, in real time (issue 4; docs/live.md)."""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import sys
+from typing import Optional
+
+import click
+
+
+HELP = """Render a live skeleton stream frame by frame and drive haptic devices, recorders and viewers.
+
+\b
+SOURCE (one):
+  osc://HOST:PORT[/PREFIX]   OSC over UDP (default 0.0.0.0:9000, prefix /hapmotion):
+                             /hapmotion/skeleton [seq t] x0 y0 z0 .. x31 y31 z31  (32 joints, metres, +Y up)
+                             /hapmotion/joint/HAND_LEFT [seq t] x y z  +  /hapmotion/frame [seq t]
+  ws://HOST:PORT             WebSocket server taking JSON text frames:
+                             {"seq": 7, "t": 0.116, "joints": {"HAND_LEFT": [x, y, z], ...}}
+  replay:PATH                a recording (BVH, Kinect JSON, AIST++, CSV, NPZ) paced in real time (--speed, --loop)
+\b
+SINK (one or more):
+  player[://HOST:PORT]       bHaptics Player SDK1, ws://127.0.0.1:15881/v2/feedbacks
+                             options ?app_id=&app_name=&duration=MS&key=PREFIX&register=FILE.tact
+  player-v3[://HOST:PORT]    bHaptics Player SDK2, wss://127.0.0.1:15882/v3/feedback (TLS, self-signed)
+                             options ?workspace_id=&api_key=&version=&duration=MS
+  osc://HOST:PORT[/PREFIX]   OSC out: /hapmotion/VestFront/5 f (0..1) and /hapmotion/VestFront f*20
+                             options ?actuators=0|1&devices=0|1
+  ws-broadcast[://HOST:PORT] WebSocket broadcast of frames, skeleton and dynamic point (default 127.0.0.1:8766)
+  record:PATH                the session as a track at stop (.csv .json .npz .tact)
+\b
+Safety: a source silent for --stall-ms fades every actuator to zero; Ctrl-C, SIGTERM, the end of a replay or an
+error sends turn-off to every sink before exiting. A summary (frames in/out/dropped/late, p50/p99 latency) is
+printed at exit.
+\b
+Examples:
+  hapmotion live --source osc://0.0.0.0:9000 --sink player --sink ws-broadcast
+  hapmotion live --source replay:dance.bvh --loop --audio song.ogg --sink player --sink record:show.tact
+"""
+
+
+@click.command("live", help=HELP)
+@click.option("--source", "source", metavar="SOURCE", help="Where the skeleton comes from (see above).")
+@click.option("--sink", "sinks", metavar="SINK", multiple=True, required=True,
+              help="Where frames go; repeat for several sinks at once.")
+@click.option("--method", type=click.Choice(["mst", "baseline"]), default="mst", show_default=True,
+              help="Motion renderer: the paper's motion salient triangle, or the active hand itself.")
+@click.option("--preset", default="paper", show_default=True, help="Renderer preset (paper, energy).")
+@click.option("--mirror/--no-mirror", default=None, help="Mirror the performer left/right (default: preset's, on).")
+@click.option("--fps", type=float, default=None,
+              help="Frame rate of the stream [default: 60; a replay's own rate].")
+@click.option("--speed", type=float, default=1.0, show_default=True, help="Replay speed factor.")
+@click.option("--loop", is_flag=True, help="Replay (or audio-only playback) starts again at the end.")
+@click.option("--audio", "audio", type=click.Path(dir_okay=False), default=None,
+              help="The show's music: its haptic channel is mixed in (multimodal) or played alone (--mode audio).")
+@click.option("--audio-offset", type=float, default=0.0, show_default=True,
+              help="Seconds the music starts after show time 0 (negative: the show starts that far into the "
+                   "song).")
+@click.option("--mode", type=click.Choice(["motion", "multimodal", "audio"]), default=None,
+              help="Channels played [default: multimodal with --audio, else motion].")
+@click.option("--mix", "mix_ratio", default="2:3", show_default=True,
+              help="audio:motion weights of the multimodal mix (the paper's 2:3).")
+@click.option("--mix-domain", type=click.Choice(["linear", "energy"]), default="linear", show_default=True,
+              help="Mix intensities (linear, the paper's) or vibration energies.")
+@click.option("--stall-ms", type=float, default=250.0, show_default=True,
+              help="A silent source has faded every actuator to zero after this many milliseconds.")
+@click.option("--stats", "show_stats", is_flag=True, help="Print frame counts and latency every second.")
+@click.option("--stats-json", type=click.Path(dir_okay=False), default=None,
+              help="Also write the final summary as JSON to this file.")
+@click.option("--workspace-id", envvar="BHAPTICS_WORKSPACE_ID", default=None,
+              help="bHaptics SDK2 workspace (app) id for player-v3 [env BHAPTICS_WORKSPACE_ID].")
+@click.option("--api-key", envvar="BHAPTICS_API_KEY", default=None,
+              help="bHaptics SDK2 API key for player-v3 [env BHAPTICS_API_KEY].")
+@click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
+def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: str, mirror: Optional[bool],
+            fps: Optional[float], speed: float, loop: bool, audio: Optional[str], audio_offset: float,
+            mode: Optional[str], mix_ratio: str, mix_domain: str, stall_ms: float, show_stats: bool,
+            stats_json: Optional[str],
+            workspace_id: Optional[str], api_key: Optional[str], quiet: bool) -> None:
+    from ..live import run_live
+
+    _setup_logging(quiet)
+
+    started = []
+
+    def ready(engine) -> None:
+        started.append(engine)
+        names = ", ".join(s.describe() for s in engine.sinks)
+        click.echo(f"live: listening on {engine.source.describe()}; sinks: {names}; Ctrl-C stops", err=True)
+
+    # User mistakes (HapMotionError) and Ctrl-C before the session is up are reported by hapmotion.cli.main as one
+    # line (exit 2 / 130); once the session runs, SIGINT/SIGTERM are a clean stop (exit 0).
+    try:
+        ratio = (2.0, 3.0)
+        if audio:
+            from ..audio import parse_mix_ratio
+
+            ratio = parse_mix_ratio(mix_ratio)
+        run_live(source, list(sinks), method=method, preset=preset, mirror=mirror, fps=fps, speed=speed,
+                 loop=loop, audio=audio, audio_offset=audio_offset, mode=mode, ratio=ratio, domain=mix_domain,
+                 stall_ms=stall_ms, stats_interval=1.0 if show_stats else None, workspace_id=workspace_id,
+                 api_key=api_key, on_ready=ready, on_stats=lambda text: click.echo(f"live: {text}", err=True))
+    finally:
+        # The summary is printed however the session ended (turn-off has been sent by then).
+        if started:
+            stats = started[0].stats
+            for line in stats.summary_lines():
+                click.echo(line, err=True)
+            if stats_json:
+                tmp = f"{stats_json}.tmp{os.getpid()}"
+                with open(tmp, "w", encoding="utf-8") as fh:
+                    json.dump(stats.as_dict(), fh, indent=1)
+                os.replace(tmp, stats_json)
+
+
+class _StderrHandler(logging.StreamHandler):
+    """Writes to whatever ``sys.stderr`` is at the time of the message (tests and embedders swap it)."""
+
+    @property  # type: ignore[override]
+    def stream(self):
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value) -> None:
+        pass
+
+
+_HANDLER = _StderrHandler()
+_HANDLER.setFormatter(logging.Formatter("live: %(message)s"))
+
+
+def _setup_logging(quiet: bool) -> None:
+    """Live messages go to the current stderr as ``live: ...`` lines (INFO and up, or WARNING with -q)."""
+    logger = logging.getLogger("hapmotion.live")
+    if _HANDLER not in logger.handlers:
+        logger.addHandler(_HANDLER)
+        logger.propagate = False
+    logger.setLevel(logging.WARNING if quiet else logging.INFO)
+    # python-osc warns on the root logger for every unreadable bundle element; live mode counts those itself
+    # ("logged once per kind"), so a flood of bad packets must not flood the terminal.
+    logging.getLogger().addFilter(_not_pythonosc)
+
+
+def _not_pythonosc(record: logging.LogRecord) -> bool:
+    return "pythonosc" not in record.pathname
+

@@ -1,0 +1,25 @@
+"""Live mode (issue 4): a skeleton stream in, rendered frame by frame, out to haptic devices, recorders and
+viewers, in real time and safely.
+
+* :func:`run_live` / :func:`live` - the whole session from SOURCE/SINK strings (what ``hapmotion live`` calls);
+* :class:`LiveEngine` - the loop itself, for custom sources and sinks;
+* :mod:`~hapmotion.live.protocol` - sans-I/O message building and parsing for every wire format;
+* :mod:`~hapmotion.live.sources`, :mod:`~hapmotion.live.sinks` - the network edges.
+
+docs/live.md describes the address scheme, message schemas, SOURCE/SINK syntax, safety behaviour and timing.
+"""
+
+from .engine import AudioChannel, LiveEngine
+from .protocol import DeviceMap, OutFrame, SkeletonFrame
+from .session import build_sink, build_source, live, run_live
+from .sinks import BroadcastSink, OscOutSink, PlayerV2Sink, PlayerV3Sink, RecorderSink, Sink
+from .sources import ClockSource, OscSource, ReplaySource, Source, WsSource
+from .stats import LiveStats
+from .urls import parse_sink, parse_source
+
+__all__ = [
+    "AudioChannel", "BroadcastSink", "ClockSource", "DeviceMap", "LiveEngine", "LiveStats", "OscOutSink",
+    "OscSource", "OutFrame", "PlayerV2Sink", "PlayerV3Sink", "RecorderSink", "ReplaySource", "Sink",
+    "SkeletonFrame", "Source", "WsSource", "build_sink", "build_source", "live", "parse_sink", "parse_source",
+    "run_live",
+]

@@ -1,0 +1,422 @@
+"""The live loop: source -> newest-wins slot -> ``Renderer.step`` -> every sink's own slot; stall fade; stop.
+
+Safety rules (issue 4, docs/live.md):
+
+* a stalled source (no usable frame) fades every actuator linearly to zero, reaching zero ``stall_s`` after the
+  last frame arrived; then the renderer and the frame order are reset, so a performer who comes back starts fresh;
+* SIGINT, SIGTERM, the source ending or failing, and an exception anywhere in the loop all end in :meth:`_stop`,
+  which sends turn-off to every sink (each under its own time limit, all at once) before anything else happens;
+* sinks are fed through one-frame slots and run in their own tasks, so a slow or dead sink cannot hold up the
+  renderer or the other sinks.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+import signal
+import threading
+import time
+from typing import Any, Callable, Optional, Protocol, Sequence
+
+import numpy as np
+
+from .protocol import MAX_ABS_M, Faults, FrameOrder, OutFrame, RateLimiter, SkeletonFrame, sanitize
+from .sinks.base import Sink
+from .sources import Source
+from .stats import LiveStats
+
+log = logging.getLogger("hapmotion.live")
+
+
+class StepRenderer(Protocol):
+    """What the engine needs from a renderer (``hapmotion.Renderer`` fits)."""
+
+    def step(self, frame: np.ndarray) -> np.ndarray: ...
+
+    @property
+    def last_debug(self) -> dict[str, np.ndarray]: ...
+
+    def reset(self) -> None: ...
+
+
+class AudioChannel:
+    """The music's haptic channel for live use: a precomputed audio track read at the show time and mixed with
+    each rendered motion row (``hapmotion.audio.mix``).
+
+    Parameters
+    ----------
+    rows:
+        ``(T, N)`` audio-track intensities 0..100 in the session's actuator order, at ``fps``.
+    mix:
+        ``mix(motion_row, audio_row) -> row`` (both ``(N,)`` 0..100).
+    """
+
+    def __init__(self, rows: np.ndarray, fps: float, mix: Callable[[np.ndarray, np.ndarray], np.ndarray]):
+        self.rows = np.asarray(rows, dtype=np.float64)
+        self.fps = float(fps)
+        self._mix = mix
+        self._zeros = np.zeros(self.rows.shape[1])
+
+    @property
+    def duration_s(self) -> float:
+        return self.rows.shape[0] / self.fps
+
+    def row(self, t: float) -> np.ndarray:
+        """Audio row at show time ``t`` seconds (zeros outside the song)."""
+        k = int(math.floor(t * self.fps + 1e-6))  # t = k / fps must give row k despite rounding
+        if 0 <= k < self.rows.shape[0]:
+            return self.rows[k]
+        return self._zeros
+
+    def mixed(self, motion_row: np.ndarray, t: float) -> np.ndarray:
+        return np.asarray(self._mix(motion_row, self.row(t)), dtype=np.float64)
+
+
+class LiveEngine:
+    """Runs one live session.
+
+    Parameters
+    ----------
+    renderer:
+        Object with ``step((32, 3)) -> (N,)``, ``last_debug`` and ``reset()`` (``hapmotion.Renderer``); may be None
+        in ``mode="audio"``.
+    sinks:
+        Where rows go.
+    n_actuators:
+        N, the row length.
+    fps:
+        The renderer's frame rate (sets the fade tick and the "slow" threshold).
+    rate:
+        Frames per second expected from the source (default ``fps``; ``fps * speed`` for a replay). The renderer
+        runs at most ``render_cap * rate`` times a second; frames arriving faster replace each other.
+    stall_s:
+        Seconds after the last usable frame by which every actuator has faded to zero.
+    audio, mode:
+        ``"motion"`` (renderer only), ``"multimodal"`` (renderer mixed with ``audio``), ``"audio"`` (``audio`` only,
+        frames are clock ticks).
+    max_abs:
+        Coordinates beyond this (metres) are absurd: the joint is dropped.
+    flood_rate:
+        Raw source messages per second admitted before decoding (default ``40 * rate``: per-joint OSC senders
+        use up to 33 messages a frame; 2400 messages/s at 60 fps).
+    stop_timeout:
+        Seconds each sink gets to send its turn-off at stop.
+    handle_signals:
+        Install SIGINT/SIGTERM handlers (main thread only) that stop the session cleanly.
+    on_ready:
+        Called with the engine once the source listens (the CLI prints the addresses).
+    stats_interval, on_stats:
+        Every ``stats_interval`` seconds, a one-line progress report goes to ``on_stats`` (default: the log).
+    """
+
+    def __init__(self, renderer: Optional[StepRenderer], sinks: Sequence[Sink], *, n_actuators: int,
+                 fps: float = 60.0, rate: Optional[float] = None, stall_s: float = 0.25,
+                 audio: Optional[AudioChannel] = None, mode: str = "motion", max_abs: float = MAX_ABS_M,
+                 render_cap: float = 1.5, flood_rate: Optional[float] = None, stop_timeout: float = 2.0,
+                 handle_signals: bool = True, stats_interval: Optional[float] = None,
+                 on_ready: Optional[Callable[["LiveEngine"], None]] = None,
+                 on_stats: Optional[Callable[[str], None]] = None, source_name: str = "source"):
+        if mode not in ("motion", "multimodal", "audio"):
+            raise ValueError(f"mode must be motion, multimodal or audio, got {mode!r}")
+        if mode != "motion" and audio is None:
+            raise ValueError(f"mode {mode} needs an audio channel")
+        if mode != "audio" and renderer is None:
+            raise ValueError("a renderer is needed unless mode is audio")
+        self.renderer = renderer
+        self.sinks = list(sinks)
+        self.n = int(n_actuators)
+        self.fps = float(fps)
+        self.interval = 1.0 / self.fps
+        self.rate = float(rate or fps)
+        self.stall_s = float(stall_s)
+        # The fade starts when a frame is overdue by half an interval, and never later than half the stall time.
+        self.grace_s = min(1.5 / self.rate, 0.5 * self.stall_s)
+        self.audio = audio
+        self.mode = mode
+        self.max_abs = max_abs
+        self.min_gap = 1.0 / (render_cap * self.rate)
+        self.stop_timeout = stop_timeout
+        self.handle_signals = handle_signals
+        self.stats_interval = stats_interval
+        self.on_ready = on_ready
+        self.on_stats = on_stats or (lambda text: log.info("stats: %s", text))
+        self.faults = Faults(source_name, log)
+        self.stats = LiveStats(self.faults, fps=self.fps)
+        for s in self.sinks:
+            name = s.name
+            k = 2
+            while name in self.stats.sinks:  # two sinks with the same address still get their own line
+                name = f"{s.name} #{k}"
+                k += 1
+            s.stats.name = name
+            self.stats.sinks[name] = s.stats
+        flood = flood_rate or 40.0 * self.rate
+        self._limiter = RateLimiter(flood, max(64.0, 4.0 * self.rate))
+        self.order = FrameOrder()
+        self._slot: Optional[SkeletonFrame] = None
+        self._wake = asyncio.Event()
+        self._stop = asyncio.Event()
+        self._stop_reason = ""
+        self._seq = 0
+        self._t0: Optional[float] = None  # show clock origin (first frame) for sources without show time
+        self._last_accept: Optional[float] = None
+        self._last_render = -math.inf
+        self._last_row = np.zeros(self.n)
+        self._faded = True  # nothing is playing yet
+        self.source: Optional[Source] = None
+
+    # ------------------------------------------------------------------ called by sources (synchronous, cheap)
+    def admit(self, now: float) -> bool:
+        """Flood limit on raw messages, checked before decoding."""
+        if self._limiter.allow(now):
+            return True
+        self.stats.flood += 1
+        self.faults.add("flood", f"messages above {self._limiter.rate:.0f}/s; the excess is dropped")
+        return False
+
+    def note_skipped(self, count: int) -> None:
+        """A replay skipped ``count`` overdue frames."""
+        self.stats.frames_in += count
+        self.stats.superseded += count
+
+    def submit(self, frame: SkeletonFrame) -> None:
+        """Take a decoded frame: clean it, drop it if it is older than the last one, put it in the slot."""
+        self.stats.frames_in += 1
+        if self.mode != "audio" and not sanitize(frame.positions, self.faults, max_abs=self.max_abs):
+            self.stats.empty += 1
+            return
+        if not self.order.accept(frame.seq, frame.t):
+            self.stats.late += 1
+            self.faults.add("late", f"frame seq={frame.seq} t={frame.t} arrived after a newer one")
+            return
+        if self._slot is not None:
+            self.stats.superseded += 1
+        self._slot = frame
+        self._last_accept = frame.received
+        self._wake.set()
+
+    # ------------------------------------------------------------------ control
+    def request_stop(self, reason: str) -> None:
+        if not self._stop.is_set():
+            self._stop_reason = reason
+            log.info("stopping: %s", reason)
+            self._stop.set()
+
+    async def run(self, source: Source) -> LiveStats:
+        """Run until stopped; always turns every sink off before returning or raising."""
+        loop = asyncio.get_running_loop()
+        self.source = source
+        installed = self._install_signals(loop)
+        tasks: list[asyncio.Task] = []
+        sink_tasks: list[asyncio.Task] = []
+        error: Optional[BaseException] = None
+        running = False
+        try:
+            self._warm_up()
+            for s in self.sinks:
+                await s.start()
+            await source.start(self)
+            sink_tasks = [asyncio.create_task(s.run(), name=f"sink {s.name}") for s in self.sinks]
+            for t in sink_tasks:
+                t.add_done_callback(_log_sink_crash)
+            source_task = asyncio.create_task(source.run(), name="source")
+            render_task = asyncio.create_task(self._render_loop(), name="render")
+            stop_task = asyncio.create_task(self._stop.wait(), name="stop")
+            tasks = [source_task, render_task, stop_task]
+            if self.stats_interval:
+                tasks.append(asyncio.create_task(self._report_loop(), name="stats"))
+            running = True
+            if self.on_ready is not None:
+                self.on_ready(self)
+            done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+            if source_task in done:
+                exc = source_task.exception()
+                if exc is not None:
+                    error = exc
+                    self.request_stop(f"source failed ({exc.__class__.__name__}: {exc})")
+                else:
+                    self.request_stop("source ended")
+            elif render_task in done:
+                error = render_task.exception() or RuntimeError("render loop ended")
+                self.request_stop(f"error ({error.__class__.__name__}: {error})")
+            for s in sink_tasks:
+                if s.done() and not s.cancelled() and s.exception() is not None:
+                    error = error or s.exception()
+        except BaseException as exc:  # CancelledError, KeyboardInterrupt or a start() failure: still turn off
+            error = exc
+            reason = f"{exc.__class__.__name__}: {exc}" if str(exc) else exc.__class__.__name__
+            if running:
+                self.request_stop(reason)
+            else:  # the session never began: the caller reports the error, there is nothing to stop
+                self._stop_reason = f"could not start ({reason})"
+            raise
+        finally:
+            for t in tasks:
+                t.cancel()
+            await asyncio.gather(*tasks, return_exceptions=True)
+            await self._turn_off(sink_tasks, started=running)
+            try:
+                await source.close()
+            except Exception as exc:  # closing must not hide the stop
+                log.warning("closing the source failed: %s", exc)
+            self.stats.stop_reason = self._stop_reason
+            for sig in installed:
+                loop.remove_signal_handler(sig)
+        if error is not None:
+            raise error
+        return self.stats
+
+    def _warm_up(self) -> None:
+        """Step the renderer once before the show so its first real frame is not delayed by JIT compilation."""
+        if self.renderer is not None:
+            self.renderer.step(np.full((32, 3), np.nan))
+            self.renderer.reset()
+
+    def _install_signals(self, loop: asyncio.AbstractEventLoop) -> list[int]:
+        if not self.handle_signals or threading.current_thread() is not threading.main_thread():
+            return []
+        installed = []
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            try:
+                loop.add_signal_handler(sig, self.request_stop, signal.Signals(sig).name)
+                installed.append(sig)
+            except (NotImplementedError, RuntimeError):  # pragma: no cover (Windows)
+                pass
+        return installed
+
+    async def _turn_off(self, sink_tasks: list[asyncio.Task], started: bool = True) -> None:
+        """Cancel every sink's streaming task, then all sinks send their turn-off at once, each time-limited.
+
+        When the session never started (``started`` False), sinks only release what they opened (a recorder writes
+        nothing)."""
+        for t in sink_tasks:
+            t.cancel()
+        await asyncio.gather(*sink_tasks, return_exceptions=True)
+
+        async def off(s: Sink) -> None:
+            if not started and not s.bounded_shutdown:
+                return
+            try:
+                if not s.bounded_shutdown:  # the recorder writes its file: it gets the time it needs
+                    await s.shutdown()
+                else:
+                    await asyncio.wait_for(s.shutdown(), self.stop_timeout)
+            except asyncio.TimeoutError:
+                log.warning("%s: turn-off timed out after %.1f s", s.name, self.stop_timeout)
+            except Exception as exc:
+                log.error("%s: turn-off failed: %s", s.name, exc)
+
+        await asyncio.gather(*(off(s) for s in self.sinks))
+
+    # ------------------------------------------------------------------ the render loop
+    async def _render_loop(self) -> None:
+        loop = asyncio.get_running_loop()
+        while True:
+            if self._slot is None:
+                deadline = self._next_fade_time()
+                handle = loop.call_at(self._to_loop_time(loop, deadline), self._wake.set) \
+                    if deadline is not None else None
+                await self._wake.wait()
+                self._wake.clear()
+                if handle is not None:
+                    handle.cancel()
+            now = time.perf_counter()
+            if self._slot is not None:
+                wait = self._last_render + self.min_gap - now
+                if wait > 0:  # flood: let newer frames replace this one, render at most render_cap * rate
+                    await asyncio.sleep(wait)
+                frame, self._slot = self._slot, None
+                self._wake.clear()
+                self._render(frame)
+            else:
+                self._fade(now)
+
+    @staticmethod
+    def _to_loop_time(loop: asyncio.AbstractEventLoop, perf_time: float) -> float:
+        return loop.time() + (perf_time - time.perf_counter())
+
+    def _render(self, frame: SkeletonFrame) -> None:
+        now = time.perf_counter()
+        if frame.show_t is not None:
+            t = frame.show_t
+        else:
+            if self._t0 is None:
+                self._t0 = frame.received
+            t = frame.received - self._t0
+        skeleton = debug = None
+        if self.mode == "audio":
+            assert self.audio is not None
+            row = self.audio.row(t).copy()
+        else:
+            assert self.renderer is not None
+            row = np.asarray(self.renderer.step(frame.positions), dtype=np.float64)
+            debug = self.renderer.last_debug
+            skeleton = frame.positions
+            if self.mode == "multimodal":
+                assert self.audio is not None
+                row = self.audio.mixed(row, t)
+        if row.shape != (self.n,):
+            raise ValueError(f"the renderer returned shape {row.shape}, expected ({self.n},)")
+        if not np.isfinite(row).all():
+            self.faults.add("render_nan", "the renderer returned a non-finite intensity; sent as 0")
+            row = np.nan_to_num(row, nan=0.0, posinf=100.0, neginf=0.0)
+        row = np.clip(row, 0.0, 100.0)
+        self._last_render = now
+        self._last_row = row
+        self._faded = False
+        self.stats.rendered += 1
+        self._emit(row, frame.received, skeleton, debug, "frame", t=t)
+
+    def _next_fade_time(self) -> Optional[float]:
+        if self._faded or self._last_accept is None:
+            return None
+        start = self._last_accept + self.grace_s
+        end = self._last_accept + self.stall_s
+        now = time.perf_counter()
+        if now < start:
+            return start
+        return min(now + self.interval, end)
+
+    def _fade(self, now: float) -> None:
+        """Called when no frame came in time: scale the last row down, reaching zero at ``stall_s``."""
+        if self._faded or self._last_accept is None:
+            return
+        since = now - self._last_accept
+        if since < self.grace_s:
+            return
+        if since >= self.stall_s - 1e-4:
+            self._faded = True
+            self.stats.stalls += 1
+            log.info("source stalled for %.0f ms: all actuators off; waiting for frames", since * 1e3)
+            if self.renderer is not None:
+                self.renderer.reset()
+            self.order.reset()
+            self._emit(np.zeros(self.n), None, None, None, "off")
+            return
+        gain = (self.stall_s - since) / (self.stall_s - self.grace_s)
+        self.stats.fade_frames += 1
+        self._emit(self._last_row * min(1.0, max(0.0, gain)), None, None, None, "fade")
+
+    def _emit(self, row: np.ndarray, received: Optional[float], skeleton: Optional[np.ndarray],
+              debug: Any, kind: str, *, t: Optional[float] = None) -> None:
+        now = time.perf_counter()
+        if t is None:
+            t = (now - self._t0) if self._t0 is not None else 0.0
+        frame = OutFrame(self._seq, t, row, received, now, skeleton, debug, kind)
+        self._seq += 1
+        for s in self.sinks:
+            s.offer(frame)
+
+    async def _report_loop(self) -> None:
+        marks: dict[str, int] = {}
+        assert self.stats_interval
+        while True:
+            await asyncio.sleep(self.stats_interval)
+            self.on_stats(self.stats.progress_line(marks))
+
+
+def _log_sink_crash(task: asyncio.Task) -> None:
+    if not task.cancelled() and task.exception() is not None:
+        log.error("%s crashed; the other sinks go on", task.get_name(), exc_info=task.exception())

@@ -1,0 +1,77 @@
+"""bHaptics Player, SDK1 API: ``ws://127.0.0.1:15881/v2/feedbacks`` (docs/bhaptics-protocol.md §2).
+
+Each rendered row becomes one request with a ``Submit`` ``frame`` per device (VestFront, VestBack, ForearmL,
+ForearmR), one Key per device so the panels play together and each new frame replaces the previous one under its
+key. ``durationMillis`` is a little longer than the send interval, so the Player keeps playing between frames and
+stops on its own shortly after the stream stops. Stop sends zero frames and ``turnOffAll``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping, Optional
+from urllib.parse import urlencode
+
+from ..protocol import DeviceMap, OutFrame, parse_v2_status, v2_frame_message, v2_register_message, v2_turn_off_all
+from .base import WebSocketClientSink
+
+import numpy as np
+
+
+def default_duration_ms(fps: float) -> int:
+    """Hold time of a streamed frame: two send intervals, and at least 40 ms (two 20 ms Player ticks, docs §4.5)
+    so a frame is never shorter than what the Player can show; 40 ms at 60 fps."""
+    return max(40, int(math.ceil(2000.0 / fps)))
+
+
+class PlayerV2Sink(WebSocketClientSink):
+    """Streams rows to the Player's SDK1 endpoint.
+
+    Parameters
+    ----------
+    dmap:
+        Columns of each device in a row.
+    host, port, path:
+        Player address (default ``127.0.0.1:15881/v2/feedbacks``).
+    app_id, app_name:
+        Optional query parameters some SDK1 clients send (docs §2.1).
+    duration_ms:
+        ``durationMillis`` of each frame (default :func:`default_duration_ms`).
+    key_prefix:
+        Keys are ``<prefix>_<Device>``.
+    registrations:
+        Key -> ``.tact`` project to ``Register`` on every (re)connection (registrations are per connection, §2.1).
+    """
+
+    def __init__(self, dmap: DeviceMap, *, host: str = "127.0.0.1", port: int = 15881, path: str = "/v2/feedbacks",
+                 app_id: Optional[str] = None, app_name: Optional[str] = None, duration_ms: Optional[int] = None,
+                 key_prefix: str = "hapmotion", registrations: Optional[Mapping[str, Any]] = None,
+                 fps: float = 60.0, name: Optional[str] = None, **kwargs: Any):
+        query = {k: v for k, v in (("app_id", app_id), ("app_name", app_name)) if v}
+        url = f"ws://{_host(host)}:{port}{path}" + (f"?{urlencode(query)}" if query else "")
+        super().__init__(name or f"player {url}", url, fps=fps, **kwargs)
+        self.dmap = dmap
+        self.duration_ms = int(duration_ms) if duration_ms else default_duration_ms(fps)
+        self.key_prefix = key_prefix
+        self.registrations = dict(registrations or {})
+        self.status: Optional[dict] = None
+
+    def hello_messages(self) -> list[str]:
+        reg = v2_register_message(self.registrations)
+        return [reg] if reg else []
+
+    def frame_messages(self, frame: OutFrame) -> list[str]:
+        return [v2_frame_message(frame.row, self.dmap, self.duration_ms, self.key_prefix)]
+
+    def off_messages(self) -> list[str]:
+        return [v2_frame_message(np.zeros(self.dmap.n), self.dmap, self.duration_ms, self.key_prefix),
+                v2_turn_off_all()]
+
+    def on_message(self, message: "str | bytes") -> None:
+        status = parse_v2_status(message)
+        if status is not None:
+            self.status = status
+
+
+def _host(host: str) -> str:
+    return f"[{host}]" if ":" in host and not host.startswith("[") else host

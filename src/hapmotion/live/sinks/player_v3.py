@@ -1,0 +1,79 @@
+"""bHaptics Player, SDK2 API: ``wss://127.0.0.1:15882/v3/feedback`` (docs/bhaptics-protocol.md §3).
+
+TLS with the Player's self-signed certificate (no verification, as every SDK2 client does), ``SdkRequestAuth``
+first on every connection, then per row ``SdkPlayDotMode`` for position 0 (the 40-value X40 array: front 0..19,
+back 20..39) and positions 1/2 (ForearmL/ForearmR, 6 values). Stop sends zero rows and ``SdkStopAll``.
+"""
+
+from __future__ import annotations
+
+import ssl
+from typing import Any, Optional
+from urllib.parse import urlencode
+
+import numpy as np
+
+from ..protocol import DeviceMap, OutFrame, parse_v3_message, v3_auth_message, v3_dot_messages, v3_stop_all
+from .base import WebSocketClientSink
+from .player_v2 import _host, default_duration_ms
+
+
+def insecure_tls_context() -> ssl.SSLContext:
+    """Client TLS context that accepts the Player's self-signed certificate (docs §3.1: clients skip validation).
+    Only for the local Player: it authenticates nobody."""
+    ctx = ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)
+    ctx.check_hostname = False
+    ctx.verify_mode = ssl.CERT_NONE
+    ctx.minimum_version = ssl.TLSVersion.TLSv1_2
+    return ctx
+
+
+class PlayerV3Sink(WebSocketClientSink):
+    """Streams rows to the Player's SDK2 endpoint.
+
+    Parameters
+    ----------
+    workspace_id, api_key:
+        The bHaptics Developer Portal workspace ("app id") and API key; sent in the URL query and the auth message.
+    version:
+        App version string sent in the query and the auth message.
+    host, port, path, duration_ms:
+        As for :class:`~hapmotion.live.sinks.player_v2.PlayerV2Sink` (default ``127.0.0.1:15882/v3/feedback``).
+    """
+
+    def __init__(self, dmap: DeviceMap, *, workspace_id: str = "hapmotion", api_key: str = "",
+                 version: str = "1", host: str = "127.0.0.1", port: int = 15882, path: str = "/v3/feedback",
+                 duration_ms: Optional[int] = None, fps: float = 60.0, name: Optional[str] = None,
+                 tls: bool = True, **kwargs: Any):
+        query = urlencode({"workspace_id": workspace_id, "api_key": api_key, "version": version})
+        scheme = "wss" if tls else "ws"
+        url = f"{scheme}://{_host(host)}:{port}{path}?{query}"
+        shown = f"{scheme}://{_host(host)}:{port}{path}"  # the api key stays out of logs
+        super().__init__(name or f"player-v3 {shown}", url, fps=fps, ssl=insecure_tls_context() if tls else None,
+                         **kwargs)
+        self.dmap = dmap
+        self.workspace_id = workspace_id
+        self.api_key = api_key
+        self.version = version
+        self.duration_ms = int(duration_ms) if duration_ms else default_duration_ms(fps)
+        self._request_id = 1
+        self.server_messages: dict[str, Any] = {}
+
+    def hello_messages(self) -> list[str]:
+        return [v3_auth_message(self.workspace_id, self.api_key, self.version)]
+
+    def _dots(self, row: np.ndarray) -> list[str]:
+        msgs = v3_dot_messages(row, self.dmap, self.duration_ms, self._request_id)
+        self._request_id += len(msgs)
+        return msgs
+
+    def frame_messages(self, frame: OutFrame) -> list[str]:
+        return self._dots(frame.row)
+
+    def off_messages(self) -> list[str]:
+        return self._dots(np.zeros(self.dmap.n)) + [v3_stop_all()]
+
+    def on_message(self, message: "str | bytes") -> None:
+        parsed = parse_v3_message(message)
+        if parsed is not None:
+            self.server_messages[parsed[0]] = parsed[1]

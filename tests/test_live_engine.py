@@ -1,0 +1,262 @@
+"""The live engine without a network: frames in order, stall fade, late and flooding frames, exceptions, slow
+sinks, the audio channel. In-memory sources and sinks; the real ``hapmotion.Renderer``."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+
+import numpy as np
+import pytest
+from synthetic import pose, waving
+
+import hapmotion
+from hapmotion.audio import mix
+from hapmotion.live import AudioChannel, ClockSource, LiveEngine, SkeletonFrame, Source
+from hapmotion.live.sinks import Sink
+
+N = 52
+FPS = 60.0
+
+
+class ScriptSource(Source):
+    """Submits ``frames`` every ``interval`` seconds (seqs optional), then ends or waits (``then="wait"``)."""
+
+    name = "script"
+
+    def __init__(self, frames, interval=1 / FPS, seqs=None, then="end", before=None):
+        self.frames, self.interval, self.seqs, self.then, self.before = frames, interval, seqs, then, before
+        self.done = asyncio.Event()
+
+    async def run(self):
+        for k, pos in enumerate(self.frames):
+            if self.before:
+                self.before(k)
+            seq = self.seqs[k] if self.seqs is not None else k
+            self.engine.submit(SkeletonFrame(np.array(pos, dtype=float), seq, None, time.perf_counter()))
+            await asyncio.sleep(self.interval)
+        self.done.set()
+        if self.then == "wait":
+            await asyncio.Event().wait()
+
+
+class MemorySink(Sink):
+    """Keeps every delivered frame with its time; ``delay`` makes it slow; ``hang`` makes its turn-off hang."""
+
+    def __init__(self, name="mem", delay=0.0, hang=False):
+        super().__init__(name, fps=FPS)
+        self.delay, self.hang = delay, hang
+        self.got = []           # (time, OutFrame)
+        self.shutdown_at = None
+
+    async def deliver(self, frame):
+        if self.delay:
+            await asyncio.sleep(self.delay)
+        self.got.append((time.perf_counter(), frame))
+        self.sent(frame)
+
+    async def shutdown(self):
+        if self.hang:
+            await asyncio.Event().wait()
+        self.shutdown_at = time.perf_counter()
+
+    def kinds(self):
+        return [f.kind for _, f in self.got]
+
+    def rows(self, kind="frame"):
+        return np.array([f.row for _, f in self.got if f.kind == kind])
+
+
+class CountingRenderer:
+    """The real renderer, counting resets and optionally failing at one frame."""
+
+    def __init__(self, fail_at=None):
+        self.inner = hapmotion.Renderer(fps=FPS)
+        self.fail_at, self.steps, self.resets = fail_at, 0, 0
+        self.layout = self.inner.layout
+
+    def step(self, frame):
+        self.steps += 1
+        if self.fail_at is not None and self.steps == self.fail_at:
+            raise RuntimeError("renderer bug at this frame")
+        return self.inner.step(frame)
+
+    @property
+    def last_debug(self):
+        return self.inner.last_debug
+
+    def reset(self):
+        self.resets += 1
+        self.inner.reset()
+
+
+def run(engine, source, timeout=10.0):
+    return asyncio.run(asyncio.wait_for(engine.run(source), timeout))
+
+
+def make(sinks, renderer=None, **kw):
+    kw.setdefault("handle_signals", False)
+    return LiveEngine(renderer or hapmotion.Renderer(fps=FPS), sinks, n_actuators=N, fps=FPS, **kw)
+
+
+def test_rows_equal_batch_rendering_and_counts_add_up():
+    frames = waving(n=40)
+    sink = MemorySink()
+    engine = make([sink])
+    stats = run(engine, ScriptSource(frames))
+    expected, _ = hapmotion.Renderer(fps=FPS).run(frames)  # sans-I/O: stepping live == rendering the file
+    got = sink.rows()
+    assert got.shape == (40, N) and expected.max() > 10
+    np.testing.assert_array_equal(got, expected)
+    assert [f.seq for _, f in sink.got] == sorted(f.seq for _, f in sink.got)
+    assert stats.frames_in == 40 and stats.rendered == 40 and stats.dropped == 0 and stats.late == 0
+    assert stats.stop_reason == "source ended" and sink.shutdown_at is not None
+    assert sink.stats.latency.count == 40 and sink.stats.latency.percentiles()["p50"] < 1000 / FPS
+    frame = sink.got[5][1]
+    assert frame.skeleton.shape == (32, 3) and frame.debug["dynamic_point"].shape == (3,)
+
+
+def test_stalled_source_fades_to_zero_within_stall_time_then_resets():
+    frames = waving(n=30)
+    stall = 0.12
+    sink = MemorySink()
+    renderer = CountingRenderer()
+    src = ScriptSource(frames, then="wait")
+    engine = make([sink], renderer=renderer, stall_s=stall)
+
+    async def scenario():
+        task = asyncio.create_task(engine.run(src))
+        await src.done.wait()
+        await asyncio.sleep(stall + 0.1)
+        # the performer comes back
+        engine.submit(SkeletonFrame(frames[0].copy(), 0, None, time.perf_counter()))
+        await asyncio.sleep(0.05)
+        engine.request_stop("test over")
+        return await task
+
+    stats = asyncio.run(asyncio.wait_for(scenario(), 10))
+    kinds = sink.kinds()
+    first_off = kinds.index("off")
+    last = max(i for i, k in enumerate(kinds[:first_off]) if k == "frame")
+    last_rx = sink.got[last][1].received
+    fades = [(t, f) for t, f in sink.got[last + 1:first_off] if f.kind == "fade"]
+    off_t, off = sink.got[first_off]
+    assert len(fades) >= 3
+    peaks = [f.row.max() for _, f in fades]
+    assert all(a >= b for a, b in zip(peaks, peaks[1:])) and peaks[0] <= sink.got[last][1].row.max()
+    assert off.row.max() == 0.0
+    # Zero is scheduled exactly at the stall time; allow for a busy machine waking the timer late.
+    assert stall - 0.001 <= off.created - last_rx <= stall + 0.04
+    assert off_t - off.created <= 0.02                     # and handed to the sink right away
+    assert stats.stalls == 1 and renderer.resets == 2      # warm-up reset + stall reset
+    assert "frame" in kinds[first_off:]                    # rendering resumed after the stall (seq 0 accepted again)
+
+
+def test_late_and_duplicate_frames_are_dropped():
+    frames = waving(n=8)
+    sink = MemorySink()
+    engine = make([sink])
+    stats = run(engine, ScriptSource(frames, seqs=[1, 2, 3, 2, 3, 4, 1, 5]))
+    assert stats.late == 3 and stats.rendered == 5 and stats.frames_in == 8
+    assert engine.faults.counts["late"] == 3
+
+
+def test_flood_newest_wins_and_renders_are_capped():
+    frames = waving(n=2000)
+    sink = MemorySink()
+    engine = make([sink], flood_rate=1e9)  # measure the slot and render cap, not the message limit
+
+    class Burst(Source):
+        async def run(self):
+            t0 = time.perf_counter()
+            for k in range(0, 2000, 100):  # 2000 frames in about 0.1 s = 20 000 fps
+                for j in range(k, k + 100):
+                    self.engine.submit(SkeletonFrame(frames[j].copy(), j, None, time.perf_counter()))
+                await asyncio.sleep(0.005)
+            self.elapsed = time.perf_counter() - t0
+            await asyncio.sleep(0.05)
+
+    src = Burst()
+    stats = run(engine, src)
+    assert stats.frames_in == 2000
+    assert stats.rendered <= (src.elapsed + 0.05) * 1.5 * FPS + 3   # never more than 1.5 x the frame rate
+    assert stats.frames_in == stats.rendered + stats.superseded + stats.late + stats.empty
+    rendered_seqs = [f for _, f in sink.got if f.kind == "frame"]
+    assert np.array_equal(rendered_seqs[-1].skeleton, frames[1999])  # the newest frame was the one rendered
+
+
+def test_message_flood_limit():
+    engine = make([MemorySink()], flood_rate=600.0)  # the burst is 4 frames' worth whatever the rate
+    admitted = sum(engine.admit(100.0) for _ in range(10_000))
+    assert admitted == 240                    # the burst: 4 frames' worth of messages at 60 fps
+    assert engine.stats.flood == 10_000 - 240 and engine.faults.counts["flood"] == 9760
+    assert engine.admit(100.5) and sum(engine.admit(100.5) for _ in range(1000)) == 239
+
+
+def test_bad_frames_are_skipped_and_the_stream_goes_on():
+    frames = waving(n=20)
+    frames[3, :, :] = np.nan            # nothing usable: skipped
+    frames[5, 8] = [np.nan, 1, 1]       # one NaN joint: joint dropped, frame rendered
+    frames[7, 15] = [0, 35.0, 0]        # absurd joint
+    sink = MemorySink()
+    engine = make([sink])
+    stats = run(engine, ScriptSource(frames))
+    assert stats.empty == 1 and stats.rendered == 19
+    assert {"nan", "absurd", "empty"} <= set(engine.faults.counts)
+    assert np.isfinite(sink.rows()).all()
+
+
+def test_renderer_exception_still_turns_every_sink_off():
+    a, b = MemorySink("a"), MemorySink("b")
+    engine = make([a, b], renderer=CountingRenderer(fail_at=6))
+    with pytest.raises(RuntimeError, match="renderer bug"):
+        run(engine, ScriptSource(waving(n=30), then="wait"))
+    assert a.shutdown_at is not None and b.shutdown_at is not None
+    assert engine.stats.stop_reason.startswith("error (RuntimeError")
+
+
+def test_slow_sink_never_holds_up_the_others():
+    fast, slow = MemorySink("fast"), MemorySink("slow", delay=0.25)
+    engine = make([slow, fast])
+    stats = run(engine, ScriptSource(waving(n=40)))
+    assert len(fast.rows()) == 40
+    assert fast.stats.latency.percentiles()["p50"] < 1000 / FPS      # not held up by the slow one
+    assert slow.stats.skipped > 20 and len(slow.got) < 10
+    assert slow.shutdown_at is not None and stats.rendered == 40
+
+
+def test_hung_turn_off_is_bounded_and_others_still_turned_off():
+    ok, hung = MemorySink("ok"), MemorySink("hung", hang=True)
+    engine = make([hung, ok], stop_timeout=0.3)
+    t0 = time.perf_counter()
+    run(engine, ScriptSource(waving(n=5)))
+    assert ok.shutdown_at is not None and time.perf_counter() - t0 < 1.5
+
+
+def test_multimodal_rows_are_the_audio_mix_at_show_time():
+    frames = np.repeat(pose(HAND_LEFT=(0.9, 1.45, 0.1))[None], 30, axis=0)
+    audio_rows = np.zeros((600, N))
+    audio_rows[:, 0] = np.linspace(0, 99.9, 600)      # a ramp, so the row used tells the time used
+    channel = AudioChannel(audio_rows, FPS, lambda m, a: mix(m, a, ratio=(2, 3)))
+    sink = MemorySink()
+    engine = make([sink], audio=channel, mode="multimodal")
+    run(engine, ScriptSource(frames))
+    motion, _ = hapmotion.Renderer(fps=FPS).run(frames)
+    for (_, f), m in zip([g for g in sink.got if g[1].kind == "frame"], motion):
+        np.testing.assert_allclose(f.row, mix(m, channel.row(f.t), ratio=(2, 3)))
+    got = [f for _, f in sink.got if f.kind == "frame"]
+    assert got[0].t == 0.0 and got[-1].t > 0.4
+    assert all(f.t == f.received - got[0].received for f in got)   # show time = seconds since the first frame
+    assert channel.row(-1.0).max() == 0 and channel.row(11.0).max() == 0
+
+
+def test_audio_only_mode_plays_the_song_rows_on_the_clock():
+    audio_rows = np.tile(np.linspace(0, 90, 12)[:, None], (1, N))
+    channel = AudioChannel(audio_rows, FPS, lambda m, a: a)
+    sink = MemorySink()
+    engine = LiveEngine(None, [sink], n_actuators=N, fps=FPS, audio=channel, mode="audio", handle_signals=False)
+    stats = run(engine, ClockSource(FPS, channel.duration_s))
+    rows = sink.rows()
+    assert stats.rendered == len(rows) and 6 <= len(rows) <= 12   # 12 ticks; a late tick is skipped, not queued
+    assert np.all(np.isin(rows[:, 0], audio_rows[:, 0])) and rows[0, 0] == 0.0
+    assert stats.stop_reason == "source ended"

@@ -1,0 +1,407 @@
+"""Fakes for the live tests, written from the documented protocols (docs/bhaptics-protocol.md §2, §3, §4) and not
+from hapmotion's own encoders, plus the tests that show the fakes catch bad messages.
+
+* :class:`FakePlayerV2` - a bHaptics Player SDK1 endpoint ``/v2/feedbacks``: checks every request, keeps per-key
+  state, answers each request with a status object;
+* :class:`FakePlayerV3` - the SDK2 ``/v3/feedback`` endpoint over TLS with a self-signed certificate made here;
+* :func:`self_signed_cert` - with the ``cryptography`` package when importable, else the ``openssl`` CLI;
+* :class:`OscReceiver` - a UDP socket collecting OSC packets (parsed with python-osc);
+* :func:`start_session` - runs ``hapmotion.live.live`` in the test's loop and waits until it listens.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import datetime
+import json
+import shutil
+import socket
+import ssl
+import subprocess
+import time
+from pathlib import Path
+from typing import Any, Optional
+
+import numpy as np
+import pytest
+from pythonosc.osc_packet import OscPacket
+from websockets.asyncio.server import serve
+from websockets.exceptions import ConnectionClosed
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+BVH = DATA / "motion" / "dataset-1_byebye_happy_001.bvh"
+
+V2_SIZES = {"VestFront": 20, "VestBack": 20, "ForearmL": 6, "ForearmR": 6}
+V3_SIZES = {0: 40, 1: 6, 2: 6}
+
+
+def ci(obj: dict, key: str) -> Any:
+    """Case-insensitive member (the Player accepts every casing, docs §2.2)."""
+    for k, v in obj.items():
+        if k.lower() == key.lower():
+            return v
+    return None
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def free_port(kind: int = socket.SOCK_STREAM) -> int:
+    """A port that was free a moment ago on 127.0.0.1 (for a server that must start later on a known port)."""
+    with socket.socket(socket.AF_INET, kind) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class _Server:
+    """A WebSocket server on 127.0.0.1 (``port`` 0: any free port) running ``self._handler``."""
+
+    port: int
+    ssl_context: Optional[ssl.SSLContext] = None
+    _server: Any = None
+
+    async def start(self):
+        self._server = await serve(self._handler, "127.0.0.1", self.port, ssl=self.ssl_context, compression=None)
+        self.port = self._server.sockets[0].getsockname()[1]
+        return self
+
+    async def stop(self) -> None:
+        if self._server is not None:
+            self._server.close()
+            await self._server.wait_closed()
+            self._server = None
+
+
+class FakePlayerV2(_Server):
+    """SDK1 Player. ``errors`` lists every rule a message broke (tests assert it stays empty)."""
+
+    def __init__(self, port: int = 0, close_after: Optional[int] = None):
+        self.port = port
+        self.close_after = close_after  # close each connection after this many requests (a Player restart)
+        self.errors: list[str] = []
+        self.connections: list[dict[str, Any]] = []
+        self.frames: list[tuple[float, str, list[int], int]] = []  # (time, position, 20/6 values, duration)
+        self.turn_off_all: list[float] = []
+        self.registered: list[str] = []
+        self.state: dict[str, list[int]] = {}
+
+    def url(self) -> str:
+        return f"player://127.0.0.1:{self.port}"
+
+    async def _handler(self, ws) -> None:
+        conn = {"path": ws.request.path, "requests": 0, "registered": []}
+        self.connections.append(conn)
+        if not ws.request.path.startswith("/v2/feedbacks"):
+            self.errors.append(f"path {ws.request.path}")
+        async for text in ws:
+            conn["requests"] += 1
+            self.check(text, conn)
+            status = {"RegisteredKeys": self.registered, "ActiveKeys": sorted(self.state),
+                      "ConnectedDeviceCount": 3, "ConnectedPositions": ["Vest", "ForearmL", "ForearmR"],
+                      "Status": {p: self._status(p) for p in V2_SIZES}}
+            try:
+                await ws.send(json.dumps(status))
+            except ConnectionClosed:
+                pass
+            if self.close_after and conn["requests"] >= self.close_after:
+                await ws.close()
+                return
+
+    def _status(self, position: str) -> list[int]:
+        for key, values in self.state.items():
+            if key.endswith(position):
+                return values
+        return [0] * V2_SIZES[position]
+
+    def check(self, text: Any, conn: dict) -> None:
+        now = time.perf_counter()
+        if not isinstance(text, str):
+            self.errors.append("binary frame")
+            return
+        try:
+            obj = json.loads(text)
+        except ValueError:
+            self.errors.append("not JSON")
+            return
+        if not isinstance(obj, dict) or not obj or any(k.lower() not in ("register", "submit") for k in obj):
+            self.errors.append(f"envelope keys {list(obj)[:3] if isinstance(obj, dict) else type(obj)}")
+            return
+        for reg in ci(obj, "register") or []:
+            key, project = ci(reg, "key"), ci(reg, "project")
+            if not isinstance(key, str) or not isinstance(project, dict) or "tracks" not in project:
+                self.errors.append("register entry")
+                continue
+            conn["registered"].append(key)
+            self.registered.append(key)
+        for sub in ci(obj, "submit") or []:
+            kind = ci(sub, "type")
+            if kind == "turnOffAll":
+                self.turn_off_all.append(now)
+                self.state.clear()
+            elif kind == "frame":
+                self._check_frame(sub, now)
+            else:
+                self.errors.append(f"submit type {kind!r}")
+
+    def _check_frame(self, sub: dict, now: float) -> None:
+        key, frame = ci(sub, "key"), ci(sub, "frame")
+        if not isinstance(key, str) or not key or not isinstance(frame, dict):
+            self.errors.append("frame submit without Key/Frame")
+            return
+        pos = ci(frame, "position")
+        if pos not in V2_SIZES:
+            self.errors.append(f"position {pos!r}")
+            return
+        dur = ci(frame, "durationMillis")
+        if not _is_int(dur) or not 20 <= dur <= 100_000:  # tact-js v1 validation range (docs §2.4)
+            self.errors.append(f"durationMillis {dur!r}")
+        values = [0] * V2_SIZES[pos]
+        for dot in ci(frame, "dotPoints") or []:
+            idx, inten = ci(dot, "index"), ci(dot, "intensity")
+            if not _is_int(idx) or not 0 <= idx < V2_SIZES[pos]:
+                self.errors.append(f"{pos} dot index {idx!r}")
+                continue
+            if not _is_int(inten) or not 0 <= inten <= 100:
+                self.errors.append(f"{pos} intensity {inten!r}")
+                continue
+            values[idx] = inten
+        if ci(frame, "pathPoints"):
+            self.errors.append("unexpected path points")
+        self.state[key] = values
+        self.frames.append((now, pos, values, dur))
+
+    def last_values(self, position: str) -> list[int]:
+        for _, pos, values, _ in reversed(self.frames):
+            if pos == position:
+                return values
+        raise AssertionError(f"no {position} frame")
+
+
+def self_signed_cert(folder: Path) -> tuple[Path, Path]:
+    """A throw-away certificate for 127.0.0.1 (cryptography if importable, else openssl)."""
+    cert, key = folder / "player.crt", folder / "player.key"
+    try:
+        from cryptography import x509
+        from cryptography.hazmat.primitives import hashes, serialization
+        from cryptography.hazmat.primitives.asymmetric import ec
+        from cryptography.x509.oid import NameOID
+    except ImportError:
+        openssl = shutil.which("openssl")
+        if openssl is None:
+            pytest.fail("needs the cryptography package or the openssl command to make a test certificate")
+        subprocess.run([openssl, "req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1",
+                        "-nodes", "-keyout", str(key), "-out", str(cert), "-days", "1", "-subj", "/CN=127.0.0.1"],
+                       check=True, capture_output=True, timeout=30)
+        return cert, key
+    pkey = ec.generate_private_key(ec.SECP256R1())
+    name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "127.0.0.1")])
+    now = datetime.datetime.now(datetime.timezone.utc)
+    crt = (x509.CertificateBuilder().subject_name(name).issuer_name(name).public_key(pkey.public_key())
+           .serial_number(x509.random_serial_number()).not_valid_before(now - datetime.timedelta(minutes=5))
+           .not_valid_after(now + datetime.timedelta(days=1)).sign(pkey, hashes.SHA256()))
+    cert.write_bytes(crt.public_bytes(serialization.Encoding.PEM))
+    key.write_bytes(pkey.private_bytes(serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8,
+                                       serialization.NoEncryption()))
+    return cert, key
+
+
+class FakePlayerV3(_Server):
+    """SDK2 Player on ``wss://127.0.0.1:PORT/v3/feedback`` with a self-signed certificate."""
+
+    def __init__(self, cert: tuple[Path, Path], port: int = 0):
+        self.port = port
+        self.ssl_context = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)
+        self.ssl_context.load_cert_chain(str(cert[0]), str(cert[1]))
+        self.errors: list[str] = []
+        self.auths: list[dict] = []
+        self.queries: list[str] = []
+        self.dots: list[tuple[float, int, list[int], int]] = []  # (time, position, values, duration)
+        self.stop_all: list[float] = []
+        self.request_ids: list[int] = []
+
+    def url(self, **query: str) -> str:
+        q = "&".join(f"{k}={v}" for k, v in query.items())
+        return f"player-v3://127.0.0.1:{self.port}" + (f"?{q}" if q else "")
+
+    async def _handler(self, ws) -> None:
+        path = ws.request.path
+        self.queries.append(path)
+        if not path.startswith("/v3/feedback?") or "workspace_id=" not in path or "api_key=" not in path:
+            self.errors.append(f"path {path}")
+        first = True
+        async for text in ws:
+            try:
+                obj = json.loads(text)
+                kind, payload = ci(obj, "type"), ci(obj, "message")
+                if isinstance(payload, str) and payload:
+                    payload = json.loads(payload)
+            except (ValueError, TypeError, AttributeError):
+                self.errors.append("not a JSON envelope")
+                continue
+            if first:
+                first = False
+                if kind not in ("SdkRequestAuth", "SdkRequestAuthInit"):
+                    self.errors.append(f"first message {kind!r}, expected auth")
+                elif not isinstance(payload, dict) or not {"applicationId", "sdkApiKey"} <= set(payload):
+                    self.errors.append("auth payload")
+                else:
+                    self.auths.append(payload)
+                try:
+                    await ws.send(json.dumps({"Type": "ServerReady", "Message": None}))
+                    await ws.send(json.dumps({"Type": "ServerDevices", "Message": json.dumps([
+                        {"position": 0, "deviceName": "TactSuitX40", "connected": True},
+                        {"position": 1, "deviceName": "Tactosy2_V3 (L)", "connected": True},
+                        {"position": 2, "deviceName": "Tactosy2_V3 (R)", "connected": True}])}))
+                except ConnectionClosed:  # the client may already be closing; what it sent is still read
+                    pass
+                continue
+            if kind == "SdkStopAll":
+                self.stop_all.append(time.perf_counter())
+            elif kind == "SdkPlayDotMode":
+                self._check_dot(payload)
+            else:
+                self.errors.append(f"type {kind!r}")
+
+    def _check_dot(self, p: Any) -> None:
+        if not isinstance(p, dict):
+            self.errors.append("dot payload")
+            return
+        pos, values, dur, rid = p.get("position"), p.get("motorValues"), p.get("durationMillis"), p.get("requestId")
+        if pos not in V3_SIZES:
+            self.errors.append(f"position {pos!r}")
+            return
+        if not isinstance(values, list) or len(values) != V3_SIZES[pos]:
+            self.errors.append(f"position {pos}: {len(values) if isinstance(values, list) else values!r} values")
+            return
+        if not all(_is_int(v) and 0 <= v <= 100 for v in values):
+            self.errors.append(f"position {pos}: values out of 0..100 ints")
+        if not _is_int(dur) or dur <= 0:
+            self.errors.append(f"durationMillis {dur!r}")
+        if not _is_int(rid) or not _is_int(p.get("deviceIndex")):
+            self.errors.append("requestId/deviceIndex")
+        else:
+            self.request_ids.append(rid)
+        self.dots.append((time.perf_counter(), pos, values, dur))
+
+
+class OscReceiver(asyncio.DatagramProtocol):
+    """Collects OSC messages as ``(time, address, params)``."""
+
+    def __init__(self) -> None:
+        self.messages: list[tuple[float, str, list]] = []
+        self.datagrams = 0
+        self.transport = None
+        self.port = 0
+
+    async def start(self) -> "OscReceiver":
+        loop = asyncio.get_running_loop()
+        self.transport, _ = await loop.create_datagram_endpoint(lambda: self, local_addr=("127.0.0.1", 0))
+        self.port = self.transport.get_extra_info("sockname")[1]
+        return self
+
+    def datagram_received(self, data: bytes, addr: Any) -> None:
+        self.datagrams += 1
+        now = time.perf_counter()
+        for tm in OscPacket(data).messages:
+            self.messages.append((now, tm.message.address, tm.message.params))
+
+    def close(self) -> None:
+        if self.transport is not None:
+            self.transport.close()
+
+
+class Tap:
+    """A sink that keeps every frame the engine emits (to compare what the network sinks received with it)."""
+
+    def __new__(cls):
+        from hapmotion.live.sinks import Sink
+
+        class _Tap(Sink):
+            def __init__(self):
+                super().__init__("tap")
+                self.frames = []
+
+            def offer(self, frame):
+                self.frames.append(frame)
+
+            async def run(self):
+                await asyncio.Event().wait()
+
+            def rendered(self) -> np.ndarray:
+                return np.array([f.row for f in self.frames if f.kind == "frame"])
+
+            def all_rows_int(self) -> list[list[int]]:
+                return np.rint(np.array([f.row for f in self.frames])).astype(int).tolist()
+
+        return _Tap()
+
+
+async def start_session(source: Any, sinks: list, timeout: float = 20.0, **kwargs: Any):
+    """Start ``hapmotion.live.live`` as a task; return ``(task, engine)`` once it listens."""
+    from hapmotion.live import live
+
+    ready: asyncio.Future = asyncio.get_running_loop().create_future()
+    kwargs.setdefault("handle_signals", False)
+    task = asyncio.create_task(live(source, sinks, on_ready=lambda e: ready.done() or ready.set_result(e),
+                                    **kwargs))
+    done, _ = await asyncio.wait({task, ready}, timeout=timeout, return_when=asyncio.FIRST_COMPLETED)
+    if task in done:
+        task.result()  # raises the start error
+    assert ready in done, "live session did not start in time"
+    return task, ready.result()
+
+
+async def wait_for(predicate, timeout: float = 5.0, step: float = 0.005) -> None:
+    """Poll ``predicate()`` until true; fail after ``timeout`` seconds."""
+    end = time.perf_counter() + timeout
+    while not predicate():
+        if time.perf_counter() > end:
+            raise AssertionError("condition not reached in time")
+        await asyncio.sleep(step)
+
+
+def real_frames(fps: float = 60.0) -> tuple[np.ndarray, float]:
+    """The byebye recording (captured at 30 fps) through ``hapmotion.load_motion``, resampled to ``fps`` like a
+    60 Hz tracker: frames ``(T, 32, 3)`` and the rate."""
+    import hapmotion
+
+    m = hapmotion.load_motion(BVH).resample(fps)
+    return m.positions, m.fps
+
+
+# ------------------------------------------------------------------------------------- the fakes can fail
+def _v2(obj: Any) -> FakePlayerV2:
+    p = FakePlayerV2()
+    p.check(json.dumps(obj), {"registered": []})
+    return p
+
+
+def test_fake_v2_accepts_a_documented_request_in_any_casing():
+    ok = {"submit": [{"type": "frame", "key": "k", "frame": {"Position": "VestFront", "DurationMillis": 100,
+                                                               "DotPoints": [{"Index": 5, "Intensity": 80}]}}]}
+    p = _v2(ok)
+    assert p.errors == [] and p.frames[0][1] == "VestFront" and p.frames[0][2][5] == 80
+
+
+@pytest.mark.parametrize("frame, problem", [
+    ({"position": "Vest", "durationMillis": 40, "dotPoints": []}, "position"),
+    ({"position": "VestFront", "durationMillis": 40, "dotPoints": [{"index": 20, "intensity": 5}]}, "index"),
+    ({"position": "ForearmL", "durationMillis": 40, "dotPoints": [{"index": 6, "intensity": 5}]}, "index"),
+    ({"position": "VestBack", "durationMillis": 40, "dotPoints": [{"index": 1, "intensity": 100.5}]}, "intensity"),
+    ({"position": "VestBack", "durationMillis": 40, "dotPoints": [{"index": 1, "intensity": 101}]}, "intensity"),
+    ({"position": "VestBack", "durationMillis": 5, "dotPoints": []}, "durationMillis"),
+])
+def test_fake_v2_rejects_what_the_protocol_forbids(frame, problem):
+    p = _v2({"Submit": [{"Type": "frame", "Key": "k", "Frame": frame}]})
+    assert len(p.errors) == 1 and problem in p.errors[0]
+
+
+def test_fake_v3_rejects_wrong_array_lengths(tmp_path):
+    p = FakePlayerV3(self_signed_cert(tmp_path))
+    p._check_dot({"requestId": 1, "position": 0, "motorValues": [0] * 20, "durationMillis": 40, "deviceIndex": -1})
+    p._check_dot({"requestId": 2, "position": 1, "motorValues": [0] * 5 + [101], "durationMillis": 40,
+                  "deviceIndex": -1})
+    p._check_dot({"requestId": 3, "position": 2, "motorValues": [0] * 6, "durationMillis": 40, "deviceIndex": -1})
+    assert p.errors == ["position 0: 20 values", "position 1: values out of 0..100 ints"]
+    assert len(p.dots) == 2
