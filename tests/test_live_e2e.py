@@ -149,6 +149,7 @@ def test_osc_recording_drives_every_sink(recording, expected, tmp_path):
     # Broadcast: hello, frames in seq order with the contract's fields, stop.
     hello = viewer.messages[0]
     assert hello["type"] == "hello" and len(hello["actuators"]) == 52 and len(hello["joints"]) == 32
+    assert hello["render"]["method"] == "mst"  # so a viewer knows to draw the motion salient triangle
     frames = viewer.frames()
     seqs = [f["seq"] for f in frames]
     assert seqs == sorted(seqs) and viewer.messages[-1] == {"type": "stop"}

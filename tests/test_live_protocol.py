@@ -318,6 +318,9 @@ def test_broadcast_messages_follow_the_contract():
     hello = json.loads(P.broadcast_hello(60.0, LAYOUT.actuators, "x40_shoulders"))
     assert hello == {"type": "hello", "version": 1, "fps": 60.0, "actuators": list(LAYOUT.actuators),
                      "joints": list(JOINTS), "bones": [list(b) for b in BONES], "layout": "x40_shoulders"}
+    with_render = json.loads(P.broadcast_hello(60.0, LAYOUT.actuators, "x40_shoulders",
+                                               {"method": "mst", "preset": "paper", "mirror": True, "source": "x"}))
+    assert with_render["render"] == {"method": "mst", "preset": "paper", "mirror": True}
     skel = np.arange(96, dtype=float).reshape(32, 3) / 10
     skel[4] = np.nan
     debug = {"dynamic_point": np.array([0.1, 1.2, 0.3]), "hit_point": np.array([np.nan] * 3),

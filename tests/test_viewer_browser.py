@@ -196,7 +196,8 @@ class Broadcast:
     async def handler(self, ws):
         layout = hapmotion.load_layout()
         await ws.send(json.dumps({"type": "hello", "version": 1, "fps": 60.0, "actuators": list(layout.actuators),
-                                  "joints": list(JOINTS), "bones": [list(b) for b in BONES], "layout": layout.name}))
+                                  "joints": list(JOINTS), "bones": [list(b) for b in BONES], "layout": layout.name,
+                                  "render": {"method": "mst", "preset": "paper", "mirror": True}}))
         for fr in self.frames:
             await ws.send(json.dumps(fr))
             await asyncio.sleep(0.02)
@@ -257,7 +258,9 @@ def test_live_page_shows_the_broadcast(page, broadcast, tmp_path, capsys):
         assert cells[aid][0] == v
         assert cells[aid][2] == css_rgb(data["colors"][cells[aid][1]])
     n_joints = sum(p is not None for p in broadcast.skeleton)
-    assert st["shown"] == {"joints": n_joints, "triangle": False, "dynamicPoint": True, "hitPoint": True}
+    # the hello says the show runs MST, so the triangle is drawn: the last frame has only the left hand active,
+    # so it is (left hand, right shoulder, J_T)
+    assert st["shown"] == {"joints": n_joints, "triangle": True, "dynamicPoint": True, "hitPoint": True}
     assert st["active"] == [1, 0] and st["level"] == 6.0
     ARTIFACTS.mkdir(exist_ok=True)
     page.screenshot(path=str(ARTIFACTS / "viewer_live.png"))

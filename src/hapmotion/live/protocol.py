@@ -673,10 +673,18 @@ def _xyz(v: Any) -> Optional[list[float]]:
     return [round(float(x), 4) for x in a]
 
 
-def broadcast_hello(fps: float, actuators: Sequence[str], layout: str) -> str:
-    """The ``hello`` message every broadcast client gets first (docs/CONTRACTS.md)."""
-    return json.dumps({"type": "hello", "version": 1, "fps": float(fps), "actuators": list(actuators),
-                       "joints": list(JOINTS), "bones": [list(b) for b in BONES], "layout": layout})
+def broadcast_hello(fps: float, actuators: Sequence[str], layout: str,
+                    render: Optional[Mapping[str, Any]] = None) -> str:
+    """The ``hello`` message every broadcast client gets first (docs/CONTRACTS.md).
+
+    ``render`` (optional) says how the show is rendered: ``{"method": "mst"|"baseline", "preset", "mirror",
+    "mode"}``, so a viewer can draw the motion salient triangle (only meaningful for ``mst``).
+    """
+    msg = {"type": "hello", "version": 1, "fps": float(fps), "actuators": list(actuators),
+           "joints": list(JOINTS), "bones": [list(b) for b in BONES], "layout": layout}
+    if render:
+        msg["render"] = {k: render.get(k) for k in ("method", "preset", "mirror", "mode") if k in render}
+    return json.dumps(msg)
 
 
 def broadcast_frame(seq: int, t: float, row: np.ndarray, skeleton: Optional[np.ndarray],

@@ -74,7 +74,7 @@ def build_sink(ep: Endpoint, *, dmap: DeviceMap, layout_name: str, fps: float,
         return OscOutSink(dmap, host=ep.host, port=ep.port, prefix=ep.path.rstrip("/") or "/hapmotion",
                           per_actuator=ep.flag("actuators"), per_device=ep.flag("devices"), fps=fps)
     if ep.kind == "ws-broadcast":
-        return BroadcastSink(dmap.actuators, layout_name, host=ep.host, port=ep.port, fps=fps)
+        return BroadcastSink(dmap.actuators, layout_name, host=ep.host, port=ep.port, fps=fps, render_info=meta)
     if ep.kind == "record":
         return RecorderSink(ep.path, dmap.actuators, layout_name, fps=fps, meta=meta, time_scale=time_scale)
     raise UsageError(f"--sink {ep.text!r}: unknown kind {ep.kind}")  # pragma: no cover

@@ -40,10 +40,11 @@ class BroadcastSink(Sink):
 
     def __init__(self, actuators: Sequence[str], layout: str = "x40_shoulders", *, host: str = "127.0.0.1",
                  port: int = 8766, fps: float = 60.0, client_buffer: int = 65536, slow_client_s: float = 5.0,
-                 sndbuf: Optional[int] = 65536, name: Optional[str] = None, **kwargs: Any):
+                 sndbuf: Optional[int] = 65536, name: Optional[str] = None,
+                 render_info: Optional[dict[str, Any]] = None, **kwargs: Any):
         super().__init__(name or f"ws-broadcast ws://{host}:{port}", fps=fps, **kwargs)
         self.host, self.port = host, port
-        self.hello = broadcast_hello(fps, actuators, layout)
+        self.hello = broadcast_hello(fps, actuators, layout, render_info)
         self.client_buffer = client_buffer
         self.slow_client_s = slow_client_s
         self.sndbuf = sndbuf

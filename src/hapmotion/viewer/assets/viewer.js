@@ -849,7 +849,7 @@
   function pushStat(arr, v) { arr.push(v); if (arr.length > 600) arr.shift(); }
 
   // ------------------------------------------------------------------ live mode
-  const LIVE = { ws: null, latest: null, hist: [], timer: null, warned: new Set(), peak: 0 };
+  const LIVE = { ws: null, latest: null, hist: [], timer: null, warned: new Set(), peak: 0, triCode: 0 };
 
   function liveWarn(kind, detail) {
     S.live.bad++;
@@ -900,6 +900,7 @@
       if (Array.isArray(m.joints)) JOINTS = m.joints.slice();
       if (Array.isArray(m.bones)) BONES = m.bones.filter((b) => Array.isArray(b) && b.length === 2);
       LIVE.hist = [];
+      LIVE.triCode = 0;
       setStatus("live: " + (m.layout || "") + " " + (m.fps ? m.fps + " fps" : ""), "live-on");
       return;
     }
@@ -938,6 +939,27 @@
     timeline.dirty = true;
   }
 
+  // The motion salient triangle of a live frame, when the hello says the show runs the MST method (paper,
+  // Section 4 step 4): both hands active -> (left hand, right hand, J_T); one -> (that hand, the opposite
+  // shoulder, J_T); none -> the last triangle, or before any, the hand farther from J_T.
+  function liveTriangle(L) {
+    const render = S.live.hello && S.live.hello.render;
+    if (!render || render.method !== "mst" || !L.skeleton) return null;
+    const idx = (name) => JOINTS.indexOf(name);
+    const hl = idx("HAND_LEFT"), hr = idx("HAND_RIGHT"), sl = idx("SHOULDER_LEFT"), sr = idx("SHOULDER_RIGHT"), jt = idx("SPINE_NAVEL");
+    if ([hl, hr, sl, sr, jt].some((j) => j < 0)) return null;
+    let code = (L.active[0] ? 1 : 0) + (L.active[1] ? 2 : 0);
+    if (code === 0) code = LIVE.triCode || 0;
+    if (code === 0) {
+      const J = L.skeleton, d = (a, b) => (J[a] && J[b]) ? Math.hypot(J[a][0] - J[b][0], J[a][1] - J[b][1], J[a][2] - J[b][2]) : -1;
+      code = d(hl, jt) >= d(hr, jt) ? 1 : 2;
+    }
+    LIVE.triCode = code;
+    const verts = code === 3 ? [hl, hr, jt] : code === 1 ? [hl, sr, jt] : [hr, sl, jt];
+    const tri = verts.map((j) => L.skeleton[j]);
+    return tri.every((p) => p) ? tri : null;
+  }
+
   function liveTick() {
     const L = LIVE.latest;
     const stalled = S.live.connected && !S.live.stopped && S.live.frames > 0 && (performance.now() - S.live.lastAt) / 1000 > LIVE_STALL_S;
@@ -953,8 +975,8 @@
     S.intensities = L.intensities.slice();
     S.level = L.level; S.active = L.active; S.chart = null; S.distance = null;
     showIntensities(S.intensities);
-    const fr = { frame: L.seq, joints: L.skeleton, dp: L.dp, hit: L.hit, target: null, tri: null, active: L.active, level: L.level,
-      chart: null, distance: null };
+    const fr = { frame: L.seq, joints: L.skeleton, dp: L.dp, hit: L.hit, target: null, tri: liveTriangle(L), active: L.active,
+      level: L.level, chart: null, distance: null };
     showFrame(fr);
     if (L.skeleton && !LIVE.viewSet) { LIVE.viewSet = true; scene.setView("audience"); }
     if (L.skeleton) {
