@@ -15,4 +15,4 @@ test:
 	$(PY) -m pytest -q
 
 bench: install
-	$(PY) benchmarks/run_all.py
+	for b in render readers audio live viewer metrics; do $(PY) benchmarks/bench_$$b.py || exit 1; done

@@ -152,3 +152,29 @@ def test_bad_audio_and_mix_options(tmp_path, capsys):
     code, _, err = run(["render", PUNCH, "-o", out, "--mode", "audio"], capsys)
     assert code == 2 and "--audio" in err
     assert not out.exists()
+
+
+def test_demo_renders_the_bundled_example(tmp_path, capsys):
+    """The README's first command: the shipped salsa clip and song, multimodal, into six files."""
+    out = tmp_path / "demo"
+    code, stdout, err = run(["demo", "-o", out], capsys)
+    assert code == 0, err
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["demo.ForearmL.tact", "demo.ForearmR.tact", "demo.csv", "demo.html", "demo.png", "demo.tact"]
+    track = load_track(out / "demo.csv")
+    assert track.n_frames == 1686 and track.fps == 120.0  # 1690 frames less the detected T-pose
+    assert track.intensities.max() > 50  # the music's kicks
+    assert "Kevin MacLeod" in stdout and "mocap.cs.cmu.edu" in stdout  # attribution shown
+    page = (out / "demo.html").read_text()
+    assert "Vibe Ace" in page and "<script" in page and "https://" not in page.split("<footer", 1)[0]
+
+
+def test_bundled_examples_are_the_shared_files_with_attribution():
+    from hapmotion.cli.demo import example_path
+
+    for name in ("60_12_scaled.bvh", "gBR_sBM_cAll_d04_mBR0_ch03.pkl"):
+        assert example_path(name).read_bytes() == (DATA / "motion" / name).read_bytes()
+    assert example_path("vibe_ace.ogg").read_bytes() == (DATA / "audio" / "vibe_ace.ogg").read_bytes()
+    attribution = example_path("ATTRIBUTION.md").read_text()
+    for must in ("CC BY 3.0", "CC BY 4.0", "NSF EIA-0196217", "not** shipped"):
+        assert must in attribution

@@ -1,5 +1,5 @@
-"""``hapmotion info`` and the shared reader options, run through click's CliRunner inside a small group that reports
-HapMotionError the way the real ``hapmotion`` group does (one line on stderr, exit code 2)."""
+"""``hapmotion info`` through the real ``hapmotion`` entry point (``hapmotion.cli.main``: a HapMotionError is one
+line on stderr, exit code 2), and the shared reader options through a probe command in a small test group."""
 
 from __future__ import annotations
 
@@ -48,7 +48,20 @@ cli.add_command(probe)
 
 
 def run(*args):
-    return CliRunner().invoke(cli, list(map(str, args)))
+    """``info`` runs through the real entry point; ``probe`` (test-only) through the small group above."""
+    runner = CliRunner()
+    if args and args[0] == "probe":
+        return runner.invoke(cli, list(map(str, args)))
+    from types import SimpleNamespace
+
+    from hapmotion.cli import main as real_main
+
+    with runner.isolation() as (out, err, both):
+        code = real_main(list(map(str, args)))
+        sys.stdout.flush()
+        sys.stderr.flush()
+        return SimpleNamespace(exit_code=code, output=both.getvalue().decode(), stdout=out.getvalue().decode(),
+                               stderr=err.getvalue().decode())
 
 
 def test_info_table():
@@ -109,7 +122,7 @@ def test_bad_file_error_names_the_line(tmp_path):
     bad.write_text("\n".join(lines))
     r = run("info", bad)
     assert r.exit_code == 2
-    assert r.stderr.strip() == f"hapmotion: error: {bad}: line 301: expected 96 channel values, found 97"
+    assert r.stderr.strip() == f"error: {bad}: line 301: expected 96 channel values, found 97"
 
 
 def test_decorator_gathers_options_for_other_commands():

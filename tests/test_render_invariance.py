@@ -60,15 +60,24 @@ def test_chunked_batch_equals_single_batch():
 
 
 def test_step_holds_missing_joints_and_never_emits_nan():
-    r = hapmotion.Renderer(fps=60.0)
+    """A lost joint is held at its last value: the frame renders exactly as if the joint had not moved."""
     frames = waving(n=60)
+    body = BodyModel.from_motion(motion_from_frames(frames))
+    r = hapmotion.Renderer(fps=60.0, body=body)
     assert r.step(np.full((32, 3), np.nan)).sum() == 0.0  # nothing seen yet: silence
-    out = [r.step(f) for f in frames[:30]]
+    r.reset()
+    for f in frames[:30]:
+        r.step(f)
     broken = frames[30].copy()
     broken[8] = np.nan  # HAND_LEFT lost for a frame
     held = r.step(broken)
+    twin = hapmotion.Renderer(fps=60.0, body=body)
+    for f in frames[:30]:
+        twin.step(f)
+    same = frames[30].copy()
+    same[8] = frames[29, 8]  # the hand stays where it was last seen
+    np.testing.assert_array_equal(held, twin.step(same))
     assert np.isfinite(held).all()
-    assert np.isfinite(np.array(out)).all()
 
 
 @settings(max_examples=40, deadline=None)

@@ -11,6 +11,7 @@ docs/metrics.md come from::
 from __future__ import annotations
 
 import sys
+from dataclasses import fields
 from typing import Any, Sequence
 
 import numpy as np
@@ -24,26 +25,26 @@ SHOWN = ("reach_r", "reach_lag_ms", "locus_cm", "locus_skin_cm", "constancy_db",
 
 PAPER = PRESETS["paper"]
 
-PROPOSED: dict[str, Any] = {"phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.3, "dead_zone": 10.0,
-                            "actuator_release_s": 0.0}
-"""The energy preset values docs/metrics.md argues for (changes from ``paper``)."""
-
-CURRENT = {f: getattr(PRESETS["energy"], f) for f in ("phantom", "attack_alpha", "release_alpha", "dead_zone",
-                                                       "actuator_release_s", "perceptual_exponent")}
-"""The ``energy`` preset as params.py defines it today (changes from ``paper``)."""
+SHIPPED: dict[str, Any] = {f.name: getattr(PRESETS["energy"], f.name) for f in fields(Params)
+                           if getattr(PRESETS["energy"], f.name) != getattr(PAPER, f.name)}
+"""The ``energy`` preset as params.py defines it (its changes from ``paper``), read from the preset itself."""
 
 VARIANTS: dict[str, dict[str, Any]] = {
     "paper": {},
     "+ energy split": {"phantom": "energy"},
-    "+ attack 0.6 / release 0.15": {"phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.15},
-    "+ dead zone 8": {"phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.15, "dead_zone": 8.0},
-    "+ actuator release 0.06 s": {
-        "phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.15, "dead_zone": 8.0, "actuator_release_s": 0.06},
-    "energy (params.py)": CURRENT,
-    "proposed energy": PROPOSED,
+    "+ attack 0.6 / release 0.3": {"phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.3},
+    "+ dead zone 10": {"phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.3, "dead_zone": 10.0},
+    "energy (shipped)": SHIPPED,
+    "shipped, release_alpha 0.15": {**SHIPPED, "release_alpha": 0.15},
+    "shipped, release_alpha 0.5": {**SHIPPED, "release_alpha": 0.5},
+    "shipped, actuator_release_s 0.06": {**SHIPPED, "actuator_release_s": 0.06},
+    "shipped, perceptual_exponent 0.6": {**SHIPPED, "perceptual_exponent": 0.6},
+    "shipped, perceptual_exponent 0.9": {**SHIPPED, "perceptual_exponent": 0.9},
+    "shipped, no perceptual mapping": {**SHIPPED, "perceptual_exponent": 0.0},
+    "shipped, paper split": {**SHIPPED, "phantom": "paper"},
 }
-"""Cumulative steps from ``paper`` towards the ``energy`` preset, the preset itself and the proposal; :func:`main`
-adds variants given on the command line as ``NAME=VALUE,...`` on top of the proposal."""
+"""Cumulative steps from ``paper`` to the shipped ``energy`` preset, then one knob at a time on top of it;
+:func:`main` adds variants given on the command line as ``NAME=VALUE,...`` on top of the shipped preset."""
 
 
 def score_variants(motions: dict[str, Any], variants: dict[str, dict[str, Any]],
@@ -107,7 +108,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     variants = dict(VARIANTS)
     for spec in extra:
         name, changes = _parse(spec)
-        variants[f"proposed, {name}"] = {**PROPOSED, **changes}
+        variants[f"shipped, {name}"] = {**SHIPPED, **changes}
     print(markdown(score_variants(motions, variants)))
 
 

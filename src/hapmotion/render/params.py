@@ -136,6 +136,7 @@ PRESETS: dict[str, Params] = {
         release_alpha=0.3,
         dead_zone=10.0,
         intensity_far_m=0.5,
+        perceptual_exponent=0.8,
     ),
 }
 """Named parameter sets. ``paper``: the paper's values. ``energy``: energy-preserving phantom split, asymmetric
