@@ -60,6 +60,26 @@ def _fit_debug(debug: dict[str, np.ndarray], n_frames: int, motion: bool) -> dic
     return out
 
 
+def power_limit_for(fraction: float | None, n_actuators: int) -> float | None:
+    """The total power limit ``sum (I/100)^2`` for ``n_actuators`` (``None``: no limit)."""
+    return None if fraction is None else float(fraction) * n_actuators
+
+
+def output_stage(motion_rows: np.ndarray, audio_rows: np.ndarray, *, mode: str, ratio: "tuple[float, float]",
+                 domain: str, power_limit: float | None) -> np.ndarray:
+    """What the three study-2 conditions send, from motion and audio rows ``(N,)`` or ``(T, N)`` 0..100.
+
+    ``multimodal``: the mix (:func:`mix`); ``motion`` / ``audio``: that channel alone; all clipped to 0..100 and
+    power-limited the same way. Used by :func:`combine` offline and per frame by live mode, so both send the same
+    numbers.
+    """
+    if mode == "multimodal":
+        return mix(motion_rows, audio_rows, ratio=ratio, domain=domain, power_limit=power_limit)
+    if mode not in ("motion", "audio"):
+        raise UsageError(f"mode must be motion, audio or multimodal, not {mode!r}")
+    return limit_power(np.clip(motion_rows if mode == "motion" else audio_rows, 0.0, 100.0), power_limit)
+
+
 def combine(motion_track: HapticTrack | None, audio_path: "str | os.PathLike[str] | None",
             mode: str = "multimodal", ratio: "tuple[float, float]" = (2, 3), offset_s: float = 0.0,
             fps: float = 60.0, domain: str = "linear", length: str = "longer",
@@ -143,11 +163,8 @@ def combine(motion_track: HapticTrack | None, audio_path: "str | os.PathLike[str
     audio_rows = fit_rows(audio.intensities, n_frames) if audio is not None else np.zeros((n_frames, n))
 
     fraction = p.power_limit_fraction if power_limit_fraction == "params" else power_limit_fraction
-    limit = None if fraction is None else float(fraction) * n
-    if mode == "multimodal":
-        rows = mix(motion_rows, audio_rows, ratio=ratio, domain=domain, power_limit=limit)
-    else:
-        rows = limit_power(np.clip(motion_rows if mode == "motion" else audio_rows, 0.0, 100.0), limit)
+    limit = power_limit_for(fraction, n)
+    rows = output_stage(motion_rows, audio_rows, mode=mode, ratio=ratio, domain=domain, power_limit=limit)
 
     meta: dict[str, Any] = dict(motion_track.meta) if motion_track is not None else {}
     meta.update({
