@@ -178,3 +178,16 @@ def test_bundled_examples_are_the_shared_files_with_attribution():
     attribution = example_path("ATTRIBUTION.md").read_text()
     for must in ("CC BY 3.0", "CC BY 4.0", "NSF EIA-0196217", "not** shipped"):
         assert must in attribution
+
+
+@pytest.mark.parametrize("extra, expect", [(["--fps", "nan"], "--fps"), (["--audio-offset", "1e9"], "--audio-offset"),
+                                           (["--param", "weight_gain=1e308"], "weight_gain"),
+                                           (["--param", "dead_zone=200"], "dead_zone")])
+def test_absurd_numbers_are_one_line_usage_errors(tmp_path, capsys, extra, expect):
+    out = tmp_path / "x.csv"
+    args = ["render", PUNCH, "-o", out, *extra]
+    if "--audio-offset" in extra:
+        args += ["--audio", SONG]
+    code, _, err = run(args, capsys)
+    assert code == 2 and expect in err and len(err.strip().splitlines()) == 1, err
+    assert not out.exists()

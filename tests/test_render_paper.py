@@ -200,3 +200,26 @@ def test_two_active_hands_give_the_extra_weight_to_the_hand_farther_from_the_dyn
     hl, hr, jt = frames[20, JOINT_INDEX["HAND_LEFT"]], frames[20, JOINT_INDEX["HAND_RIGHT"]], frames[20, 1]
     np.testing.assert_allclose(track.debug["dynamic_point"][19], (frames[19, 8] + frames[19, 12] + jt) / 3)
     np.testing.assert_allclose(track.debug["dynamic_point"][20], (hl + 3 * hr + jt) / 5, atol=1e-12)
+
+
+def test_baseline_uses_the_active_hand_itself():
+    hand = (0.89, 1.45, 0.0)
+    track = hapmotion.render(still(pose(HAND_LEFT=hand), n=5), method="baseline")
+    np.testing.assert_allclose(track.debug["dynamic_point"], np.repeat(np.array([hand]), 5, 0), atol=1e-12)
+    d = np.linalg.norm(np.array(hand) - np.array([0.0, 1.10, 0.0]))
+    np.testing.assert_allclose(track.debug["distance"], d)
+
+
+def test_direct_mapping_under_13_cm_lands_on_the_nearest_surface_point():
+    """Hands low in front of the belly: the left hand is farther from J_T, so DP = centroid(HL, SR, J_T) =
+    (0.02, 1.20, 0.067), 12.2 cm from J_T. In body coordinates (x = -X) it is (-0.02, 0.10, 0.067); scaled radially
+    onto the ellipse x^2/0.19^2 + z^2/0.114^2 = 1 (y kept: it is between the caps) it lands on the front panel."""
+    p = pose(HAND_LEFT=(0.25, 1.05, 0.20), HAND_RIGHT=(-0.05, 1.05, 0.05))
+    track = hapmotion.render(still(p, n=3))
+    dp = (np.array([0.25, 1.05, 0.20]) + np.array([-0.19, 1.45, 0.0]) + np.array([0.0, 1.10, 0.0])) / 3
+    np.testing.assert_allclose(track.debug["dynamic_point"][-1], dp, atol=1e-12)
+    assert track.debug["distance"][-1] < 0.13
+    x, y, z = -dp[0], dp[1] - 1.10, dp[2]
+    k = np.sqrt((x / 0.19) ** 2 + (z / 0.114) ** 2)
+    np.testing.assert_allclose(track.debug["hit_body"][-1], [x / k, y, z / k], atol=1e-9)
+    assert track.debug["chart"][-1] == 0  # front

@@ -128,3 +128,87 @@ def test_unknown_extension_and_missing_folder(track, tmp_path):
 def test_track_refuses_nan():
     with pytest.raises(ValueError):
         HapticTrack(np.full((2, 52), np.nan), 60.0, load_layout().actuators)
+
+
+@pytest.mark.parametrize(
+    "name, content, place",
+    [
+        ("nan.csv", "time_s,VestFront_0\n0.0,nan\n", "line 2"),
+        ("range.csv", "time_s,VestFront_0\n0.0,10\n0.1,250\n", "line 3"),
+        ("times.csv", "time_s,VestFront_0\n0.0,10\n0.0,20\n", "line 3"),
+        ("null.json", '{"format":"hapmotion-track","fps":60,"actuators":["VestFront_0"],"frames":[[1],[null]]}',
+         "field frames[1]"),
+        ("fps.json", '{"format":"hapmotion-track","fps":0,"actuators":["VestFront_0"],"frames":[[1]]}', "field fps"),
+        ("start.tact", '{"project":{"mediaFileDuration":1,"hapmotion":{"fps":60},"tracks":[{"effects":[{"modes":'
+                       '{"VestFront":{"dotMode":{"feedback":[{"endTime":100,"pointList":[]}]}}}}]}]}}', "effects[0]"),
+        ("index.tact", '{"project":{"mediaFileDuration":1,"hapmotion":{"fps":60},"tracks":[{"effects":[{"modes":'
+                       '{"VestFront":{"dotMode":{"feedback":[{"startTime":0,"endTime":100,"pointList":'
+                       '[{"index":99,"intensity":0.5}]}]}}}}]}]}}', "effects[0]"),
+    ],
+)
+def test_bad_track_files_are_one_line_input_errors(tmp_path, name, content, place):
+    path = tmp_path / name
+    path.write_text(content)
+    with pytest.raises(InputError) as info:
+        load_track(path)
+    assert name in str(info.value) and place in str(info.value) and "\n" not in str(info.value)
+
+
+def test_binary_csv_and_npz_with_bad_fps(tmp_path, track):
+    (tmp_path / "b.csv").write_bytes(b"\xff\xfe\x00garbage")
+    with pytest.raises(InputError, match="binary"):
+        load_track(tmp_path / "b.csv")
+    np.savez(tmp_path / "z.npz", intensities=np.zeros((2, 52)), actuators=np.array(track.actuators), fps=np.array(0.0))
+    with pytest.raises(InputError, match="array fps"):
+        load_track(tmp_path / "z.npz")
+
+
+def test_tact_reads_only_its_own_sleeve_files(tmp_path, track):
+    track.save(tmp_path / "show.tact")
+    HapticTrack(np.full((10, 52), 77.0), 30.0, track.actuators).save(tmp_path / "show.backup.tact")
+    back = load_track(tmp_path / "show.tact")
+    np.testing.assert_allclose(back.intensities, track.intensities, atol=0.5 + 1e-9)
+    assert back.fps == track.fps
+
+
+def test_writing_onto_a_directory_is_a_one_line_error(tmp_path, track):
+    (tmp_path / "out.csv").mkdir()
+    with pytest.raises(InputError, match="cannot write"):
+        track.save(tmp_path / "out.csv")
+    assert [p.name for p in tmp_path.iterdir()] == ["out.csv"]
+
+
+def test_json_meta_never_holds_nan(tmp_path, track):
+    t = HapticTrack(track.intensities, track.fps, track.actuators, meta={"x": np.float64("nan"), "y": [float("inf")]})
+    t.save(tmp_path / "m.json")
+    text = (tmp_path / "m.json").read_text()
+    assert "NaN" not in text and "Infinity" not in text
+    assert load_track(tmp_path / "m.json").meta == {"x": None, "y": [None]}
+
+
+@pytest.mark.parametrize(
+    "doc, expect",
+    [
+        ("[]", "field devices"),
+        ('{"devices": [{"name": "VestFront", "rows": 5, "cols": 4, "chart": "front", "x_span": [0.6]}]}', r"devices\[0\]"),
+        ('{"devices": [{"name": "VestFront", "rows": 5, "cols": 4, "chart": "front", "x_span": [0.6, 0.6]}]}',
+         r"devices\[0\]"),
+        ('{"devices": [{"name": "A", "rows": 5, "cols": 4, "chart": "front", "x_span": [-0.6, 0.6]},'
+         '{"name": "B", "rows": 5, "cols": 4, "chart": "back", "x_span": [-0.6, 0.6]},'
+         '{"name": "C", "rows": 2, "cols": 3, "chart": "shoulder", "side": "left", "x_span": [0.7, 1]},'
+         '{"name": "D", "rows": 3, "cols": 3, "chart": "shoulder", "side": "right", "x_span": [0.7, 1]}]}', "same grid"),
+    ],
+)
+def test_bad_layout_files(tmp_path, doc, expect):
+    from hapmotion.layout import load_layout as load
+
+    path = tmp_path / "layout.json"
+    path.write_text(doc)
+    with pytest.raises(InputError, match=expect):
+        load(path)
+
+
+def test_mirror_map_is_a_permutation():
+    m = load_layout().mirror_map()
+    assert sorted(m.tolist()) == list(range(52))
+    assert (m[m] == np.arange(52)).all()  # mirroring twice is the identity

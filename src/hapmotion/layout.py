@@ -151,17 +151,22 @@ def load_layout(path: "str | os.PathLike[str] | None" = None) -> Layout:
     else:
         source = os.fspath(path)
         try:
-            text = Path(path).read_text()
+            text = Path(path).read_text(encoding="utf-8")
         except OSError as err:
             raise InputError(source, None, f"cannot read layout: {err.strerror}") from None
+        except UnicodeDecodeError:
+            raise InputError(source, None, "expected a UTF-8 JSON layout, found binary data") from None
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as err:
         raise InputError(source, f"line {err.lineno}", f"expected JSON: {err.msg}") from None
+    if not isinstance(doc, dict) or not isinstance(doc.get("devices"), list):
+        raise InputError(source, "field devices", "expected an object with a list of devices")
     devices = []
     offset = 0
     seen_charts = set()
-    for k, dd in enumerate(doc.get("devices", [])):
+    names: set[str] = set()
+    for k, dd in enumerate(doc["devices"]):
         place = f"field devices[{k}]"
         try:
             chart_name = dd["chart"]
@@ -171,16 +176,23 @@ def load_layout(path: "str | os.PathLike[str] | None" = None) -> Layout:
                 chart = _CHART_CODES[chart_name]
             rows, cols = int(dd["rows"]), int(dd["cols"])
             x_span = tuple(float(v) for v in dd["x_span"])
-            z_span = tuple(float(v) for v in dd.get("z_span", (0.0, 0.0)))
+            z_span = tuple(float(v) for v in dd.get("z_span", (0.7, -0.7)))
+            if len(x_span) != 2 or len(z_span) != 2 or not all(np.isfinite(x_span + z_span)):
+                raise ValueError("x_span and z_span must be two finite numbers each")
+            if x_span[0] == x_span[1] or (chart >= CHART_SHOULDER_LEFT and z_span[0] == z_span[1]):
+                raise ValueError("a span's two ends must differ")
             dev = Device(
                 name=str(dd["name"]), rows=rows, cols=cols, chart=chart, offset=offset,
                 sdk2_position=int(dd.get("sdk2_position", -1)), sdk2_offset=int(dd.get("sdk2_offset", 0)),
                 sdk2_length=int(dd.get("sdk2_length", rows * cols)), x_span=x_span, z_span=z_span,
             )
-        except (KeyError, TypeError, ValueError) as err:
+        except (KeyError, TypeError, ValueError, AttributeError) as err:
             raise InputError(source, place, f"expected name, rows, cols, chart (front|back|shoulder), side, x_span: {err}") from None
-        if rows < 1 or cols < 1:
-            raise InputError(source, place, f"expected rows and cols >= 1, found {rows} x {cols}")
+        if not (1 <= rows <= 64 and 1 <= cols <= 64):
+            raise InputError(source, place, f"expected rows and cols in 1..64, found {rows} x {cols}")
+        if dev.name in names or "_" in dev.name or not dev.name:
+            raise InputError(source, place, f"expected a unique device name without '_', found {dev.name!r}")
+        names.add(dev.name)
         if chart in seen_charts:
             raise InputError(source, place, f"expected one device per chart, found a second {CHART_NAMES[chart]}")
         seen_charts.add(chart)
@@ -189,5 +201,10 @@ def load_layout(path: "str | os.PathLike[str] | None" = None) -> Layout:
     if len(seen_charts) != 4:
         missing = [CHART_NAMES[c] for c in range(4) if c not in seen_charts]
         raise InputError(source, "field devices", f"expected a front, a back and two shoulder charts, missing {', '.join(missing)}")
+    by_chart = {d.chart: d for d in devices}
+    for a, b in ((CHART_FRONT, CHART_BACK), (CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT)):
+        if (by_chart[a].rows, by_chart[a].cols) != (by_chart[b].rows, by_chart[b].cols):
+            raise InputError(source, "field devices", f"expected {by_chart[a].name} and {by_chart[b].name} to have the "
+                             "same grid (mirroring swaps them)")
     return Layout(name=str(doc.get("name", Path(source).stem)), devices=tuple(devices),
                   tact_layouts=dict(doc.get("tact_layouts", {})), description=str(doc.get("description", "")))

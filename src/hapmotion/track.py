@@ -8,10 +8,18 @@ columns follow the device layout's actuator order, which for the default layout 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+
+
+def parse_actuator_id(actuator: str) -> tuple[str, int]:
+    """``"VestFront_5"`` -> ``("VestFront", 5)``; an id without a ``_<index>`` suffix is its own device, index -1."""
+    device, sep, index = actuator.rpartition("_")
+    if sep and device and index.isdigit():
+        return device, int(index)
+    return actuator, -1
 
 
 @dataclass
@@ -46,6 +54,8 @@ class HapticTrack:
     debug: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        if not (np.isfinite(self.fps) and self.fps > 0):
+            raise ValueError(f"fps must be a positive number, got {self.fps}")
         arr = np.asarray(self.intensities, dtype=np.float64)
         if arr.ndim != 2 or arr.shape[1] != len(self.actuators):
             raise ValueError(f"intensities must be (T, {len(self.actuators)}), got {arr.shape}")
@@ -71,24 +81,17 @@ class HapticTrack:
 
     def device_columns(self, device: str) -> np.ndarray:
         """Column indices of one device (``"VestFront"``, ``"ForearmL"``, ...), in index order."""
-        cols = [i for i, a in enumerate(self.actuators) if a.rsplit("_", 1)[0] == device]
-        cols.sort(key=lambda i: int(self.actuators[i].rsplit("_", 1)[1]))
-        return np.asarray(cols, dtype=np.intp)
+        cols = [(parse_actuator_id(a)[1], i) for i, a in enumerate(self.actuators) if parse_actuator_id(a)[0] == device]
+        return np.asarray([i for _, i in sorted(cols)], dtype=np.intp)
 
     def devices(self) -> list[str]:
         """Device names in first-appearance order."""
         seen: list[str] = []
         for a in self.actuators:
-            d = a.rsplit("_", 1)[0]
+            d = parse_actuator_id(a)[0]
             if d not in seen:
                 seen.append(d)
         return seen
-
-    def with_intensities(self, intensities: np.ndarray, **meta: Any) -> "HapticTrack":
-        """A copy with other intensities (same fps, actuators, layout); ``meta`` entries are added."""
-        m = dict(self.meta)
-        m.update(meta)
-        return replace(self, intensities=intensities, meta=m, debug=dict(self.debug))
 
     # ------------------------------------------------------------------ files
     def save(self, path: "str | os.PathLike[str]") -> None:

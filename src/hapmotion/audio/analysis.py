@@ -420,8 +420,9 @@ def _check_rate_and_offset(fps: float, offset_s: float) -> tuple[float, float]:
         raise UsageError(f"fps and audio offset must be numbers, got {fps!r} and {offset_s!r}") from None
     if not (math.isfinite(fps) and 1.0 <= fps <= 1000.0):
         raise UsageError(f"fps must be 1..1000, got {fps}")
-    if not math.isfinite(offset_s):
-        raise UsageError(f"audio offset must be a finite number of seconds, got {offset_s}")
+    if not math.isfinite(offset_s) or abs(offset_s) > 86400.0:
+        # a day bounds the silence a positive offset pads in front (memory grows with it)
+        raise UsageError(f"audio offset must be a finite number of seconds within a day (+-86400), got {offset_s}")
     return fps, offset_s
 
 

@@ -61,28 +61,6 @@ def body_axes_into(shoulder_left, shoulder_right, pelvis, neck, axes):
 
 
 @njit(cache=True)
-def body_axes(shoulder_left, shoulder_right, pelvis, neck, fallback):
-    """Orthonormal body axes for one frame (allocating form of :func:`body_axes_into`).
-
-    Parameters
-    ----------
-    shoulder_left, shoulder_right, pelvis, neck:
-        ``(3,)`` world positions, metres.
-    fallback:
-        ``(3, 3)`` axes (rows right, up, forward) to return when this frame's are degenerate (shoulders on top of
-        each other, or the spine along the shoulder line).
-
-    Returns
-    -------
-    ``(3, 3)`` float64: rows ``right``, ``up``, ``forward`` as unit vectors in world coordinates, and a flag
-    (True when the fallback was used).
-    """
-    axes = fallback.copy()
-    ok = body_axes_into(shoulder_left, shoulder_right, pelvis, neck, axes)
-    return axes, not ok
-
-
-@njit(cache=True)
 def to_body_into(point, origin, axes, out):
     """World point ``(3,)`` -> body coordinates written into ``out`` ``(3,)`` (x right, y up, z forward), m."""
     dx = point[0] - origin[0]
@@ -93,26 +71,10 @@ def to_body_into(point, origin, axes, out):
 
 
 @njit(cache=True)
-def to_body(point, origin, axes):
-    """World point ``(3,)`` -> body coordinates ``(3,)`` (x right, y up, z forward), metres."""
-    out = np.empty(3)
-    to_body_into(point, origin, axes, out)
-    return out
-
-
-@njit(cache=True)
 def to_world_into(point, origin, axes, out):
     """Body coordinates ``(3,)`` -> world point written into ``out`` ``(3,)``, metres."""
     for k in range(3):
         out[k] = origin[k] + point[0] * axes[0, k] + point[1] * axes[1, k] + point[2] * axes[2, k]
-
-
-@njit(cache=True)
-def to_world(point, origin, axes):
-    """Body coordinates ``(3,)`` -> world point ``(3,)``, metres."""
-    out = np.empty(3)
-    to_world_into(point, origin, axes, out)
-    return out
 
 
 DEFAULT_AXES = np.array([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
@@ -120,10 +82,10 @@ DEFAULT_AXES = np.array([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
 
 
 @njit(cache=True)
-def _frames_kernel(sl, sr, pelvis, neck, origin, out_axes, out_fallback):
+def _frames_kernel(sl, sr, pelvis, neck, out_axes):
     axes = DEFAULT_AXES.copy()
     for t in range(sl.shape[0]):
-        out_fallback[t] = not body_axes_into(sl[t], sr[t], pelvis[t], neck[t], axes)
+        body_axes_into(sl[t], sr[t], pelvis[t], neck[t], axes)  # keeps the previous axes when degenerate
         out_axes[t] = axes
 
 
@@ -138,10 +100,8 @@ def body_frames(motion) -> tuple[np.ndarray, np.ndarray]:
     pelvis = np.ascontiguousarray(motion.joint("PELVIS"))
     neck = np.ascontiguousarray(motion.joint("NECK"))
     origin = np.ascontiguousarray(motion.joint("SPINE_NAVEL"))
-    n = sl.shape[0]
-    axes = np.empty((n, 3, 3))
-    fallback = np.zeros(n, dtype=np.bool_)
-    _frames_kernel(sl, sr, pelvis, neck, origin, axes, fallback)
+    axes = np.empty((sl.shape[0], 3, 3))
+    _frames_kernel(sl, sr, pelvis, neck, axes)
     return origin.copy(), axes
 
 

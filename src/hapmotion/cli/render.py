@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -110,6 +111,10 @@ def command(motion_file, output, method, preset, params, no_mirror, fps, layout_
     from ..render import render
     from ..render.renderer import resolve_params
 
+    if fps is not None and not math.isfinite(fps):  # click's FloatRange lets nan through
+        raise UsageError(f"--fps must be a number in 1..1000, not {fps}")
+    if not math.isfinite(audio_offset) or abs(audio_offset) > 86400:
+        raise UsageError(f"--audio-offset must be within a day (+-86400 s), not {audio_offset}")
     if mode is None:
         mode = "motion" if not audio_file else ("multimodal" if motion_file else "audio")
     if mode in ("audio", "multimodal") and not audio_file:

@@ -394,11 +394,12 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         if prm[P_BETA] > 0.0 and amp > 0.0:
             # perceived magnitude -> drive, before the split so the split's energy rule still holds
             amp = 100.0 * (min(amp, 100.0) / 100.0) ** (1.0 / prm[P_BETA])
-        sl_x0 = charts[2, 3]
-        sl_x1 = charts[2, 4]
+        side_chart = 2 if hit[0] < 0.0 else 3  # the shoulder on the hit's side
+        sl_x0 = charts[side_chart, 3]
+        sl_x1 = charts[side_chart, 4]
         on_sleeve = (face == FACE_TOP or (face == FACE_SIDE and hit[1] >= surf[S_YSLEEVE])) and abs(hit[0]) >= sl_x0 * a
         if on_sleeve:
-            chart = 2 if hit[0] < 0.0 else 3
+            chart = side_chart
             z0 = charts[chart, 5]
             z1 = charts[chart, 6]
             u = _clip((hit[2] / b - z0) / (z1 - z0), 0.0, 1.0)
@@ -406,9 +407,9 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             _split(chart, u, v, 1.0, amp, charts, prm, raw)
             main_chart = chart
         else:
-            x0 = charts[0, 3]
-            x1 = charts[0, 4]
-            u = _clip((hit[0] / a - x0) / (x1 - x0), 0.0, 1.0)
+            # u on each panel with that panel's own column span
+            u = _clip((hit[0] / a - charts[0, 3]) / (charts[0, 4] - charts[0, 3]), 0.0, 1.0)
+            u_back = _clip((hit[0] / a - charts[1, 3]) / (charts[1, 4] - charts[1, 3]), 0.0, 1.0)
             if face == FACE_TOP:
                 v = 0.0
             elif face == FACE_BOTTOM:
@@ -423,8 +424,10 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             if w_front > 0.0:
                 _split(0, u, v, w_front, amp, charts, prm, raw)
             if w_front < 1.0:
-                _split(1, u, v, 1.0 - w_front, amp, charts, prm, raw)
+                _split(1, u_back, v, 1.0 - w_front, amp, charts, prm, raw)
             main_chart = 0 if w_front >= 0.5 else 1
+            if main_chart == 1:
+                u = u_back
 
         # ---- beyond the paper: ERM dead zone, per-actuator release; mirror; clip
         decay = prm[P_REL_DECAY]

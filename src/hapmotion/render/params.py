@@ -26,6 +26,17 @@ PHANTOMS = ("paper", "energy")
 IDLE_CHOICES = ("keep", "farther")
 
 
+_RANGES = (
+    ("threshold_window_s", 1e-3, 0.5), ("accel_floor", 0.0, 1e3), ("weight_gain", 0.0, 100.0),
+    ("weight_extra_max", 0.0, 100.0), ("near_m", 0.0, 10.0), ("far_m", 0.01, 20.0), ("intensity_far_m", 0.0, 20.0),
+    ("side_blend", 0.0, 1.0), ("base_level", 0.0, 10.0), ("boost_levels", 0.0, 10.0), ("boost_full_ratio", 1e-3, 1e3),
+    ("max_level", 0.0, 10.0), ("percent_per_level", 0.0, 100.0), ("phantom_1d_tolerance", 0.0, 0.5),
+    ("perceptual_exponent", 0.0, 5.0), ("dead_zone", 0.0, 99.0), ("silence_floor", 0.0, 50.0),
+    ("actuator_release_s", 0.0, 10.0),
+)
+"""Accepted range of each numeric parameter (beyond these the renderer's numbers stop meaning anything)."""
+
+
 @dataclass(frozen=True)
 class Params:
     """Motion renderer parameters (units in each field's comment)."""
@@ -115,6 +126,10 @@ class Params:
             v = getattr(self, f.name)
             if isinstance(v, float) and not np.isfinite(v):
                 raise UsageError(f"{f.name} must be finite, not {v}")
+        for name, lo, hi in _RANGES:
+            v = getattr(self, name)
+            if not lo <= v <= hi:
+                raise UsageError(f"{name} must be in {lo:g}..{hi:g}, not {v:g}")
 
     def replace(self, **changes: Any) -> "Params":
         """A copy with some fields changed (unknown names raise UsageError)."""

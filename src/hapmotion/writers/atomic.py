@@ -29,8 +29,11 @@ def atomic_path(path: "str | os.PathLike[str]") -> Iterator[Path]:
     except OSError as err:
         raise InputError(target, None, f"cannot write there: {err.strerror}") from None
     try:
-        yield tmp_path
-        os.replace(tmp_path, target)
+        try:
+            yield tmp_path
+            os.replace(tmp_path, target)
+        except OSError as err:  # disk full, target is a directory, ...: the user's to fix, one line
+            raise InputError(target, None, f"cannot write: {err.strerror or err}") from None
     except BaseException:
         with contextlib.suppress(OSError):
             tmp_path.unlink()

@@ -25,14 +25,17 @@ def write_csv(track: HapticTrack, path: Path) -> None:
 
 
 def read_csv(path: Path) -> HapticTrack:
-    with open(path, encoding="utf-8") as fh:
-        header = fh.readline().strip()
+    try:
+        with open(path, encoding="utf-8") as fh:
+            header = fh.readline().strip()
+    except UnicodeDecodeError:
+        raise InputError(path, "line 1", "expected a UTF-8 text CSV track, found binary data") from None
     cols = header.split(",")
     if not cols or cols[0] != "time_s" or len(cols) < 2:
         raise InputError(path, "line 1", f"expected a header starting with time_s and actuator ids, found {header[:60]!r}")
     try:
         data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    except ValueError as err:
+    except (ValueError, UnicodeDecodeError) as err:
         raise InputError(path, None, f"expected {len(cols)} numbers per row: {err}") from None
     if data.shape[0] == 0:
         raise InputError(path, None, "expected at least one row, found 0")
@@ -41,7 +44,13 @@ def read_csv(path: Path) -> HapticTrack:
     if not np.isfinite(data).all():
         row = int(np.flatnonzero(~np.isfinite(data).all(axis=1))[0])
         raise InputError(path, f"line {row + 2}", "expected finite numbers, found NaN or inf")
+    if data[:, 1:].min() < 0 or data[:, 1:].max() > 100:
+        row = int(np.flatnonzero(((data[:, 1:] < 0) | (data[:, 1:] > 100)).any(axis=1))[0])
+        raise InputError(path, f"line {row + 2}", "expected intensities 0..100")
     times = data[:, 0]
+    if len(times) > 1 and not (np.diff(times) > 0).all():
+        row = int(np.flatnonzero(np.diff(times) <= 0)[0])
+        raise InputError(path, f"line {row + 3}", "expected increasing time_s")
     # the whole span is more precise than one 6-decimal step (1/60 s is written 0.016667)
     span = float(times[-1] - times[0])
     fps = round((len(times) - 1) / span, 4) if len(times) > 1 and span > 0 else 60.0

@@ -11,7 +11,7 @@ import numpy as np
 from ..errors import InputError
 from ..track import HapticTrack
 from .atomic import atomic_path
-from .json_track import _jsonable
+from .json_track import _check_values, _jsonable
 
 
 def write_npz(track: HapticTrack, path: Path) -> None:
@@ -39,6 +39,9 @@ def read_npz(path: Path) -> HapticTrack:
             layout = str(z["layout"]) if "layout" in z else ""
             meta = json.loads(str(z["meta_json"])) if "meta_json" in z else {}
             debug = {k[len("debug_"):]: z[k] for k in z.files if k.startswith("debug_")}
-    except (OSError, ValueError, KeyError) as err:
+    except (OSError, ValueError, KeyError, TypeError, json.JSONDecodeError) as err:
         raise InputError(path, None, f"expected a hapmotion track NPZ (intensities, actuators, fps): {err}") from None
+    if intensities.ndim != 2 or intensities.shape[1] != len(actuators) or intensities.shape[0] == 0:
+        raise InputError(path, "array intensities", f"expected (T, {len(actuators)}), found {intensities.shape}")
+    _check_values(path, intensities, fps, "array intensities", "array fps")
     return HapticTrack(intensities=intensities, fps=fps, actuators=actuators, layout=layout, meta=meta, debug=debug)

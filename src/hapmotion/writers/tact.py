@@ -113,36 +113,56 @@ def write_tact(track: HapticTrack, path: Path) -> None:
             tmps[target].write_text(json.dumps(doc, separators=(",", ":")), encoding="utf-8")
 
 
+SLEEVES = ("ForearmL", "ForearmR")
+_SIZES = {"VestFront": 20, "VestBack": 20, "ForearmL": 6, "ForearmR": 6}
+
+
 def read_tact(path: Path) -> HapticTrack:
-    """Rebuild a track from a hapmotion ``.tact`` file and its sleeve siblings (if present)."""
-    files = [path] + sorted(path.parent.glob(f"{path.stem}.*{path.suffix}"))
-    fps = None
-    columns: dict[str, np.ndarray] = {}
-    duration = 0.0
+    """Rebuild a track from a hapmotion ``.tact`` file and the sleeve files written beside it (if present).
+
+    Only the exact siblings :func:`write_tact` writes (``NAME.ForearmL.tact``, ``NAME.ForearmR.tact``) are read.
+    """
+    files = [path] + [f for f in tact_paths(path, list(SLEEVES)).values() if f != path and f.is_file()]
+    docs = []
     for f in files:
         try:
             doc = json.loads(f.read_text(encoding="utf-8"))
             proj = doc["project"]
-            meta = proj.get("hapmotion", {})
-            fps = float(meta.get("fps", fps or 50.0))
-            duration = max(duration, float(proj.get("mediaFileDuration", 0.0)))
+            fps = float(proj.get("hapmotion", {}).get("fps", 50.0))
+            duration = float(proj.get("mediaFileDuration", 0.0))
             effects = proj["tracks"][0]["effects"]
-        except (OSError, json.JSONDecodeError, KeyError, IndexError, TypeError, ValueError) as err:
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, IndexError, TypeError, ValueError,
+                AttributeError) as err:
             raise InputError(f, "field project", f"expected a .tact project with tracks and effects: {err}") from None
-        n = int(round(duration * fps))
-        for eff in effects:
-            t0 = float(eff.get("startTime", 0))
-            for pos, mode in eff.get("modes", {}).items():
-                size = 20 if pos.startswith("Vest") else 6
-                rows = columns.setdefault(pos, np.zeros((n, size)))
-                for fb in mode.get("dotMode", {}).get("feedback", []):
-                    s = int(round((t0 + fb["startTime"]) * fps / 1000.0))
-                    e = int(round((t0 + fb["endTime"]) * fps / 1000.0))
-                    for p in fb.get("pointList", []):
-                        rows[s:e, int(p["index"])] = float(p["intensity"]) * 100.0
-    order = [d for d in ("VestFront", "VestBack", "ForearmL", "ForearmR") if d in columns]
+        if not (np.isfinite(fps) and fps > 0) or not (np.isfinite(duration) and 0 <= duration < 86400):
+            raise InputError(f, "field project.hapmotion.fps / mediaFileDuration",
+                             f"expected a positive rate and a duration under a day, found {fps} and {duration}")
+        docs.append((f, fps, duration, effects))
+    fps = docs[0][1]
+    n = max(1, int(round(max(d for _, _, d, _ in docs) * fps)))
+    columns: dict[str, np.ndarray] = {}
+    for f, _, _, effects in docs:
+        for k, eff in enumerate(effects):
+            try:
+                t0 = float(eff.get("startTime", 0))
+                for pos, mode in eff.get("modes", {}).items():
+                    size = _SIZES.get(pos, 20)
+                    rows = columns.setdefault(pos, np.zeros((n, size)))
+                    for fb in mode.get("dotMode", {}).get("feedback", []):
+                        s0 = int(round((t0 + float(fb["startTime"])) * fps / 1000.0))
+                        e0 = int(round((t0 + float(fb["endTime"])) * fps / 1000.0))
+                        for p in fb.get("pointList", []):
+                            i, v = int(p["index"]), float(p["intensity"])
+                            if not (0 <= i < size and np.isfinite(v) and 0 <= v <= 1):
+                                raise ValueError(f"point index {i} (0..{size - 1}) intensity {v} (0..1)")
+                            rows[max(0, s0):max(0, e0), i] = v * 100.0
+            except (KeyError, TypeError, ValueError, AttributeError) as err:
+                raise InputError(f, f"field effects[{k}]", f"expected dot-mode feedback with startTime, endTime, "
+                                 f"pointList: {err}") from None
+    order = [d for d in ("VestFront", "VestBack", *SLEEVES) if d in columns]
     order += [d for d in columns if d not in order]
-    n = max(c.shape[0] for c in columns.values())
-    data = np.column_stack([np.pad(columns[d], ((0, n - columns[d].shape[0]), (0, 0))) for d in order])
+    if not order:
+        raise InputError(path, "field effects", "expected at least one position with dot-mode feedback")
+    data = np.column_stack([columns[d] for d in order])
     ids = tuple(f"{d}_{i}" for d in order for i in range(columns[d].shape[1]))
-    return HapticTrack(intensities=data, fps=fps or 50.0, actuators=ids, meta={"source": str(path)})
+    return HapticTrack(intensities=data, fps=fps, actuators=ids, meta={"source": str(path)})
