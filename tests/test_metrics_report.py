@@ -105,12 +105,13 @@ def test_report_values_are_sane(report):
         assert -1.0 <= s["r"] <= 1.0 and abs(s["lag_ms"]) <= 1000.0
         assert 0.0 <= s["locus_cm"] < 30.0 and s["constancy_db"] >= 0.0
         assert 0.0 <= s["hf_power"] <= 1.0 and 0.0 <= s["dead_zone"] <= 1.0
-    # the dead-zone lift guarantees that every command sent clears the ERM start threshold (8 % lift, 10 % model
-    # threshold: only lifted values below 10 % or release tails can remain)
+    # the energy preset's dead-zone lift (10 %) equals the motor model's start threshold (10 %): no command it sends
+    # stalls, while the paper preset's mostly do (docs/metrics.md 4.1)
     by = {(r.clip, r.method, r.preset): r.scores for r in rep.runs}
     for clip in {r.clip for r in rep.runs}:
         for method in ("mst", "baseline"):
-            assert by[(clip, method, "energy")]["dead_zone"] < by[(clip, method, "paper")]["dead_zone"]
+            assert by[(clip, method, "energy")]["dead_zone"] == 0.0
+            assert by[(clip, method, "paper")]["dead_zone"] > 0.5
             assert by[(clip, method, "energy")]["skin_rms"] > by[(clip, method, "paper")]["skin_rms"]
 
 

@@ -15,7 +15,7 @@ from hapmotion.joints import JOINT_INDEX
 from hapmotion.motion import new_motion
 from hapmotion.viewer import write_page
 from hapmotion.viewer.inputs import is_track_file
-from hapmotion.viewer.page import read_page
+from hapmotion.viewer.page import AudioPart, read_page
 from hapmotion.viewer.signals import triangle_vertices
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -212,3 +212,44 @@ def test_view_command_errors_are_one_line_and_leave_nothing(tmp_path, capsys, ar
     assert code == 2
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert list(tmp_path.rglob("*")) == []
+
+
+# ---------------------------------------------------------------------------------------------------- page facts
+class _DurationFails(hapmotion.HapticTrack):
+    """A track whose length cannot be worked out: the page must fail before anything is written."""
+
+    @property
+    def duration(self):
+        raise RuntimeError("duration unavailable")
+
+
+def test_failed_page_leaves_no_file_and_no_part_file(tmp_path):
+    track = _DurationFails(np.full((30, 2), 40.0), 30.0, ("VestFront_0", "VestFront_1"))
+    path = tmp_path / "broken.html"
+    with pytest.raises(RuntimeError, match="duration unavailable"):
+        write_page(path, [track])
+    assert list(tmp_path.iterdir()) == []          # neither the page nor a .part file
+
+
+def test_page_duration_counts_the_audio_offset_once(tmp_path):
+    # AudioPart.duration_s is already the track time at which the music ends (audio length + offset):
+    # 2 s of audio starting at 10 s ends at 12 s, after the 1 s track.
+    track = hapmotion.HapticTrack(np.zeros((30, 2)), 30.0, ("VestFront_0", "VestFront_1"))
+    audio = AudioPart(path=Path("a.wav"), data=b"RIFF", mime="audio/wav", waveform=np.zeros((360, 2)),
+                      waveform_fps=30.0, onsets=np.array([10.5]), offset_s=10.0, duration_s=12.0, name="a.wav")
+    info = write_page(tmp_path / "p.html", [track], audio=audio)
+    assert info.duration_s == pytest.approx(12.0)
+    assert info.n_frames == 30 and info.n_bytes == (tmp_path / "p.html").stat().st_size
+
+
+def test_view_command_reports_the_duration_with_an_audio_offset(tmp_path, capsys):
+    import soundfile
+
+    out = tmp_path / "late.html"
+    code, stdout, err = run(["view", SALSA, "--audio", SONG, "--audio-offset", "10", "--mode", "motion", "-o", out],
+                            capsys)
+    assert code == 0, err
+    expected = soundfile.info(str(SONG)).duration + 10.0        # 61.46 s of music starting at 10 s: ends at 71.46 s
+    assert f"{expected:.1f} s)" in stdout, stdout
+    data, _ = read_page(out)
+    assert data["audio"]["duration_s"] == pytest.approx(expected, abs=0.05)

@@ -317,16 +317,19 @@ def write_page(path: "str | os.PathLike[str]", tracks: Sequence[HapticTrack], mo
     """
     out = Path(path)
     pieces, sizes = build_page(tracks, motion, **options)
+    # Every fact is worked out before the write, so a failure leaves no page at all (not a page and an error).
     audio = options.get("audio")
+    n_frames = max([t.n_frames for t in tracks] + [motion.n_frames if motion is not None else 0])
+    # audio.duration_s is already the track time at which the music ends (offset included): add nothing to it.
+    duration = max([t.duration for t in tracks] + [motion.duration if motion is not None else 0.0]
+                   + [audio.duration_s if audio is not None else 0.0])
     with atomic_path(out) as tmp:
         with open(tmp, "w", encoding="utf-8") as fh:
             for piece in pieces:
                 fh.write(piece)
-    n_frames = max([t.n_frames for t in tracks] + [motion.n_frames if motion is not None else 0])
-    duration = max([t.duration for t in tracks] + [motion.duration if motion is not None else 0.0]
-                   + [audio.offset_s + audio.duration_s if audio is not None else 0.0])
-    return PageInfo(path=out, n_bytes=out.stat().st_size, n_tracks=len(tracks), n_frames=n_frames,
-                    duration_s=duration, blob_bytes=sizes)
+        n_bytes = tmp.stat().st_size
+    return PageInfo(path=out, n_bytes=n_bytes, n_tracks=len(tracks), n_frames=n_frames,
+                    duration_s=float(duration), blob_bytes=sizes)
 
 
 _DATA_RE = re.compile(r'<script type="application/json" id="hm-data">(.*?)</script>', re.S)

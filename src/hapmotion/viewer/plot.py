@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UsageError
-from ..track import HapticTrack
+from ..track import HapticTrack, parse_actuator_id
 from ..writers.atomic import atomic_path
 from .colors import plot_cmap, scale_top
 from .signals import ENERGY_UNITS, total_intensity, track_motion_energy
@@ -44,10 +44,11 @@ def pool_max(values: np.ndarray, max_columns: int = MAX_COLUMNS) -> tuple[np.nda
 
 
 def _groups(track: HapticTrack) -> list[tuple[str, int, int]]:
-    """``(device, first column, count)`` in column order."""
+    """``(device, first column, count)`` in column order; an id not shaped ``<Device>_<index>`` is its own device
+    (:func:`hapmotion.track.parse_actuator_id`), so ``Vest_a`` is never merged into a device ``Vest``."""
     out: list[tuple[str, int, int]] = []
     for i, a in enumerate(track.actuators):
-        dev = a.rsplit("_", 1)[0]
+        dev = parse_actuator_id(a)[0]
         if out and out[-1][0] == dev:
             out[-1] = (dev, out[-1][1], out[-1][2] + 1)
         else:
@@ -56,7 +57,8 @@ def _groups(track: HapticTrack) -> list[tuple[str, int, int]]:
 
 
 def _row_ticks(track: HapticTrack, groups) -> tuple[list[float], list[str]]:
-    """One tick per grid row of each device, labelled with that row's actuator indices ("0-3")."""
+    """One tick per grid row of each device, labelled with that row's actuator indices ("0-3"), as the ids give them
+    (empty for ids without an index)."""
     from ..layout import load_layout
 
     cols = {}
@@ -67,10 +69,15 @@ def _row_ticks(track: HapticTrack, groups) -> tuple[list[float], list[str]]:
     pos, labels = [], []
     for dev, start, count in groups:
         step = cols.get(dev, count)
+        step = max(1, step)
         for r0 in range(0, count, step):
             r1 = min(count, r0 + step) - 1
             pos.append(start + (r0 + r1) / 2)
-            labels.append(f"{r0}-{r1}" if r1 > r0 else f"{r0}")
+            first, last = (parse_actuator_id(track.actuators[start + r])[1] for r in (r0, r1))
+            if min(first, last) < 0:
+                labels.append("")
+            else:
+                labels.append(f"{first}-{last}" if r1 > r0 else f"{first}")
     return pos, labels
 
 
@@ -153,7 +160,8 @@ def _draw(fig, axes, track, sel, t, x0, x1, inten, groups, audio, title, top) ->
         if start > 0:
             ax_heat.axhline(start - 0.5, color="black", linewidth=1.2)
         ax_heat.text(-0.075, start + (count - 1) / 2, GROUP_NAMES.get(dev, dev), ha="right", va="center",
-                     transform=ax_heat.get_yaxis_transform(), fontsize=9, fontweight="bold")
+                     transform=ax_heat.get_yaxis_transform(), fontsize=9, fontweight="bold",
+                     parse_math=False)  # a "$" in a saved track's id is text, not a formula to typeset
     ticks, labels = _row_ticks(track, groups)
     ax_heat.set_yticks(ticks, labels, fontsize=8)
     pool_note = f"; max over {k} frames per column" if k > 1 else ""
