@@ -103,3 +103,90 @@ def test_signal_stops_a_running_session_with_turn_off(sig, tmp_path):
     assert stats["frames_in"] >= 30 and stats["stop_reason"] == sig.name and stats["latency_ms"]["p99"] > 0
     track = load_track(out)
     assert track.n_frames >= 30 and track.intensities[-1].max() == 0
+
+
+# ----------------------------------------------------------------------------------------- outputs and options
+@pytest.fixture
+def short_replay(tmp_path):
+    """A 20-frame clip of a real recording (2/3 s at its 30 fps) as a motion table, for quick CLI sessions."""
+    import hapmotion
+    from hapmotion.readers import save_motion_table
+    from test_live_support import BVH
+
+    path = tmp_path / "short.npz"
+    save_motion_table(hapmotion.load_motion(BVH).slice(0, 20), path)
+    return path
+
+
+def one_line_error(code, err, message):
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert code == 2, err
+    assert len(lines) == 1 and lines[0].startswith("error: ") and message in lines[0], err
+
+
+@pytest.mark.parametrize("value", ["inf", "nan", "-inf", "0", "0.5", "5000"])
+def test_fps_must_be_finite_and_sane(value, short_replay, capsys):
+    code = main(["live", "--source", f"replay:{short_replay}", "--sink", "ws-broadcast://127.0.0.1:0",
+                 "--fps", value])
+    one_line_error(code, capsys.readouterr().err, "--fps must be a finite number")
+
+
+def test_record_to_a_folder_is_refused_before_the_show(short_replay, tmp_path, capsys):
+    folder = tmp_path / "take.csv"
+    folder.mkdir()
+    code = main(["live", "--source", f"replay:{short_replay}", "--speed", "4", "--sink", f"record:{folder}"])
+    one_line_error(code, capsys.readouterr().err, f"record:{folder}: {folder} is a folder")
+
+
+def test_stats_json_folder_is_checked_before_the_show(short_replay, tmp_path, capsys):
+    code = main(["live", "--source", f"replay:{short_replay}", "--speed", "4", "--sink", "ws-broadcast://127.0.0.1:0",
+                 "--stats-json", str(tmp_path / "missing" / "stats.json")])
+    one_line_error(code, capsys.readouterr().err, f"--stats-json: folder {tmp_path / 'missing'} does not exist")
+
+
+def test_outputs_lost_at_stop_are_reported_and_exit_non_zero(short_replay, tmp_path, capsys, monkeypatch):
+    """Both paths pass the start-up checks, then become folders during the show: the session still ends with
+    turn-off and the summary, each loss is one log line, and the exit code says the show's outputs are missing."""
+    from hapmotion.live.sinks import RecorderSink
+
+    out, summary = tmp_path / "take.csv", tmp_path / "stats.json"
+    start = RecorderSink.start
+
+    async def start_then_block(self):
+        await start(self)
+        out.mkdir()
+        summary.mkdir()
+
+    monkeypatch.setattr(RecorderSink, "start", start_then_block)
+    code = main(["live", "--source", f"replay:{short_replay}", "--speed", "4", "--sink", f"record:{out}",
+                 "--stats-json", str(summary)])
+    err = capsys.readouterr().err
+    assert code == 1, err
+    assert f"record {out}: recording not saved: " in err and f"--stats-json {summary} not written: " in err
+    assert "frames in" in err and "stopped: source ended" in err and "Traceback" not in err
+    assert out.is_dir() and summary.is_dir() and not list(tmp_path.glob(".*.part"))
+
+
+def test_a_stats_json_failure_never_hides_the_session_error(short_replay, tmp_path, capsys, monkeypatch):
+    from hapmotion import Renderer
+    from hapmotion.live.sinks import RecorderSink
+
+    summary = tmp_path / "stats.json"
+    step, calls = Renderer.step, []
+
+    def failing_step(self, frame):
+        calls.append(1)
+        if len(calls) == 5:  # the warm-up step is call 1
+            raise RuntimeError("renderer bug at frame 4")
+        return step(self, frame)
+
+    async def start_then_block(self):
+        summary.mkdir()
+
+    monkeypatch.setattr(Renderer, "step", failing_step)
+    monkeypatch.setattr(RecorderSink, "start", start_then_block)
+    code = main(["live", "--source", f"replay:{short_replay}", "--sink", f"record:{tmp_path / 'take.npz'}",
+                 "--stats-json", str(summary)])
+    err = capsys.readouterr().err
+    assert code == 1 and "internal error: RuntimeError: renderer bug at frame 4" in err, err
+    assert f"--stats-json {summary} not written: " in err and "frames in" in err

@@ -152,6 +152,28 @@ def test_stalled_source_fades_to_zero_within_stall_time_then_resets():
     assert "frame" in kinds[first_off:]                    # rendering resumed after the stall (seq 0 accepted again)
 
 
+def test_frames_without_any_renderer_joint_do_not_keep_the_motors_running():
+    """Feet-only frames after real ones must not count as fresh: the output fades to zero within the stall time."""
+    from hapmotion.joints import JOINT_INDEX
+
+    real = waving(n=30)
+    feet = np.full((40, 32, 3), np.nan)
+    feet[:, JOINT_INDEX["FOOT_LEFT"]] = real[-1, JOINT_INDEX["FOOT_LEFT"]]
+    stall = 0.12
+    sink = MemorySink()
+    engine = make([sink], stall_s=stall)
+    # 30 real frames, then feet only for 40 / 60 s = 0.67 s (far longer than the stall time)
+    stats = run(engine, ScriptSource(np.concatenate([real, feet])))
+    kinds = sink.kinds()
+    assert kinds.count("frame") == 30 and stats.empty == 40 and stats.rendered == 30
+    off = kinds.index("off")
+    last_frame = sink.got[kinds.index("frame") + 29][1]
+    assert last_frame.row.max() > 0
+    assert stall - 0.001 <= sink.got[off][1].created - last_frame.received <= stall + 0.04
+    assert all(f.kind != "frame" for _, f in sink.got[off:])  # nothing played again after the fade
+    assert engine.faults.counts["empty"] == 40
+
+
 def test_late_and_duplicate_frames_are_dropped():
     frames = waving(n=8)
     sink = MemorySink()
@@ -260,3 +282,36 @@ def test_audio_only_mode_plays_the_song_rows_on_the_clock():
     assert stats.rendered == len(rows) and 6 <= len(rows) <= 12   # 12 ticks; a late tick is skipped, not queued
     assert np.all(np.isin(rows[:, 0], audio_rows[:, 0])) and rows[0, 0] == 0.0
     assert stats.stop_reason == "source ended"
+
+
+def test_session_audio_goes_through_the_offline_output_stage(monkeypatch):
+    """``build_audio`` uses ``audio.pipeline.output_stage`` / ``power_limit_for`` (no copy of them), so the song
+    alone equals offline ``combine(mode="audio")`` and each mixed row equals the offline stage on the same rows."""
+    from pathlib import Path
+
+    from hapmotion.audio import combine, pipeline
+    from hapmotion.layout import load_layout
+    from hapmotion.live.session import build_audio
+
+    song = Path(__file__).resolve().parents[2] / "shared" / "data" / "audio" / "vibe_ace.ogg"
+    layout = load_layout()
+    real_stage, calls = pipeline.output_stage, []
+
+    def spy(motion_rows, audio_rows, **kw):
+        calls.append(kw)
+        return real_stage(motion_rows, audio_rows, **kw)
+
+    monkeypatch.setattr(pipeline, "output_stage", spy)
+    limit = pipeline.power_limit_for(hapmotion.audio.DEFAULT_PARAMS.power_limit_fraction, N)
+    solo = build_audio(song, fps=FPS, layout=layout, actuators=layout.actuators, solo=True)
+    assert calls[0] == {"mode": "audio", "ratio": (2, 3), "domain": "linear", "power_limit": limit}
+    offline = combine(None, song, mode="audio", fps=FPS, actuators=layout)
+    np.testing.assert_array_equal(solo.rows, offline.intensities)
+
+    channel = build_audio(song, fps=FPS, layout=layout, actuators=layout.actuators, ratio=(1, 1), domain="energy")
+    calls.clear()
+    motion_row = np.linspace(0, 100, N)
+    got = channel.mixed(motion_row, 2.0)
+    assert calls == [{"mode": "multimodal", "ratio": (1, 1), "domain": "energy", "power_limit": limit}]
+    np.testing.assert_array_equal(got, real_stage(motion_row, channel.row(2.0), mode="multimodal", ratio=(1, 1),
+                                                  domain="energy", power_limit=limit))

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 import sys
 from typing import Optional
 
@@ -93,27 +92,47 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
 
     # User mistakes (HapMotionError) and Ctrl-C before the session is up are reported by hapmotion.cli.main as one
     # line (exit 2 / 130); once the session runs, SIGINT/SIGTERM are a clean stop (exit 0).
-    try:
-        ratio = (2.0, 3.0)
-        if audio:
-            from ..audio import parse_mix_ratio
+    if stats_json:
+        from ..live.outputs import check_writable
 
-            ratio = parse_mix_ratio(mix_ratio)
+        check_writable(stats_json, "--stats-json")
+    ratio = (2.0, 3.0)
+    if audio:
+        from ..audio import parse_mix_ratio
+
+        ratio = parse_mix_ratio(mix_ratio)
+    try:
         run_live(source, list(sinks), method=method, preset=preset, mirror=mirror, fps=fps, speed=speed,
                  loop=loop, audio=audio, audio_offset=audio_offset, mode=mode, ratio=ratio, domain=mix_domain,
                  stall_ms=stall_ms, stats_interval=1.0 if show_stats else None, workspace_id=workspace_id,
                  api_key=api_key, on_ready=ready, on_stats=lambda text: click.echo(f"live: {text}", err=True))
     finally:
-        # The summary is printed however the session ended (turn-off has been sent by then).
-        if started:
-            stats = started[0].stats
-            for line in stats.summary_lines():
-                click.echo(line, err=True)
-            if stats_json:
-                tmp = f"{stats_json}.tmp{os.getpid()}"
-                with open(tmp, "w", encoding="utf-8") as fh:
-                    json.dump(stats.as_dict(), fh, indent=1)
-                os.replace(tmp, stats_json)
+        # The summary is printed however the session ended (turn-off has been sent by then). Nothing here raises:
+        # a session error in flight stays the one reported.
+        lost = _finish(started[0] if started else None, stats_json)
+    if lost:  # the show ran but an output it was asked for is missing (already logged)
+        raise click.exceptions.Exit(1)
+
+
+def _finish(engine, stats_json: Optional[str]) -> list[str]:
+    """Print the summary, write ``--stats-json`` atomically; return the outputs that could not be written."""
+    if engine is None:
+        return []
+    from ..writers.atomic import atomic_path
+
+    log = logging.getLogger("hapmotion.live")
+    stats = engine.stats
+    for line in stats.summary_lines():
+        click.echo(line, err=True)
+    lost = [f"{s.name}: {s.error}" for s in engine.sinks if getattr(s, "error", None)]
+    if stats_json:
+        try:
+            with atomic_path(stats_json) as tmp:
+                tmp.write_text(json.dumps(stats.as_dict(), indent=1), encoding="utf-8")
+        except Exception as exc:
+            log.error("--stats-json %s not written: %s", stats_json, exc)
+            lost.append(f"--stats-json: {exc}")
+    return lost
 
 
 class _StderrHandler(logging.StreamHandler):

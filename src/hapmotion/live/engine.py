@@ -4,8 +4,11 @@ Safety rules (issue 4, docs/live.md):
 
 * a stalled source (no usable frame) fades every actuator linearly to zero, reaching zero ``stall_s`` after the
   last frame arrived; then the renderer and the frame order are reset, so a performer who comes back starts fresh;
-* SIGINT, SIGTERM, the source ending or failing, and an exception anywhere in the loop all end in :meth:`_stop`,
-  which sends turn-off to every sink (each under its own time limit, all at once) before anything else happens;
+* a frame counts as fresh (renders, holds off the fade) only if it carries at least one joint the renderer uses
+  (``hapmotion.render.kernel.KERNEL_JOINTS``); others are counted as ``empty`` and skipped;
+* SIGINT, SIGTERM, the source ending or failing, and an exception anywhere in the loop all end in
+  :meth:`_turn_off`, which sends turn-off to every sink (each under its own time limit, all at once) before
+  anything else happens;
 * sinks are fed through one-frame slots and run in their own tasks, so a slow or dead sink cannot hold up the
   renderer or the other sinks.
 """
@@ -142,6 +145,12 @@ class LiveEngine:
         self.stats_interval = stats_interval
         self.on_ready = on_ready
         self.on_stats = on_stats or (lambda text: log.info("stats: %s", text))
+        self._required: Optional[np.ndarray] = None
+        if mode != "audio":
+            from ..joints import JOINT_INDEX
+            from ..render.kernel import KERNEL_JOINTS
+
+            self._required = np.array([JOINT_INDEX[j] for j in KERNEL_JOINTS], dtype=np.intp)
         self.faults = Faults(source_name, log)
         self.stats = LiveStats(self.faults, fps=self.fps)
         for s in self.sinks:
@@ -184,7 +193,8 @@ class LiveEngine:
     def submit(self, frame: SkeletonFrame) -> None:
         """Take a decoded frame: clean it, drop it if it is older than the last one, put it in the slot."""
         self.stats.frames_in += 1
-        if self.mode != "audio" and not sanitize(frame.positions, self.faults, max_abs=self.max_abs):
+        if self.mode != "audio" and not sanitize(frame.positions, self.faults, max_abs=self.max_abs,
+                                                 required=self._required):
             self.stats.empty += 1
             return
         if not self.order.accept(frame.seq, frame.t):

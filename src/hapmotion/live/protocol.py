@@ -128,7 +128,8 @@ class Faults:
 
     Kinds used by live mode: ``malformed`` (not parseable), ``unknown_address`` (OSC address outside the scheme),
     ``wrong_joint_count``, ``unknown_joint``, ``nan`` (non-finite coordinate), ``absurd`` (beyond
-    :data:`MAX_ABS_M`), ``empty`` (no usable joint left), ``late`` (older than the last accepted frame),
+    :data:`MAX_ABS_M`), ``empty`` (no usable joint left, or none the renderer
+    uses), ``late`` (older than the last accepted frame),
     ``flood`` (over the message budget), ``binary`` (WebSocket binary frame), ``render_nan``.
     """
 
@@ -163,11 +164,14 @@ def _opt_time(value: Any) -> Optional[float]:
     return None
 
 
-def sanitize(positions: np.ndarray, faults: Faults, *, max_abs: float = MAX_ABS_M) -> bool:
+def sanitize(positions: np.ndarray, faults: Faults, *, max_abs: float = MAX_ABS_M,
+             required: Optional[np.ndarray] = None) -> bool:
     """Blank (set to NaN) joints with a non-finite or absurd coordinate, in place; count each kind once per frame.
 
     ``positions`` is ``(32, 3)`` float64, NaN meaning "not sent". Joints that were not sent at all (all three NaN)
-    are not faults. Returns False when no joint is left (the frame must be skipped, counted as ``empty``).
+    are not faults. Returns False when no joint is left, or, given ``required`` (joint indices, e.g. the renderer's
+    kernel joints), none of those is left: the frame must be skipped, counted as ``empty``. A frame of feet only
+    would otherwise keep the renderer playing the last hands and torso it saw (and keep the stall fade away).
     """
     sent = ~np.isnan(positions).all(axis=1)
     finite = np.isfinite(positions).all(axis=1)
@@ -183,6 +187,10 @@ def sanitize(positions: np.ndarray, faults: Faults, *, max_abs: float = MAX_ABS_
         positions[absurd] = np.nan
     if np.isnan(positions).all():
         faults.add("empty", "a frame without a single usable joint")
+        return False
+    if required is not None and np.isnan(positions[required]).all():
+        names = ", ".join(JOINTS[int(j)] for j in required)
+        faults.add("empty", f"a frame without any joint the renderer uses ({names})")
         return False
     return True
 

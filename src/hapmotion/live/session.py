@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import math
 import os
 from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, Union
@@ -85,12 +86,13 @@ def build_audio(path: "str | os.PathLike[str]", *, fps: float, layout: Any, actu
                 solo: bool = False) -> AudioChannel:
     """Analyse the song once and keep its haptic track for per-frame mixing (``hapmotion.audio``).
 
-    The output stage is offline rendering's (``audio.pipeline.combine``): the total power of each sent row is at
-    most ``power_limit_fraction x N``, applied to the mix, or to the music's own rows when it plays ``solo``
-    (audio mode).
+    Rows go through offline rendering's output stage (``audio.pipeline.output_stage`` with the limit of
+    ``power_limit_for``), so live and offline send the same numbers: the music's own rows when it plays ``solo``
+    (audio mode), each motion row mixed with the music's otherwise.
     """
     try:
-        from ..audio import analyze_file, audio_track, limit_power, mix
+        from ..audio import analyze_file, audio_track
+        from ..audio.pipeline import output_stage, power_limit_for
     except ImportError as exc:  # the audio part is optional at run time
         raise UsageError(f"--audio needs hapmotion.audio, which cannot be imported ({exc})") from None
     analysis = analyze_file(path, fps=fps, offset_s=offset_s)
@@ -99,16 +101,13 @@ def build_audio(path: "str | os.PathLike[str]", *, fps: float, layout: Any, actu
     missing = [a for a in actuators if a not in index]
     if missing:
         raise UsageError(f"--audio: the audio track has no column {missing[0]} of the session layout")
-    # the same output stage as offline rendering (audio.pipeline.combine): total power at most
-    # power_limit_fraction x N, for the music alone and for the mix
-    fraction = analysis.params.power_limit_fraction
-    limit = None if fraction is None else float(fraction) * len(actuators)
+    limit = power_limit_for(analysis.params.power_limit_fraction, len(actuators))
     rows = track.intensities[:, [index[a] for a in actuators]]
     if solo:
-        rows = limit_power(rows, limit)
+        rows = output_stage(np.zeros_like(rows), rows, mode="audio", ratio=ratio, domain=domain, power_limit=limit)
 
     def mix_row(motion_row: np.ndarray, audio_row: np.ndarray) -> np.ndarray:
-        return mix(motion_row, audio_row, ratio=ratio, domain=domain, power_limit=limit)
+        return output_stage(motion_row, audio_row, mode="multimodal", ratio=ratio, domain=domain, power_limit=limit)
 
     mix_row(rows[0] * 0, rows[0] * 0)  # a bad ratio or domain is a UsageError now, not mid-show
     return AudioChannel(rows, fps, mix_row)
@@ -160,8 +159,8 @@ async def live(
         raise UsageError("at least one --sink is required")
     if not (stall_ms > 0):
         raise UsageError(f"--stall-ms must be positive, got {stall_ms}")
-    if fps is not None and not (fps > 0):
-        raise UsageError(f"--fps must be positive, got {fps}")
+    if fps is not None and not (math.isfinite(fps) and 1.0 <= fps <= 1000.0):
+        raise UsageError(f"--fps must be a finite number of frames per second from 1 to 1000, got {fps}")
 
     src: Optional[Source]
     body = None

@@ -114,6 +114,10 @@ class WebSocketClientSink(Sink):
     :meth:`on_message`.
     """
 
+    off_open_timeout = 0.5
+    """Seconds :meth:`shutdown` waits to reconnect for the turn-off, so reconnecting, the hello and the turn-off all
+    fit in the engine's ``stop_timeout`` (2 s by default) instead of one ``open_timeout`` using it up."""
+
     def __init__(self, name: str, url: str, *, fps: float = 60.0, send_timeout: float = 0.5,
                  open_timeout: float = 2.0, backoff: tuple[float, float] = (0.1, 5.0), max_timeouts: int = 3,
                  ssl: Any = None):
@@ -144,9 +148,9 @@ class WebSocketClientSink(Sink):
         self.last_message = message
 
     # -------------------------------------------------------------- task
-    async def _connect(self) -> ClientConnection:
-        kwargs: dict[str, Any] = dict(open_timeout=self.open_timeout, close_timeout=1.0, compression=None,
-                                      max_size=2 ** 22, ping_interval=20, ping_timeout=20)
+    async def _connect(self, open_timeout: Optional[float] = None) -> ClientConnection:
+        kwargs: dict[str, Any] = dict(open_timeout=open_timeout or self.open_timeout, close_timeout=1.0,
+                                      compression=None, max_size=2 ** 22, ping_interval=20, ping_timeout=20)
         if self.ssl is not None:
             kwargs["ssl"] = self.ssl
         ws = await connect(self.url, **kwargs)
@@ -261,7 +265,7 @@ class WebSocketClientSink(Sink):
             return
         if ws is None:
             try:
-                ws = await self._connect()
+                ws = await self._connect(min(self.open_timeout, self.off_open_timeout))
                 await self._send_all(ws, self.hello_messages())
             except Exception as exc:
                 log.warning("%s: could not reach the server to send turn-off (%s)", self.name, exc)

@@ -60,11 +60,12 @@ class OscOutSink(Sink):
         except OSError as exc:
             raise UsageError(f"{self.name}: cannot open a UDP socket to {self.host}:{self.port} ({exc})") from None
 
-    def _send_row(self, row: np.ndarray) -> bool:
+    def _send_row(self, row: np.ndarray, force: bool = False) -> bool:
+        """Send one row; a full write buffer skips it unless ``force`` (the turn-off must never be skipped)."""
         tr = self._transport
         if tr is None or tr.is_closing():
             return False
-        if tr.get_write_buffer_size() > self.buffer_limit:
+        if not force and tr.get_write_buffer_size() > self.buffer_limit:
             self.stats.skipped += 1
             return False
         for dgram in self.encoder.encode(row):
@@ -76,6 +77,10 @@ class OscOutSink(Sink):
             self.sent(frame)
 
     async def shutdown(self) -> None:
-        self._send_row(np.zeros(self.dmap.n))
+        # UDP can lose a datagram and the receiver holds the last value it got: send the zeros 3 times, past the
+        # buffer limit (they are queued behind what is waiting, and close() flushes the queue before it closes).
+        zeros = np.zeros(self.dmap.n)
+        for _ in range(3):
+            self._send_row(zeros, force=True)
         if self._transport is not None:
             self._transport.close()

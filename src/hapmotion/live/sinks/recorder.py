@@ -3,7 +3,9 @@
 Rows are kept on a fixed time grid at the session frame rate (sample and hold: grid row k holds the last frame sent
 at or before k / fps seconds after the first one), so the file plays back in real time whatever the arrival
 jitter, stalls and drops were (a replay at ``--speed`` s is recorded at its own pace: wall time x s). The last row is all zeros (the turn-off). The file is written by
-``HapticTrack.save`` (extension picks .csv .json .npz .tact; atomic), off the event loop.
+``hapmotion.writers.save_track`` (extension picks .csv .json .npz .tact; atomic), off the event loop. The path is
+checked before the show (not a folder, its folder writable); if saving still fails at stop, the error is logged as
+``recording not saved: ...`` and kept in :attr:`RecorderSink.error` (the CLI then exits non-zero).
 """
 
 from __future__ import annotations
@@ -17,6 +19,8 @@ import numpy as np
 
 from ...errors import UsageError
 from ...track import HapticTrack
+from ...writers import save_track
+from ..outputs import check_writable
 from ..protocol import OutFrame
 from .base import Sink, log
 
@@ -30,7 +34,7 @@ class RecorderSink(Sink):
     Parameters
     ----------
     path:
-        Output file; its extension must be one of :data:`FORMATS`, its folder must exist.
+        Output file; its extension must be one of :data:`FORMATS`, its folder must exist and be writable.
     actuators, layout:
         Column ids and layout name of the track.
     meta:
@@ -50,9 +54,7 @@ class RecorderSink(Sink):
         if self.path.suffix.lower() not in FORMATS:
             raise UsageError(f"record:{path}: unknown extension {self.path.suffix!r}, expected one of "
                              + ", ".join(FORMATS))
-        parent = self.path.parent if str(self.path.parent) else Path(".")
-        if not parent.is_dir():
-            raise UsageError(f"record:{path}: folder {parent} does not exist")
+        check_writable(self.path, f"record:{path}")
         self.actuators = tuple(actuators)
         self.layout = layout
         self.meta = dict(meta or {})
@@ -62,6 +64,7 @@ class RecorderSink(Sink):
         self._t0: Optional[float] = None
         self._last = np.zeros(len(self.actuators), dtype=np.float32)
         self.saved: Optional[Path] = None
+        self.error: Optional[str] = None  # why the file could not be written at stop
 
     def offer(self, frame: OutFrame) -> None:
         """Recording is memory-only until stop, so it is done right here (no task, no I/O)."""
@@ -101,6 +104,11 @@ class RecorderSink(Sink):
         self._fill(self._n, self._n + 1, np.zeros(len(self.actuators)))  # the turn-off
         track = HapticTrack(intensities=self.rows(), fps=self.fps, actuators=self.actuators, layout=self.layout,
                             meta={**self.meta, "live": True})
-        await asyncio.to_thread(track.save, self.path)
+        try:
+            await asyncio.to_thread(save_track, track, self.path)
+        except Exception as exc:  # the show is over; say so loudly rather than lose the take silently
+            self.error = str(exc) or exc.__class__.__name__
+            log.error("%s: recording not saved: %s", self.name, self.error)
+            return
         self.saved = self.path
         log.info("%s: %d rows (%.1f s) written", self.name, track.n_frames, track.duration)
