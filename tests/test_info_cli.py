@@ -108,6 +108,10 @@ def test_info_kinect_body_option(tmp_path):
      ".json"),
     (["info", DATA / "gBR_sBM_cAll_d04_mBR0_ch03.pkl", "--up", "z"], "--up does not apply to AIST++"),
     (["info", DATA / "01_01.bvh", "--units", "cm", "--scale", "0.1"], "give either units or scale"),
+    (["info", DATA / "01_01.bvh", "--fps-in", "nan"], "--fps-in must be a frame rate between 0.5 and 2000 fps, "
+     "found nan"),
+    (["info", DATA / "01_01.bvh", "--fps-in", "1e-300"], "--fps-in must be a frame rate between 0.5 and 2000 fps"),
+    (["info", DATA / "gBR_sBM_cAll_d04_mBR0_ch03.pkl", "--fps-in", "inf"], "--fps-in must be a frame rate"),
 ])
 def test_errors_are_one_line_exit_2(args, message):
     r = run(*args)

@@ -440,3 +440,34 @@ def test_many_long_numbers_take_the_slow_path(tmp_path):
     text = TINY.split("Frames: 2")[0] + "Frames: 300\nFrame Time: 0.5\n" + "\n".join(lines) + "\n"
     b = bvh_mod.parse_bvh(write(tmp_path, text))
     assert b.frames.tolist() == [[float(t) for t in ln.split()] for ln in lines]
+
+
+# ------------------------------------------------------------------------------------ review fixes: sizes and rates
+
+
+def test_huge_frames_count_is_refused_before_allocating(tmp_path):
+    """``Frames: 99999999999`` would ask for terabytes; the count is capped by what the bytes left can hold."""
+    text = TINY.replace("Frames: 2", "Frames: 99999999999")
+    left = len(text.split("Frame Time: 0.5\n", 1)[1].encode())  # bytes after the Frame Time line
+    most = left // (2 * 15) + 1  # each of the 15 values needs a digit and a separator
+    msg = assert_input_error(write(tmp_path, text), f"line {HEAD_LINES + 2}",
+                             f"Frames: says 99999999999 but the file holds at most {most} frames: truncated?",
+                             loader=bvh_mod.parse_bvh)
+    assert most == 3 and msg.endswith("truncated?")
+    # the bound itself is never too tight: a file of single-digit values with exactly that many rows still reads
+    one_digit = " ".join(["0"] * 15)
+    text = TINY.split("Frames: 2")[0] + "Frames: 3\nFrame Time: 0.5\n" + "\n".join([one_digit] * 3)  # no final \n
+    assert bvh_mod.parse_bvh(write(tmp_path, text, "tight.bvh")).n_frames == 3
+    # a real file claiming more frames than its size allows
+    head, rest = CMU.read_text().split("Frames: 2752", 1)
+    path = write(tmp_path, head + "Frames: 1000000000" + rest, "01_01_big.bvh")
+    with pytest.raises(InputError, match=r": line 186: Frames: says 1000000000 but the file holds at most \d+ frames"):
+        hapmotion.load_motion(path)
+
+
+@pytest.mark.parametrize("old, new, place", [
+    ("Frames: 2", "Frames: \u00b2", f"line {HEAD_LINES + 2}"),  # "²" passes str.isdigit() but not int()
+    ("CHANNELS 3 Zrotation", "CHANNELS \u00b3 Zrotation", "line 13"),
+])
+def test_non_ascii_digit_counts_are_input_errors(tmp_path, old, new, place):
+    assert_input_error(write(tmp_path, TINY.replace(old, new)), place, "expected", loader=bvh_mod.parse_bvh)

@@ -55,7 +55,7 @@ def test_option_checks():
         hapmotion.load_motion(bvh, speed=2)
     with pytest.raises(UsageError, match="option up does not apply to AIST"):
         hapmotion.load_motion(DATA / "gBR_sBM_cAll_d04_mBR0_ch03.pkl", up="z")
-    with pytest.raises(UsageError, match="fps must be a positive number"):
+    with pytest.raises(UsageError, match="fps must be a frame rate between 0.5 and 2000 fps, found 0"):
         hapmotion.load_motion(bvh, fps=0)
     with pytest.raises(UsageError, match="skip_frames must be a whole number"):
         hapmotion.load_motion(bvh, skip_frames=-1)

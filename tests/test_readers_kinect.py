@@ -164,7 +164,18 @@ def _doc(clip):
     (lambda d: d["frames"][3]["bodies"][0]["joint_positions"].pop(),
      "field frames[3].bodies[0].joint_positions", "expected 32 [x, y, z] triples, found 31"),
     (lambda d: d["frames"][2]["bodies"][0]["joint_positions"][5].__setitem__(1, "up"),
-     "field frames[2].bodies[0].joint_positions[5]", "expected an [x, y, z] triple of numbers"),
+     "field frames[2].bodies[0].joint_positions[5][1]", "expected a number (y in mm), found the string 'up'"),
+    # numeric text would convert with np.array(..., float64): it must be refused, not read
+    (lambda d: d["frames"][2]["bodies"][0]["joint_positions"][5].__setitem__(1, "12.5"),
+     "field frames[2].bodies[0].joint_positions[5][1]", "expected a number (y in mm), found the string '12.5'"),
+    (lambda d: d["frames"][1]["bodies"][0]["joint_positions"].__setitem__(0, ["1", "2", "3"]),
+     "field frames[1].bodies[0].joint_positions[0][0]", "expected a number (x in mm), found the string '1'"),
+    (lambda d: d["frames"][0]["bodies"][0]["joint_positions"][31].__setitem__(2, True),
+     "field frames[0].bodies[0].joint_positions[31][2]", "expected a number (z in mm), found a boolean"),
+    (lambda d: d["frames"][0]["bodies"][0]["joint_positions"][7].__setitem__(0, None),
+     "field frames[0].bodies[0].joint_positions[7][0]", "expected a number (x in mm), found null"),
+    (lambda d: d["frames"][3]["bodies"][0]["joint_positions"].__setitem__(2, "1 2 3"),
+     "field frames[3].bodies[0].joint_positions[2]", "expected an [x, y, z] triple of numbers, found the string"),
     (lambda d: d["frames"][2]["bodies"][0]["joint_positions"][4].pop(),
      "field frames[2].bodies[0].joint_positions[4]", "expected an [x, y, z] triple of numbers, found a list of 2"),
     (lambda d: d["frames"][1]["bodies"][0].__setitem__("joint_positions", {"x": 1}),
@@ -213,3 +224,14 @@ def test_nan_joint_is_a_gap(tmp_path, clip):
     m = hapmotion.load_motion(write(tmp_path, doc))
     assert m.meta["filled_by_joint"] == {"HAND_LEFT": 1}
     assert np.isfinite(m.positions[:, m.present]).all()
+
+
+def test_integer_beyond_float_range_names_the_coordinate(tmp_path, clip):
+    doc = _doc(clip)
+    doc["frames"][0]["bodies"][0]["joint_positions"][0][0] = 987654.125  # a marker to replace in the text
+    path = write(tmp_path, doc)
+    text = path.read_text()
+    assert text.count("987654.125") == 1
+    path.write_text(text.replace("987654.125", "1" + "0" * 400))  # json.loads gives a Python int; float() overflows
+    assert_input_error(path, "field frames[0].bodies[0].joint_positions[0][0]",
+                       "expected a number (x in mm), found an integer too large for a float")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import stat
 import tempfile
 from pathlib import Path
 
@@ -16,7 +18,6 @@ from hapmotion.errors import InputError, UsageError
 from hapmotion.joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS
 from hapmotion.motion import new_motion
 from hapmotion.readers import save_motion_table
-from hapmotion.readers.table import atomic_write
 from readers_support import DATA, assert_input_error
 
 OPTIONAL = [j for j in JOINTS if j not in RENDER_JOINTS]
@@ -169,6 +170,49 @@ def test_csv_without_render_joints_names_them(tmp_path):
         hapmotion.load_motion(path)
 
 
+HAND_HEADER = ("time_s,HAND_LEFT_x,HAND_LEFT_y,HAND_LEFT_z,HAND_LEFT_conf,HAND_RIGHT_x,HAND_RIGHT_y,HAND_RIGHT_z,"
+               "SHOULDER_LEFT_x,SHOULDER_LEFT_y,SHOULDER_LEFT_z,SHOULDER_RIGHT_x,SHOULDER_RIGHT_y,SHOULDER_RIGHT_z,"
+               "PELVIS_x,PELVIS_y,PELVIS_z")
+
+
+def hand_row(t, conf="1", left="0.3,1.0,0.2"):
+    return f"{t},{left},{conf},-0.3,1.0,0.2,0.2,1.4,0,-0.2,1.4,0,0,0.9,0"
+
+
+def test_joint_with_zero_confidence_everywhere_says_so(tmp_path):
+    """The joint is in the file, so "found none ... (the file has: HAND_LEFT, ...)" would contradict itself."""
+    path = csv(tmp_path, [HAND_HEADER] + [hand_row(k / 30, conf="0") for k in range(4)])
+    msg = assert_input_error(path, "joint HAND_LEFT", "every sample of HAND_LEFT has confidence 0 (or is empty)")
+    assert "the file has" not in msg
+    # zero confidence in some rows and empty cells in the others: still nothing usable
+    lines = [HAND_HEADER, hand_row(0, conf="0"), hand_row(0.1, conf="1", left=",,"), hand_row(0.2, conf="0")]
+    assert_input_error(csv(tmp_path, lines, "mixed.csv"), "joint HAND_LEFT", "every sample of HAND_LEFT has "
+                       "confidence 0 (or is empty)")
+    # one usable sample is enough: it is held over the others
+    lines = [HAND_HEADER, hand_row(0, conf="0"), hand_row(0.1, conf="0.5"), hand_row(0.2, conf="0")]
+    m = hapmotion.load_motion(csv(tmp_path, lines, "one.csv"))
+    assert m.meta["filled_by_joint"] == {"HAND_LEFT": 2}
+
+
+def test_zero_confidence_hand_is_derived_from_the_wrist(tmp_path):
+    """A joint whose every sample is invalid counts as absent, so the derivation rules may fill it."""
+    header = HAND_HEADER + ",WRIST_LEFT_x,WRIST_LEFT_y,WRIST_LEFT_z"
+    path = csv(tmp_path, [header] + [hand_row(k / 30, conf="0") + f",0.25,1.1,{k / 10:g}" for k in range(4)])
+    m = hapmotion.load_motion(path)
+    assert m.derived[JOINT_INDEX["HAND_LEFT"]] and m.meta["derived_from"]["HAND_LEFT"] == "WRIST_LEFT"
+    np.testing.assert_allclose(m.joint("HAND_LEFT"), [[0.25, 1.1, k / 10] for k in range(4)])
+
+
+def test_npz_joint_with_zero_confidence_everywhere(tmp_path):
+    a = good_arrays()
+    conf = np.ones((6, 7))
+    conf[:, 6] = 0  # HAND_RIGHT never seen
+    assert_input_error(npz(tmp_path, **a, confidence=conf), "joint HAND_RIGHT",
+                       "every sample of HAND_RIGHT has confidence 0 (or is NaN)")
+    a["positions"][:, 6] = np.nan
+    assert_input_error(npz(tmp_path, **a), "joint HAND_RIGHT", "every sample of HAND_RIGHT is NaN")
+
+
 # ----------------------------------------------------------------------------------------------------------- NPZ
 
 
@@ -201,7 +245,7 @@ def test_npz_minimal_and_confidence(tmp_path):
     (lambda a: a.__setitem__("joints", a["joints"][:-1]), "field joints", "expected 7 joint names"),
     (lambda a: a["joints"].__setitem__(2, "NEK"), "field joints[2]", "found 'NEK'"),
     (lambda a: a["joints"].__setitem__(2, "PELVIS"), "field joints[2]", "expected unique joint names"),
-    (lambda a: a.__setitem__("fps", np.float64(-1)), "field fps", "expected a positive number"),
+    (lambda a: a.__setitem__("fps", np.float64(-1)), "field fps", "expected a frame rate between 0.5 and 2000"),
     (lambda a: a.pop("fps"), "field fps", "expected an array 'fps'"),
     (lambda a: a.__setitem__("confidence", np.ones((6, 3))), "field confidence", "expected shape (6, 7)"),
     (lambda a: a["positions"].__setitem__((4, 1, 0), np.inf), "field positions[4, 1]", "found inf"),
@@ -227,18 +271,44 @@ def test_npz_object_array_and_garbage_refused(tmp_path):
 # ------------------------------------------------------------------------------------------------------ writing
 
 
-def test_atomic_write_leaves_nothing_on_failure(tmp_path):
-    target = tmp_path / "out.csv"
+@pytest.mark.parametrize("ext", [".csv", ".npz"])
+def test_failed_write_leaves_the_old_file_and_nothing_else(tmp_path, monkeypatch, ext):
+    m = hapmotion.load_motion(DATA / "dataset-1_punch_normal_001.bvh")
+    target = tmp_path / f"out{ext}"
     target.write_text("old content")
 
-    def fail(f):
+    def fail(f, *args, **kwargs):
         f.write(b"partial")
         raise RuntimeError("disk full")
 
-    with pytest.raises(RuntimeError):
-        atomic_write(str(target), fail)
+    monkeypatch.setattr(np, "savetxt" if ext == ".csv" else "savez_compressed", fail)
+    with pytest.raises(RuntimeError, match="disk full"):
+        save_motion_table(m, target)
     assert target.read_text() == "old content"
-    assert [p.name for p in tmp_path.iterdir()] == ["out.csv"]
+    assert [p.name for p in tmp_path.iterdir()] == [f"out{ext}"]
+
+
+@pytest.mark.parametrize("umask, mode", [(0o022, 0o644), (0o027, 0o640)])
+@pytest.mark.parametrize("ext", [".csv", ".npz"])
+def test_written_table_permissions_follow_the_umask(tmp_path, ext, umask, mode):
+    """A temp file from mkstemp would be 0600 whatever the umask; the table must be readable as any new file."""
+    m = hapmotion.load_motion(DATA / "dataset-1_punch_normal_001.bvh")
+    old = os.umask(umask)
+    try:
+        save_motion_table(m, tmp_path / f"m{ext}")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / f"m{ext}").stat().st_mode) == mode
+    assert hapmotion.load_motion(tmp_path / f"m{ext}").n_frames == m.n_frames
+
+
+def test_missing_folder_is_one_line_input_error(tmp_path):
+    m = hapmotion.load_motion(DATA / "dataset-1_punch_normal_001.bvh")
+    target = tmp_path / "no" / "such" / "m.csv"
+    with pytest.raises(InputError) as err:
+        save_motion_table(m, target)
+    assert str(err.value).startswith(f"{target}: expected an existing folder {target.parent}")
+    assert "\n" not in str(err.value) and not (tmp_path / "no").exists()
 
 
 def test_save_rejects_other_extensions(tmp_path):
@@ -246,3 +316,15 @@ def test_save_rejects_other_extensions(tmp_path):
     with pytest.raises(UsageError, match="expected a .csv or .npz"):
         save_motion_table(m, tmp_path / "m.txt")
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("cell", ["0.3", ""], ids=["fast path", "cell by cell"])
+def test_csv_line_numbers_skip_blank_lines_on_both_paths(cell):
+    """Both ways of reading the rows report the same 1-based line numbers (blank lines skipped, not renumbered)."""
+    from hapmotion.readers.table import _csv_values
+
+    header = ["time_s", "PELVIS_x"]
+    values, numbers = _csv_values("t.csv", ["0,0.1", "", "0.1," + cell, "  ", "0.2,0.5"], 2, header)
+    assert numbers == [2, 4, 6]
+    np.testing.assert_array_equal(values[:, 0], [0, 0.1, 0.2])
+    assert values[1, 1] == 0.3 if cell else np.isnan(values[1, 1])

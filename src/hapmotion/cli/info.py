@@ -51,7 +51,8 @@ def motion_options(f: Callable[..., Any]) -> Callable[..., Any]:
         click.option("--body-id", type=int, default=None, metavar="ID",
                      help="Azure Kinect JSON: the body to use (default: the first body id seen)."),
         click.option("--fps-in", type=float, default=None, metavar="FPS",
-                     help="Frame rate of the input, overriding the file's (BVH Frame Time, Kinect timestamps, ...)."),
+                     help="Frame rate of the input (0.5 to 2000), overriding the file's (BVH Frame Time, Kinect "
+                     "timestamps, ...)."),
         click.option("--up", type=click.Choice(["y", "z"], case_sensitive=False), default=None,
                      help="Up axis of the input (BVH, CSV, NPZ; default y)."),
     ]
@@ -69,9 +70,11 @@ def load_from_cli(path: str, *, units: Optional[str] = None, scale: Optional[flo
     :class:`~hapmotion.errors.UsageError`, which the CLI prints as one line.
     """
     from ..readers import check_options, load_motion
+    from ..readers._common import check_fps_option
 
     options = {"units": units, "scale": scale, "skip_frames": skip_frames, "body_id": body_id, "fps": fps_in, "up": up}
     check_options(path, options, spelling=CLI_SPELLING)  # errors in the words the user typed
+    check_fps_option(fps_in, CLI_SPELLING["fps"])
     return load_motion(path, **options)
 
 

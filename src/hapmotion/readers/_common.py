@@ -24,6 +24,15 @@ UNIT_NAMES = {"m": "m", "cm": "cm", "mm": "mm", "inch": "inch", "cmu": "CMU unit
 
 UP_AXES = ("y", "z")
 
+MIN_FPS = 0.5
+MAX_FPS = 2000.0
+"""Frame rates a motion may have (fps). Motion capture runs at 24-480 fps; the margin either side admits slowed
+or sped-up exports, while a rate outside it is a corrupt header (``Frame Time: 1e-300``) or a wrong unit
+(milliseconds taken for seconds) that would otherwise give an absurd clip length or allocation later."""
+
+FPS_RANGE = f"{MIN_FPS:g} to {MAX_FPS:g} fps"
+STEP_RANGE = f"{1 / MAX_FPS:g} to {1 / MIN_FPS:g} s"
+
 # Where the derived torso joints sit on the segment PELVIS -> NECK (0 = pelvis, 1 = neck). Measured on the three
 # BVH skeletons in shared/data/motion (median over each clip of the spine joint's projection on PELVIS -> NECK):
 # CMU MotionBuilder Spine 0.35 / Spine1 0.70, CMU Daz abdomen 0.38 / chest 0.59, Bandai Spine 0.38 / Chest 0.60.
@@ -83,9 +92,16 @@ def snap_rate(fps: float, tolerance: float) -> float:
     return float(whole) if whole > 0 and abs(fps - whole) <= tolerance * whole else float(fps)
 
 
-def check_fps_option(fps: Optional[float]) -> None:
-    if fps is not None and not (isinstance(fps, (int, float)) and fps > 0 and math.isfinite(fps)):
-        raise UsageError(f"fps must be a positive number, found {fps!r}")
+def fps_in_range(fps: Any) -> bool:
+    """``fps`` is a real number (not a bool) within :data:`MIN_FPS`..:data:`MAX_FPS` (so finite, not NaN)."""
+    return isinstance(fps, (int, float, np.integer, np.floating)) and not isinstance(fps, (bool, np.bool_)) \
+        and MIN_FPS <= float(fps) <= MAX_FPS
+
+
+def check_fps_option(fps: Optional[float], name: str = "fps") -> None:
+    """:class:`UsageError` unless the ``fps`` option (named ``name`` in the message) is ``None`` or in range."""
+    if fps is not None and not fps_in_range(fps):
+        raise UsageError(f"{name} must be a frame rate between {MIN_FPS:g} and {MAX_FPS:g} fps, found {fps!r}")
 
 
 def check_skip_option(skip: Optional[int], n_frames: int, source: str) -> Optional[int]:

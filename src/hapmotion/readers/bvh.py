@@ -29,11 +29,13 @@ from ..joints import JOINT_INDEX, JOINTS, N_JOINTS
 from ..motion import Motion, new_motion
 from . import skeletons
 from ._common import (
+    FPS_RANGE,
     UNITS,
     apply_up_axis,
     check_fps_option,
     check_skip_option,
     derive_missing,
+    fps_in_range,
     missing_needed,
     read_bytes,
     resolve_scale,
@@ -70,6 +72,8 @@ class BvhFile:
     frame_time: float
     channels: np.ndarray
     motion_line: int  # 1-based line of the first MOTION data row
+    frame_time_line: int = 0  # 1-based line of "Frame Time:"
+    frame_time_text: str = ""  # that line as written, for messages
 
     @property
     def frames(self) -> np.ndarray:
@@ -161,7 +165,7 @@ def _parse_hierarchy(path: str, text: str) -> list[BvhJoint]:
         if tok.upper() == "CHANNELS":
             toks.next("CHANNELS")
             count_tok, count_line = toks.next("a channel count")
-            if not count_tok.isdigit():
+            if not (count_tok.isascii() and count_tok.isdigit()):
                 raise InputError(path, f"line {count_line}", f"expected a channel count, found '{count_tok}'")
             for _ in range(int(count_tok)):
                 ch, chline = toks.next("a channel name")
@@ -246,17 +250,24 @@ def parse_bvh(path: str | os.PathLike[str]) -> BvhFile:
         pos = len(raw)
     (frames_text, frames_line), (time_text, time_line) = lines
     fm = _FRAMES.match(frames_text)
-    if fm is None or not fm.group(1).isdigit():
+    if fm is None or not (fm.group(1).isascii() and fm.group(1).isdigit()):
         raise InputError(path, f"line {frames_line}", f"expected 'Frames: <count>', found '{frames_text.strip()}'")
     n_frames = int(fm.group(1))
     if n_frames == 0:
         raise InputError(path, f"line {frames_line}", "expected at least one frame, found 'Frames: 0'")
+    data_start = pos + 1
+    if n_channels:
+        # Every value takes at least one digit and one separator, so the bytes after "Frame Time:" bound the
+        # frame count; checking it first keeps a corrupt "Frames:" from allocating (n_channels, n_frames) floats.
+        most = max(0, len(raw) - data_start) // (2 * n_channels) + 1
+        if n_frames > most:
+            raise InputError(path, f"line {frames_line}", f"Frames: says {n_frames} but the file holds at most "
+                             f"{most} frames: truncated?")
     tm = _FRAME_TIME.match(time_text)
     frame_time = _float_or_none(tm.group(1)) if tm else None
     if frame_time is None or not (frame_time > 0 and math.isfinite(frame_time)):
         raise InputError(path, f"line {time_line}",
                          f"expected 'Frame Time: <seconds>' with a positive number, found '{time_text.strip()}'")
-    data_start = pos + 1
     first_data_line = time_line + 1
     buf = np.frombuffer(raw, dtype=np.uint8, offset=min(data_start, len(raw)))
     values, status, row, line, found, token = parse_table(buf, n_frames, n_channels)
@@ -273,7 +284,8 @@ def parse_bvh(path: str | os.PathLike[str]) -> BvhFile:
         raise InputError(path, at, f"expected {n_frames} frames (Frames: on line {frames_line}), found {row}: "
                          "the file looks truncated")
     assert status == OK, status
-    return BvhFile(path=path, joints=joints, frame_time=frame_time, channels=values, motion_line=first_data_line)
+    return BvhFile(path=path, joints=joints, frame_time=frame_time, channels=values, motion_line=first_data_line,
+                   frame_time_line=time_line, frame_time_text=time_text.strip())
 
 
 def _is_float(text: str) -> bool:
@@ -419,6 +431,10 @@ def read_bvh(
     resolve_scale(units, scale)  # bad option values fail before the file is read
     apply_up_axis(np.zeros(3), up, path)
     bvh = parse_bvh(path)
+    file_fps = 1.0 / bvh.frame_time  # inf for a subnormal Frame Time
+    if fps is None and not fps_in_range(file_fps):
+        raise InputError(path, f"line {bvh.frame_time_line}", f"expected 'Frame Time: <seconds>' giving {FPS_RANGE}, "
+                         f"found '{bvh.frame_time_text}' ({file_fps:.6g} fps)")
     skel, mapping = map_joints(bvh)
     notes: list[str] = []
 
@@ -450,7 +466,6 @@ def read_bvh(
     positions[:, [JOINT_INDEX[c] for c in canon]] = world
     derived, derived_from = derive_missing(positions)
 
-    file_fps = 1.0 / bvh.frame_time
     if fps is not None:
         notes.append(f"frame rate {fps:g} fps from the option (file says {file_fps:.6g})")
     meta = {

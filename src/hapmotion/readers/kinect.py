@@ -20,6 +20,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import sys
 from typing import Any, Optional
 
 import numpy as np
@@ -27,7 +28,7 @@ import numpy as np
 from ..errors import InputError, UsageError
 from ..joints import JOINTS, N_JOINTS, canonical
 from ..motion import Motion, new_motion
-from ._common import check_fps_option, check_skip_option, read_bytes, snap_rate
+from ._common import FPS_RANGE, check_fps_option, check_skip_option, fps_in_range, read_bytes, snap_rate
 
 MM = 0.001
 MAX_GAP_FACTOR = 4
@@ -81,23 +82,32 @@ def _joint_order(path: str, doc: dict) -> np.ndarray:
 
 
 def _positions(path: str, where: str, value: Any) -> np.ndarray:
-    """``(32, 3)`` float array from a ``joint_positions`` field, or an InputError naming the field."""
+    """``(32, 3)`` float array from a ``joint_positions`` field, or an InputError naming the field.
+
+    The JSON types are checked before converting: ``np.array(..., float64)`` would also turn numeric strings
+    ("12.5") and booleans into coordinates.
+    """
     if not isinstance(value, list):
         raise InputError(path, f"field {where}", f"expected {N_JOINTS} [x, y, z] triples, found {_kind(value)}")
-    try:
-        arr = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        arr = None
-    if arr is None or arr.ndim != 2 or arr.shape[1] != 3:
-        bad = next((k for k, v in enumerate(value)
-                    if not (isinstance(v, list) and len(v) == 3 and all(_is_number(c) for c in v))), None)
-        if bad is not None:
-            raise InputError(path, f"field {where}[{bad}]", f"expected an [x, y, z] triple of numbers, found "
-                             f"{_kind(value[bad])}")
-        raise InputError(path, f"field {where}", f"expected {N_JOINTS} [x, y, z] triples")
-    if arr.shape[0] != N_JOINTS:
-        raise InputError(path, f"field {where}", f"expected {N_JOINTS} [x, y, z] triples, found {arr.shape[0]}")
-    return arr
+    if all(type(v) is list and len(v) == 3 for v in value) and {type(c) for v in value for c in v} <= {int, float}:
+        if len(value) != N_JOINTS:
+            raise InputError(path, f"field {where}", f"expected {N_JOINTS} [x, y, z] triples, found {len(value)}")
+        try:
+            return np.array(value, dtype=np.float64)
+        except OverflowError:  # a JSON integer beyond float range
+            pass
+    for k, v in enumerate(value):  # name the first entry that is not a triple of numbers
+        if not isinstance(v, list) or len(v) != 3:
+            raise InputError(path, f"field {where}[{k}]", f"expected an [x, y, z] triple of numbers, found {_kind(v)}")
+        for i, c in enumerate(v):
+            if not _is_number(c):
+                found = _kind(c)
+            elif type(c) is int and abs(c) > sys.float_info.max:
+                found = "an integer too large for a float"
+            else:
+                continue
+            raise InputError(path, f"field {where}[{k}][{i}]", f"expected a number ({'xyz'[i]} in mm), found {found}")
+    raise InputError(path, f"field {where}", f"expected {N_JOINTS} [x, y, z] triples of numbers")
 
 
 def read_kinect_json(
@@ -181,7 +191,11 @@ def read_kinect_json(
                 k = int(bad[0]) + 1
                 raise InputError(path, f"field frames[{k}].timestamp_usec", f"expected a time after "
                                  f"{stamps[k - 1]:.0f}, found {stamps[k]:.0f}")
-            rate = snap_rate(1e6 / float(np.median(steps)), 5e-3)  # device clock jitter
+            median = float(np.median(steps))
+            if not fps_in_range(1e6 / median):
+                raise InputError(path, "field frames[*].timestamp_usec", f"expected steps giving {FPS_RANGE}, found "
+                                 f"a median step of {median:.6g} us ({1e6 / median:.6g} fps)")
+            rate = snap_rate(1e6 / median, 5e-3)  # device clock jitter
         else:
             rate = 30.0
             notes.append("one frame only: frame rate set to 30 fps (the Azure Kinect default)")

@@ -18,7 +18,6 @@ import io
 import math
 import os
 import re
-import tempfile
 import zipfile
 from typing import Any, Optional
 
@@ -27,11 +26,17 @@ import numpy as np
 from ..errors import InputError, UsageError
 from ..joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS, canonical
 from ..motion import Motion, new_motion
+from ..writers.atomic import atomic_path
 from ._common import (
+    FPS_RANGE,
+    MAX_FPS,
+    MIN_FPS,
+    STEP_RANGE,
     apply_up_axis,
     check_fps_option,
     check_skip_option,
     derive_missing,
+    fps_in_range,
     read_bytes,
     units_or_default,
 )
@@ -81,6 +86,9 @@ def _assemble(
         full[:, cols] = c
         valid[:, cols] &= c > 0
         confidence = full
+    # Samples with confidence 0 are gaps: blank them, so that a joint never seen counts as absent (and may be
+    # derived) and derived joints do not start from them.
+    positions[~valid] = np.nan
     derived = np.zeros(N_JOINTS, dtype=bool)
     if derived_in is not None:
         derived[cols] = derived_in
@@ -90,6 +98,12 @@ def _assemble(
         valid |= new_derived[None, :] & np.isfinite(positions).all(axis=2)
         if confidence is not None:
             confidence[:, new_derived] = 0.5  # as new_motion does for derived joints without a confidence
+    blank = "is empty" if fmt.endswith("CSV") else "is NaN"
+    for name in RENDER_JOINTS:  # a render joint in the file without one usable sample, and not derivable
+        if name in names and not valid[:, JOINT_INDEX[name]].any():
+            why = f"has confidence 0 (or {blank})" if conf is not None else blank
+            raise InputError(path, f"joint {name}", f"every sample of {name} {why}; expected at least one usable "
+                             "sample of this joint, which the render needs")
     meta = {
         "format": fmt,
         "skeleton": f"canonical joints ({len(names)} in the file)",
@@ -186,8 +200,6 @@ def _csv_values(path: str, lines: list[str], first_line: int, header: list[str])
     if fast is not None and fast.shape == (len(numbers), len(header)) and not np.isinf(fast).any():
         return fast, numbers
     rows: list[list[float]] = []
-    numbers = []
-    numbers: list[int] = []
     width = len(header)
     for k, line in enumerate(lines):
         if not line.strip():
@@ -197,7 +209,6 @@ def _csv_values(path: str, lines: list[str], first_line: int, header: list[str])
         if len(cells) != width:
             raise InputError(path, f"line {line_no}", f"expected {width} comma-separated values, found {len(cells)}")
         rows.append([_cell(path, line_no, header[c], cells[c]) for c in range(width)])
-        numbers.append(line_no)
     return np.array(rows, dtype=np.float64).reshape(len(rows), width), numbers
 
 
@@ -273,7 +284,11 @@ def _rate_from_times(path: str, t: np.ndarray, line_numbers: list[int]) -> float
         r = off[0] + 1
         raise InputError(path, f"line {line_numbers[r]}", f"expected a time step of {step:.6g} s (within 1 %), "
                          f"found {dt[r - 1]:.6g} s; resample the table to a uniform rate or give fps")
-    return 1.0 / step
+    rate = 1.0 / step
+    if not fps_in_range(rate):
+        raise InputError(path, "column time_s", f"expected a median time step giving {FPS_RANGE} ({STEP_RANGE}), "
+                         f"found {step:.6g} s ({rate:.6g} fps)")
+    return rate
 
 
 # ---------------------------------------------------------------------------------------------------------- NPZ
@@ -336,8 +351,9 @@ def read_npz(
         notes.append(f"frame rate {rate:g} fps from the option")
     else:
         f = need("fps")
-        if f.shape != () or f.dtype.kind not in "fiu" or not (float(f) > 0 and math.isfinite(float(f))):
-            raise InputError(path, "field fps", f"expected a positive number, found {f!r}")
+        if f.shape != () or f.dtype.kind not in "fiu" or not fps_in_range(float(f)):
+            raise InputError(path, "field fps", f"expected a frame rate between {MIN_FPS:g} and {MAX_FPS:g} fps, "
+                             f"found {f!r}")
         rate = float(f)
     conf = None
     if "confidence" in arrays:
@@ -391,20 +407,6 @@ def save_motion_table(motion: Motion, path: str | os.PathLike[str]) -> None:
         fmt = ["%.17g"] + ["%.17g", "%.17g", "%.17g", "%.9g"] * len(names)
         np.savetxt(f, table, fmt=fmt, delimiter=",")
 
-    atomic_write(path, write)
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:  # an open file: np.savez would append ".npz" to a name
+        write(f)
 
-
-def atomic_write(path: str, write) -> None:
-    """Call ``write(binary file)`` on a temp file beside ``path``, then rename it over ``path``."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=os.path.splitext(path)[1], dir=folder)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            write(f)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
