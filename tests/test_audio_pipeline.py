@@ -186,3 +186,18 @@ def test_bundled_music_audio_only_track(name):
     # kicks are the loud frames: about 2 frames per onset
     kicks = out.debug["audio_kick"].astype(bool)
     assert 1.5 < kicks.sum() / out.meta["audio"]["onsets"] <= 2.0
+
+
+def test_combine_reuses_a_given_analysis(monkeypatch):
+    """Several conditions of one song: pass the analysis and the song is not analysed again; same numbers."""
+    song = Path(__file__).resolve().parents[2] / "shared" / "data" / "audio" / "vibe_ace.ogg"
+    motion = HapticTrack(np.full((120, 52), 30.0), 60.0, DEFAULT_ACTUATORS)
+    fresh = combine(motion, song, mode="multimodal", fps=60.0, length="motion")
+    an = analyze_file(song, fps=60.0)
+
+    def no_second_analysis(*args, **kwargs):
+        raise AssertionError("the song was analysed again")
+
+    monkeypatch.setattr("hapmotion.audio.pipeline.analyze_file", no_second_analysis)
+    reused = combine(motion, song, mode="multimodal", fps=60.0, length="motion", analysis=an)
+    np.testing.assert_array_equal(reused.intensities, fresh.intensities)

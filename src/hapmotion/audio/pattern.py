@@ -20,7 +20,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import UsageError
-from ..track import HapticTrack
+from ..track import HapticTrack, parse_actuator_id
 from .analysis import AudioAnalysis
 from .params import AudioParams
 
@@ -37,8 +37,8 @@ TORSO_PREFIX = "Vest"
 
 def device_of(actuator: str) -> str:
     """``"VestFront_12"`` -> ``"VestFront"``; raises :class:`UsageError` for ids not shaped ``<Device>_<index>``."""
-    device, sep, index = str(actuator).rpartition("_")
-    if not sep or not device or not index.isdigit():
+    device, index = parse_actuator_id(str(actuator))
+    if index < 0:
         raise UsageError(f"actuator id {actuator!r}: expected <Device>_<index> such as VestFront_0")
     return device
 

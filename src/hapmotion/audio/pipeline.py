@@ -84,7 +84,7 @@ def combine(motion_track: HapticTrack | None, audio_path: "str | os.PathLike[str
             mode: str = "multimodal", ratio: "tuple[float, float]" = (2, 3), offset_s: float = 0.0,
             fps: float = 60.0, domain: str = "linear", length: str = "longer",
             actuators: "Sequence[str] | Any | None" = None, params: AudioParams | None = None,
-            power_limit_fraction: float | None | str = "params") -> HapticTrack:
+            power_limit_fraction: float | None | str = "params", analysis: Any = None) -> HapticTrack:
     """Render one of the study-2 conditions.
 
     Parameters
@@ -115,6 +115,9 @@ def combine(motion_track: HapticTrack | None, audio_path: "str | os.PathLike[str
         Total power limit as a fraction of all actuators at full drive, applied to every frame in every mode so the
         three conditions share one output stage; ``"params"`` takes ``params.power_limit_fraction``, ``None``
         disables it.
+    analysis:
+        The song's :class:`AudioAnalysis` when the caller already has it (same file, fps, offset and params), so
+        rendering several conditions of one song analyses it once.
 
     Returns
     -------
@@ -152,7 +155,9 @@ def combine(motion_track: HapticTrack | None, audio_path: "str | os.PathLike[str
 
     audio = None
     if audio_path is not None:
-        an = analyze_file(audio_path, fps=fps, offset_s=offset_s, params=p)
+        an = analysis
+        if an is None or an.fps != fps or an.offset_s != offset_s:
+            an = analyze_file(audio_path, fps=fps, offset_s=offset_s, params=p)
         audio = audio_track(an, ids, p)
 
     n_motion = motion_track.n_frames if motion_track is not None else 0

@@ -40,6 +40,7 @@ from pythonosc.osc_packet import OscPacket
 
 from ..errors import InputError
 from ..joints import BONES, JOINTS, N_JOINTS, canonical
+from ..track import parse_actuator_id
 
 log = logging.getLogger("hapmotion.live")
 
@@ -453,10 +454,10 @@ class DeviceMap:
         """From ids ``<Device>_<index>`` alone, with the bHaptics SDK2 positions (docs §3.5, §4.1)."""
         groups: dict[str, list[tuple[int, int]]] = {}
         for col, aid in enumerate(actuators):
-            device, _, idx = aid.rpartition("_")
-            if not device or not idx.isdigit():
+            device, idx = parse_actuator_id(aid)
+            if idx < 0:
                 raise ValueError(f"actuator id {aid!r} is not <Device>_<index>")
-            groups.setdefault(device, []).append((int(idx), col))
+            groups.setdefault(device, []).append((idx, col))
         devices = {}
         for device, pairs in groups.items():
             pairs.sort()

@@ -381,7 +381,8 @@ def evaluate(
                 track = render(motion, method=method, params=prm, layout=layout)
                 scores = score_track(track, motion, motor=motor, layout=layout)
                 if audio_api is not None:
-                    mixed = audio_api[1](track, audio, mode="multimodal", fps=motion.fps, length="motion")
+                    mixed = audio_api[1](track, audio, mode="multimodal", fps=motion.fps, length="motion",
+                                         analysis=analysis)  # the song is analysed once per clip
                     scores.update(score_audio(mixed, analysis.onset_times, analysis.envelope, motor=motor))
                 dt = time.perf_counter() - t0
                 t_render += dt
