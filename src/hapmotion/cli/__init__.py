@@ -33,26 +33,10 @@ def cli() -> None:
 
 
 def _register() -> None:
-    from . import demo, render
+    from . import demo, evaluate, info, live, plot, render, view
 
-    cli.add_command(render.command, "render")
-    cli.add_command(demo.command, "demo")
-    for name in ("info", "live", "view", "plot", "evaluate"):
-        module = _optional(name)
-        if module is not None:
-            cli.add_command(module.command, name)
-
-
-def _optional(name: str):
-    """Commands contributed by other parts of the package (they may not be installed in a trimmed build)."""
-    import importlib.util
-
-    spec = importlib.util.find_spec(f"hapmotion.cli.{name}")
-    if spec is None:
-        return None
-    import importlib
-
-    return importlib.import_module(f"hapmotion.cli.{name}")
+    for module in (render, info, demo, live, view, plot, evaluate):
+        cli.add_command(module.command, module.__name__.rsplit(".", 1)[1])
 
 
 _register()

@@ -8,7 +8,8 @@ from pathlib import Path
 import click
 
 from ..errors import UsageError
-from .render import load_motion_cli, motion_reader_options, parse_param_overrides
+from .info import motion_options
+from .render import load_motion_cli, parse_param_overrides
 
 
 def _names(text: str, option: str) -> list[str]:
@@ -32,7 +33,7 @@ def _names(text: str, option: str) -> list[str]:
               help="Song to mix with every track (2:3): adds onset agreement (+-50 ms), mix saturation, envelope r.")
 @click.option("--no-figures", is_flag=True, help="Tables only (faster).")
 @click.option("--no-bench", is_flag=True, help="Skip the synthetic sweep bench.")
-@motion_reader_options
+@motion_options
 def command(inputs, output, methods, presets, params, audio_file, no_figures, no_bench, motion_opts=None):
     """Measure the feel: render each INPUT motion file with each method and preset and score the tracks.
 

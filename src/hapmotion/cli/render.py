@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from ..errors import UsageError
+from .info import load_from_cli, motion_options
 
 MODES = ("multimodal", "motion", "audio")
 
@@ -42,23 +43,8 @@ def parse_param_overrides(items: tuple[str, ...]) -> dict:
     return out
 
 
-def motion_reader_options(func):
-    """Reader options shared by the commands that read motion (from ``cli/info.py`` when present)."""
-    try:
-        from .info import motion_options
-    except ImportError:  # readers' CLI helpers not installed: plain path only
-        return func
-    return motion_options(func)
-
-
 def load_motion_cli(path: str, motion_opts: dict | None = None):
     """Read a motion file with the reader options the command received (``motion_opts``)."""
-    try:
-        from .info import load_from_cli
-    except ImportError:
-        from ..readers import load_motion
-
-        return load_motion(path)
     return load_from_cli(path, **(motion_opts or {}))
 
 
@@ -99,7 +85,7 @@ def progress_bar(total: int, label: str):
               help="Seconds to delay the music against the motion (negative: skip the start of the song).")
 @click.option("--length", type=click.Choice(["longer", "motion"]), default="longer", show_default=True,
               help="Track length with both inputs: as long as the longer one, or cut to the motion.")
-@motion_reader_options
+@motion_options
 def command(motion_file, output, method, preset, params, no_mirror, fps, layout_file, audio_file, mode, mix_ratio,
             mix_domain, audio_offset, length, motion_opts=None):
     """Render MOTION_FILE (BVH, Azure Kinect JSON, AIST++ .pkl, CSV/NPZ joints) into a haptic track.
