@@ -34,10 +34,12 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 import soundfile as sf  # noqa: E402
 
-from hapmotion.audio import analyze_file, analyze_signal, audio_track, beat_grid, match_events  # noqa: E402
-from hapmotion.audio.evaluate import track_beats  # noqa: E402
+from hapmotion.audio import analyze_file, analyze_signal, audio_track  # noqa: E402
+from hapmotion.metrics.events import match_events  # noqa: E402
 from hapmotion.audio.io import mono_blocks, probe  # noqa: E402
-from hapmotion.audio.synth import drum_hit, place_hits, song_beats, song_blocks, write_blocks  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from support.beats import beat_grid, track_beats  # noqa: E402
+from support.audio_synth import drum_hit, place_hits, song_beats, song_blocks, write_blocks  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "audio"
 SONGS = ("vibe_ace.ogg", "lets_go_fishin.ogg")

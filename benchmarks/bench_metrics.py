@@ -41,7 +41,7 @@ def main() -> None:
     # in-process breakdown (warm: compiled kernels, imported matplotlib)
     from hapmotion.metrics.report import evaluate
     from hapmotion.metrics.scorecard import score_track
-    from hapmotion.readers import load_motion
+    from hapmotion.motion_files import load_motion
     from hapmotion.render import render
 
     with tempfile.TemporaryDirectory() as tmp:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 import hapmotion
-from hapmotion.readers import save_motion_table
+from hapmotion.motion_files import save_motion_table
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "motion"
 TARGET_BVH_FPS = 100_000.0  # frames/s, issue 2

@@ -18,7 +18,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import hapmotion  # noqa: E402
 from hapmotion.body.model import BodyModel  # noqa: E402
-from synthetic import motion_from_frames, waving  # noqa: E402
+from support.synthetic import motion_from_frames, waving  # noqa: E402
 
 
 def one_hour_motion(fps: float = 60.0):

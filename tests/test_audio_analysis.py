@@ -9,10 +9,10 @@ import pytest
 
 from hapmotion.audio import AudioParams, analyze_file, analyze_signal
 from hapmotion.audio.analysis import FrameGrid, level_dbfs, release_follower
-from hapmotion.audio.synth import drum_hit, place_hits, sine_sweep, sweep_time
+from support.audio_synth import drum_hit, place_hits, sine_sweep, sweep_time
 from hapmotion.errors import UsageError
+from support.data import AUDIO
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "audio"
 SR = 22050
 
 
@@ -209,7 +209,7 @@ def test_bad_rate_and_params_are_usage_errors():
 # ------------------------------------------------------------------ the bundled music
 @pytest.fixture(scope="module", params=["vibe_ace.ogg", "lets_go_fishin.ogg"])
 def song(request):
-    return analyze_file(DATA / request.param)
+    return analyze_file(AUDIO / request.param)
 
 
 def test_bundled_music_envelope_is_alive_but_not_pinned(song):

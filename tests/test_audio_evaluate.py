@@ -8,11 +8,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hapmotion.audio import analyze_file, analyze_signal, audio_track, beat_grid, match_events, tempo_from_onsets
-from hapmotion.audio.evaluate import track_beats
-from hapmotion.audio.synth import song_beats, song_blocks
+from hapmotion.audio import analyze_file, analyze_signal, audio_track
+from hapmotion.metrics.events import match_events
+from support.beats import beat_grid, tempo_from_onsets
+from support.beats import track_beats
+from support.audio_synth import song_beats, song_blocks
+from support.data import AUDIO
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "audio"
 
 
 def test_match_events_by_hand():
@@ -80,7 +82,7 @@ def test_bundled_music_beats_and_kicks(name):
     0.59 (Vibe Ace) and 0.44 (Let's Go Fishin'); random kick trains at the same rate score 0.26 and 0.21 (mean of
     20 seeds). Kicks follow onsets, and music has many off-beat onsets, so recall against beats stays well below 1.
     """
-    an = analyze_file(DATA / name)
+    an = analyze_file(AUDIO / name)
     beats = track_beats(an.onset_envelope, an.hop_s)
     grid = beat_grid(an.onset_envelope, an.hop_s, an.audio_duration_s)
     intervals = np.diff(beats)

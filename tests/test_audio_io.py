@@ -10,10 +10,10 @@ import soundfile as sf
 
 from hapmotion.audio import analyze_file, analyze_signal, mp3_supported
 from hapmotion.audio import io as audio_io
-from hapmotion.audio.synth import drum_hit, place_hits, write_blocks
+from support.audio_synth import drum_hit, place_hits, write_blocks
 from hapmotion.errors import InputError
+from support.data import AUDIO
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "audio"
 HIT_TIMES = np.array([0.3, 0.8, 1.45, 2.0, 2.7])
 
 
@@ -178,7 +178,7 @@ def test_bad_arrays():
 # ------------------------------------------------------------------ the bundled music
 @pytest.mark.parametrize("name,seconds", [("vibe_ace.ogg", 61.5), ("lets_go_fishin.ogg", 133.0)])
 def test_bundled_music_reads_at_its_documented_length(name, seconds):
-    an = analyze_file(DATA / name)
+    an = analyze_file(AUDIO / name)
     assert an.sample_rate == 22050 and an.channels == 1          # SOURCES.md: mono Ogg Vorbis, 22050 Hz
     assert an.audio_duration_s == pytest.approx(seconds, abs=0.06)
     assert an.n_frames == int(np.ceil(an.audio_duration_s * 60))

@@ -8,13 +8,14 @@ import numpy as np
 import pytest
 
 from hapmotion.audio import (DEFAULT_ACTUATORS, AudioParams, analyze_file, analyze_signal, audio_track,
-                             kick_frames, match_events, region_weights)
+                             kick_frames, region_weights)
+from hapmotion.metrics.events import match_events
 from hapmotion.audio.analysis import AudioAnalysis
 from hapmotion.audio.pattern import device_of
-from hapmotion.audio.synth import drum_hit, place_hits
+from support.audio_synth import drum_hit, place_hits
 from hapmotion.errors import UsageError
+from support.data import AUDIO
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "audio"
 
 
 def _analysis(envelope, onsets=(), fps=60.0, mid=None, params=None) -> AudioAnalysis:
@@ -126,7 +127,7 @@ def test_synthetic_clicks_become_kicks_on_their_frames():
 
 @pytest.mark.parametrize("name", ["vibe_ace.ogg", "lets_go_fishin.ogg"])
 def test_bundled_music_pattern(name):
-    an = analyze_file(DATA / name)
+    an = analyze_file(AUDIO / name)
     tr = audio_track(an)
     rows = tr.intensities
     assert rows.shape == (an.n_frames, 52)
@@ -143,7 +144,7 @@ def test_bundled_music_pattern(name):
 
 def test_clipped_music_works_and_stays_bounded():
     # the synthetic song driven 20 dB into clipping: 40 % of its samples sit at +-1
-    from hapmotion.audio.synth import song_blocks
+    from support.audio_synth import song_blocks
 
     sr = 22050
     x = np.clip(10 * np.concatenate(list(song_blocks(20.0, sr))), -1.0, 1.0)

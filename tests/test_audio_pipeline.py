@@ -11,13 +11,13 @@ import soundfile as sf
 
 import hapmotion
 from hapmotion.audio import DEFAULT_ACTUATORS, analyze_file, audio_track, combine, mix
-from hapmotion.audio.synth import drum_hit, place_hits
+from support.audio_synth import drum_hit, place_hits
 from hapmotion.errors import InputError, UsageError
 from hapmotion.track import HapticTrack
-from synthetic import motion_from_frames, waving
+from support.synthetic import motion_from_frames, waving
+from support.data import AUDIO
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "audio"
-SONG = DATA / "vibe_ace.ogg"
+SONG = AUDIO / "vibe_ace.ogg"
 
 
 def _motion_track(n_frames=120, fps=60.0, level=50.0) -> HapticTrack:
@@ -179,8 +179,8 @@ def test_rendered_motion_with_the_bundled_music_in_multimodal_mode():
 
 @pytest.mark.parametrize("name", ["vibe_ace.ogg", "lets_go_fishin.ogg"])
 def test_bundled_music_audio_only_track(name):
-    out = combine(None, DATA / name, mode="audio")
-    assert out.n_frames == int(np.ceil(sf.info(DATA / name).duration * 60))
+    out = combine(None, AUDIO / name, mode="audio")
+    assert out.n_frames == int(np.ceil(sf.info(AUDIO / name).duration * 60))
     assert np.isfinite(out.intensities).all() and out.intensities.max() <= 100
     assert np.all(np.sum((out.intensities / 100) ** 2, axis=1) <= 39.0 + 1e-9)
     # kicks are the loud frames: about 2 frames per onset
@@ -190,7 +190,7 @@ def test_bundled_music_audio_only_track(name):
 
 def test_combine_reuses_a_given_analysis(monkeypatch):
     """Several conditions of one song: pass the analysis and the song is not analysed again; same numbers."""
-    song = Path(__file__).resolve().parents[2] / "shared" / "data" / "audio" / "vibe_ace.ogg"
+    song = AUDIO / "vibe_ace.ogg"
     motion = HapticTrack(np.full((120, 52), 30.0), 60.0, DEFAULT_ACTUATORS)
     fresh = combine(motion, song, mode="multimodal", fps=60.0, length="motion")
     an = analyze_file(song, fps=60.0)

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from hapmotion.cli import main
-from hapmotion.writers import load_track
+from hapmotion.track_files import load_track
+from support.data import SHARED_DATA
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-PUNCH = DATA / "motion" / "dataset-1_punch_normal_001.bvh"
+PUNCH = SHARED_DATA / "motion" / "dataset-1_punch_normal_001.bvh"
 
 
 def run(args, capsys):
@@ -112,7 +112,7 @@ def test_console_script_runs_in_a_fresh_process(tmp_path):
     assert out.read_text().splitlines()[0].startswith("time_s,VestFront_0,")
 
 
-SONG = DATA / "audio" / "vibe_ace.ogg"  # 61.5 s
+SONG = SHARED_DATA / "audio" / "vibe_ace.ogg"  # 61.5 s
 
 
 def test_audio_only_track_at_a_chosen_rate(tmp_path, capsys):
@@ -173,8 +173,8 @@ def test_bundled_examples_are_the_shared_files_with_attribution():
     from hapmotion.cli.demo import example_path
 
     for name in ("60_12_scaled.bvh", "gBR_sBM_cAll_d04_mBR0_ch03.pkl"):
-        assert example_path(name).read_bytes() == (DATA / "motion" / name).read_bytes()
-    assert example_path("vibe_ace.ogg").read_bytes() == (DATA / "audio" / "vibe_ace.ogg").read_bytes()
+        assert example_path(name).read_bytes() == (SHARED_DATA / "motion" / name).read_bytes()
+    assert example_path("vibe_ace.ogg").read_bytes() == (SHARED_DATA / "audio" / "vibe_ace.ogg").read_bytes()
     attribution = example_path("ATTRIBUTION.md").read_text()
     for must in ("CC BY 3.0", "CC BY 4.0", "NSF EIA-0196217", "not** shipped"):
         assert must in attribution

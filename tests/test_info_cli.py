@@ -13,7 +13,7 @@ from click.testing import CliRunner
 from hapmotion.cli.info import MOTION_OPTION_NAMES, command, load_from_cli, motion_options
 from hapmotion.errors import HapMotionError, UsageError
 
-from readers_support import DATA
+from support.data import MOTION
 
 
 class Group(click.Group):
@@ -65,7 +65,7 @@ def run(*args):
 
 
 def test_info_table():
-    r = run("info", DATA / "01_01.bvh")
+    r = run("info", MOTION / "01_01.bvh")
     assert r.exit_code == 0, r.output
     lines = r.output.splitlines()
     labels = [ln.split("  ")[0] for ln in lines]
@@ -79,7 +79,7 @@ def test_info_table():
 
 
 def test_info_json_and_options():
-    r = run("info", DATA / "dataset-1_punch_normal_001.bvh", "--json", "--skip-frames", "24", "--fps-in", "60",
+    r = run("info", MOTION / "dataset-1_punch_normal_001.bvh", "--json", "--skip-frames", "24", "--fps-in", "60",
             "--units", "CM")
     assert r.exit_code == 0, r.output
     s = json.loads(r.output)
@@ -89,11 +89,11 @@ def test_info_json_and_options():
 
 
 def test_info_kinect_body_option(tmp_path):
-    from test_readers_kinect import kinect_document  # the fixture generator of the Kinect tests
+    from support.motion_files import kinect_document  # the fixture generator of the Kinect tests
 
     import hapmotion
 
-    clip = hapmotion.load_motion(DATA / "dataset-1_punch_normal_001.bvh").slice(0, 30)
+    clip = hapmotion.load_motion(MOTION / "dataset-1_punch_normal_001.bvh").slice(0, 30)
     path = tmp_path / "k.json"
     path.write_text(json.dumps(kinect_document(clip)))
     r = run("info", path, "--body-id", "3", "--json")
@@ -103,15 +103,15 @@ def test_info_kinect_body_option(tmp_path):
 
 @pytest.mark.parametrize("args, message", [
     (["info", "missing.bvh"], "missing.bvh: file not found"),
-    (["info", DATA / "SOURCES.md"], "expected one of the extensions .bvh"),
-    (["info", DATA / "01_01.bvh", "--body-id", "2"], "--body-id does not apply to BVH files (.bvh); it applies to "
+    (["info", MOTION / "SOURCES.md"], "expected one of the extensions .bvh"),
+    (["info", MOTION / "01_01.bvh", "--body-id", "2"], "--body-id does not apply to BVH files (.bvh); it applies to "
      ".json"),
-    (["info", DATA / "gBR_sBM_cAll_d04_mBR0_ch03.pkl", "--up", "z"], "--up does not apply to AIST++"),
-    (["info", DATA / "01_01.bvh", "--units", "cm", "--scale", "0.1"], "give either units or scale"),
-    (["info", DATA / "01_01.bvh", "--fps-in", "nan"], "--fps-in must be a frame rate between 0.5 and 2000 fps, "
+    (["info", MOTION / "gBR_sBM_cAll_d04_mBR0_ch03.pkl", "--up", "z"], "--up does not apply to AIST++"),
+    (["info", MOTION / "01_01.bvh", "--units", "cm", "--scale", "0.1"], "give either units or scale"),
+    (["info", MOTION / "01_01.bvh", "--fps-in", "nan"], "--fps-in must be a frame rate between 0.5 and 2000 fps, "
      "found nan"),
-    (["info", DATA / "01_01.bvh", "--fps-in", "1e-300"], "--fps-in must be a frame rate between 0.5 and 2000 fps"),
-    (["info", DATA / "gBR_sBM_cAll_d04_mBR0_ch03.pkl", "--fps-in", "inf"], "--fps-in must be a frame rate"),
+    (["info", MOTION / "01_01.bvh", "--fps-in", "1e-300"], "--fps-in must be a frame rate between 0.5 and 2000 fps"),
+    (["info", MOTION / "gBR_sBM_cAll_d04_mBR0_ch03.pkl", "--fps-in", "inf"], "--fps-in must be a frame rate"),
 ])
 def test_errors_are_one_line_exit_2(args, message):
     r = run(*args)
@@ -120,7 +120,7 @@ def test_errors_are_one_line_exit_2(args, message):
 
 
 def test_bad_file_error_names_the_line(tmp_path):
-    lines = (DATA / "01_01.bvh").read_text().split("\n")
+    lines = (MOTION / "01_01.bvh").read_text().split("\n")
     lines[300] += " 1.5"
     bad = tmp_path / "bad.bvh"
     bad.write_text("\n".join(lines))
@@ -145,7 +145,7 @@ def test_decorator_gathers_options_for_other_commands():
 
 
 def test_load_from_cli_maps_fps_in():
-    m = load_from_cli(str(DATA / "dataset-1_punch_normal_001.bvh"), fps_in=10.0, skip_frames=None)
+    m = load_from_cli(str(MOTION / "dataset-1_punch_normal_001.bvh"), fps_in=10.0, skip_frames=None)
     assert m.fps == 10.0
     with pytest.raises(UsageError):
-        load_from_cli(str(DATA / "dataset-1_punch_normal_001.bvh"), body_id=1)
+        load_from_cli(str(MOTION / "dataset-1_punch_normal_001.bvh"), body_id=1)

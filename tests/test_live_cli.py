@@ -13,15 +13,15 @@ import time
 
 import pytest
 from click.testing import CliRunner
-from test_live_e2e import send_osc
-from test_live_support import FakePlayerV2, real_frames, wait_for
+from support.live_fakes import send_osc
+from support.live_fakes import FakePlayerV2, real_frames, wait_for
 
 from hapmotion.cli import main
 from hapmotion.cli.live import command
 
 # The installed entry point (hapmotion.cli:main), run with this interpreter.
 HAPMOTION = [sys.executable, "-c", "import sys; from hapmotion.cli import main; sys.exit(main(sys.argv[1:]))"]
-from hapmotion.writers import load_track
+from hapmotion.track_files import load_track
 
 
 @pytest.mark.parametrize("args, message", [
@@ -110,8 +110,8 @@ def test_signal_stops_a_running_session_with_turn_off(sig, tmp_path):
 def short_replay(tmp_path):
     """A 20-frame clip of a real recording (2/3 s at its 30 fps) as a motion table, for quick CLI sessions."""
     import hapmotion
-    from hapmotion.readers import save_motion_table
-    from test_live_support import BVH
+    from hapmotion.motion_files import save_motion_table
+    from support.live_fakes import BVH
 
     path = tmp_path / "short.npz"
     save_motion_table(hapmotion.load_motion(BVH).slice(0, 20), path)

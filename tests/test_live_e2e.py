@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 from pythonosc.osc_message_builder import OscMessageBuilder
 from pythonosc.udp_client import SimpleUDPClient
-from test_live_support import (BVH, FakePlayerV2, FakePlayerV3, OscReceiver, Tap, free_port, real_frames,
-                               self_signed_cert, start_session, wait_for)
+from support.live_fakes import (BVH, FakePlayerV2, FakePlayerV3, OscReceiver, Tap, free_port, real_frames,
+                               self_signed_cert, send_osc, start_session, wait_for)
 from websockets.asyncio.client import connect
 
 import hapmotion
 from hapmotion.live import BroadcastSink, ReplaySource
-from hapmotion.writers import load_track
+from hapmotion.track_files import load_track
 
 FPS = 60.0
 
@@ -49,14 +49,6 @@ def is_ordered_subsequence(got: list, candidates: list) -> bool:
             return False
         k += 1
     return True
-
-
-async def send_osc(port: int, frames: np.ndarray, start_seq: int = 0, interval: float = 1 / FPS) -> None:
-    client = SimpleUDPClient("127.0.0.1", port)
-    t0 = time.perf_counter()
-    for k, pos in enumerate(frames):
-        client.send_message("/hapmotion/skeleton", [start_seq + k, (start_seq + k) / FPS] + pos.ravel().tolist())
-        await asyncio.sleep(max(0.0, t0 + (k + 1) * interval - time.perf_counter()))
 
 
 class Viewer:

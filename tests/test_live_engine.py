@@ -8,12 +8,13 @@ import time
 
 import numpy as np
 import pytest
-from synthetic import pose, waving
+from support.synthetic import pose, waving
 
 import hapmotion
 from hapmotion.audio import mix
 from hapmotion.live import AudioChannel, ClockSource, LiveEngine, SkeletonFrame, Source
 from hapmotion.live.sinks import Sink
+from support.data import AUDIO
 
 N = 52
 FPS = 60.0
@@ -293,7 +294,7 @@ def test_session_audio_goes_through_the_offline_output_stage(monkeypatch):
     from hapmotion.layout import load_layout
     from hapmotion.live.session import build_audio
 
-    song = Path(__file__).resolve().parents[2] / "shared" / "data" / "audio" / "vibe_ace.ogg"
+    song = AUDIO / "vibe_ace.ogg"
     layout = load_layout()
     real_stage, calls = pipeline.output_stage, []
 

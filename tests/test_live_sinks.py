@@ -7,7 +7,7 @@ import logging
 import time
 
 import numpy as np
-from test_live_support import OscReceiver
+from support.live_fakes import OscReceiver
 
 from hapmotion.layout import load_layout
 from hapmotion.live.protocol import DeviceMap, OutFrame

@@ -14,9 +14,9 @@ from hapmotion.metrics.report import csv_text, evaluate, markdown_table
 from hapmotion.metrics.scorecard import AUDIO_COLUMNS, COLUMNS, score_audio, score_track
 from hapmotion.render import render
 from hapmotion.track import HapticTrack
+from support.data import SHARED_DATA
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-CLIPS = sorted(p for p in (DATA / "motion").iterdir() if p.suffix in (".bvh", ".pkl", ".json", ".csv", ".npz"))
+CLIPS = sorted(p for p in (SHARED_DATA / "motion").iterdir() if p.suffix in (".bvh", ".pkl", ".json", ".csv", ".npz"))
 LAYOUT = load_layout()
 
 
@@ -118,7 +118,7 @@ def test_report_values_are_sane(report):
 @pytest.mark.parametrize("clip", CLIPS, ids=lambda p: p.stem)
 def test_energy_split_keeps_energy_constant_on_real_recordings(clip):
     """Known answer on real data: with the energy split alone, energy is a function of the level only (0 dB)."""
-    from hapmotion.readers import load_motion
+    from hapmotion.motion_files import load_motion
     from hapmotion.render import PRESETS
 
     motion = load_motion(clip)
@@ -133,7 +133,7 @@ def test_energy_split_keeps_energy_constant_on_real_recordings(clip):
 def test_cli_writes_the_report(tmp_path):
     from hapmotion.cli.evaluate import command
 
-    clip = str(DATA / "motion" / "dataset-1_punch_normal_001.bvh")
+    clip = str(SHARED_DATA / "motion" / "dataset-1_punch_normal_001.bvh")
     res = CliRunner().invoke(command, [clip, "--methods", "mst", "--presets", "paper,energy", "--no-figures",
                                        "--no-bench", "-o", str(tmp_path / "r")])
     assert res.exit_code == 0, res.output
@@ -144,7 +144,7 @@ def test_cli_writes_the_report(tmp_path):
 def test_cli_param_override_labels_the_preset(tmp_path):
     from hapmotion.cli.evaluate import command
 
-    clip = str(DATA / "motion" / "dataset-1_punch_normal_001.bvh")
+    clip = str(SHARED_DATA / "motion" / "dataset-1_punch_normal_001.bvh")
     res = CliRunner().invoke(command, [clip, "--methods", "baseline", "--presets", "energy", "--param",
                                        "release_alpha=0.3", "--no-figures", "--no-bench", "-o", str(tmp_path)])
     assert res.exit_code == 0, res.output
@@ -159,7 +159,7 @@ def test_cli_param_override_labels_the_preset(tmp_path):
 def test_cli_bad_options_are_one_line_errors(tmp_path, capsys, args, message):
     from hapmotion.cli import main
 
-    clip = str(DATA / "motion" / "dataset-1_punch_normal_001.bvh")
+    clip = str(SHARED_DATA / "motion" / "dataset-1_punch_normal_001.bvh")
     code = main(["evaluate", clip, *args, "-o", str(tmp_path / "r")])
     err = capsys.readouterr().err.strip()
     assert code == 2
@@ -170,8 +170,8 @@ def test_cli_bad_options_are_one_line_errors(tmp_path, capsys, args, message):
 def test_cli_with_audio_adds_onset_columns(tmp_path):
     from hapmotion.cli.evaluate import command
 
-    clip = str(DATA / "motion" / "dataset-1_punch_normal_001.bvh")
-    song = str(DATA / "audio" / "vibe_ace.ogg")
+    clip = str(SHARED_DATA / "motion" / "dataset-1_punch_normal_001.bvh")
+    song = str(SHARED_DATA / "audio" / "vibe_ace.ogg")
     res = CliRunner().invoke(command, [clip, "--methods", "mst", "--presets", "paper", "--audio", song,
                                        "--no-figures", "--no-bench", "-o", str(tmp_path)])
     assert res.exit_code == 0, res.output

@@ -14,10 +14,10 @@ from hapmotion.layout import load_layout
 from hapmotion.track import HapticTrack
 from hapmotion.viewer.colors import plot_cmap, scale_top
 from hapmotion.viewer.plot import _groups, _row_ticks, plot_track, pool_max
+from support.data import SHARED_DATA
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-PUNCH = DATA / "motion" / "dataset-1_punch_normal_001.bvh"    # Bandai Namco (CC BY-NC), test use only
-SONG = DATA / "audio" / "vibe_ace.ogg"
+PUNCH = SHARED_DATA / "motion" / "dataset-1_punch_normal_001.bvh"    # Bandai Namco (CC BY-NC), test use only
+SONG = SHARED_DATA / "audio" / "vibe_ace.ogg"
 
 
 def run(args, capsys):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from synthetic import motion_from_frames, rotation, transform, waving
+from support.synthetic import motion_from_frames, rotation, transform, waving
 
 import hapmotion
 from hapmotion.body.model import BodyModel

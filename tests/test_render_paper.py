@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from synthetic import motion_from_frames, pose, still
+from support.synthetic import motion_from_frames, pose, still
 
 import hapmotion
 from hapmotion.body.model import BodyModel

@@ -10,9 +10,9 @@ import pytest
 import hapmotion
 from hapmotion.body.model import BodyModel
 from hapmotion.layout import load_layout
+from support.data import MOTION
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "motion"
-CLIPS = sorted(p.name for p in DATA.iterdir() if p.suffix in (".bvh", ".pkl"))
+CLIPS = sorted(p.name for p in MOTION.iterdir() if p.suffix in (".bvh", ".pkl"))
 IDS = load_layout().actuators
 
 
@@ -28,7 +28,7 @@ BACK = _cols(lambda d, i: d == "VestBack")
 
 @pytest.fixture(scope="module")
 def motions():
-    return {name: hapmotion.load_motion(DATA / name) for name in CLIPS}
+    return {name: hapmotion.load_motion(MOTION / name) for name in CLIPS}
 
 
 def test_all_seven_clips_are_there():

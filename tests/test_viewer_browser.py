@@ -22,12 +22,12 @@ from hapmotion.joints import BONES, JOINTS
 from hapmotion.viewer import write_page
 from hapmotion.viewer.inputs import apply_modes
 from hapmotion.viewer.page import read_page
+from support.data import SHARED_DATA
 
 pytestmark = pytest.mark.browser
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-SALSA = DATA / "motion" / "60_12_scaled.bvh"          # CMU subject 60 salsa, 120 fps, 14 s
-SONG = DATA / "audio" / "vibe_ace.ogg"                # "Vibe Ace", Kevin MacLeod, CC BY 3.0
+SALSA = SHARED_DATA / "motion" / "60_12_scaled.bvh"          # CMU subject 60 salsa, 120 fps, 14 s
+SONG = SHARED_DATA / "audio" / "vibe_ace.ogg"                # "Vibe Ace", Kevin MacLeod, CC BY 3.0
 ARTIFACTS = Path(__file__).resolve().parents[1] / "test-artifacts"
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",

@@ -14,12 +14,12 @@ import pytest
 import hapmotion
 from hapmotion.cli import main
 from hapmotion.layout import load_layout
-from hapmotion.readers import save_motion_table
+from hapmotion.motion_files import save_motion_table
 from hapmotion.viewer.inputs import is_track_file, load_input
 from hapmotion.viewer.page import read_page
+from support.data import SHARED_DATA
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-PUNCH = DATA / "motion" / "dataset-1_punch_normal_001.bvh"    # Bandai Namco (CC BY-NC), 30 fps, 224 frames
+PUNCH = SHARED_DATA / "motion" / "dataset-1_punch_normal_001.bvh"    # Bandai Namco (CC BY-NC), 30 fps, 224 frames
 
 
 @pytest.fixture(scope="module")

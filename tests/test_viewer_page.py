@@ -17,10 +17,10 @@ from hapmotion.viewer import write_page
 from hapmotion.viewer.inputs import is_track_file
 from hapmotion.viewer.page import AudioPart, read_page
 from hapmotion.viewer.signals import triangle_vertices
+from support.data import SHARED_DATA
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-SALSA = DATA / "motion" / "60_12_scaled.bvh"          # CMU subject 60 salsa, 120 fps, 14 s
-SONG = DATA / "audio" / "vibe_ace.ogg"
+SALSA = SHARED_DATA / "motion" / "60_12_scaled.bvh"          # CMU subject 60 salsa, 120 fps, 14 s
+SONG = SHARED_DATA / "audio" / "vibe_ace.ogg"
 
 
 @pytest.fixture(scope="module")

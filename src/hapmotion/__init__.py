@@ -19,11 +19,11 @@ from typing import Any
 __version__ = "0.1.0"
 
 _LAZY = {
-    "load_motion": ("hapmotion.readers", "load_motion"),
+    "load_motion": ("hapmotion.motion_files", "load_motion"),
     "Motion": ("hapmotion.motion", "Motion"),
     "load_layout": ("hapmotion.layout", "load_layout"),
     "HapticTrack": ("hapmotion.track", "HapticTrack"),
-    "load_track": ("hapmotion.writers", "load_track"),
+    "load_track": ("hapmotion.track_files", "load_track"),
 }
 
 # Imported eagerly: importing the subpackage ``hapmotion.render`` would otherwise bind the name to the module.

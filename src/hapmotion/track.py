@@ -99,6 +99,6 @@ class HapticTrack:
 
         The file appears whole or not at all (written to a temporary file, then renamed).
         """
-        from .writers import save_track
+        from .track_files import save_track
 
         save_track(self, path)

@@ -12,7 +12,6 @@ docs/audio.md explains every parameter, the spatial mapping, the length rule and
 """
 
 from .analysis import AudioAnalysis, analyze_file, analyze_signal
-from .evaluate import Agreement, beat_grid, match_events, tempo_from_onsets
 from .io import mp3_supported
 from .mix import DEFAULT_RATIO, check_ratio, limit_power, mix, parse_mix_ratio
 from .params import DEFAULT_PARAMS, MIX_DOMAINS, SPATIAL_MAPPINGS, AudioParams
@@ -20,8 +19,8 @@ from .pattern import DEFAULT_ACTUATORS, audio_track, kick_frames, region_weights
 from .pipeline import LENGTH_RULES, MODES, combine
 
 __all__ = [
-    "Agreement", "AudioAnalysis", "AudioParams", "DEFAULT_ACTUATORS", "DEFAULT_PARAMS", "DEFAULT_RATIO",
+    "AudioAnalysis", "AudioParams", "DEFAULT_ACTUATORS", "DEFAULT_PARAMS", "DEFAULT_RATIO",
     "LENGTH_RULES", "MIX_DOMAINS", "MODES", "SPATIAL_MAPPINGS", "analyze_file", "analyze_signal", "audio_track",
-    "beat_grid", "check_ratio", "combine", "kick_frames", "limit_power", "match_events", "mix", "mp3_supported",
-    "parse_mix_ratio", "region_weights", "tempo_from_onsets",
+    "check_ratio", "combine", "kick_frames", "limit_power", "mix", "mp3_supported",
+    "parse_mix_ratio", "region_weights",
 ]

@@ -29,7 +29,7 @@ def command(out_dir, mode, preset):
     """Render the bundled salsa clip (CMU mocap) with the bundled music ("Vibe Ace", Kevin MacLeod) into
     OUT_DIR/demo.tact (+ sleeve files), demo.csv, a plot demo.png and a viewer page demo.html."""
     from ..audio import combine
-    from ..readers import load_motion
+    from ..motion_files import load_motion
     from ..render import render
 
     out = Path(out_dir)

@@ -69,8 +69,8 @@ def load_from_cli(path: str, *, units: Optional[str] = None, scale: Optional[flo
     Options left at ``None`` are not passed; one that does not apply to the format raises
     :class:`~hapmotion.errors.UsageError`, which the CLI prints as one line.
     """
-    from ..readers import check_options, load_motion
-    from ..readers._common import check_fps_option
+    from ..motion_files import check_options, load_motion
+    from ..motion_files._common import check_fps_option
 
     options = {"units": units, "scale": scale, "skip_frames": skip_frames, "body_id": body_id, "fps": fps_in, "up": up}
     check_options(path, options, spelling=CLI_SPELLING)  # errors in the words the user typed
@@ -89,7 +89,7 @@ def command(input: str, motion_opts: dict[str, Any], as_json: bool) -> None:
     frames, frame rate, units and their conversion to metres, skipped frames, which joints were found (with the
     file's names), which were derived and how, gaps filled per joint, and notes.
     """
-    from ..readers.info import describe, format_table, summary
+    from ..motion_files.info import describe, format_table, summary
 
     motion = load_from_cli(input, **motion_opts)
     if as_json:

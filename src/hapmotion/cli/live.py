@@ -93,7 +93,7 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
     # User mistakes (HapMotionError) and Ctrl-C before the session is up are reported by hapmotion.cli.main as one
     # line (exit 2 / 130); once the session runs, SIGINT/SIGTERM are a clean stop (exit 0).
     if stats_json:
-        from ..live.outputs import check_writable
+        from ..filesafety import check_writable
 
         check_writable(stats_json, "--stats-json")
     ratio = (2.0, 3.0)
@@ -118,7 +118,7 @@ def _finish(engine, stats_json: Optional[str]) -> list[str]:
     """Print the summary, write ``--stats-json`` atomically; return the outputs that could not be written."""
     if engine is None:
         return []
-    from ..writers.atomic import atomic_path
+    from ..filesafety import atomic_path
 
     log = logging.getLogger("hapmotion.live")
     stats = engine.stats

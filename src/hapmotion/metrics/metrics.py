@@ -505,7 +505,7 @@ def onset_agreement(kicks: np.ndarray, onsets: np.ndarray, tolerance_s: float = 
 
     ``precision = matched / kicks``, ``recall = matched / onsets``, ``F = 2 P R / (P + R)``; +-50 ms is the usual
     onset-evaluation tolerance in music information retrieval (rendering-research.md 5). The matching is the audio
-    module's :func:`hapmotion.audio.evaluate.match_events`: the largest one-to-one pairing (maximum bipartite
+    module's :func:`hapmotion.metrics.events.match_events`: the largest one-to-one pairing (maximum bipartite
     matching, as mir_eval does), which never counts fewer matches than a greedy closest-first pairing and is the
     same metric the audio channel is tested with.
 
@@ -516,9 +516,9 @@ def onset_agreement(kicks: np.ndarray, onsets: np.ndarray, tolerance_s: float = 
 
     Returns
     -------
-    :class:`hapmotion.audio.evaluate.Agreement` (``precision``, ``recall``, ``f_measure``, ``matched``, counts).
+    :class:`hapmotion.metrics.events.Agreement` (``precision``, ``recall``, ``f_measure``, ``matched``, counts).
     """
-    from ..audio.evaluate import match_events
+    from .events import match_events
 
     return match_events(kicks, onsets, tolerance_s)
 

@@ -30,7 +30,7 @@ from ..errors import UsageError
 from ..layout import Layout, load_layout
 from ..motion import Motion
 from ..track import HapticTrack
-from ..writers.atomic import atomic_path
+from ..filesafety import atomic_path
 from . import metrics as M
 from .motor import DEFAULT_MOTOR, MotorModel, simulate
 from .scorecard import AUDIO_COLUMNS, COLUMNS, PERCENT_KEYS, Column, aligned_commands, score_audio, score_track
@@ -342,7 +342,7 @@ def evaluate(
     figures, bench:
         Draw the PNG figures; run the synthetic sweep bench.
     load:
-        Motion loader (default :func:`hapmotion.readers.load_motion`).
+        Motion loader (default :func:`hapmotion.motion_files.load_motion`).
     progress:
         Called with a short label after each rendered run (for progress bars).
     """
@@ -359,7 +359,7 @@ def evaluate(
     if not inputs:
         raise UsageError("evaluate needs at least one motion file")
     if load is None:
-        from ..readers import load_motion as load
+        from ..motion_files import load_motion as load
     audio_api = _audio_api() if audio is not None else None
     layout = load_layout()
     report = Report(runs=[], audio=audio is not None)

@@ -39,7 +39,7 @@ from ..errors import InputError, UsageError
 from ..joints import BONES, JOINTS
 from ..motion import Motion
 from ..track import HapticTrack
-from ..writers.atomic import atomic_path
+from ..filesafety import atomic_path
 from . import packing
 from .colors import SCALE_TOPS, bright_from, page_colors
 from .signals import ENERGY_UNITS, track_motion_energy, triangle_vertices

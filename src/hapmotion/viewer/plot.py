@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import UsageError
 from ..track import HapticTrack, parse_actuator_id
-from ..writers.atomic import atomic_path
+from ..filesafety import atomic_path
 from .colors import plot_cmap, scale_top
 from .signals import ENERGY_UNITS, total_intensity, track_motion_energy
 

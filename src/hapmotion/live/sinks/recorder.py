@@ -3,7 +3,7 @@
 Rows are kept on a fixed time grid at the session frame rate (sample and hold: grid row k holds the last frame sent
 at or before k / fps seconds after the first one), so the file plays back in real time whatever the arrival
 jitter, stalls and drops were (a replay at ``--speed`` s is recorded at its own pace: wall time x s). The last row is all zeros (the turn-off). The file is written by
-``hapmotion.writers.save_track`` (extension picks .csv .json .npz .tact; atomic), off the event loop. The path is
+``hapmotion.track_files.save_track`` (extension picks .csv .json .npz .tact; atomic), off the event loop. The path is
 checked before the show (not a folder, its folder writable); if saving still fails at stop, the error is logged as
 ``recording not saved: ...`` and kept in :attr:`RecorderSink.error` (the CLI then exits non-zero).
 """
@@ -19,8 +19,8 @@ import numpy as np
 
 from ...errors import UsageError
 from ...track import HapticTrack
-from ...writers import save_track
-from ..outputs import check_writable
+from ...track_files import save_track
+from ...filesafety import check_writable
 from ..protocol import OutFrame
 from .base import Sink, log
 

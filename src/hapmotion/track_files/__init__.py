@@ -10,7 +10,7 @@ from pathlib import Path
 
 from ..errors import InputError, UsageError
 from ..track import HapticTrack
-from .atomic import atomic_path
+from ..filesafety import atomic_path
 from .csv_track import read_csv, write_csv
 from .json_track import read_json, write_json
 from .npz_track import read_npz, write_npz

@@ -6,13 +6,13 @@ import json
 
 import numpy as np
 import pytest
-from synthetic import motion_from_frames, waving
+from support.synthetic import motion_from_frames, waving
 
 import hapmotion
 from hapmotion.errors import InputError, UsageError
 from hapmotion.layout import load_layout
 from hapmotion.track import HapticTrack
-from hapmotion.writers import load_track, save_track
+from hapmotion.track_files import load_track, save_track
 
 EXPECTED_HEADER = (
     "time_s,"
@@ -96,7 +96,7 @@ def test_failed_write_leaves_nothing_behind(track, tmp_path, monkeypatch):
     def boom(*args, **kwargs):
         raise RuntimeError("disk full")
 
-    monkeypatch.setattr("hapmotion.writers.json_track.json.dumps", boom)
+    monkeypatch.setattr("hapmotion.track_files.json_track.json.dumps", boom)
     with pytest.raises(RuntimeError):
         track.save(path)
     assert list(tmp_path.iterdir()) == []
@@ -112,7 +112,7 @@ def test_tact_is_all_or_nothing(track, tmp_path, monkeypatch):
             raise RuntimeError("disk full")
         return real(*args, **kwargs)
 
-    monkeypatch.setattr("hapmotion.writers.tact.json.dumps", fail_third)
+    monkeypatch.setattr("hapmotion.track_files.tact.json.dumps", fail_third)
     with pytest.raises(RuntimeError):
         track.save(tmp_path / "show.tact")
     assert list(tmp_path.iterdir()) == []

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..track import HapticTrack
-from .atomic import atomic_path
+from ..filesafety import atomic_path
 
 
 def write_csv(track: HapticTrack, path: Path) -> None:

@@ -81,7 +81,7 @@ def load_motion(path: "str | os.PathLike[str]", **options: Any) -> Motion:
 
 
 def save_motion_table(motion: Motion, path: "str | os.PathLike[str]") -> None:
-    """Write a motion as hapmotion CSV or NPZ (by extension, atomically); see :mod:`hapmotion.readers.table`."""
+    """Write a motion as hapmotion CSV or NPZ (by extension, atomically); see :mod:`hapmotion.motion_files.table`."""
     from .table import save_motion_table as _save
 
     _save(motion, path)

@@ -12,10 +12,11 @@ import pytest
 import hapmotion
 from hapmotion.errors import InputError
 from hapmotion.joints import JOINT_INDEX
-from hapmotion.readers.aist import COCO17
-from readers_support import DATA, assert_input_error
+from hapmotion.motion_files.aist import COCO17
+from support.data import MOTION
+from support.motion_files import assert_input_error
 
-AIST = DATA / "gBR_sBM_cAll_d04_mBR0_ch03.pkl"
+AIST = MOTION / "gBR_sBM_cAll_d04_mBR0_ch03.pkl"
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,7 @@ Conventions shared by every map:
   "shoulder"/"collar" in those files are clavicles (``CLAVICLE_*``).
 - Finger joints are not mapped: the CMU conversions carry no finger data (SOURCES.md) and the renderer does not
   use them.
-- A name ending in ``_End`` is the End Site of that joint (see :mod:`hapmotion.readers.bvh`).
+- A name ending in ``_End`` is the End Site of that joint (see :mod:`hapmotion.motion_files.bvh`).
 """
 
 from __future__ import annotations

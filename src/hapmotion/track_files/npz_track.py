@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..track import HapticTrack
-from .atomic import atomic_path
+from ..filesafety import atomic_path
 from .json_track import _check_values, _jsonable
 
 

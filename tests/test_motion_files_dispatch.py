@@ -9,11 +9,11 @@ import pytest
 import hapmotion
 from hapmotion.errors import InputError, UsageError
 from hapmotion.joints import JOINT_INDEX, RENDER_JOINTS
-from hapmotion.readers import SUPPORTED_EXTENSIONS
-from hapmotion.readers.info import describe, summary
+from hapmotion.motion_files import SUPPORTED_EXTENSIONS
+from hapmotion.motion_files.info import describe, summary
 
-from readers_support import DATA
-CLIPS = sorted(p for p in DATA.iterdir() if p.suffix in (".bvh", ".pkl"))
+from support.data import MOTION
+CLIPS = sorted(p for p in MOTION.iterdir() if p.suffix in (".bvh", ".pkl"))
 
 
 def test_there_are_seven_clips():
@@ -48,13 +48,13 @@ def test_unknown_extension_lists_supported(tmp_path):
 
 
 def test_option_checks():
-    bvh = DATA / "01_01.bvh"
+    bvh = MOTION / "01_01.bvh"
     with pytest.raises(UsageError, match="option body_id does not apply to BVH files"):
         hapmotion.load_motion(bvh, body_id=1)
     with pytest.raises(UsageError, match="unknown reader option 'speed'"):
         hapmotion.load_motion(bvh, speed=2)
     with pytest.raises(UsageError, match="option up does not apply to AIST"):
-        hapmotion.load_motion(DATA / "gBR_sBM_cAll_d04_mBR0_ch03.pkl", up="z")
+        hapmotion.load_motion(MOTION / "gBR_sBM_cAll_d04_mBR0_ch03.pkl", up="z")
     with pytest.raises(UsageError, match="fps must be a frame rate between 0.5 and 2000 fps, found 0"):
         hapmotion.load_motion(bvh, fps=0)
     with pytest.raises(UsageError, match="skip_frames must be a whole number"):
@@ -65,7 +65,7 @@ def test_option_checks():
 
 
 def test_describe_rows():
-    m = hapmotion.load_motion(DATA / "gBR_sBM_cAll_d04_mBR0_ch03.pkl", skip_frames=20)
+    m = hapmotion.load_motion(MOTION / "gBR_sBM_cAll_d04_mBR0_ch03.pkl", skip_frames=20)
     rows = dict(describe(m))
     assert rows["format"] == "AIST++ keypoints3d pickle" and rows["frames"] == "700" and rows["fps"] == "60"
     assert rows["duration"] == "11.67 s" and rows["frames skipped"] == "20" and rows["units"].startswith("cm")

@@ -1,14 +1,19 @@
-"""Atomic file output: write to a temporary file beside the target, rename it into place when complete."""
+"""File safety: outputs appear whole or not at all, and a file is known to be writable before a show starts.
+
+* :func:`atomic_path` - write to a temporary file beside the target, rename it into place when complete;
+* :func:`check_writable` - fail early, in one line, when a file that will be written at the end cannot be.
+"""
 
 from __future__ import annotations
 
 import contextlib
 import os
 import secrets
+import tempfile
 from pathlib import Path
 from typing import Iterator
 
-from ..errors import InputError
+from .errors import InputError, UsageError
 
 
 @contextlib.contextmanager
@@ -38,3 +43,20 @@ def atomic_path(path: "str | os.PathLike[str]") -> Iterator[Path]:
         with contextlib.suppress(OSError):
             tmp_path.unlink()
         raise
+
+
+def check_writable(path: "str | os.PathLike[str]", what: str) -> None:
+    """Raise :class:`UsageError` (naming ``what``, e.g. ``record:show.csv``) unless a file can be written at
+    ``path``: it is not a folder, and a temporary file can be created (then removed) in its folder."""
+    target = Path(path)
+    if target.is_dir():
+        raise UsageError(f"{what}: {target} is a folder, expected a file name")
+    folder = target.parent
+    if not folder.is_dir():
+        raise UsageError(f"{what}: folder {folder} does not exist")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".check", dir=folder)
+    except OSError as exc:
+        raise UsageError(f"{what}: cannot write in folder {folder} ({exc.strerror or exc})") from None
+    os.close(fd)
+    os.unlink(tmp)

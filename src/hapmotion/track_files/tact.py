@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..track import HapticTrack
-from .atomic import atomic_path
+from ..filesafety import atomic_path
 
 # Designer layout coordinates (protocol doc 4.1 and 4.3)
 _VEST_POINTS = [{"index": r * 4 + c, "x": round(c / 3, 3), "y": r / 4} for r in range(5) for c in range(4)]

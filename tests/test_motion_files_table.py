@@ -17,8 +17,9 @@ import hapmotion
 from hapmotion.errors import InputError, UsageError
 from hapmotion.joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS
 from hapmotion.motion import new_motion
-from hapmotion.readers import save_motion_table
-from readers_support import DATA, assert_input_error
+from hapmotion.motion_files import save_motion_table
+from support.data import MOTION
+from support.motion_files import HEADER, assert_input_error, row
 
 OPTIONAL = [j for j in JOINTS if j not in RENDER_JOINTS]
 
@@ -70,7 +71,7 @@ def test_round_trip(ext, motion):
 
 @pytest.mark.parametrize("name", ["gBR_sBM_cAll_d04_mBR0_ch03.pkl", "01_01.bvh"])
 def test_real_clips_convert(tmp_path, name):
-    src = hapmotion.load_motion(DATA / name)
+    src = hapmotion.load_motion(MOTION / name)
     for ext in (".csv", ".npz"):
         save_motion_table(src, tmp_path / f"m{ext}")
         back = hapmotion.load_motion(tmp_path / f"m{ext}")
@@ -82,14 +83,6 @@ def test_real_clips_convert(tmp_path, name):
 
 # -------------------------------------------------------------------------------------------- hand-written CSV
 
-HEADER = ("time_s,WRIST_LEFT_x,WRIST_LEFT_y,WRIST_LEFT_z,wrist_right_x,wrist_right_y,wrist_right_z,"
-          "SHOULDER_LEFT_x,SHOULDER_LEFT_y,SHOULDER_LEFT_z,SHOULDER_RIGHT_x,SHOULDER_RIGHT_y,SHOULDER_RIGHT_z,"
-          "HIP_LEFT_x,HIP_LEFT_y,HIP_LEFT_z,HIP_RIGHT_x,HIP_RIGHT_y,HIP_RIGHT_z,WRIST_LEFT_conf")
-
-
-def row(t, dx=0.0, conf=1.0):
-    v = [t, 0.3 + dx, 1.0, 0.2, -0.3, 1.0, 0.2, 0.2, 1.4, 0, -0.2, 1.4, 0, 0.1, 0.9, 0, -0.1, 0.9, 0, conf]
-    return ",".join(f"{x:g}" for x in v)
 
 
 def csv(tmp_path, lines, name="t.csv"):
@@ -273,7 +266,7 @@ def test_npz_object_array_and_garbage_refused(tmp_path):
 
 @pytest.mark.parametrize("ext", [".csv", ".npz"])
 def test_failed_write_leaves_the_old_file_and_nothing_else(tmp_path, monkeypatch, ext):
-    m = hapmotion.load_motion(DATA / "dataset-1_punch_normal_001.bvh")
+    m = hapmotion.load_motion(MOTION / "dataset-1_punch_normal_001.bvh")
     target = tmp_path / f"out{ext}"
     target.write_text("old content")
 
@@ -292,7 +285,7 @@ def test_failed_write_leaves_the_old_file_and_nothing_else(tmp_path, monkeypatch
 @pytest.mark.parametrize("ext", [".csv", ".npz"])
 def test_written_table_permissions_follow_the_umask(tmp_path, ext, umask, mode):
     """A temp file from mkstemp would be 0600 whatever the umask; the table must be readable as any new file."""
-    m = hapmotion.load_motion(DATA / "dataset-1_punch_normal_001.bvh")
+    m = hapmotion.load_motion(MOTION / "dataset-1_punch_normal_001.bvh")
     old = os.umask(umask)
     try:
         save_motion_table(m, tmp_path / f"m{ext}")
@@ -303,7 +296,7 @@ def test_written_table_permissions_follow_the_umask(tmp_path, ext, umask, mode):
 
 
 def test_missing_folder_is_one_line_input_error(tmp_path):
-    m = hapmotion.load_motion(DATA / "dataset-1_punch_normal_001.bvh")
+    m = hapmotion.load_motion(MOTION / "dataset-1_punch_normal_001.bvh")
     target = tmp_path / "no" / "such" / "m.csv"
     with pytest.raises(InputError) as err:
         save_motion_table(m, target)
@@ -312,7 +305,7 @@ def test_missing_folder_is_one_line_input_error(tmp_path):
 
 
 def test_save_rejects_other_extensions(tmp_path):
-    m = hapmotion.load_motion(DATA / "dataset-1_punch_normal_001.bvh")
+    m = hapmotion.load_motion(MOTION / "dataset-1_punch_normal_001.bvh")
     with pytest.raises(UsageError, match="expected a .csv or .npz"):
         save_motion_table(m, tmp_path / "m.txt")
     assert not list(tmp_path.iterdir())
@@ -321,7 +314,7 @@ def test_save_rejects_other_extensions(tmp_path):
 @pytest.mark.parametrize("cell", ["0.3", ""], ids=["fast path", "cell by cell"])
 def test_csv_line_numbers_skip_blank_lines_on_both_paths(cell):
     """Both ways of reading the rows report the same 1-based line numbers (blank lines skipped, not renumbered)."""
-    from hapmotion.readers.table import _csv_values
+    from hapmotion.motion_files.table import _csv_values
 
     header = ["time_s", "PELVIS_x"]
     values, numbers = _csv_values("t.csv", ["0,0.1", "", "0.1," + cell, "  ", "0.2,0.5"], 2, header)

@@ -6,6 +6,7 @@ from hapmotion's own encoders, plus the tests that show the fakes catch bad mess
 * :class:`FakePlayerV3` - the SDK2 ``/v3/feedback`` endpoint over TLS with a self-signed certificate made here;
 * :func:`self_signed_cert` - with the ``cryptography`` package when importable, else the ``openssl`` CLI;
 * :class:`OscReceiver` - a UDP socket collecting OSC packets (parsed with python-osc);
+* :func:`send_osc` - sends frames as ``/hapmotion/skeleton`` OSC messages, paced;
 * :func:`start_session` - runs ``hapmotion.live.live`` in the test's loop and waits until it listens.
 """
 
@@ -25,11 +26,12 @@ from typing import Any, Optional
 import numpy as np
 import pytest
 from pythonosc.osc_packet import OscPacket
+from pythonosc.udp_client import SimpleUDPClient
 from websockets.asyncio.server import serve
 from websockets.exceptions import ConnectionClosed
+from .data import MOTION
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-BVH = DATA / "motion" / "dataset-1_byebye_happy_001.bvh"
+BVH = MOTION / "dataset-1_byebye_happy_001.bvh"
 
 V2_SIZES = {"VestFront": 20, "VestBack": 20, "ForearmL": 6, "ForearmR": 6}
 V3_SIZES = {0: 40, 1: 6, 2: 6}
@@ -370,38 +372,9 @@ def real_frames(fps: float = 60.0) -> tuple[np.ndarray, float]:
     return m.positions, m.fps
 
 
-# ------------------------------------------------------------------------------------- the fakes can fail
-def _v2(obj: Any) -> FakePlayerV2:
-    p = FakePlayerV2()
-    p.check(json.dumps(obj), {"registered": []})
-    return p
-
-
-def test_fake_v2_accepts_a_documented_request_in_any_casing():
-    ok = {"submit": [{"type": "frame", "key": "k", "frame": {"Position": "VestFront", "DurationMillis": 100,
-                                                               "DotPoints": [{"Index": 5, "Intensity": 80}]}}]}
-    p = _v2(ok)
-    assert p.errors == [] and p.frames[0][1] == "VestFront" and p.frames[0][2][5] == 80
-
-
-@pytest.mark.parametrize("frame, problem", [
-    ({"position": "Vest", "durationMillis": 40, "dotPoints": []}, "position"),
-    ({"position": "VestFront", "durationMillis": 40, "dotPoints": [{"index": 20, "intensity": 5}]}, "index"),
-    ({"position": "ForearmL", "durationMillis": 40, "dotPoints": [{"index": 6, "intensity": 5}]}, "index"),
-    ({"position": "VestBack", "durationMillis": 40, "dotPoints": [{"index": 1, "intensity": 100.5}]}, "intensity"),
-    ({"position": "VestBack", "durationMillis": 40, "dotPoints": [{"index": 1, "intensity": 101}]}, "intensity"),
-    ({"position": "VestBack", "durationMillis": 5, "dotPoints": []}, "durationMillis"),
-])
-def test_fake_v2_rejects_what_the_protocol_forbids(frame, problem):
-    p = _v2({"Submit": [{"Type": "frame", "Key": "k", "Frame": frame}]})
-    assert len(p.errors) == 1 and problem in p.errors[0]
-
-
-def test_fake_v3_rejects_wrong_array_lengths(tmp_path):
-    p = FakePlayerV3(self_signed_cert(tmp_path))
-    p._check_dot({"requestId": 1, "position": 0, "motorValues": [0] * 20, "durationMillis": 40, "deviceIndex": -1})
-    p._check_dot({"requestId": 2, "position": 1, "motorValues": [0] * 5 + [101], "durationMillis": 40,
-                  "deviceIndex": -1})
-    p._check_dot({"requestId": 3, "position": 2, "motorValues": [0] * 6, "durationMillis": 40, "deviceIndex": -1})
-    assert p.errors == ["position 0: 20 values", "position 1: values out of 0..100 ints"]
-    assert len(p.dots) == 2
+async def send_osc(port: int, frames: np.ndarray, start_seq: int = 0, interval: float = 1 / 60.0) -> None:
+    client = SimpleUDPClient("127.0.0.1", port)
+    t0 = time.perf_counter()
+    for k, pos in enumerate(frames):
+        client.send_message("/hapmotion/skeleton", [start_seq + k, (start_seq + k) * interval] + pos.ravel().tolist())
+        await asyncio.sleep(max(0.0, t0 + (k + 1) * interval - time.perf_counter()))

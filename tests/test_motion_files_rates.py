@@ -10,13 +10,14 @@ import pytest
 
 import hapmotion
 from hapmotion.errors import InputError, UsageError
-from hapmotion.readers._common import MAX_FPS, MIN_FPS
-from readers_support import DATA, assert_input_error
-from test_readers_kinect import kinect_document
-from test_readers_table import HEADER, row
+from hapmotion.motion_files._common import MAX_FPS, MIN_FPS
+from support.data import MOTION
+from support.motion_files import assert_input_error
+from support.motion_files import kinect_document
+from support.motion_files import HEADER, row
 
-PUNCH = DATA / "dataset-1_punch_normal_001.bvh"
-AIST = DATA / "gBR_sBM_cAll_d04_mBR0_ch03.pkl"
+PUNCH = MOTION / "dataset-1_punch_normal_001.bvh"
+AIST = MOTION / "gBR_sBM_cAll_d04_mBR0_ch03.pkl"
 BAD_RATES = [1e-300, 1e300, math.nan, math.inf, -math.inf, 0.0, -30.0, 0.49, 2000.5, True]
 
 

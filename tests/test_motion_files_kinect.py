@@ -17,60 +17,10 @@ import pytest
 import hapmotion
 from hapmotion.errors import InputError, UsageError
 from hapmotion.joints import JOINT_INDEX, JOINTS, PARENTS
-from readers_support import DATA, assert_input_error
+from support.data import MOTION
+from support.motion_files import PERIOD_US, assert_input_error, kinect_document, to_camera_mm
 
-CLIP = DATA / "dataset-1_punch_normal_001.bvh"
-PERIOD_US = 33_333  # 30 fps device clock steps
-
-
-def to_camera_mm(world: np.ndarray) -> np.ndarray:
-    """Metres, +Y up -> millimetres in the depth camera frame (+Y down, +Z forward): 180 deg about X."""
-    return world * np.array([1.0, -1.0, -1.0]) * 1000.0
-
-
-def full_skeleton(motion) -> np.ndarray:
-    """(T, 32, 3) with absent joints placed at their nearest present ancestor (the JSON always has 32 joints)."""
-    pos = motion.positions.copy()
-    for j in range(len(JOINTS)):
-        k = j
-        while not motion.present[k]:
-            k = PARENTS[k]
-        pos[:, j] = motion.positions[:, k]
-    return pos
-
-
-def kinect_document(motion, *, second_body=True, missing=(), drop=(), shift_mm=1000.0, jitter=True) -> dict:
-    """An offline_processor document for ``motion``: body 7 is the clip, body 3 the clip moved +x by ``shift_mm``.
-
-    ``missing``: frames where body 7 is not tracked; ``drop``: captures that are absent altogether (their
-    timestamps are skipped, so the device clock jumps by two periods).
-    """
-    cam = to_camera_mm(full_skeleton(motion)).round(3)
-    rng = np.random.default_rng(1)
-    frames = []
-    for t in range(motion.n_frames):
-        if t in drop:
-            continue
-        bodies = []
-        if t not in missing:
-            bodies.append({"body_id": 7, "joint_orientations": [[1.0, 0.0, 0.0, 0.0]] * 32,
-                           "joint_positions": cam[t].tolist()})
-        if second_body:
-            other = cam[t] + np.array([shift_mm, 0.0, 0.0])
-            bodies.append({"body_id": 3, "joint_orientations": [[1.0, 0.0, 0.0, 0.0]] * 32,
-                           "joint_positions": other.tolist()})
-        stamp = 2_000_000 + t * PERIOD_US + (int(rng.integers(-3, 4)) if jitter else 0)
-        frames.append({"bodies": bodies, "frame_id": t, "num_bodies": len(bodies), "timestamp_usec": stamp})
-    return {
-        "bone_list": [[JOINTS[p], JOINTS[c]] for c, p in enumerate(PARENTS) if p >= 0],
-        "camera_calibration": {"depth_mode": "NFOV_UNBINNED"},  # a fork's extra key: must be ignored
-        "frames": frames,
-        "joint_names": list(JOINTS),
-        "k4abt_sdk_version": "1.1.2",
-        "source_file": "punch.mkv",
-    }
-
-
+CLIP = MOTION / "dataset-1_punch_normal_001.bvh"
 def write(tmp_path, doc, name="body.json") -> Path:
     path = tmp_path / name
     path.write_text(json.dumps(doc, indent=4, sort_keys=True))

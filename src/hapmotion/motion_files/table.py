@@ -26,7 +26,7 @@ import numpy as np
 from ..errors import InputError, UsageError
 from ..joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS, canonical
 from ..motion import Motion, new_motion
-from ..writers.atomic import atomic_path
+from ..filesafety import atomic_path
 from ._common import (
     FPS_RANGE,
     MAX_FPS,

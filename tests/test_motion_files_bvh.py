@@ -12,15 +12,16 @@ from hypothesis import strategies as st
 import hapmotion
 from hapmotion.errors import InputError, UsageError
 from hapmotion.joints import JOINT_INDEX, RENDER_JOINTS
-from hapmotion.readers import bvh as bvh_mod
-from hapmotion.readers import skeletons
-from hapmotion.readers._floats import OK, parse_table
-from readers_support import DATA, assert_input_error
+from hapmotion.motion_files import bvh as bvh_mod
+from hapmotion.motion_files import skeletons
+from hapmotion.motion_files._floats import OK, parse_table
+from support.data import MOTION
+from support.motion_files import assert_input_error
 
-CMU = DATA / "01_01.bvh"
-SALSA = DATA / "60_12_scaled.bvh"
-PUNCH = DATA / "dataset-1_punch_normal_001.bvh"
-BANDAI = sorted(DATA.glob("dataset-*.bvh"))
+CMU = MOTION / "01_01.bvh"
+SALSA = MOTION / "60_12_scaled.bvh"
+PUNCH = MOTION / "dataset-1_punch_normal_001.bvh"
+BANDAI = sorted(MOTION.glob("dataset-*.bvh"))
 
 
 def renamed_punch(tmp_path, renames: dict[str, str], name: str = "renamed.bvh", prefix: str = ""):
@@ -208,7 +209,7 @@ def test_punch_left_hand_moves_forward_most():
 
 
 def test_wave_clip_hands_above_shoulders():
-    m = hapmotion.load_motion(DATA / "dataset-2_wave-both-hands_normal_001.bvh")
+    m = hapmotion.load_motion(MOTION / "dataset-2_wave-both-hands_normal_001.bvh")
     above = (m.joint("HAND_LEFT")[:, 1] > m.joint("SHOULDER_LEFT")[:, 1]) & (
         m.joint("HAND_RIGHT")[:, 1] > m.joint("SHOULDER_RIGHT")[:, 1])
     assert above.mean() > 0.75
@@ -403,7 +404,7 @@ def test_exact_float_parsing_and_crlf(tmp_path):
 
 
 def test_fps_snapping():
-    from hapmotion.readers._common import snap_rate
+    from hapmotion.motion_files._common import snap_rate
 
     assert snap_rate(1 / 0.0083333, 5e-4) == 120.0
     assert snap_rate(1 / 0.0333333, 5e-4) == 30.0

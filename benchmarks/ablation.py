@@ -5,7 +5,7 @@ every recording and scored (:func:`hapmotion.metrics.scorecard.score_track`), an
 recordings and methods (median for the lags), so one line per knob setting answers "what did this change do". The numbers quoted in
 docs/metrics.md come from::
 
-    python -m hapmotion.metrics.ablation ../shared/data/motion/*.bvh ../shared/data/motion/*.pkl
+    python benchmarks/ablation.py ../shared/data/motion/*.bvh ../shared/data/motion/*.pkl
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..render.params import PRESETS, Params
-from .scorecard import COLUMNS, PERCENT_KEYS, score_track
-from .sweep import run_bench
+from hapmotion.render.params import PRESETS, Params
+from hapmotion.metrics.scorecard import COLUMNS, PERCENT_KEYS, score_track
+from hapmotion.metrics.sweep import run_bench
 
 SHOWN = ("reach_r", "reach_lag_ms", "locus_cm", "locus_skin_cm", "constancy_db", "sparc", "toggles_s", "hf_power",
          "dead_zone", "skin_rms")
@@ -52,7 +52,7 @@ def score_variants(motions: dict[str, Any], variants: dict[str, dict[str, Any]],
     """Mean of every metric over recordings and methods, per variant; the median for the lags, which are only as
     steady as the correlation behind them (a weakly coupled or periodic recording can put its peak anywhere in the
     +-1 s window). ``None`` values are left out."""
-    from ..render import render
+    from hapmotion.render import render
 
     out: dict[str, dict[str, float]] = {}
     for name, changes in variants.items():
@@ -90,14 +90,14 @@ def markdown(results: dict[str, dict[str, float]]) -> str:
 
 
 def _parse(spec: str) -> tuple[str, dict[str, Any]]:
-    from ..cli.render import parse_param_overrides
+    from hapmotion.cli.render import parse_param_overrides
 
     return spec, parse_param_overrides(tuple(spec.split(",")))
 
 
 def main(argv: Sequence[str] | None = None) -> None:
-    """``python -m hapmotion.metrics.ablation MOTION... [-- NAME=VALUE,...]...``: print the ablation table."""
-    from ..readers import load_motion
+    """``python benchmarks/ablation.py MOTION... [-- NAME=VALUE,...]...``: print the ablation table."""
+    from hapmotion.motion_files import load_motion
 
     args = list(sys.argv[1:] if argv is None else argv)
     extra = []

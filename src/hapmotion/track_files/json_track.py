@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..track import HapticTrack
-from .atomic import atomic_path
+from ..filesafety import atomic_path
 
 
 def _jsonable(obj):

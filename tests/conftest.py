@@ -1,0 +1,45 @@
+"""Shared fixtures: the real recordings and music in ``../shared/data`` (see tests/support/data.py)."""
+
+from __future__ import annotations
+
+import pytest
+
+import hapmotion
+from support.data import AUDIO, MOTION, SHARED_DATA, TACT
+
+
+@pytest.fixture(scope="session")
+def shared_data():
+    """The folder of real recordings, music and pattern files beside the repository."""
+    return SHARED_DATA
+
+
+@pytest.fixture(scope="session")
+def song():
+    """A real song: "Vibe Ace" by Kevin MacLeod (CC BY 3.0), Ogg Vorbis."""
+    return AUDIO / "vibe_ace.ogg"
+
+
+@pytest.fixture(scope="session")
+def bandai_clips():
+    """The Bandai Namco Research Motion Dataset clips (BVH, 30 fps, one performer each)."""
+    return sorted(MOTION.glob("dataset-*.bvh"))
+
+
+@pytest.fixture(scope="session")
+def load_clip():
+    """Load a clip of ``../shared/data/motion`` by file name, once per test session."""
+    cache: dict[str, hapmotion.Motion] = {}
+
+    def load(name: str) -> hapmotion.Motion:
+        if name not in cache:
+            cache[name] = hapmotion.load_motion(MOTION / name)
+        return cache[name]
+
+    return load
+
+
+@pytest.fixture(scope="session")
+def tact_dir():
+    """Real bHaptics pattern files (.tact) and their SOURCES.md."""
+    return TACT

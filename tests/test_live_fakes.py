@@ -1,0 +1,47 @@
+"""The fakes of tests/support/live_fakes.py catch what the documented protocols forbid."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import pytest
+
+from support.live_fakes import FakePlayerV2, FakePlayerV3, self_signed_cert
+
+
+# ------------------------------------------------------------------------------------- the fakes can fail
+def _v2(obj: Any) -> FakePlayerV2:
+    p = FakePlayerV2()
+    p.check(json.dumps(obj), {"registered": []})
+    return p
+
+
+def test_fake_v2_accepts_a_documented_request_in_any_casing():
+    ok = {"submit": [{"type": "frame", "key": "k", "frame": {"Position": "VestFront", "DurationMillis": 100,
+                                                               "DotPoints": [{"Index": 5, "Intensity": 80}]}}]}
+    p = _v2(ok)
+    assert p.errors == [] and p.frames[0][1] == "VestFront" and p.frames[0][2][5] == 80
+
+
+@pytest.mark.parametrize("frame, problem", [
+    ({"position": "Vest", "durationMillis": 40, "dotPoints": []}, "position"),
+    ({"position": "VestFront", "durationMillis": 40, "dotPoints": [{"index": 20, "intensity": 5}]}, "index"),
+    ({"position": "ForearmL", "durationMillis": 40, "dotPoints": [{"index": 6, "intensity": 5}]}, "index"),
+    ({"position": "VestBack", "durationMillis": 40, "dotPoints": [{"index": 1, "intensity": 100.5}]}, "intensity"),
+    ({"position": "VestBack", "durationMillis": 40, "dotPoints": [{"index": 1, "intensity": 101}]}, "intensity"),
+    ({"position": "VestBack", "durationMillis": 5, "dotPoints": []}, "durationMillis"),
+])
+def test_fake_v2_rejects_what_the_protocol_forbids(frame, problem):
+    p = _v2({"Submit": [{"Type": "frame", "Key": "k", "Frame": frame}]})
+    assert len(p.errors) == 1 and problem in p.errors[0]
+
+
+def test_fake_v3_rejects_wrong_array_lengths(tmp_path):
+    p = FakePlayerV3(self_signed_cert(tmp_path))
+    p._check_dot({"requestId": 1, "position": 0, "motorValues": [0] * 20, "durationMillis": 40, "deviceIndex": -1})
+    p._check_dot({"requestId": 2, "position": 1, "motorValues": [0] * 5 + [101], "durationMillis": 40,
+                  "deviceIndex": -1})
+    p._check_dot({"requestId": 3, "position": 2, "motorValues": [0] * 6, "durationMillis": 40, "deviceIndex": -1})
+    assert p.errors == ["position 0: 20 values", "position 1: values out of 0..100 ints"]
+    assert len(p.dots) == 2
