@@ -10,7 +10,8 @@ import click
 import pytest
 from click.testing import CliRunner
 
-from hapmotion.cli.info import MOTION_OPTION_NAMES, command, load_from_cli, motion_options
+from hapmotion.cli.info import command
+from hapmotion.cli.motion_options import MOTION_OPTION_NAMES, motion_options, read_motion
 from hapmotion.errors import HapMotionError, UsageError
 
 from support.data import MOTION
@@ -144,8 +145,8 @@ def test_decorator_gathers_options_for_other_commands():
     assert r.exit_code == 2 and "--skip-frames" in r.output
 
 
-def test_load_from_cli_maps_fps_in():
-    m = load_from_cli(str(MOTION / "dataset-1_punch_normal_001.bvh"), fps_in=10.0, skip_frames=None)
+def test_read_motion_maps_fps_in():
+    m = read_motion(str(MOTION / "dataset-1_punch_normal_001.bvh"), fps_in=10.0, skip_frames=None)
     assert m.fps == 10.0
     with pytest.raises(UsageError):
-        load_from_cli(str(MOTION / "dataset-1_punch_normal_001.bvh"), body_id=1)
+        read_motion(str(MOTION / "dataset-1_punch_normal_001.bvh"), body_id=1)

@@ -8,8 +8,8 @@ from pathlib import Path
 import click
 
 from ..errors import UsageError
-from .info import motion_options
-from .render import load_motion_cli, parse_param_overrides
+from .motion_options import motion_options, read_motion
+from .render import parse_param_overrides
 
 
 def _names(text: str, option: str) -> list[str]:
@@ -66,7 +66,7 @@ def command(inputs, output, methods, presets, params, audio_file, no_figures, no
     try:
         report = evaluate(
             list(inputs), method_list, preset_list, out_dir=Path(output), audio=audio_file, overrides=overrides,
-            figures=not no_figures, bench=not no_bench, load=lambda p: load_motion_cli(p, motion_opts),
+            figures=not no_figures, bench=not no_bench, load=lambda p: read_motion(p, **motion_opts),
             progress=progress,
         )
     finally:

@@ -7,9 +7,8 @@ from pathlib import Path
 import click
 
 from ..errors import UsageError
-from .info import motion_options
+from .motion_options import motion_options, read_motion
 from .render import progress_bar
-from .view import read_motion_with
 
 
 @click.command("plot")
@@ -64,7 +63,7 @@ def command(input_path, output, method, preset, mirror, audio_path, mode, mix_ra
     if output.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise UsageError(f"{output}: the figure format follows the extension; use .png, .pdf or .svg")
     loaded = load_input(input_path, methods=[method], presets=[preset], mirror=mirror,
-                        read_motion=read_motion_with(motion_opts), progress=progress_bar)
+                        read_motion=lambda path: read_motion(path, **motion_opts), progress=progress_bar)
     mode = mode or ("multimodal" if audio_path else "motion")
     track = apply_modes(loaded.tracks, [mode], audio_path, audio_offset, mix_ratio)[0]
     audio = load_audio_part(audio_path, fps=track.fps, offset_s=audio_offset) if audio_path is not None else None

@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from ..errors import UsageError
-from .info import load_from_cli, motion_options
+from .motion_options import motion_options, read_motion
 
 MODES = ("multimodal", "motion", "audio")
 
@@ -41,11 +41,6 @@ def parse_param_overrides(items: tuple[str, ...]) -> dict:
         except ValueError:
             raise UsageError(f"--param {item!r}: expected a {kind} value, found {value!r}") from None
     return out
-
-
-def load_motion_cli(path: str, motion_opts: dict | None = None):
-    """Read a motion file with the reader options the command received (``motion_opts``)."""
-    return load_from_cli(path, **(motion_opts or {}))
 
 
 def progress_bar(total: int, label: str):
@@ -116,7 +111,7 @@ def command(motion_file, output, method, preset, params, no_mirror, fps, layout_
 
     motion_track = None
     if mode != "audio":
-        motion = load_motion_cli(motion_file, motion_opts)
+        motion = read_motion(motion_file, **(motion_opts or {}))
         if fps is not None:
             motion = motion.resample(fps)
         update, close = progress_bar(motion.n_frames, "rendering")

@@ -7,13 +7,8 @@ from pathlib import Path
 import click
 
 from ..errors import UsageError
-from .info import load_from_cli, motion_options
+from .motion_options import motion_options, read_motion
 from .render import progress_bar
-
-def read_motion_with(motion_opts: dict):
-    """A ``path -> Motion`` reader that applies the CLI's reader options (``--units``, ``--skip-frames``, ...)."""
-    return lambda path: load_from_cli(str(path), **motion_opts)
-
 
 @click.command("view")
 @click.argument("input_path", metavar="INPUT", required=False, type=click.Path(dir_okay=False, path_type=Path))
@@ -80,7 +75,7 @@ def command(input_path, output, audio_path, audio_offset, modes, mix_ratio, meth
     tracks, motion, notes, source_name = [], None, [], ""
     if input_path is not None:
         loaded = load_input(input_path, methods=method_list, presets=preset_list, mirror=mirror,
-                            read_motion=read_motion_with(motion_opts), progress=progress_bar)
+                            read_motion=lambda path: read_motion(path, **motion_opts), progress=progress_bar)
         motion, notes, source_name = loaded.motion, loaded.notes, input_path.name
         tracks = apply_modes(loaded.tracks, mode_list, audio_path, audio_offset, mix_ratio)
     audio = None
