@@ -20,7 +20,8 @@ import numpy as np
 
 from ..errors import InputError, UsageError
 from .engine import AudioChannel, LiveEngine
-from .protocol import DeviceMap, tact_project
+from .devices import DeviceMap
+from .wire.player_v2 import tact_project
 from .sinks import BroadcastSink, OscOutSink, PlayerV2Sink, PlayerV3Sink, RecorderSink, Sink
 from .sources import ClockSource, OscSource, ReplaySource, Source, WsSource
 from .stats import LiveStats

@@ -1,7 +1,7 @@
 """Live sources: where skeleton frames come from (OSC over UDP, WebSocket JSON, paced replay of a recording, and
 a plain clock for the audio-only mode).
 
-A source decodes messages with :mod:`hapmotion.live.protocol` and hands each frame to ``engine.submit`` the
+A source decodes messages with its :mod:`hapmotion.live.wire` module and hands each frame to ``engine.submit`` the
 moment it is read; it never queues. Before decoding, every raw message asks ``engine.admit`` (a flood limit), so a
 sender far above the frame rate costs little.
 """
@@ -19,7 +19,10 @@ from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
 
 from ..errors import UsageError
-from .protocol import OSC_PREFIX, OscSkeletonDecoder, SkeletonFrame, decode_ws_skeleton
+from .frames import SkeletonFrame
+from .wire.osc_address import OSC_PREFIX
+from .wire.osc_in import OscSkeletonDecoder
+from .wire.ws_in import decode_ws_skeleton
 
 if TYPE_CHECKING:
     from ..motion import Motion
@@ -102,7 +105,6 @@ class WsSource(Source):
         self.host, self.port, self.max_size = host, port, max_size
         self.name = f"ws://{host}:{port}"
         self._server: Optional[Server] = None
-        self.connections = 0
 
     async def start(self, engine: "LiveEngine") -> None:
         await super().start(engine)
@@ -115,7 +117,6 @@ class WsSource(Source):
         self.name = f"ws://{self.host}:{self.port}"
 
     async def _handler(self, conn: ServerConnection) -> None:
-        self.connections += 1
         engine = self.engine
         try:
             async for message in conn:
