@@ -234,7 +234,8 @@ def test_the_startup_line_says_what_is_exposed():
                                     "--allow-origin", "https://show.example,https://backup.example"))
     assert re.search(r"listening on ws://127\.0\.0\.1:\d+ \(reachable from this machine only; senders: any address; "
                      r"token: required \(Authorization: Bearer header or \?token=\); browser pages: "
-                     r"https://show\.example, https://backup\.example; at most 8 senders, 240 messages/s each\)", ws), ws
+                     r"https://show\.example, https://backup\.example; at most 8 senders, 240 messages/s each\)",
+                     ws), ws
     assert "s3cret" not in ws  # the secret itself is never printed
     osc = asyncio.run(_startup_lines("--source", "osc://0.0.0.0:0", "--allow-sender", "127.0.0.1,10.1.0.0/16"))
     assert re.search(r"listening on osc://0\.0\.0\.0:\d+ \(reachable from every network interface; senders: "

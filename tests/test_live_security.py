@@ -105,7 +105,7 @@ def test_a_token_is_required_in_a_header_or_the_query(frames):
     assert "token: required" in exposure and "browser pages: refused" in exposure
 
 
-# ----------------------------------------------------------------------------------------------- OSC: loopback, allow-list
+# --------------------------------------------------------------------------------------------- OSC: loopback, senders
 def test_osc_listens_on_loopback_unless_told_otherwise():
     async def scenario():
         task, engine = await start_session("osc://:0", [Tap()])

@@ -26,9 +26,10 @@ class Faults:
 
     Kinds used by live mode: ``malformed`` (not parseable), ``unknown_address`` (OSC address outside the scheme),
     ``wrong_joint_count``, ``unknown_joint``, ``nan`` (non-finite coordinate), ``absurd`` (beyond
-    :data:`MAX_ABS_M`), ``empty`` (no usable joint left, or none the renderer
-    uses), ``late`` (older than the last accepted frame),
-    ``flood`` (over the message budget), ``binary`` (WebSocket binary frame), ``render_nan``.
+    :data:`MAX_ABS_M`), ``empty`` (no usable joint left, or none the renderer uses), ``late`` (older than the last
+    accepted frame), ``binary`` (WebSocket binary frame), ``render_nan``; and, from who may send
+    (:mod:`hapmotion.live.access`): ``flood`` (over a sender's budget), ``flood_closed``, ``too_many_senders``,
+    ``sender_refused``, ``token_refused``, ``origin_refused``, ``handshake``, ``connection``, ``socket``.
     """
 
     def __init__(self, source: str, logger: logging.Logger = log):
