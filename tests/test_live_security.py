@@ -166,26 +166,32 @@ def test_osc_flood_from_one_sender_does_not_starve_another(frames):
             while time.perf_counter() < stop:
                 s.sendto(dgrams[k % 100], ("127.0.0.1", port))
                 k += 1
-                if k % 50 == 0:
-                    time.sleep(0.004)  # about 10 000 datagrams/s: far over the budget, without eating a core
+                if k % 16 == 0:
+                    time.sleep(0.004)  # about 4000 datagrams/s: over the 2400/s budget, without eating a core
             s.close()
 
         flooding = asyncio.create_task(asyncio.to_thread(flood))
         performer = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         t0 = time.perf_counter()
+        sent = []
         for k in range(180):  # 3 s at 60 Hz, outlasting the flood
             performer.sendto(skeleton_dgram(frames[k], k), ("127.0.0.1", port))
+            sent.append(time.perf_counter())
             await asyncio.sleep(max(0.0, t0 + (k + 1) / FPS - time.perf_counter()))
         await asyncio.sleep(0.01)
         engine.request_stop("test over")
         await flooding
         performer.close()
-        return await task
+        return await task, float(np.diff(sent).max())
 
-    stats = asyncio.run(asyncio.wait_for(scenario(), 40))
+    stats, send_gap = asyncio.run(asyncio.wait_for(scenario(), 40))
     assert stats.flood > 0                                     # the flooding sender was held to its budget
     assert stats.faults.counts["wrong_joint_count"] > 0        # (what it was allowed to send was decoded)
-    assert stats.frames_in == 180 and stats.stalls == 0        # every frame of the performer, no silence
+    # None of the performer's frames was refused (with one bucket for all senders, about a third were). On a busy
+    # machine the kernel may still drop a few datagrams while this process waits for a core: UDP gives no promise.
+    assert stats.frames_in >= 180 - 5
+    if send_gap < 0.15:  # (as below: no stall unless the machine held the performer itself up)
+        assert stats.stalls == 0
 
 
 # ----------------------------------------------------------------------------------------------- WebSocket flood
@@ -203,6 +209,8 @@ HOSTILE = textwrap.dedent("""
         try:
             async with connect(f"ws://127.0.0.1:{port}", open_timeout=5, close_timeout=0.2) as ws:
                 opened += 1
+                for _ in range(1000):  # a burst far over the budget at once, then a steady flood
+                    await ws.send('{"joints": {"HAND_LEFT": "flood"}}')
                 while time.perf_counter() < end:
                     for _ in range(20):
                         await ws.send('{"joints": {"HAND_LEFT": "flood"}}')
@@ -259,7 +267,7 @@ def test_a_thousand_hostile_connections_do_not_starve_the_performer(frames):
 
 
 # ----------------------------------------------------------------------------------------------- crafted messages
-def test_crafted_websocket_messages_are_counted_and_the_stream_goes_on(frames, caplog):
+def test_crafted_websocket_messages_are_counted_and_the_stream_goes_on(frames):
     big = "1" + "0" * 400
     crafted = ["[" * 30_000 + "]" * 30_000,  # under the 64 KiB message limit
                '{"seq": ' + big + ', "joints": {"HAND_LEFT": [0, 1, 0]}}',
@@ -280,9 +288,17 @@ def test_crafted_websocket_messages_are_counted_and_the_stream_goes_on(frames, c
         engine.request_stop("test over")
         return await task
 
-    with caplog.at_level(logging.INFO):
+    records: list[logging.LogRecord] = []
+    keep = logging.Handler(logging.DEBUG)
+    keep.emit = records.append  # type: ignore[method-assign]
+    for name in ("hapmotion.live", "websockets", "asyncio"):  # ours (and the server library's), and the loop's
+        logging.getLogger(name).addHandler(keep)
+    try:
         stats = asyncio.run(asyncio.wait_for(scenario(), 30))
+    finally:
+        for name in ("hapmotion.live", "websockets", "asyncio"):
+            logging.getLogger(name).removeHandler(keep)
     assert stats.faults.counts == {"malformed": 6 * len(crafted)}   # every one counted, nothing else went wrong
     assert stats.frames_in == 30                                     # the connection stayed open for the rest
-    assert not [r for r in caplog.records if r.exc_info]             # no traceback anywhere
-    assert len([r for r in caplog.records if "malformed" in r.getMessage()]) == 1  # logged once
+    assert not [r for r in records if r.exc_info or r.levelno >= logging.ERROR]  # no traceback anywhere
+    assert len([r for r in records if "malformed" in r.getMessage()]) == 1  # logged once
