@@ -116,7 +116,11 @@ def _read_one(path: Path) -> tuple[str, dict[str, np.ndarray]]:
     n_ticks = int(end_ms // TICK_MS) + 1
     check_frames(path, "field project.mediaFileDuration / effects", n_ticks, sum(p.shape[0] for p in layout.values()),
                  TICK_FPS)
-    return type_name, render(effects, layout, n_ticks)
+    cols = render(effects, layout, n_ticks)
+    if n_ticks > 1 and (n_ticks - 1) * TICK_MS == end_ms and not any(r[-1].any() for r in cols.values()):
+        # the end falls on a tick and nothing plays there (dot frames end exclusive): the track stops before it
+        cols = {pos: r[:-1] for pos, r in cols.items()}
+    return type_name, cols
 
 
 def read_tact(path: Path) -> HapticTrack:
