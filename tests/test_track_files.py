@@ -63,9 +63,9 @@ def test_json_and_npz_round_trip(track, tmp_path, ext):
 def test_tact_files_follow_the_designer_format(track, tmp_path):
     path = tmp_path / "show.tact"
     track.save(path)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["show.Tactosy2.tact", "show.tact"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["show.ForearmL.tact", "show.ForearmR.tact", "show.tact"]
     vest = json.loads(path.read_text())
-    arms = json.loads((tmp_path / "show.Tactosy2.tact").read_text())
+    arms = {side: json.loads((tmp_path / f"show.Forearm{side}.tact").read_text()) for side in "LR"}
     ticked = track.resample(50.0)
     proj = vest["project"]
     assert proj["layout"]["type"] == "Tactot"
@@ -74,7 +74,7 @@ def test_tact_files_follow_the_designer_format(track, tmp_path):
     assert vest["intervalMillis"] == 20 and vest["size"] == 20
     effect = proj["tracks"][0]["effects"][0]
     assert effect["offsetTime"] == ticked.n_frames * 20
-    for doc in (vest, arms):
+    for doc in (vest, arms["L"], arms["R"]):
         for pos, mode in doc["project"]["tracks"][0]["effects"][0]["modes"].items():
             assert mode["mode"] == "DOT_MODE"
             cols = ticked.device_columns(pos)
@@ -86,10 +86,15 @@ def test_tact_files_follow_the_designer_format(track, tmp_path):
                     assert 0.0 < pt["intensity"] <= 1.0
                     tick = fb["startTime"] // 20
                     assert pt["intensity"] * 100 == pytest.approx(ticked.intensities[tick, cols[pt["index"]]], abs=0.5)
-    # the sleeve file lists both sleeves, as every Designer sleeve file does
-    assert arms["project"]["layout"]["type"] == "Tactosy2"
-    assert set(arms["project"]["layout"]["layouts"]) == {"ForearmL", "ForearmR"}
-    assert set(arms["project"]["tracks"][0]["effects"][0]["modes"]) == {"ForearmL", "ForearmR"}
+    # each sleeve file lists both sleeves, as every Designer sleeve file does, and plays its own side only
+    for side, doc in arms.items():
+        other = "R" if side == "L" else "L"
+        assert doc["project"]["layout"]["type"] == "Tactosy2"
+        assert set(doc["project"]["layout"]["layouts"]) == {"ForearmL", "ForearmR"}
+        modes = doc["project"]["tracks"][0]["effects"][0]["modes"]
+        assert set(modes) == {"ForearmL", "ForearmR"} and modes[f"Forearm{other}"]["dotMode"]["feedback"] == []
+        plays = ticked.intensities[:, ticked.device_columns(f"Forearm{side}")].max() >= 0.5
+        assert bool(modes[f"Forearm{side}"]["dotMode"]["feedback"]) == plays
     back = load_track(path)
     assert back.fps == 50.0 and back.actuators == track.actuators
     np.testing.assert_allclose(back.intensities, np.rint(ticked.intensities), atol=1e-9)
@@ -124,7 +129,7 @@ def test_tact_is_all_or_nothing(track, tmp_path, monkeypatch):
 
     def fail_third(*args, **kwargs):
         calls["n"] += 1
-        if calls["n"] == 2:
+        if calls["n"] == 3:
             raise RuntimeError("disk full")
         return real(*args, **kwargs)
 

@@ -4,18 +4,22 @@ Reading (:func:`read_tact`) renders the project the way the Player plays it (:mo
 Player's 20 ms tick (50 fps) with one column per motor of every position the file's device type covers
 (``VestFront_0..19``, ``ForearmL_0..5``, ``Head_0..5`` ...), whole numbers 0..100.
 
-Writing (:func:`write_tact`): a ``.tact`` project holds one device type, so ``save_track(track, "show.tact")`` writes
+Writing (:func:`write_tact`): a ``.tact`` project holds one device type, and Designer keeps one file per sleeve, so
+``save_track(track, "show.tact")`` writes
 
 - ``show.tact``: the vest (``Tactot``: VestFront + VestBack), and
-- ``show.Tactosy2.tact``: the sleeves (``Tactosy2``), listing both ForearmL and ForearmR as Designer does,
+- ``show.ForearmL.tact`` / ``show.ForearmR.tact``: one per sleeve (``Tactosy2``), each listing both ForearmL and
+  ForearmR as every Designer sleeve file does, with its own side's frames (the other side's list is empty),
 
-(one file per device type the track uses; a track without a vest puts its first device type in ``show.tact``).
-Each holds one effect in DOT_MODE whose frames sit on the Player's 20 ms tick: the track is first resampled to
-50 fps with :meth:`HapticTrack.resample` (each tick takes the maximum of the rows it overlaps, so no short peak is
-lost), then runs of identical ticks become one frame (intensities quantised to 1 %, the Player's resolution; silent
-runs left out). All files are written to temporary files first and renamed together at the end.
+(in general: the vest in ``show.tact``, every other device in ``show.<position>.tact``; a track without a vest puts
+its first device in ``show.tact``). Each holds one effect in DOT_MODE whose frames sit on the Player's 20 ms tick:
+the track is first resampled to 50 fps with :meth:`HapticTrack.resample` (each tick takes the maximum of the rows it
+overlaps, so no short peak is lost), then runs of identical ticks become one frame (intensities quantised to 1 %,
+the Player's resolution; silent runs left out). All files are written to temporary files first and renamed
+together at the end.
 
-:func:`read_tact` also reads the sibling files ``NAME.<device type>.tact`` written beside ``NAME.tact``.
+:func:`read_tact` also reads the sibling files ``NAME.<position>.tact`` beside ``NAME.tact``; what several files
+play on one position adds up (clipped at 100), as it does on the Player.
 """
 
 from __future__ import annotations
@@ -38,22 +42,26 @@ TICK_FPS = 1000.0 / TICK_MS
 
 
 # ------------------------------------------------------------------------------------------------------ writing
-def _groups(track: HapticTrack) -> dict[str, list[str]]:
-    """Device type -> the track's devices of that type, in position order."""
-    out: dict[str, list[str]] = {}
+def _files(track: HapticTrack, path: Path) -> dict[Path, tuple[str, list[str]]]:
+    """Target file -> (device type, the track's devices it carries)."""
+    plan: dict[Path, tuple[str, list[str]]] = {}
     for dev in track.devices():
         t = type_for_position(dev, len(track.device_columns(dev)))
         if t is None:
             raise UsageError(f"cannot write {dev!r} to a .tact file: expected a bHaptics position with its motor "
                              "count (VestFront/VestBack 20, ForearmL/ForearmR 6, ...)")
-        out.setdefault(t.name, []).append(dev)
-    return out
+        vest = t.name == "Tactot"
+        target = path if vest else path.with_name(f"{path.stem}.{dev}{path.suffix}")
+        plan.setdefault(target, (t.name, []))[1].append(dev)
+    if path not in plan and plan:  # no vest: the first device's file takes the plain name
+        first = next(iter(plan))
+        plan = {(path if k == first else k): v for k, v in plan.items()}
+    return plan
 
 
-def tact_paths(path: Path, types: list[str]) -> dict[str, Path]:
-    """The file each device type goes to: the vest (or else the first type) in ``path``, others beside it."""
-    first = "Tactot" if "Tactot" in types else (types[0] if types else None)
-    return {t: path if t == first else path.with_name(f"{path.stem}.{t}{path.suffix}") for t in types}
+def tact_paths(path: Path, devices: list[str]) -> list[Path]:
+    """Sibling files :func:`read_tact` reads beside ``path``: ``NAME.<position>.tact`` for every bHaptics position."""
+    return [path.with_name(f"{path.stem}.{d}{path.suffix}") for d in devices]
 
 
 def _feedback(rows: np.ndarray) -> list[dict]:
@@ -96,13 +104,12 @@ def _project(name: str, type_name: str, rows: dict[str, np.ndarray], duration_ms
 
 
 def write_tact(track: HapticTrack, path: Path) -> None:
-    groups = _groups(track)
+    plan = _files(track, path)
     ticked = track.resample(TICK_FPS)
     duration_ms = ticked.n_frames * TICK_MS
-    docs = {}
-    for type_name, target in tact_paths(path, list(groups)).items():
-        rows = {d: ticked.intensities[:, ticked.device_columns(d)] for d in groups[type_name]}
-        docs[target] = _project(path.stem, type_name, rows, duration_ms)
+    docs = {target: _project(path.stem, type_name, {d: ticked.intensities[:, ticked.device_columns(d)] for d in devs},
+                             duration_ms)
+            for target, (type_name, devs) in plan.items()}
     with contextlib.ExitStack() as stack:
         # every file is complete before any is renamed into place
         tmps = {target: stack.enter_context(atomic_path(target)) for target in docs}
@@ -124,21 +131,27 @@ def _read_one(path: Path) -> tuple[str, dict[str, np.ndarray]]:
 
 
 def read_tact(path: Path) -> HapticTrack:
-    """Render a ``.tact`` pattern (and its ``NAME.<device type>.tact`` siblings) on the Player's 20 ms tick."""
-    files = [path] + [f for t in bhaptics_devices()
-                      if (f := path.with_name(f"{path.stem}.{t}{path.suffix}")) != path and f.is_file()]
+    """Render a ``.tact`` pattern (and its ``NAME.<position>.tact`` siblings) on the Player's 20 ms tick."""
+    siblings = [f for f in tact_paths(path, list(position_order())) if f != path and f.is_file()]
+    files = [path] + siblings
     types, columns = [], {}
     for f in files:
         type_name, cols = _read_one(f)
         types.append(type_name)
         for pos, rows in cols.items():
-            if pos in columns:
-                raise InputError(f, f"field project.layout.layouts.{pos}", "expected each position in one file only")
-            columns[pos] = rows
+            have = columns.get(pos)
+            if have is not None and have.shape[1] != rows.shape[1]:
+                raise InputError(f, f"field project.layout.layouts.{pos}", f"expected {have.shape[1]} motors as in "
+                                 f"{files[0].name}, found {rows.shape[1]}")
+            if have is None:
+                columns[pos] = rows
+            else:  # what several files play on one position adds up, as on the Player
+                n = max(len(have), len(rows))
+                columns[pos] = np.minimum(100.0, np.pad(have, ((0, n - len(have)), (0, 0)))
+                                          + np.pad(rows, ((0, n - len(rows)), (0, 0))))
     order = [p for p in position_order() if p in columns] + sorted(p for p in columns if p not in position_order())
     n = max(columns[p].shape[0] for p in order)
     data = np.column_stack([np.pad(columns[p], ((0, n - columns[p].shape[0]), (0, 0))) for p in order])
     ids = tuple(f"{p}_{i}" for p in order for i in range(columns[p].shape[1]))
     return HapticTrack(intensities=data, fps=TICK_FPS, actuators=ids, layout="+".join(dict.fromkeys(types)),
                        meta={"source": str(path), "files": [str(f) for f in files]})
-
