@@ -13,7 +13,7 @@ from hapmotion.errors import InputError
 from hapmotion.layout import load_layout
 from hapmotion.track import HapticTrack
 from hapmotion.track_files import load_track
-from hapmotion.track_files.limits import MAX_FRAMES, MAX_INT_DIGITS, MAX_NESTING
+from hapmotion.track_files.limits import MAX_FRAMES, MAX_INT_DIGITS, MAX_NESTING, nesting_depth
 
 TRACK_HEAD = '{"format":"hapmotion-track","fps":60,'
 
@@ -109,3 +109,13 @@ def test_tact_declaring_a_day_long_pattern_is_refused(tmp_path):
                     '"DOT_MODE","dotMode":{"feedback":[{"startTime":0,"endTime":86000000,"pointList":'
                     '[{"index":1,"intensity":1}]}]}}}}]}]}}' + " " * 10_000)
     _refused(path, f"over the limit of {MAX_FRAMES:,}")
+
+
+@pytest.mark.parametrize("text, depth", [
+    ("", 0), ("[]", 1), ('{"a": [1, {"b": 2}]}', 3), ('"[[[["', 0),
+    (r'["\"[[", []]', 2),  # an escaped quote does not end the string
+    (r'["\\", [[]]]', 3),  # an escaped backslash does not escape the quote after it
+])
+@pytest.mark.parametrize("chunk", [1, 2, 3, 1 << 22])
+def test_nesting_depth_by_hand(text, depth, chunk):
+    assert nesting_depth(text, chunk=chunk) == depth

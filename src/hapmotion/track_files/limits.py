@@ -8,7 +8,6 @@ duration, array shapes, uncompressed sizes, nesting) with these limits and refus
 from __future__ import annotations
 
 import json
-import re
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +15,9 @@ import numpy as np
 from ..errors import InputError
 
 MAX_FILE_BYTES = 256 * 1024 * 1024
-"""Largest track or pattern file read (bytes)."""
+"""Largest CSV or NPZ track read (bytes)."""
+MAX_JSON_BYTES = 64 * 1024 * 1024
+"""Largest JSON track or ``.tact`` pattern read (bytes): parsed JSON costs several times its size in memory."""
 MAX_FRAMES = 1_000_000
 """Most rows a track may have (5.5 h at the Player's 20 ms tick; 52 columns of float64 = 416 MB)."""
 MAX_CELLS = 60_000_000
@@ -29,8 +30,6 @@ MAX_NESTING = 64
 """Deepest JSON nesting accepted (a .tact nests 9 levels)."""
 MAX_INT_DIGITS = 18
 """Longest integer literal accepted in JSON (Python refuses beyond 4,300 digits with a ValueError)."""
-
-_STRINGS = re.compile(r'"(?:[^"\\]|\\.)*"', re.DOTALL)
 
 
 def check_frames(source, place: str, n_frames: float, n_columns: int, fps: float) -> None:
@@ -46,12 +45,12 @@ def check_frames(source, place: str, n_frames: float, n_columns: int, fps: float
         raise InputError(source, place, f"declares {n_frames / fps:,.0f} s, over the limit of {MAX_DURATION_S:,.0f} s")
 
 
-def read_text(path: Path, what: str) -> str:
-    """The file as text (UTF-8, a byte-order mark tolerated), refusing files over :data:`MAX_FILE_BYTES`."""
+def read_text(path: Path, what: str, max_bytes: int = MAX_JSON_BYTES) -> str:
+    """The file as text (UTF-8, a byte-order mark tolerated), refusing files over ``max_bytes``."""
     try:
         size = path.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise InputError(path, None, f"is {size:,} bytes, over the limit of {MAX_FILE_BYTES:,} for a {what}")
+        if size > max_bytes:
+            raise InputError(path, None, f"is {size:,} bytes, over the limit of {max_bytes:,} for a {what}")
         raw = path.read_bytes()
     except OSError as err:
         raise InputError(path, None, f"cannot read {what}: {err.strerror}") from None
@@ -61,13 +60,30 @@ def read_text(path: Path, what: str) -> str:
         raise InputError(path, None, f"expected a UTF-8 {what}, found binary data") from None
 
 
-def nesting_depth(text: str) -> int:
-    """Deepest ``[``/``{`` nesting of a JSON text (string contents ignored)."""
-    bare = _STRINGS.sub("", text).encode("ascii", "ignore")
-    codes = np.frombuffer(bare, dtype=np.uint8)
-    step = (np.isin(codes, (ord("["), ord("{"))).astype(np.int64)
-            - np.isin(codes, (ord("]"), ord("}"))).astype(np.int64))
-    return int(np.cumsum(step).max(initial=0))
+def nesting_depth(text: str, chunk: int = 1 << 22) -> int:
+    """Deepest ``[``/``{`` nesting of a JSON text, brackets inside strings ignored.
+
+    One linear pass, vectorised over chunks of ``chunk`` bytes (memory stays a few times the chunk), carrying
+    across chunks the depth, whether we are inside a string, and the length of a trailing run of backslashes.
+    """
+    data = text.encode("utf-8", "replace")
+    depth, deepest, inside, carry_run = 0, 0, False, 0
+    for start in range(0, len(data), chunk):
+        codes = np.frombuffer(data, dtype=np.uint8, count=min(chunk, len(data) - start), offset=start)
+        idx = np.arange(codes.size)
+        # a quote is escaped when an odd run of backslashes stands right before it
+        last_plain = np.maximum.accumulate(np.where(codes != ord("\\"), idx, -1 - carry_run))
+        run = idx - 1 - np.concatenate([[-1 - carry_run], last_plain[:-1]])
+        quote = (codes == ord('"')) & (run % 2 == 0)
+        outside = (np.cumsum(quote) + inside) % 2 == 0
+        step = (np.isin(codes, (ord("["), ord("{"))) & outside).astype(np.int64) \
+            - (np.isin(codes, (ord("]"), ord("}"))) & outside).astype(np.int64)
+        levels = depth + np.cumsum(step)
+        deepest = max(deepest, int(levels.max(initial=depth)))
+        depth = int(levels[-1])
+        inside = (int(inside) + int(np.count_nonzero(quote))) % 2 == 1
+        carry_run = int(codes.size - 1 - last_plain[-1])  # backslashes ending this chunk (0 if the last is not one)
+    return deepest
 
 
 def _parse_int(literal: str) -> int:
