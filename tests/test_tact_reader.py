@@ -121,32 +121,47 @@ def test_fades(tmp_path):
 
 
 def test_connected_dots_cross_fade(tmp_path):
-    t = read(tmp_path, project([effect("VestFront", dots=[dot(0, 100, [(0, 1.0)]), dot(100, 200, [(1, 1.0)])],
-                                       connected=True)]))
-    # 40 ms into the first frame: 60 % of it, 40 % of the next
+    frames = [dot(0, 100, [(0, 1.0)], "FADE_OUT"), dot(100, 200, [(1, 1.0)]), dot(200, 200, [(2, 0.5)])]
+    t = read(tmp_path, project([effect("VestFront", dots=frames, connected=True)]))
+    # 40 ms into the first frame: 60 % of it, 40 % of the next (connected frames ignore playbackType)
     assert col(t, "VestFront", 0)[2] == 60 and col(t, "VestFront", 1)[2] == 40
+    # the last frame spans no time: it plays for the tick at 200 ms, the effect's end
+    np.testing.assert_array_equal(col(t, "VestFront", 2)[8:11], [30, 40, 50])
 
 
-def test_path_point_on_a_motor_and_its_neighbours(tmp_path):
-    # motor 5 of a vest panel sits at (0.333, 0.25); motors 1 and 9 are 0.25 away, 4 and 6 are 1/3 away
+def test_path_point_drives_the_three_nearest_motors(tmp_path):
+    """Vest motors sit at x = 0, 0.333, 0.667, 1 and y = 0, 0.25 ... 1; distances count in motor spacings (x times 3,
+    y times 4). A point at (0.4, 0.3) is about 0.28 spacings from motor 5 at (0.333, 0.25), about 0.82 from motors 6
+    (0.667, 0.25) and 9 (0.333, 0.5), and 1.12 from motor 10 (beyond the three nearest)."""
+    t = read(tmp_path, project([effect("VestFront", length=100, paths=[path([(0, 0.4, 0.3, 0.6),
+                                                                              (100, 0.4, 0.3, 0.6)])])]))
+    row = t.intensities[2, t.device_columns("VestFront")]
+    level = lambda dx, dy: np.floor(60 * (1 - np.hypot(dx * 3, dy * 4) / PATH_RADIUS) + 1e-9)  # noqa: E731
+    assert row[5] == level(0.4 - 0.333, 0.3 - 0.25) == 42
+    assert row[6] == level(0.667 - 0.4, 0.3 - 0.25) == 10 and row[9] == level(0.4 - 0.333, 0.5 - 0.3) == 10
+    assert np.count_nonzero(row) == 3
+
+
+def test_path_point_on_a_motor_plays_that_motor(tmp_path):
     t = read(tmp_path, project([effect("VestFront", length=100, paths=[path([(0, 0.333, 0.25, 0.6),
                                                                               (100, 0.333, 0.25, 0.6)])])]))
     row = t.intensities[2, t.device_columns("VestFront")]
-    side = np.floor(60 * (1 - 0.25 / PATH_RADIUS) + 1e-9)
-    assert row[5] == 60 and row[1] == side and row[9] == side
-    assert np.count_nonzero(row) == 3  # the three nearest motors only
+    assert row[5] == 60 and np.count_nonzero(row) == 1  # the neighbours are a full spacing away
 
 
-@pytest.mark.parametrize("pattern, motor, share", [("CONST_TDM", 1, 1.0), ("CONST_SPEED", 1, 1 - 0.167 / PATH_RADIUS)])
-def test_moving_patterns(tmp_path, pattern, motor, share):
+@pytest.mark.parametrize("pattern", ["CONST_TDM", "CONST_SPEED"])
+def test_moving_patterns(tmp_path, pattern):
     """Key frames (0,0) at 0 ms, (0.333,0) at 100 ms, (1,0) at 200 ms. At 100 ms CONST_TDM is at its key frame, on
-    motor 1; CONST_SPEED has covered half the polyline's length, x = 0.5, midway between motors 1 and 2."""
+    motor 1; CONST_SPEED has covered half the polyline's length, x = 0.5, midway between motors 1 and 2
+    (0.167 / 0.333 = half a spacing from each)."""
     keys = [(0, 0.0, 0.0, 1.0), (100, 0.333, 0.0, 1.0), (200, 1.0, 0.0, 1.0)]
     t = read(tmp_path, project([effect("VestFront", paths=[path(keys, pattern)])]))
     row = t.intensities[5, t.device_columns("VestFront")]
-    assert row[motor] == np.floor(100 * share + 1e-9)
-    if pattern == "CONST_SPEED":
-        assert row[2] == row[1]
+    if pattern == "CONST_TDM":
+        assert row[1] == 100 and np.count_nonzero(row) == 1
+    else:
+        half = np.floor(100 * (1 - (0.5 - 0.333) * 3 / PATH_RADIUS) + 1e-9)
+        assert row[1] == half == 49 and row[2] == np.floor(100 * (1 - (0.667 - 0.5) * 3 / PATH_RADIUS) + 1e-9)
 
 
 def test_mode_decides_what_plays(tmp_path):
