@@ -96,7 +96,7 @@ def test_tact_files_follow_the_designer_format(track, tmp_path):
         plays = ticked.intensities[:, ticked.device_columns(f"Forearm{side}")].max() >= 0.5
         assert bool(modes[f"Forearm{side}"]["dotMode"]["feedback"]) == plays
     back = load_track(path)
-    assert back.fps == 50.0 and back.actuators == track.actuators
+    assert back.fps == 50.0 and back.actuators == track.actuators and back.layout == "x40_shoulders"
     np.testing.assert_allclose(back.intensities, np.rint(ticked.intensities), atol=1e-9)
 
 

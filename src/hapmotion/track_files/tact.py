@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import InputError, UsageError
 from ..filesafety import atomic_path
-from ..layout import bhaptics_devices, position_order, type_for_position
+from ..layout import bhaptics_devices, load_layout, position_order, type_for_position
 from ..track import HapticTrack
 from .limits import check_frames, load_json
 from .tact_project import parse_project
@@ -153,5 +153,8 @@ def read_tact(path: Path) -> HapticTrack:
     n = max(columns[p].shape[0] for p in order)
     data = np.column_stack([np.pad(columns[p], ((0, n - columns[p].shape[0]), (0, 0))) for p in order])
     ids = tuple(f"{p}_{i}" for p in order for i in range(columns[p].shape[1]))
-    return HapticTrack(intensities=data, fps=TICK_FPS, actuators=ids, layout="+".join(dict.fromkeys(types)),
+    default = load_layout()
+    # our own vest + sleeve files come back on the renderer's layout; anything else is named by its device types
+    layout = default.name if ids == default.actuators else "+".join(dict.fromkeys(types))
+    return HapticTrack(intensities=data, fps=TICK_FPS, actuators=ids, layout=layout,
                        meta={"source": str(path), "files": [str(f) for f in files]})
