@@ -1,7 +1,8 @@
 """Each compiled step of the renderer on small inputs whose answer is worked out by hand.
 
-The helpers are the functions ``render_frames`` sequences (``hapmotion.render.steps``); they are called here one at
-a time from Python. The last test renders a clip with and without compilation, which catches a stale numba cache.
+The steps are the compiled functions that ``render_frames`` runs in order (``hapmotion.render.steps``); each is
+called here on its own from Python. The last test renders a clip with and without compilation, which catches a
+stale numba cache.
 """
 
 from __future__ import annotations

@@ -62,7 +62,8 @@ def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
     p[packed.P_TOL] = params.phantom_1d_tolerance
     p[packed.P_BETA] = params.perceptual_exponent
     p[packed.P_DEAD] = params.dead_zone
-    p[packed.P_REL_DECAY] = float(np.exp(-1.0 / (fps * params.actuator_release_s))) if params.actuator_release_s > 0 else 0.0
+    release_s = params.actuator_release_s
+    p[packed.P_REL_DECAY] = float(np.exp(-1.0 / (fps * release_s))) if release_s > 0 else 0.0
     p[packed.P_FPS] = fps
     p[packed.P_IFAR] = params.intensity_far_m if params.intensity_far_m > 0 else params.far_m
     p[packed.P_SILENCE] = params.silence_floor

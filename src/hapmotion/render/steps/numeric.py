@@ -1,4 +1,4 @@
-"""Small compiled scalar helpers shared by the step modules."""
+"""Small compiled scalar functions shared by the step modules."""
 
 from __future__ import annotations
 
