@@ -127,7 +127,7 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         else:
             previous_dynamic_point(state, torso, prev_dp)
             j_a, j_r, w_a, w_r = salient_triangle(choice, jt, excess, prev_dp, prm[P_W_GAIN], prm[P_W_MAX])
-            dynamic_point(jt[j_a], jt[j_r], torso, w_a, w_r, 1.0, dp)
+            dynamic_point(jt[j_a], jt[j_r], torso, w_a, w_r, 1.0, dp)  # J_T keeps weight 1
         for k in range(3):
             state[ST_PREV_DP + k] = dp[k]
         dist = dist3(dp, torso)
