@@ -1,7 +1,7 @@
 """The evaluation figures, on absolute scales so that two runs, two recordings or two reports compare at a glance.
 
 * :func:`clip_figure` -- one recording over time: the hands' speeds (m/s) above one panel per (method, preset)
-  with the strongest command on each half of the vest (0..100), the motors' start threshold drawn;
+  with the strongest motor on each half of the vest as the motors render it (0..100), the start threshold drawn;
 * :func:`summary_figure` -- one bar panel per key metric, a group per recording, a bar per (method, preset), with
   the metric's full range and its reference line;
 * :func:`bench_figure` -- energy along each synthetic sweep, one line per preset.
@@ -20,7 +20,7 @@ import numpy as np
 from ..filesafety import atomic_path
 from ..layout import load_layout
 from .felt import FELT_LEVEL, MOVING_MPS
-from .motor import DEFAULT_MOTOR, MotorModel
+from .motor import DEFAULT_MOTOR, MotorModel, simulate
 from .scorecard import AUDIO_COLUMNS, COLUMNS, Column
 from .tables import cell, header, shown
 
@@ -31,7 +31,7 @@ LEFT_COLOR, RIGHT_COLOR = "tab:blue", "tab:orange"
 START_COLOR = "#f2c4c4"
 
 _SCALES: dict[str, tuple[float, float]] = {
-    "felt_moving": (0, 100), "peak_moving": (0, 100), "still_ratio": (0, 100), "lateral": (0, 100),
+    "felt_moving": (0, 100), "peak_moving": (0, 100), "still_ratio": (0, 120), "lateral": (0, 100),
     "mix_lateral": (0, 100), "dead_zone": (0, 100), "hf_power": (0, 100), "saturation": (0, 100),
     "mix_saturation": (0, 100), "speed_rho": (-1, 1), "reach_rho": (-1, 1), "mix_follows_audio": (-1, 1),
     "envelope_r": (-1, 1), "onset_f": (0, 1), "onset_p": (0, 1), "onset_r": (0, 1),
@@ -72,6 +72,17 @@ def _col(key: str) -> Column:
     return next(c for c in COLUMNS + AUDIO_COLUMNS if c.key == key)
 
 
+def _wrap(name: str, width: int = 18) -> str:
+    """A recording name on two lines, broken at the ``_`` or ``-`` nearest its middle when it is long."""
+    if len(name) <= width:
+        return name
+    cuts = [i + 1 for i, ch in enumerate(name) if ch in "_-"]
+    if not cuts:
+        return name
+    cut = min(cuts, key=lambda i: abs(i - len(name) / 2))
+    return name[:cut] + "\n" + name[cut:]
+
+
 def _label(run) -> str:
     return f"{run.method}/{run.preset}"
 
@@ -92,11 +103,11 @@ def _shade(ax, t: np.ndarray, mask: np.ndarray, **kw) -> None:
 def clip_figure(clip, runs: Sequence, path: Path, motor: MotorModel = DEFAULT_MOTOR) -> Path:
     """One recording over time on absolute scales.
 
-    Top: each hand's speed relative to the hips (m/s, 0.2 s averages), the 0.5 m/s "moving" line, stillness
-    shaded, and the song's onsets as ticks. Below, per run: the strongest command on the wearer's left and right
-    half of the vest (0..100; the music + motion mix as a thin grey line when there is a song), the band under the
-    motors' start threshold shaded and the felt level dashed. Each hand is drawn in the colour of the half where a
-    mirrored show should put it.
+    Top: each hand's speed relative to the hips (m/s, 0.2 s averages), the 0.5 m/s "moving" line, and the song's
+    onsets as ticks. Below, per run: the strongest motor on the wearer's left and right half of the vest as the
+    ERM model renders it (0..100 of full amplitude; the music + motion mix as a thin grey line when there is a
+    song), the band under the motors' start threshold shaded and the felt level dotted. Stillness is shaded grey in
+    every panel. Each hand is drawn in the colour of the half where a mirrored show should put it.
     """
     plt = _pyplot()
     f = clip.facts
@@ -106,6 +117,8 @@ def clip_figure(clip, runs: Sequence, path: Path, motor: MotorModel = DEFAULT_MO
     fig, axes = plt.subplots(len(runs) + 1, 1, figsize=(12, 1.2 + 1.75 * (len(runs) + 1)), sharex=True,
                              squeeze=False)
     axes = axes[:, 0]
+    for ax in axes:
+        _shade(ax, t, f.still, color="0.9", label="standing still")
     ax = axes[0]
     hand_colors = (RIGHT_COLOR, LEFT_COLOR) if mirror else (LEFT_COLOR, RIGHT_COLOR)
     felt_on = ("right", "left") if mirror else ("left", "right")
@@ -113,7 +126,6 @@ def clip_figure(clip, runs: Sequence, path: Path, motor: MotorModel = DEFAULT_MO
         ax.plot(t, f.speeds[:, k], color=hand_colors[k], lw=1.0,
                 label=f"performer's {name} hand (felt on the wearer's {felt_on[k]})")
     ax.axhline(MOVING_MPS, color="0.3", ls="--", lw=0.8, label=f"moving: {MOVING_MPS:g} m/s")
-    _shade(ax, t, f.still, color="0.88", label="standing still")
     top = max(2.0, float(np.ceil(f.speeds.max() if f.speeds.size else 0.0)))
     if clip.onsets is not None:
         on = np.asarray(clip.onsets, dtype=np.float64)
@@ -121,28 +133,32 @@ def clip_figure(clip, runs: Sequence, path: Path, motor: MotorModel = DEFAULT_MO
         ax.plot(on, np.full(on.shape, 0.97 * top), "|", color="0.2", ms=6, label="music onsets")
     ax.set_ylim(0, top)
     ax.set_ylabel("hand speed (m/s)")
-    ax.set_title(f"{clip.name}: what the performer does, and what each rendering sends to the vest", fontsize=11)
+    ax.set_title(f"{clip.name}: what the performer does, and what the wearer would feel", fontsize=11)
     ax.legend(fontsize=7, loc="upper right", ncol=2)
     start = 100 * motor.dead_zone
     for ax, run in zip(axes[1:], runs):
-        left, right = _sides(run.track.intensities, x)
+        skin, _ = simulate(run.track.intensities, run.track.fps, motor)
+        left, right = _sides(100.0 * skin, x)
         ax.axhspan(0, start, color=START_COLOR, lw=0, label=f"under motor start ({start:.0f})")
         ax.axhline(FELT_LEVEL, color="0.3", ls=":", lw=0.8, label=f"felt: {FELT_LEVEL:.0f}")
         if run.mixed is not None:
+            mixed_skin, _ = simulate(run.mixed.intensities, run.mixed.fps, motor)
             n = min(run.mixed.n_frames, t.size)
-            ax.plot(t[:n], run.mixed.intensities[:n].max(axis=1), color="0.55", lw=0.6, label="with music, any motor")
+            ax.plot(t[:n], 100.0 * mixed_skin[:n].max(axis=1), color="0.45", lw=0.6, label="with music, any motor")
         ax.plot(t, left, color=LEFT_COLOR, lw=0.9, label="wearer's left half")
         ax.plot(t, right, color=RIGHT_COLOR, lw=0.9, label="wearer's right half")
         ax.set_ylim(0, 100)
         ax.set_yticks([0, 25, 50, 75, 100])
-        ax.set_ylabel("strongest\ncommand (0-100)", fontsize=8)
+        ax.set_ylabel("strongest motor,\nfelt (0-100)", fontsize=8)
         s = run.scores
         facts = [f"felt while moving {cell(_col('felt_moving'), s.get('felt_moving'))} %",
                  f"coupling to hand speed {cell(_col('speed_rho'), s.get('speed_rho'))}",
                  f"lateral accuracy {cell(_col('lateral'), s.get('lateral'))} %"]
         ax.set_title(f"{_label(run)}: " + ", ".join(facts), fontsize=9, loc="left")
     if len(axes) > 1:
-        axes[1].legend(fontsize=7, loc="upper right", ncol=5)
+        handles, labels = axes[1].get_legend_handles_labels()
+        keep = [i for i, lab in enumerate(labels) if lab != "standing still"]
+        axes[1].legend([handles[i] for i in keep], [labels[i] for i in keep], fontsize=7, loc="upper right", ncol=5)
     axes[-1].set_xlabel("time (s)")
     fig.tight_layout()
     return _save(fig, path)
@@ -158,9 +174,9 @@ def summary_figure(runs: Sequence, columns: Sequence[Column], path: Path) -> Pat
     cmap = matplotlib.colormaps["tab10"]
     colors = {lab: cmap(i % 10) for i, lab in enumerate(labels)}
     n = len(columns)
-    ncol = 2
+    ncol = 1 if len(clips) > 3 else 2  # one column when the recordings' names need the width
     nrow = math.ceil(n / ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(13, 0.6 + 2.5 * nrow), squeeze=False)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(12, 0.6 + 2.1 * nrow), squeeze=False)
     width = 0.8 / max(len(labels), 1)
     xs = np.arange(len(clips))
     for ax, col in zip(axes.flat, columns):
@@ -172,27 +188,34 @@ def summary_figure(runs: Sequence, columns: Sequence[Column], path: Path) -> Pat
                          None)
                 vals.append(np.nan if v is None else v)
             top = max([top] + [v for v in vals if np.isfinite(v)])
-            ax.bar(xs + (k - (len(labels) - 1) / 2) * width, vals, width, color=colors[lab], label=lab)
+            pos = xs + (k - (len(labels) - 1) / 2) * width
+            ax.bar(pos, vals, width, color=colors[lab], label=lab)
+            for p_, v in zip(pos, vals):
+                if not np.isfinite(v):  # undefined (no frame of the kind the metric needs): say so, not 0
+                    ax.text(p_, 0.02, "n/a", transform=ax.get_xaxis_transform(), rotation=90, fontsize=6,
+                            ha="center", va="bottom", color="0.4")
         lo, hi = _SCALES.get(col.key, (0.0, None))
         if hi is None or top > hi:
             hi = top * 1.1 if top > 0 else 1.0
         ax.set_ylim(lo, hi)
+        ax.set_xlim(-0.5, len(clips) - 0.5)
         if col.key == "peak_moving":
             ax.axhspan(0, 10, color=START_COLOR, lw=0, zorder=0)
         if col.key in _REFERENCES:
             y, text = _REFERENCES[col.key]
             ax.axhline(y, color="0.3", ls="--", lw=0.8)
-            ax.text(xs[-1] + 0.45, y, text, fontsize=7, ha="right", va="bottom", color="0.3")
+            ax.text(0.995, y, text, transform=ax.get_yaxis_transform(), fontsize=7, ha="right", va="bottom",
+                    color="0.3", bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5, "alpha": 0.8})
         hint = {"higher": "  [higher is better]", "lower": "  [lower is better]", "zero": "  [0 is best]",
                 "": ""}[col.better]
         ax.set_title(header(col) + hint, fontsize=9)
-        ax.set_xticks(xs, [c[:22] for c in clips], fontsize=7, rotation=12)
+        ax.set_xticks(xs, [_wrap(c) for c in clips], fontsize=7)
         ax.tick_params(axis="y", labelsize=7)
         ax.axhline(0, color="0.6", lw=0.5)
     for ax in list(axes.flat)[n:]:
         ax.axis("off")
     fig.legend(*axes.flat[0].get_legend_handles_labels(), loc="upper center", ncol=len(labels), fontsize=8)
-    fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / (0.6 + 2.5 * nrow)))
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / (0.6 + 2.1 * nrow)))
     return _save(fig, path)
 
 

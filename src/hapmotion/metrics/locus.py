@@ -116,7 +116,8 @@ def active_hand(speeds: np.ndarray, threshold: float = MOVING_MPS, dominance: fl
     return out
 
 
-def lateral_accuracy(amplitude: np.ndarray, x_positions: np.ndarray, hand: np.ndarray, mirror: bool) -> float | None:
+def lateral_accuracy(amplitude: np.ndarray, x_positions: np.ndarray, hand: np.ndarray, mirror: bool,
+                     min_frames: int = 1) -> float | None:
     """Share of the vibration energy on the vest half where the active hand should be felt, 0..1.
 
     Over the frames with one active hand (``hand`` >= 0), the energy ``sum A^2`` of the actuators on the correct
@@ -136,14 +137,18 @@ def lateral_accuracy(amplitude: np.ndarray, x_positions: np.ndarray, hand: np.nd
         ``(T,)`` from :func:`active_hand`.
     mirror:
         The track is mirrored (``track.meta["mirror"]``).
+    min_frames:
+        Fewer one-hand frames than this say nothing about a recording: ``None``.
 
     Returns
     -------
-    0..1, or ``None`` without a one-hand frame or without vibration in those frames.
+    0..1, or ``None`` with too few one-hand frames or without vibration in them.
     """
     a = np.asarray(amplitude, dtype=np.float64)
     x = np.asarray(x_positions, dtype=np.float64)
     h = np.asarray(hand)
+    if np.count_nonzero(h >= 0) < max(1, min_frames):
+        return None
     left_side, right_side = x < 0, x > 0
     e = a * a
     correct = wrong = 0.0

@@ -193,6 +193,15 @@ def _x_positions(track: HapticTrack, layout: Layout) -> np.ndarray | None:
     return layout.positions()[:, 0]
 
 
+ONE_HAND_S = 0.5
+"""Seconds of one-hand gestures a recording needs before its lateral accuracy is scored (fewer frames would score a
+hand passing its partner, not a gesture)."""
+
+
+def _one_hand_frames(fps: float) -> int:
+    return int(np.ceil(ONE_HAND_S * fps - 1e-9))
+
+
 def _lag_ms(c) -> float | None:
     return None if c.lag_s is None else 1000.0 * c.lag_s
 
@@ -248,7 +257,8 @@ def score_track(
         out["reach_lag_ms"] = _lag_ms(coupling(facts.reach, felt_total, fps))
         x = _x_positions(track, layout)
         if x is not None:
-            out["lateral"] = lateral_accuracy(cmd, x, facts.hand, bool(track.meta.get("mirror")))
+            out["lateral"] = lateral_accuracy(cmd, x, facts.hand, bool(track.meta.get("mirror")),
+                                              _one_hand_frames(fps))
 
     # locus and constancy need the renderer's own target
     aligned = aligned_commands(track, layout)
@@ -335,5 +345,5 @@ def score_audio(
     if facts is not None and x is not None:
         n = min(facts.n_frames, mixed.n_frames)
         out["mix_lateral"] = lateral_accuracy(mixed.intensities[:n] / 100.0, x, facts.hand[:n],
-                                              bool(mixed.meta.get("mirror")))
+                                              bool(mixed.meta.get("mirror")), _one_hand_frames(mixed.fps))
     return out
