@@ -9,6 +9,7 @@ lost or smeared, and every start costs a spin-up.
 from __future__ import annotations
 
 import numpy as np
+from scipy import signal
 
 from .limits import SENT_MIN
 
@@ -50,20 +51,19 @@ def toggles_per_s(running: np.ndarray, fps: float) -> float:
 def power_above(amplitude: np.ndarray, fps: float, cutoff_hz: float) -> float | None:
     """Share of the commands' envelope power above a frequency (the motors' bandwidth), 0..1.
 
-    Each actuator's command minus its mean is transformed (periodogram, ``rfft``); the powers of all actuators are
-    pooled, and the share above ``cutoff_hz`` is returned. Power the ERM cannot follow is lost or smeared.
+    Each actuator's command minus its mean goes through a one-sided periodogram (:func:`scipy.signal.periodogram`,
+    rectangular window); the powers of all actuators are pooled, and the share above ``cutoff_hz`` is returned.
+    Power the ERM cannot follow is lost or smeared.
 
     ``amplitude``: ``(T, N)``. ``None`` if every command is constant.
     """
     a = np.asarray(amplitude, dtype=np.float64)
     if a.shape[0] < 4:
         return None
-    x = a - a.mean(axis=0)
-    spec = np.abs(np.fft.rfft(x, axis=0)) ** 2
-    f = np.fft.rfftfreq(a.shape[0], 1.0 / fps)
-    p = spec.sum(axis=1)
+    f, pxx = signal.periodogram(a, fs=fps, window="boxcar", detrend="constant", axis=0)
+    p = pxx.sum(axis=1)
     total = p[1:].sum()
-    if total <= _TINY * a.shape[0]:
+    if total <= _TINY:
         return None
     return float(p[f > cutoff_hz].sum() / total)
 
