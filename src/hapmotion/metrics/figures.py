@@ -105,8 +105,7 @@ def clip_figure(clip, runs: Sequence, path: Path, motor: MotorModel = DEFAULT_MO
 
     Top: each hand's speed relative to the hips (m/s, 0.2 s averages), the 0.5 m/s "moving" line, and the song's
     onsets as ticks. Below, per run: the strongest motor on the wearer's left and right half of the vest as the
-    ERM model renders it (0..100 of full amplitude; the music + motion mix as a thin grey line when there is a
-    song), the band under the motors' start threshold shaded and the felt level dotted. Stillness is shaded grey in
+    ERM model renders it (0..100 of full amplitude; the music + motion mix dashed when there is a song), the band under the motors' start threshold shaded and the felt level dotted. Stillness is shaded grey in
     every panel. Each hand is drawn in the colour of the half where a mirrored show should put it.
     """
     plt = _pyplot()
@@ -144,7 +143,9 @@ def clip_figure(clip, runs: Sequence, path: Path, motor: MotorModel = DEFAULT_MO
         if run.mixed is not None:
             mixed_skin, _ = simulate(run.mixed.intensities, run.mixed.fps, motor)
             n = min(run.mixed.n_frames, t.size)
-            ax.plot(t[:n], 100.0 * mixed_skin[:n].max(axis=1), color="0.45", lw=0.6, label="with music, any motor")
+            mixed_left, mixed_right = _sides(100.0 * mixed_skin[:n], x)
+            ax.plot(t[:n], mixed_left, color=LEFT_COLOR, lw=0.6, ls="--", alpha=0.8, label="with music: left")
+            ax.plot(t[:n], mixed_right, color=RIGHT_COLOR, lw=0.6, ls="--", alpha=0.8, label="with music: right")
         ax.plot(t, left, color=LEFT_COLOR, lw=0.9, label="wearer's left half")
         ax.plot(t, right, color=RIGHT_COLOR, lw=0.9, label="wearer's right half")
         ax.set_ylim(0, 100)
@@ -158,7 +159,7 @@ def clip_figure(clip, runs: Sequence, path: Path, motor: MotorModel = DEFAULT_MO
     if len(axes) > 1:
         handles, labels = axes[1].get_legend_handles_labels()
         keep = [i for i, lab in enumerate(labels) if lab != "standing still"]
-        axes[1].legend([handles[i] for i in keep], [labels[i] for i in keep], fontsize=7, loc="upper right", ncol=5)
+        axes[1].legend([handles[i] for i in keep], [labels[i] for i in keep], fontsize=7, loc="upper right", ncol=4)
     axes[-1].set_xlabel("time (s)")
     fig.tight_layout()
     return _save(fig, path)

@@ -87,7 +87,9 @@ def run_sentence(run, motor: MotorModel = DEFAULT_MOTOR) -> str:
     if s.get("mix_lateral") is not None or s.get("onset_f") is not None:
         music = []
         if s.get("mix_lateral") is not None:
-            music.append(f"the gesture lands {side_words(s['mix_lateral'])} ({_pct(s['mix_lateral'])})")
+            covered = s.get("lateral") is not None and s["lateral"] >= 0.55 and s["mix_lateral"] < 0.55
+            music.append(("the gesture's side is drowned: it" if covered else "the gesture")
+                         + f" lands {side_words(s['mix_lateral'])} ({_pct(s['mix_lateral'])})")
         if s.get("onset_f") is not None:
             music.append(f"the music's onsets arrive as kicks the motors render with F = {s['onset_f']:.2f}")
         if s.get("mix_follows_audio") is not None:
