@@ -19,8 +19,8 @@ def energy_range_db(energy_t: np.ndarray) -> float | None:
     """Spread of the energy over frames that should all feel the same: ``10 log10(max E / min E)``, dB.
 
     ``energy_t``: ``(T,)`` energies of the frames of one sweep of a constant-intensity target across the cells. A
-    linear 1D split gives 3.01 dB, a linear bilinear 2D split 6.02 dB, the energy split 0 dB. ``None`` if a frame has no energy at all (the dip is
-    then unbounded) or there are no frames.
+    linear 1D split gives 3.01 dB, a linear bilinear 2D split 6.02 dB, the energy split 0 dB. ``None`` if a frame
+    has no energy at all (the dip is then unbounded) or there are no frames.
     """
     e = np.asarray(energy_t, dtype=np.float64)
     if e.size == 0 or e.min() <= _TINY:

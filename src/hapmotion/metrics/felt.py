@@ -35,7 +35,8 @@ def moving_frames(speeds: np.ndarray, threshold: float = MOVING_MPS) -> np.ndarr
 
 
 def still_frames(speeds: np.ndarray, fps: float, threshold: float = STILL_MPS, min_s: float = STILL_S) -> np.ndarray:
-    """``(T,)`` bool: frames inside a run of at least ``min_s`` seconds where every hand is slower than ``threshold``."""
+    """``(T,)`` bool: frames inside a run of at least ``min_s`` seconds in which every hand is slower than
+    ``threshold`` (m/s)."""
     slow = (np.asarray(speeds, dtype=np.float64) < threshold).all(axis=1)
     edges = np.flatnonzero(np.diff(np.concatenate(([0], slow.astype(np.int8), [0]))))
     out = np.zeros_like(slow)

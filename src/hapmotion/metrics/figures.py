@@ -4,7 +4,7 @@
   with the strongest motor on each half of the vest as the motors render it (0..100), the start threshold drawn;
 * :func:`summary_figure` -- one bar panel per key metric, a group per recording, a bar per (method, preset), with
   the metric's full range and its reference line;
-* :func:`bench_figure` -- energy along each synthetic sweep, one line per preset.
+* :func:`bench_figure` -- energy along each synthetic sweep (dB below its maximum), one line per preset.
 
 Files are written with :func:`hapmotion.filesafety.atomic_path` (whole or not at all); matplotlib runs headless.
 """
@@ -104,9 +104,10 @@ def clip_figure(clip, runs: Sequence, path: Path, motor: MotorModel = DEFAULT_MO
     """One recording over time on absolute scales.
 
     Top: each hand's speed relative to the hips (m/s, 0.2 s averages), the 0.5 m/s "moving" line, and the song's
-    onsets as ticks. Below, per run: the strongest motor on the wearer's left and right half of the vest as the
-    ERM model renders it (0..100 of full amplitude; the music + motion mix dashed when there is a song), the band under the motors' start threshold shaded and the felt level dotted. Stillness is shaded grey in
-    every panel. Each hand is drawn in the colour of the half where a mirrored show should put it.
+    onsets as ticks. Below, per run: the strongest motor on the wearer's left and right half of the vest as the ERM
+    model renders it (0..100 of full amplitude; the music + motion mix dashed when there is a song), the band under
+    the motors' start threshold shaded and the felt level dotted. Stillness is shaded grey in every panel. Each hand
+    is drawn in the colour of the half where a mirrored show should put it.
     """
     plt = _pyplot()
     f = clip.facts
@@ -221,7 +222,7 @@ def summary_figure(runs: Sequence, columns: Sequence[Column], path: Path) -> Pat
 
 
 def bench_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path:
-    """Energy (dB re. the sweep's median) along each synthetic sweep, one panel per case, a line per preset."""
+    """Energy (dB re. the sweep's maximum) along each synthetic sweep, one panel per case, a line per preset."""
     import matplotlib
 
     plt = _pyplot()
@@ -237,11 +238,11 @@ def bench_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path:
             g = np.asarray(r["progress"])
             pos = g[:, 0] if case != "column" else g[:, 1]
             ax.plot(pos, r["energy_db"], color=colors[r["preset"]], label=f"{r['preset']} ({r['range_db']:.2f} dB)")
-        ax.set_ylim(-7, 2)
+        ax.set_ylim(-7, 0.5)
         ax.axhline(0, color="0.6", lw=0.5)
         ax.set_title(f"{case} sweep", fontsize=10)
         ax.set_xlabel("grid position (motor pitches)")
-        ax.set_ylabel("commanded energy (dB re. median)")
+        ax.set_ylabel("commanded energy (dB re. its maximum)")
         ax.legend(fontsize=7)
     fig.tight_layout()
     return _save(fig, path)

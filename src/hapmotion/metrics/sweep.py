@@ -221,7 +221,8 @@ def _weights(grid: np.ndarray, phantom: str, layout: Layout, tol: float) -> np.n
             i = min(int(np.floor(cu)), cols - 2)
             j = min(int(np.floor(cv)), rows - 2)
             fu, fv = cu - i, cv - j
-            for di, dj, share in ((0, 0, (1 - fu) * (1 - fv)), (1, 0, fu * (1 - fv)), (0, 1, (1 - fu) * fv), (1, 1, fu * fv)):
+            corners = ((0, 0, (1 - fu) * (1 - fv)), (1, 0, fu * (1 - fv)), (0, 1, (1 - fu) * fv), (1, 1, fu * fv))
+            for di, dj, share in corners:
                 w[t, dev.offset + (j + dj) * cols + i + di] += np.sqrt(share)
             continue
         i0, j0 = int(np.floor(cu + 0.5)), int(np.floor(cv + 0.5))
@@ -249,9 +250,9 @@ def reasoned_commands(case: SweepCase, params, level: float, layout: Layout | No
 
     Amplitude ``K = level x percent_per_level`` goes through the Stevens mapping ``100 (K/100)^(1/beta)`` when
     ``perceptual_exponent`` is set (before the split, as :class:`hapmotion.render.Params` documents), is split by
-    the phantom formula (:func:`reasoned_energy`'s rules), then each share gets the dead-zone lift
-    ``dead_zone + (100 - dead_zone) x / 100`` with shares under ``silence_floor`` set to 0. The per-actuator release hold is
-    not modelled (it depends on the history; in these slow sweeps it only acts for a few frames beside each motor).
+    the phantom formula (:func:`reasoned_energy`'s rules), then each share gets the dead-zone lift ``dead_zone +
+    (100 - dead_zone) x / 100`` with shares under ``silence_floor`` set to 0. The per-actuator release hold is not
+    modelled (it depends on the history; in these slow sweeps it only acts for a few frames beside each motor).
     """
     layout = layout or load_layout()
     amp = level * params.percent_per_level
@@ -287,10 +288,11 @@ def run_bench(
 
     Returns
     -------
-    One dict per (case, preset): ``case``, ``preset``, ``phantom``, measured ``range_db`` (commanded energy range
-    over the sweep), ``range_skin_db`` (the same on the ERM model's output), ``locus_cm`` / ``locus_amp_cm`` (mean centroid errors), ``toggles_s``, ``jerk`` over the sweep, and
-    the ``reasoned_*`` values for the preset's phantom model, plus ``energy_db`` ``(T_sweep,)`` (dB re. the sweep's
-    median) and ``progress`` ``(T_sweep, 2)`` (grid coordinates) for figures.
+    One dict per (case, preset): ``case``, ``preset``, ``phantom``, measured ``range_db`` (commanded
+    energy range over the sweep), ``range_skin_db`` (the same on the ERM model's output), ``locus_cm`` /
+    ``locus_amp_cm`` (mean centroid errors), ``toggles_s``, ``jerk`` over the sweep, and the ``reasoned_*`` values
+    for the preset's phantom model, plus ``energy_db`` ``(T_sweep,)`` (dB re. the sweep's maximum: 0 where the
+    energy is highest, the dips below) and ``progress`` ``(T_sweep, 2)`` (grid coordinates) for figures.
     """
     from ..render import render
     from ..render.renderer import resolve_params
@@ -327,7 +329,7 @@ def run_bench(
                 "reasoned_locus_amp_cm": mean_finite(reasoned_centroids(case, expected, 1.0, layout)[sw]),
                 "toggles_s": toggles_per_s(running[sw], fps),
                 "jerk": jerk_rms(cmd[sw], fps),
-                "energy_db": 10 * np.log10(np.maximum(e, 1e-12) / max(float(np.median(e)), 1e-12)),
+                "energy_db": 10 * np.log10(np.maximum(e, 1e-12) / max(float(e.max()), 1e-12)),
                 "progress": case.grid[sw],
             })
     return rows
