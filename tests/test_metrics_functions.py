@@ -23,7 +23,8 @@ def energy_pair(a: np.ndarray, k: float = 1.0) -> np.ndarray:
 
 def test_linear_split_dips_3db_at_the_midpoint():
     a = np.linspace(0, 1, 101)  # includes a = 0.5
-    assert constancy.energy_range_db(coupling.energy(linear_pair(a, 0.6))) == pytest.approx(10 * math.log10(2), abs=1e-12)
+    dip = constancy.energy_range_db(coupling.energy(linear_pair(a, 0.6)))
+    assert dip == pytest.approx(10 * math.log10(2), abs=1e-12)
     assert constancy.energy_range_db(coupling.energy(energy_pair(a, 0.6))) == pytest.approx(0.0, abs=1e-12)
     assert coupling.energy(linear_pair(np.array([0.25])))[0] == pytest.approx(0.625)  # research 1.1 table
 
@@ -179,7 +180,8 @@ def test_lateral_accuracy_by_hand():
     a[2] = [0.3, 0.0, 0.0, 0.0]  # right hand: 0.09 on the other side
     a[3] = [1.0, 1.0, 1.0, 1.0]  # no single active hand: not scored
     # mirrored: a hand is felt on the wearer's other side
-    assert locus.lateral_accuracy(a, x, hand, mirror=True) == pytest.approx((0.64 + 0.25 + 0.09) / (0.36 + 0.64 + 0.25 + 0.09))
+    correct, wrong = 0.64 + 0.25 + 0.09, 0.36
+    assert locus.lateral_accuracy(a, x, hand, mirror=True) == pytest.approx(correct / (correct + wrong))
     assert locus.lateral_accuracy(a, x, hand, mirror=False) == pytest.approx(0.36 / 1.34)
     assert locus.lateral_accuracy(a, x, np.full(4, -1), mirror=True) is None
     assert locus.lateral_accuracy(a, x, hand, mirror=True, min_frames=4) is None
