@@ -20,23 +20,22 @@ from typing import Any, Callable, Optional, Sequence, Union
 from ..errors import InputError, UsageError
 from ..show import Show, live_music
 from .engine import AudioChannel, LiveEngine
-from .protocol import DeviceMap, tact_project
+from .devices import DeviceMap
+from .wire.player_v2 import tact_project
 from .sinks import BroadcastSink, OscOutSink, PlayerV2Sink, PlayerV3Sink, RecorderSink, Sink
-from .sources import ClockSource, OscSource, ReplaySource, Source, WsSource
+from .sources import ClockSource, ReplaySource, Source, network_source
 from .stats import LiveStats
 from .urls import Endpoint, parse_sink, parse_source
 
 log = logging.getLogger("hapmotion.live")
 
-def build_source(ep: Endpoint, *, fps: Optional[float], speed: float, loop: bool) -> Source:
-    """A source object for a parsed ``--source``."""
+def build_source(ep: Endpoint, *, fps: Optional[float], speed: float, loop: bool,
+                 reader_options: Optional[dict[str, Any]] = None, **access: Any) -> Source:
+    """A source object for a parsed ``--source``: a replay read with ``reader_options``, or a network source with
+    the ``access`` rules of :func:`~hapmotion.live.sources.network_source` (default: only this machine may send)."""
     if ep.kind == "replay":
-        return ReplaySource.from_path(ep.path, fps=fps, speed=speed, loop=loop)
-    if ep.kind == "osc-in":
-        return OscSource(ep.host, ep.port, prefix=ep.path.rstrip("/") or "/hapmotion")
-    if ep.kind == "ws":
-        return WsSource(ep.host, ep.port)
-    raise UsageError(f"--source {ep.text!r}: unknown kind {ep.kind}")  # pragma: no cover (parse_source guards)
+        return ReplaySource.from_path(ep.path, fps=fps, speed=speed, loop=loop, reader_options=reader_options)
+    return network_source(ep, **access)
 
 
 def _registrations(ep: Endpoint) -> dict[str, Any]:
