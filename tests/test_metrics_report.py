@@ -2,7 +2,6 @@
 
 import csv
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -201,7 +200,6 @@ def test_one_hand_punches_land_on_the_mirrored_side():
             assert score_track(track, motion, facts=facts)["lateral"] <= 0.1, (method, mirror)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("clip", CLIPS, ids=lambda p: p.stem)
 def test_energy_split_keeps_energy_constant_on_real_recordings(clip):
     """Known answer on real data: with the energy split alone, energy is a function of the level only (0 dB)."""

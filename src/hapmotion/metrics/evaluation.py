@@ -52,7 +52,6 @@ class Run:
     preset: str
     track: HapticTrack
     scores: dict[str, float | None]
-    seconds: float  # render + score time
     mixed: HapticTrack | None = None
 
 
@@ -180,9 +179,8 @@ def evaluate(
                     music = render_show(show.replace(mode="audio"), motion_track=track, analysis=analysis)
                 scores.update(score_audio(mixed, analysis.onset_times, analysis.envelope, music=music,
                                           facts=clip.facts, motor=motor, layout=layout))
-            dt = time.perf_counter() - t0
-            t_render += dt
-            report.runs.append(Run(clip.name, method, label, track, scores, dt, mixed))
+            t_render += time.perf_counter() - t0
+            report.runs.append(Run(clip.name, method, label, track, scores, mixed))
             if progress is not None:
                 progress(f"{clip.name} {method}/{label}")
     report.timings["load"] = t_load

@@ -33,7 +33,7 @@ the amplitude at the end of row ``t``'s hold; the motors start at rest.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
@@ -89,9 +89,6 @@ class MotorModel:
     def bandwidth_hz(self) -> float:
         """Corner frequency ``1 / (2 pi tau)`` of the faster time constant, Hz: envelope detail above it is lost."""
         return 1.0 / (2.0 * math.pi * min(self.tau_rise_s, self.tau_fall_s))
-
-    def to_dict(self) -> dict:
-        return asdict(self)
 
 
 DEFAULT_MOTOR = MotorModel()
