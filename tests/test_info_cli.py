@@ -136,10 +136,11 @@ def test_decorator_gathers_options_for_other_commands():
     out = json.loads(r.output)
     assert out["flag"] is True and out["input"] == "x.bvh"
     assert out["opts"] == {"units": None, "scale": None, "skip_frames": None, "body_id": None, "fps_in": 30.0,
-                           "up": "z"}
+                           "up": "z", "joint_map": None, "limit": []}
     assert tuple(out["opts"]) == MOTION_OPTION_NAMES
     helps = run("probe", "--help").output
-    for opt in ("--units", "--scale", "--skip-frames", "--body-id", "--fps-in", "--up", "--flag"):
+    for opt in ("--units", "--scale", "--skip-frames", "--body-id", "--fps-in", "--up", "--joint-map", "--limit",
+                "--flag"):
         assert opt in helps
     r = run("probe", "x.bvh", "--skip-frames", "-1")
     assert r.exit_code == 2 and "--skip-frames" in r.output
