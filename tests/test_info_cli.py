@@ -151,3 +151,36 @@ def test_read_motion_maps_fps_in():
     assert m.fps == 10.0
     with pytest.raises(UsageError):
         read_motion(str(MOTION / "dataset-1_punch_normal_001.bvh"), body_id=1)
+
+
+def test_info_says_which_up_axis_and_why(tmp_path):
+    from support.motion_files import bvh_to_z_up
+
+    path = tmp_path / "zup.bvh"
+    path.write_text(bvh_to_z_up((MOTION / "dataset-1_punch_normal_001.bvh").read_text()))
+    r = run("info", path)
+    assert r.exit_code == 0, r.output
+    row = next(ln for ln in r.output.splitlines() if ln.startswith("up axis"))
+    assert "+Z (detected: head above the pelvis along +Z in 100% of frames, a foot the lowest joint in" in row
+    r = run("info", path, "--up", "z", "--json")
+    assert json.loads(r.output)["up_axis"] == "+Z (option)"
+
+
+def test_joint_map_and_limit_options(tmp_path):
+    from support.motion_files import SCHEMES, synthetic_bvh
+
+    path = tmp_path / "odd.bvh"
+    path.write_text(synthetic_bvh(SCHEMES["CMU"], rename={"LeftHand": "lmanus", "RightHand": "rmanus"}))
+    r = run("info", path)
+    assert r.exit_code == 2 and "--joint-map" in r.stderr and r.stderr.count("\n") == 1
+    jm = tmp_path / "map.toml"
+    jm.write_text('lmanus = "HAND_LEFT"\nrmanus = "HAND_RIGHT"\n')
+    r = run("info", path, "--joint-map", jm, "--json")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.output)["joints_found"]["HAND_LEFT"] == "lmanus"
+    r = run("info", path, "--joint-map", jm, "--limit", "frames=10")
+    assert r.exit_code == 2 and "expected at most 10 frames (limit frames; raise it with --limit frames=N), found 60" \
+        in r.stderr
+    assert run("info", path, "--joint-map", jm, "--limit", "frames=60").exit_code == 0
+    r = run("info", path, "--limit", "frame=60")
+    assert r.exit_code == 2 and "--limit expects NAME=NUMBER" in r.stderr

@@ -455,8 +455,8 @@ def unmatched_message(missing: list[str], bvh: BvhFile, mapping: dict[str, str])
     (at most three each, shortened) and how to write a joint map. Never lists the whole skeleton.
 
     Candidates for a missing joint are first its neighbours in the file's hierarchy (the children of the joint
-    matched as its canonical parent, the parent of the joint matched as its canonical child: the hand is the
-    joint below the elbow), then the names that look most alike.
+    matched as its nearest canonical ancestor, the parent of the joint matched as its canonical child: the hand
+    is the joint below the elbow), then the names that look most alike.
     """
     from ..joints import JOINT_INDEX, PARENTS
 
@@ -466,7 +466,10 @@ def unmatched_message(missing: list[str], bvh: BvhFile, mapping: dict[str, str])
     for canon in missing:
         near: list[str] = []
         c = JOINT_INDEX[canon]
-        parent = JOINTS[PARENTS[c]] if PARENTS[c] >= 0 else None
+        p = PARENTS[c]
+        while p >= 0 and JOINTS[p] not in mapping:  # the nearest matched canonical ancestor (HAND -> ELBOW)
+            p = PARENTS[p]
+        parent = JOINTS[p] if p >= 0 else None
         if parent in mapping:
             near += [j.name for j in bvh.joints if j.parent == index[mapping[parent]] and not j.end_site]
         for child in (JOINTS[k] for k, p in enumerate(PARENTS) if p == c):
