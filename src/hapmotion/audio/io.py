@@ -179,7 +179,8 @@ def mono_blocks(info: AudioInfo, block_frames: int = BLOCK_FRAMES) -> Iterator[n
                     raise InputError(info.path, f"near {done / info.sample_rate:.2f} s", f"decode error: {said}")
                 if len(block) == 0:
                     break
-                mono = downmix(block)
+                with np.errstate(all="ignore"):  # a signalling NaN in a float file warns on every operation
+                    mono = downmix(block)
                 if not np.isfinite(mono).all():
                     bad = done + int(np.flatnonzero(~np.isfinite(mono))[0])
                     raise InputError(info.path, f"sample {bad} ({bad / info.sample_rate:.3f} s)",
