@@ -45,7 +45,7 @@ COCO17_TO_CANONICAL: dict[str, tuple[str, ...]] = {
     "left_ankle": ("ANKLE_LEFT",), "right_ankle": ("ANKLE_RIGHT",),
 }
 
-AIST_FPS = 60.0  # AIST++ annotations are 60 fps exactly (AIST++ site, factsfigures; SOURCES.md)
+AIST_FPS = 60.0  # AIST++ annotations are 60 fps exactly (repository google/aistplusplus_dataset, factsfigures.html)
 KEYS = ("keypoints3d_optim", "keypoints3d")
 
 

@@ -1,6 +1,6 @@
 """BVH reader: parse the HIERARCHY and MOTION blocks, run forward kinematics, map joints to the canonical set.
 
-BVH conventions followed here (``shared/data/motion/SOURCES.md``, "Common conventions"):
+BVH conventions followed here (the Biovision format as the CMU, Daz and Bandai Namco exports write it):
 
 - A joint's rotation channels are in degrees and are applied in the order listed, as intrinsic rotations:
   ``Zrotation Yrotation Xrotation`` means ``R = Rz @ Ry @ Rx``.

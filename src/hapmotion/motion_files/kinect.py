@@ -1,6 +1,6 @@
 """Azure Kinect Body Tracking JSON, as written by the SDK sample ``offline_processor``.
 
-Layout (``shared/docs/motion-formats.md`` section 2.4)::
+Layout (repository microsoft/Azure-Kinect-Samples, ``body-tracking-samples/offline_processor/main.cpp``)::
 
     {"frames": [{"bodies": [{"body_id": 1, "joint_positions": [[x, y, z] x 32], "joint_orientations": ...}],
                  "frame_id": 0, "num_bodies": 1, "timestamp_usec": 123456}, ...],

@@ -1,7 +1,8 @@
 """Which BVH joint is which canonical (Azure Kinect) joint.
 
-Three skeletons are known exactly (the ones in ``shared/data/motion``, see its ``SOURCES.md``); any other BVH is
-matched by name with common synonyms (:func:`match_generic`).
+Three skeletons are known exactly (the CMU MotionBuilder-friendly and Daz-friendly BVH conversions by B. Hahne
+(cgspeed), and the Bandai Namco Research Motion Dataset); any other BVH is matched by name with common synonyms and
+by its structure (:func:`match_generic`); a user joint map (:mod:`hapmotion.motion_files.joint_map`) names the rest.
 
 Conventions shared by every map:
 
@@ -10,8 +11,8 @@ Conventions shared by every map:
   is ``HAND_*``; using the same point for every skeleton keeps renders comparable across formats.
 - ``SHOULDER_*`` is the humerus head (CMU ``LeftArm``, Daz ``lShldr``, Bandai ``UpperArm_L``); the joints named
   "shoulder"/"collar" in those files are clavicles (``CLAVICLE_*``).
-- Finger joints are not mapped: the CMU conversions carry no finger data (SOURCES.md) and the renderer does not
-  use them.
+- Finger joints are not mapped: the CMU conversions carry no finger data (CMU did not capture fingers) and the
+  renderer does not use them.
 - A name ending in ``_End`` is the End Site of that joint (see :mod:`hapmotion.motion_files.bvh`).
 """
 
@@ -51,14 +52,14 @@ class Skeleton:
 
 
 # CMU units: the CMU FAQ gives metres = value * (1.0 / 0.45) * 2.54 / 100 = 0.056444 (mocap.cs.cmu.edu FAQ, quoted
-# in shared/data/motion/SOURCES.md).
+# in the cgspeed conversions' notes).
 CMU_METRES_PER_UNIT = (1.0 / 0.45) * 2.54 / 100.0
 
 CMU_MB = Skeleton(
     name="CMU MotionBuilder-friendly BVH (31 joints)",
     mapping={
         "PELVIS": "Hips", "SPINE_NAVEL": "Spine", "SPINE_CHEST": "Spine1",
-        # Neck sits at the thorax in these files; Neck1 is the real neck (SOURCES.md).
+        # Neck sits at the thorax in these files; Neck1 is the real neck (checked by forward kinematics).
         "NECK": "Neck1", "HEAD": "Head",
         **_sided({
             "CLAVICLE_LEFT": "LeftShoulder", "SHOULDER_LEFT": "LeftArm", "ELBOW_LEFT": "LeftForeArm",
@@ -103,7 +104,7 @@ BANDAI = Skeleton(
     },
     signature=frozenset({"joint_Root", "Hips", "Spine", "Chest", "Neck", "Head", "Shoulder_L", "UpperArm_L",
                          "LowerArm_L", "Hand_L", "Hand_R", "UpperLeg_L", "Toes_L"}),
-    metres_per_unit=0.01,  # centimetres (dataset README; SOURCES.md)
+    metres_per_unit=0.01,  # centimetres (dataset README, BandaiNamcoResearchInc/Bandai-Namco-Research-Motiondataset)
     unit_name="cm",
 )
 
