@@ -16,8 +16,6 @@ from hapmotion.audio.io import mp3_supported
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 
-pytestmark = pytest.mark.skipif(not mp3_supported(), reason="libsndfile without MP3")
-
 
 @pytest.fixture(scope="module")
 def damaged_mp3(tmp_path_factory):
@@ -44,6 +42,10 @@ def analyse_in_subprocess(path):
                           timeout=120)
 
 
+needs_mp3 = pytest.mark.skipif(not mp3_supported(), reason="libsndfile without MP3")
+
+
+@needs_mp3
 def test_damaged_mp3_is_one_clean_error(damaged_mp3):
     good, bad = damaged_mp3
     r = analyse_in_subprocess(bad)
@@ -54,6 +56,7 @@ def test_damaged_mp3_is_one_clean_error(damaged_mp3):
     assert r.stdout == "ok\n" and r.stderr == ""
 
 
+@needs_mp3
 def test_stderr_works_again_after_an_mp3(damaged_mp3, capfd):
     """The capture is undone after each read: what the program prints afterwards reaches stderr."""
     from hapmotion.audio.io import mono_blocks, probe
@@ -63,3 +66,14 @@ def test_stderr_works_again_after_an_mp3(damaged_mp3, capfd):
     assert n > 2 * 44100
     os.write(2, b"after\n")
     assert capfd.readouterr().err == "after\n"
+
+
+def test_float_wav_with_absurd_values_is_refused(tmp_path):
+    """Damaged float WAV data (3e38) would overflow the analysis' energy sums with a RuntimeWarning per block."""
+    x = np.zeros((22050, 1), dtype=np.float32)
+    x[5000] = 3e38
+    path = tmp_path / "loud.wav"
+    sf.write(path, x, 22050, subtype="FLOAT")
+    r = analyse_in_subprocess(path)
+    assert r.stderr == "" and r.stdout == (f"{path}: sample 5000 (0.227 s): expected sample values within +-10000 "
+                                           "(full scale is 1), found 3e+38\n")

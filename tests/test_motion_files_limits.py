@@ -249,3 +249,15 @@ def test_pickle_of_object_arrays_is_refused(tmp_path):
     path.write_bytes(pickle.dumps({"keypoints3d_optim": np.array([1, "a"], dtype=object)}))
     with pytest.raises(InputError, match=r"obj\.pkl: .*refusing an array of dtype object"):
         hapmotion.load_motion(path)
+
+
+def test_json_that_would_parse_into_gigabytes(tmp_path):
+    """9 MB of ``[],`` is 3 million 56-byte lists once parsed: refused from the first pass over the bytes, with the
+    estimate and the limit to raise."""
+    path = tmp_path / "lists.json"
+    path.write_bytes(b'{"frames": [' + b"[]," * 3_000_000 + b"[]]}")
+    with pytest.raises(InputError, match=r"lists\.json: expected at most 512 MB of parsed JSON \(3000003 lists and "
+                       r"objects, up to 6000004 values\) \(limit json_mb; raise it with --limit json_mb=N\), found 600$"):
+        hapmotion.load_motion(path)
+    with pytest.raises(InputError, match="field frames"):  # raised, the file parses (and is not a recording)
+        hapmotion.load_motion(path, limits={"json_mb": 700})

@@ -29,6 +29,11 @@ MIN_SAMPLE_RATE = 4000
 MAX_SAMPLE_RATE = 768000
 """Highest sample rate accepted (sanity bound; libsndfile reads higher, nothing records it)."""
 
+MAX_SAMPLE_MAGNITUDE = 1e4
+"""Largest sample magnitude accepted. Samples are nominally -1..1 (integer formats cannot exceed it; float files
+may run a little over full scale); 1e4 is 80 dB over full scale, so anything beyond is a damaged float file, whose
+values (up to 3.4e38) would overflow the analysis' energy sums."""
+
 
 @dataclass(frozen=True)
 class AudioInfo:
@@ -185,6 +190,12 @@ def mono_blocks(info: AudioInfo, block_frames: int = BLOCK_FRAMES) -> Iterator[n
                     bad = done + int(np.flatnonzero(~np.isfinite(mono))[0])
                     raise InputError(info.path, f"sample {bad} ({bad / info.sample_rate:.3f} s)",
                                      "expected finite sample values, found NaN or infinity")
+                loud = np.abs(mono) > MAX_SAMPLE_MAGNITUDE
+                if loud.any():
+                    bad = done + int(np.flatnonzero(loud)[0])
+                    raise InputError(info.path, f"sample {bad} ({bad / info.sample_rate:.3f} s)",
+                                     f"expected sample values within +-{MAX_SAMPLE_MAGNITUDE:g} (full scale is 1), "
+                                     f"found {mono[bad - done]:.3g}")
                 done += len(mono)
                 yield mono
                 if len(block) < block_frames:

@@ -65,7 +65,7 @@ def motion_options(f: Callable[..., Any]) -> Callable[..., Any]:
                      "matching misses."),
         click.option("--limit", multiple=True, metavar="NAME=N",
                      help="Raise a size limit of the readers: frames (500000), duration_s (14400), joints (1000), "
-                     "depth (64), file_mb (256). Repeatable."),
+                     "depth (64), file_mb (256), json_mb (512). Repeatable."),
     ]
     for option in reversed(options):  # click lists params in decoration order, bottom first
         wrapper = option(wrapper)

@@ -27,7 +27,8 @@ import numpy as np
 from ..errors import InputError
 from ..joints import JOINTS, N_JOINTS, canonical
 from ..motion import Motion, new_motion
-from .limits import DEFAULT_LIMITS, ReaderLimits, check_frames, nesting_depth, over_limit, read_bytes
+from .json_scan import scan_json
+from .limits import DEFAULT_LIMITS, ReaderLimits, check_frames, over_limit, read_bytes
 from .options import FPS_RANGE, ReaderOptions, fps_in_range, skip_count, snap_rate
 
 MM = 0.001
@@ -263,12 +264,16 @@ def _json_number(text: str) -> "int | float":
 
 def _load_json(path: str, limits: ReaderLimits = DEFAULT_LIMITS) -> Any:
     raw = read_bytes(path, limits)
+    # Python's JSON parser recurses once per nesting level and makes an object per value: check both first.
+    shape = scan_json(raw)
+    over_limit(path, None, "levels of JSON nesting", shape.depth, limits, "depth")
+    over_limit(path, None, f"MB of parsed JSON ({shape.containers} lists and objects, up to {shape.values} values)",
+               round(shape.parsed_bytes / 1e6), limits, "json_mb")
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise InputError(path, None, "expected UTF-8 JSON text, found binary data") from None
-    # Python's JSON parser recurses once per nesting level: check the depth first (Kinect files nest 6 deep).
-    over_limit(path, None, "levels of JSON nesting", nesting_depth(raw), limits, "depth")
+    del raw  # the text replaces it
     try:
         return json.loads(text, parse_int=_json_number)
     except json.JSONDecodeError as err:

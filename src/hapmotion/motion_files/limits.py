@@ -35,6 +35,10 @@ class ReaderLimits:
         skeletons nest about 12 deep (root to fingertip), Kinect JSON 6.
     file_mb:
         File size in MB (10^6 bytes). Text motion files take 1-3 MB per minute at 120 fps.
+    json_mb:
+        Memory (MB) a JSON file may take once parsed, estimated before parsing from its lists, objects and values
+        (:mod:`hapmotion.motion_files.json_scan`). Python holds each value as an object, about 17 kB per frame of a
+        one-body Azure Kinect file: 512 MB is about 30,000 body-frames (16 min at 30 fps).
     """
 
     frames: int = 500_000
@@ -42,6 +46,7 @@ class ReaderLimits:
     joints: int = 1_000
     depth: int = 64
     file_mb: float = 256.0
+    json_mb: float = 512.0
 
     @classmethod
     def names(cls) -> tuple[str, ...]:
@@ -118,16 +123,3 @@ def check_frames(source: str, place: Optional[str], n_frames: int, fps: Optional
     over_limit(source, place, "frames", n_frames, limits, "frames")
     if fps:
         over_limit(source, place, "seconds of motion", n_frames / fps, limits, "duration_s")
-
-
-def nesting_depth(raw: bytes) -> int:
-    """Deepest nesting of ``[``/``{`` in JSON text, not counting brackets inside strings. Linear time, no recursion:
-    it runs before ``json.loads``, whose C parser recurses once per level."""
-    import re
-
-    import numpy as np
-
-    text = re.sub(rb'"(?:[^"\\]|\\.)*"', b'""', raw)
-    b = np.frombuffer(text, dtype=np.uint8)
-    step = (b == ord("[")).astype(np.int32) + (b == ord("{")) - (b == ord("]")) - (b == ord("}"))
-    return int(np.cumsum(step).max()) if len(step) else 0
