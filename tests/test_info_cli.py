@@ -184,3 +184,19 @@ def test_joint_map_and_limit_options(tmp_path):
     assert run("info", path, "--joint-map", jm, "--limit", "frames=60").exit_code == 0
     r = run("info", path, "--limit", "frame=60")
     assert r.exit_code == 2 and "--limit expects NAME=NUMBER" in r.stderr
+
+
+def test_weak_up_axis_warning_reaches_stderr(tmp_path):
+    """Every command reading motion prints the reader's warnings (here through ``info``): one line each."""
+    from support.motion_files import SCHEMES, synthetic_bvh
+
+    text = synthetic_bvh(SCHEMES["CMU"], frames=60)
+    head, motion = text.split("MOTION\n")
+    rows = motion.strip().split("\n")
+    body = [" ".join(r.split()[:4] + ["-90.0"] + r.split()[5:]) if k < 30 else r for k, r in enumerate(rows[2:])]
+    path = tmp_path / "lying.bvh"
+    path.write_text(head + "MOTION\n" + "\n".join(rows[:2] + body) + "\n")
+    r = run("info", path)
+    assert r.exit_code == 0
+    assert r.stderr.startswith(f"warning: {path}: weak evidence for the up axis (") and r.stderr.count("\n") == 1
+    assert "--up" in r.stderr

@@ -89,9 +89,16 @@ def read_motion(path: "str | os.PathLike[str]", **motion_opts: Any) -> Motion:
     """``hapmotion.load_motion`` with the options :func:`motion_options` gathered (by their CLI names).
 
     An option that does not apply to the format, or a bad value, raises :class:`~hapmotion.errors.UsageError`
-    naming the option as the user typed it, which the CLI prints as one line.
+    naming the option as the user typed it, which the CLI prints as one line. The reader's warnings (notes that
+    start with "warning", such as weak evidence for the up axis) are printed on stderr, one line each, so that
+    every command shows them, not only ``info``.
     """
     from ..motion_files import check_options, load_motion
 
     options = check_options(os.fspath(path), cli_reader_options(**motion_opts), spelling=CLI_SPELLING)
-    return load_motion(path, options)
+    motion = load_motion(path, options)
+    for note in motion.meta.get("notes", []):
+        if note.startswith("warning"):
+            text = note.split(":", 1)[1].strip() if note.startswith("warning:") else note
+            click.echo(f"warning: {os.fspath(path)}: {text}", err=True)
+    return motion
