@@ -305,7 +305,10 @@ def run_one(kind: str, path: Path, timeout: float, cap_bytes: int) -> dict:
 
 
 def classify(result: dict) -> str:
-    code, lines = result["code"], [ln for ln in result["stderr"].splitlines() if ln.strip()]
+    """read / clean error / internal error / hang / stray stderr lines (anything on stderr but the one error line,
+    or the reader's own "warning:" lines)."""
+    code = result["code"]
+    lines = [ln for ln in result["stderr"].splitlines() if ln.strip() and not ln.startswith("warning: ")]
     if code is None:
         return "hang"
     if code == 2:
@@ -352,6 +355,7 @@ def main() -> None:
         counts: dict[str, Counter] = defaultdict(Counter)
         worst: dict[str, list] = defaultdict(list)
         seconds: Counter = Counter()
+        peaks: dict[str, float] = defaultdict(float)
         peak = (0.0, "")
         t0 = time.perf_counter()
         cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -360,6 +364,7 @@ def main() -> None:
             c = classify(r)
             counts[kind][c] += 1
             seconds[kind] += r["s"]
+            peaks[kind] = max(peaks[kind], r["peak_mb"])
             if r["peak_mb"] > peak[0]:
                 peak = (r["peak_mb"], f"{path.name} ({c})")
             if c not in ("read", "clean error"):
@@ -382,12 +387,13 @@ def main() -> None:
               f"{wall:.0f} s wall, {cpu:.0f} s CPU in the runs; parent RSS {baseline:.0f} MB (each run starts "
               "from it)")
         print(f"{'reader':8s} {'files':>6s} {'read':>6s} {'clean':>6s} {'internal':>9s} {'hangs':>6s} "
-              f"{'stray':>6s} {'s/file':>7s}")
+              f"{'stray':>6s} {'s/file':>7s} {'peak MB':>8s}")
         for kind in ("motion", "track", "audio"):
             c = counts[kind]
             n = sum(c.values())
             print(f"{kind:8s} {n:6d} {c['read']:6d} {c['clean error']:6d} {c['internal error']:9d} "
-                  f"{c['hang']:6d} {c['stray stderr lines']:6d} {seconds[kind] / max(1, n):7.3f}")
+                  f"{c['hang']:6d} {c['stray stderr lines']:6d} {seconds[kind] / max(1, n):7.3f} "
+                  f"{peaks[kind]:8.0f}")
         print(f"\ninternal errors (exit 1 / tracebacks): {total['internal error']:5d}   target 0")
         print(f"hangs over {args.timeout:g} s:                   {total['hang']:5d}   target 0")
         print(f"stray stderr lines:                     {total['stray stderr lines']:5d}   target 0")
