@@ -25,7 +25,8 @@ from typing import Any, Callable, Optional, Protocol, Sequence
 
 import numpy as np
 
-from .protocol import MAX_ABS_M, Faults, FrameOrder, OutFrame, RateLimiter, SkeletonFrame, sanitize
+from .frames import OutFrame, SkeletonFrame
+from .hygiene import MAX_ABS_M, Faults, FrameOrder, RateLimiter, sanitize
 from .sinks.base import Sink
 from .sources import Source
 from .stats import LiveStats
