@@ -136,12 +136,14 @@ def test_decorator_gathers_options_for_other_commands():
     out = json.loads(r.output)
     assert out["flag"] is True and out["input"] == "x.bvh"
     assert out["opts"] == {"units": None, "scale": None, "skip_frames": None, "body_id": None, "fps_in": 30.0,
-                           "up": "z", "joint_map": None, "limit": []}
+                           "up": "z", "joint_map": None, "limits": None}
     assert tuple(out["opts"]) == MOTION_OPTION_NAMES
     helps = run("probe", "--help").output
     for opt in ("--units", "--scale", "--skip-frames", "--body-id", "--fps-in", "--up", "--joint-map", "--limit",
                 "--flag"):
         assert opt in helps
+    assert json.loads(run("probe", "x.bvh", "--limit", "frames=9", "--limit", "depth=3").output)["opts"]["limits"] == \
+        ["frames=9", "depth=3"]
     r = run("probe", "x.bvh", "--skip-frames", "-1")
     assert r.exit_code == 2 and "--skip-frames" in r.output
 

@@ -13,8 +13,9 @@ import click
 from ..motion import Motion
 from ..motion_files.options import ReaderOptions
 
-MOTION_OPTION_NAMES = ("units", "scale", "skip_frames", "body_id", "fps_in", "up", "joint_map", "limit")
-"""Parameter names :func:`motion_options` adds; they arrive in the command as one dict, ``motion_opts``."""
+MOTION_OPTION_NAMES = ("units", "scale", "skip_frames", "body_id", "fps_in", "up", "joint_map", "limits")
+"""Parameter names :func:`motion_options` adds; they arrive in the command as one dict, ``motion_opts``, with
+``None`` for every option not given (``limits`` too: a tuple of ``NAME=N`` texts only when given)."""
 
 CLI_SPELLING = {"units": "--units", "scale": "--scale", "skip_frames": "--skip-frames", "body_id": "--body-id",
                 "fps": "--fps-in", "up": "--up", "joint_map": "--joint-map", "limits": "--limit"}
@@ -40,7 +41,9 @@ def motion_options(f: Callable[..., Any]) -> Callable[..., Any]:
 
     @functools.wraps(f)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
-        kwargs["motion_opts"] = {name: kwargs.pop(name, None) for name in MOTION_OPTION_NAMES}
+        opts = {name: kwargs.pop(name, None) for name in MOTION_OPTION_NAMES}
+        opts["limits"] = opts["limits"] or None  # click gives () when --limit is not used: "not given"
+        kwargs["motion_opts"] = opts
         return f(*args, **kwargs)
 
     # functools.wraps copied f's click params (a shared list); give the wrapper its own before adding ours.
@@ -63,7 +66,7 @@ def motion_options(f: Callable[..., Any]) -> Callable[..., Any]:
         click.option("--joint-map", type=click.Path(dir_okay=False), default=None, metavar="MAP.toml|MAP.json",
                      help="BVH: a file of '\"their joint\" = \"HAND_LEFT\"' lines naming joints the automatic "
                      "matching misses."),
-        click.option("--limit", multiple=True, metavar="NAME=N",
+        click.option("--limit", "limits", multiple=True, metavar="NAME=N",
                      help="Raise a size limit of the readers: frames (500000), duration_s (14400), joints (1000), "
                      "depth (64), file_mb (256), json_mb (512). Repeatable."),
     ]
@@ -75,12 +78,12 @@ def motion_options(f: Callable[..., Any]) -> Callable[..., Any]:
 def cli_reader_options(*, units: Optional[str] = None, scale: Optional[float] = None,
                        skip_frames: Optional[int] = None, body_id: Optional[int] = None,
                        fps_in: Optional[float] = None, up: Optional[str] = None,
-                       joint_map: Optional[str] = None, limit: Optional[Iterable[str]] = None) -> ReaderOptions:
+                       joint_map: Optional[str] = None, limits: Optional[Iterable[str]] = None) -> ReaderOptions:
     """The :class:`ReaderOptions` for what :func:`motion_options` gathered (``fps_in`` is the reader's ``fps``,
-    each ``limit`` a ``NAME=N`` text). Values are checked when a file is read, in the user's spelling."""
+    each of ``limits`` a ``NAME=N`` text). Values are checked when a file is read, in the user's spelling."""
     from ..motion_files.limits import DEFAULT_LIMITS, parse_limit_assignments
 
-    limits = DEFAULT_LIMITS.raised(parse_limit_assignments(list(limit or ())))
+    limits = DEFAULT_LIMITS.raised(parse_limit_assignments(list(limits or ())))
     return ReaderOptions(units=units, scale=scale, skip_frames=skip_frames, fps=fps_in, up=up, body_id=body_id,
                          joint_map=joint_map, limits=limits)
 
