@@ -454,9 +454,10 @@ def unmatched_message(missing: list[str], bvh: BvhFile, mapping: dict[str, str])
     """A short explanation for a skeleton whose needed joints were not found: the joints, the closest candidates
     (at most three each, shortened) and how to write a joint map. Never lists the whole skeleton.
 
-    Candidates for a missing joint are first its neighbours in the file's hierarchy (the children of the joint
-    matched as its nearest canonical ancestor, the parent of the joint matched as its canonical child: the hand
-    is the joint below the elbow), then the names that look most alike.
+    Candidates for a missing joint are first its neighbours in the file's hierarchy (the parent of the joint
+    matched as its canonical child: the shoulder is the joint above the elbow; then the children of the joint
+    matched as its nearest canonical ancestor: the hand is a joint below the elbow), then the names that look
+    most alike.
     """
     from ..joints import JOINT_INDEX, PARENTS
 
@@ -466,15 +467,14 @@ def unmatched_message(missing: list[str], bvh: BvhFile, mapping: dict[str, str])
     for canon in missing:
         near: list[str] = []
         c = JOINT_INDEX[canon]
+        for child in (JOINTS[k] for k, p in enumerate(PARENTS) if p == c):  # the joint above its matched child
+            if child in mapping and bvh.joints[index[mapping[child]]].parent >= 0:
+                near.append(bvh.joints[bvh.joints[index[mapping[child]]].parent].name)
         p = PARENTS[c]
         while p >= 0 and JOINTS[p] not in mapping:  # the nearest matched canonical ancestor (HAND -> ELBOW)
             p = PARENTS[p]
-        parent = JOINTS[p] if p >= 0 else None
-        if parent in mapping:
-            near += [j.name for j in bvh.joints if j.parent == index[mapping[parent]] and not j.end_site]
-        for child in (JOINTS[k] for k, p in enumerate(PARENTS) if p == c):
-            if child in mapping and bvh.joints[index[mapping[child]]].parent >= 0:
-                near.append(bvh.joints[bvh.joints[index[mapping[child]]].parent].name)
+        if p >= 0:  # the joints below it
+            near += [j.name for j in bvh.joints if j.parent == index[mapping[JOINTS[p]]] and not j.end_site]
         close = list(dict.fromkeys(n for n in near + skeletons.closest_names(canon, names)
                                    if n not in mapping.values()))[:3]
         shown = ", ".join(repr(n[:30]) for n in close)
