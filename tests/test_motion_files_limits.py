@@ -15,7 +15,6 @@ import pickle
 import subprocess
 import sys
 import zipfile
-import zlib
 from pathlib import Path
 
 import numpy as np

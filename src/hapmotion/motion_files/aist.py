@@ -16,7 +16,7 @@ from __future__ import annotations
 import io
 import os
 import pickle
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 

@@ -13,9 +13,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-QUOTE, BACKSLASH, COMMA = 34, 92, 44
-OPEN = (91, 123)  # [ {
-CLOSE = (93, 125)  # ] }
+QUOTE, BACKSLASH, COMMA = 34, 92, 44  # '"', '\\', ','
+OPEN_LIST, OPEN_OBJECT, CLOSE_LIST, CLOSE_OBJECT = 91, 123, 93, 125  # [ { ] }
 
 # Bytes of Python objects per JSON value once parsed, rounded up: a list or dict (56-232 bytes, with its slots
 # and over-allocation) and a number or string (a 24-byte float or 28-byte int plus its 8-byte slot in the
@@ -55,12 +54,12 @@ def _scan(buf):
                 in_string = False
         elif c == QUOTE:
             in_string = True
-        elif c == 91 or c == 123:
+        elif c == OPEN_LIST or c == OPEN_OBJECT:
             depth += 1
             containers += 1
             if depth > deepest:
                 deepest = depth
-        elif c == 93 or c == 125:
+        elif c == CLOSE_LIST or c == CLOSE_OBJECT:
             depth -= 1
         elif c == COMMA:
             commas += 1

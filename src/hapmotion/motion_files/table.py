@@ -30,7 +30,7 @@ from ..joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS, canonical
 from ..motion import Motion, new_motion
 from ..filesafety import atomic_path
 from .derived_joints import derive_missing
-from .limits import DEFAULT_LIMITS, ReaderLimits, check_frames, over_limit, read_bytes
+from .limits import ReaderLimits, check_frames, over_limit, read_bytes
 from .options import FPS_RANGE, MAX_FPS, MIN_FPS, STEP_RANGE, ReaderOptions, skip_count, fps_in_range
 from .units import units_or_default
 from .up_axis import apply_up_axis
