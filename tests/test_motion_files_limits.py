@@ -22,7 +22,7 @@ import pytest
 
 import hapmotion
 from hapmotion.errors import InputError
-from hapmotion.motion_files import ReaderLimits
+from hapmotion.limits import InputLimits
 from support.data import MOTION
 from support.motion_files import assert_input_error, kinect_document
 
@@ -70,17 +70,21 @@ def test_deeply_nested_json_is_refused_by_depth(tmp_path):
 @pytest.mark.parametrize("digits", [400, 5000])
 def test_huge_integers_in_json_fields(tmp_path, clip, digits):
     """Python's int() refuses 4,300+ digits (ValueError) and a float cannot hold 400 digits (OverflowError):
-    both are the file's fault, named by field."""
+    both are the file's fault, refused before parsing by the number_digits limit and, with the limit raised,
+    named by field."""
     doc = kinect_document(clip, second_body=False, jitter=False)
     doc["frames"][2]["timestamp_usec"] = 424242
     path = tmp_path / "big.json"
     path.write_text(json.dumps(doc).replace("424242", "9" * digits))
+    assert_clean_refusal(path, f"big.json: line 1: expected at most 100 digits in a number (limit number_digits; "
+                               f"raise it with --limit number_digits=N), found {digits}")
     assert_clean_refusal(path, "field frames[2].timestamp_usec: expected a number of microseconds, found the "
-                               "number inf")
+                               "number inf", "--limit", "number_digits=6000")
     doc = kinect_document(clip, second_body=False, jitter=False)
     doc["frames"][1]["bodies"][0]["body_id"] = 424242
     path.write_text(json.dumps(doc).replace("424242", "7" * digits))
-    assert_clean_refusal(path, "field frames[1].bodies[0].body_id: expected a whole number, found the number inf")
+    assert_clean_refusal(path, "field frames[1].bodies[0].body_id: expected a whole number, found the number inf",
+                         "--limit", "number_digits=6000")
 
 
 def test_timestamp_far_in_the_future_is_a_jump_not_a_cast_warning(tmp_path, clip):
@@ -124,7 +128,7 @@ def test_bvh_joint_count_and_frames_limits(tmp_path):
     assert_input_error(PUNCH, "line 133", "expected at most 100 frames (limit frames; raise it with --limit "
                        "frames=N), found 224", limits={"frames": 100})
     assert_input_error(PUNCH, "line 134", "expected at most 5 seconds of motion (limit duration_s",
-                       limits=ReaderLimits(duration_s=5))
+                       limits=InputLimits(duration_s=5))
     with pytest.raises(InputError, match=r"001\.bvh: expected a file of at most 0\.1 MB \(limit file_mb; raise it "
                        r"with --limit file_mb=N\), found 0\.3 MB$"):
         hapmotion.load_motion(PUNCH, limits={"file_mb": 0.1})

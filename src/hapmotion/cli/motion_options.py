@@ -1,6 +1,7 @@
-"""The reader options every command that reads motion shares, from one definition: :func:`motion_options` adds
-them to a click command, :func:`cli_reader_options` turns what the user typed into a
-:class:`~hapmotion.motion_files.ReaderOptions`, and :func:`read_motion` reads a file with them."""
+"""The reader options every command that reads motion or tracks shares, from one definition: :func:`motion_options`
+adds them to a click command, :func:`cli_reader_options` turns what the user typed into a
+:class:`~hapmotion.motion_files.ReaderOptions`, :func:`read_motion` reads a motion file with them and
+:func:`read_track` a track file with their ``--limit`` values."""
 
 from __future__ import annotations
 
@@ -10,8 +11,10 @@ from typing import Any, Callable, Iterable, Optional
 
 import click
 
+from ..limits import DEFAULT_LIMITS, InputLimits, parse_limit_assignments
 from ..motion import Motion
 from ..motion_files.options import ReaderOptions
+from ..track import HapticTrack
 
 MOTION_OPTION_NAMES = ("units", "scale", "skip_frames", "body_id", "fps_in", "up", "joint_map", "limits")
 """Parameter names :func:`motion_options` adds; they arrive in the command as one dict, ``motion_opts``, with
@@ -67,8 +70,8 @@ def motion_options(f: Callable[..., Any]) -> Callable[..., Any]:
                      help="BVH: a file of '\"their joint\" = \"HAND_LEFT\"' lines naming joints the automatic "
                      "matching misses."),
         click.option("--limit", "limits", multiple=True, metavar="NAME=N",
-                     help="Raise a size limit of the readers: frames (500000), duration_s (14400), joints (1000), "
-                     "depth (64), file_mb (256), json_mb (512). Repeatable."),
+                     help=f"Raise a size limit of the motion and track readers: {DEFAULT_LIMITS.help_text()}. "
+                     "Repeatable."),
     ]
     for option in reversed(options):  # click lists params in decoration order, bottom first
         wrapper = option(wrapper)
@@ -81,11 +84,13 @@ def cli_reader_options(*, units: Optional[str] = None, scale: Optional[float] = 
                        joint_map: Optional[str] = None, limits: Optional[Iterable[str]] = None) -> ReaderOptions:
     """The :class:`ReaderOptions` for what :func:`motion_options` gathered (``fps_in`` is the reader's ``fps``,
     each of ``limits`` a ``NAME=N`` text). Values are checked when a file is read, in the user's spelling."""
-    from ..motion_files.limits import DEFAULT_LIMITS, parse_limit_assignments
-
-    limits = DEFAULT_LIMITS.raised(parse_limit_assignments(list(limits or ())))
     return ReaderOptions(units=units, scale=scale, skip_frames=skip_frames, fps=fps_in, up=up, body_id=body_id,
-                         joint_map=joint_map, limits=limits)
+                         joint_map=joint_map, limits=cli_limits(limits))
+
+
+def cli_limits(limits: Optional[Iterable[str]] = None) -> InputLimits:
+    """The :class:`InputLimits` for the ``--limit NAME=N`` texts the user gave (the defaults for the others)."""
+    return DEFAULT_LIMITS.raised(parse_limit_assignments(list(limits or ())))
 
 
 def read_motion(path: "str | os.PathLike[str]", **motion_opts: Any) -> Motion:
@@ -105,3 +110,11 @@ def read_motion(path: "str | os.PathLike[str]", **motion_opts: Any) -> Motion:
             text = note.split(":", 1)[1].strip() if note.startswith("warning:") else note
             click.echo(f"warning: {os.fspath(path)}: {text}", err=True)
     return motion
+
+
+def read_track(path: "str | os.PathLike[str]", **motion_opts: Any) -> HapticTrack:
+    """``hapmotion.load_track`` within the ``--limit`` values :func:`motion_options` gathered (the other reader
+    options are about motion files and do not apply to a saved track)."""
+    from ..track_files import load_track
+
+    return load_track(path, limits=cli_limits(motion_opts.get("limits")))

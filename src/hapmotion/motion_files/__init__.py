@@ -23,7 +23,7 @@ from typing import Any, Mapping, Optional
 
 from ..errors import InputError, UsageError
 from ..motion import Motion
-from .limits import DEFAULT_LIMITS, ReaderLimits
+from ..limits import DEFAULT_LIMITS, InputLimits
 from .options import ReaderOptions
 
 _MOTION_OPTIONS = frozenset({"units", "scale", "skip_frames", "fps"})
@@ -46,7 +46,7 @@ OPTIONS: frozenset[str] = frozenset(ReaderOptions.format_option_names())
 
 def reader_options(options: Optional[ReaderOptions] = None, **kwargs: Any) -> ReaderOptions:
     """``options`` (default: none given) with the keyword options laid over it; :class:`UsageError` for a name
-    that is not an option. ``limits`` may be a :class:`ReaderLimits` or a mapping of limits to raise."""
+    that is not an option. ``limits`` may be a :class:`InputLimits` or a mapping of limits to raise."""
     base = options if options is not None else ReaderOptions()
     if not isinstance(base, ReaderOptions):
         raise UsageError(f"options must be a ReaderOptions, found {type(base).__name__}")
@@ -92,7 +92,7 @@ def load_motion(path: "str | os.PathLike[str]", options: Optional[ReaderOptions]
     ``skip_frames`` (leading frames to drop; BVH detects T-pose frames itself); ``fps`` (frame rate override);
     ``up`` (the file's up axis: y, z, -y, -z, x, -x; BVH detects it, tables are +Y); ``body_id`` (Azure Kinect
     JSON: which body); ``joint_map`` (BVH: a ``.toml``/``.json`` file or a mapping of the file's joint names to
-    canonical joints); ``limits`` (a :class:`ReaderLimits`, or a mapping of limits to raise, e.g.
+    canonical joints); ``limits`` (a :class:`InputLimits`, or a mapping of limits to raise, e.g.
     ``{"frames": 2_000_000}``). Raises :class:`~hapmotion.errors.InputError` for a file that cannot be used and
     :class:`~hapmotion.errors.UsageError` for options that do not fit.
 
@@ -118,5 +118,5 @@ def save_motion_table(motion: Motion, path: "str | os.PathLike[str]") -> None:
     _save(motion, path)
 
 
-__all__ = ["load_motion", "save_motion_table", "check_options", "reader_options", "ReaderOptions", "ReaderLimits",
+__all__ = ["load_motion", "save_motion_table", "check_options", "reader_options", "ReaderOptions", "InputLimits",
            "DEFAULT_LIMITS", "SUPPORTED_EXTENSIONS", "OPTIONS"]

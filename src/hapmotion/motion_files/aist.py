@@ -24,7 +24,7 @@ from ..errors import InputError
 from ..joints import JOINT_INDEX, N_JOINTS
 from ..motion import Motion, new_motion
 from .derived_joints import derive_missing
-from .limits import DEFAULT_LIMITS, ReaderLimits, check_frames, read_bytes
+from ..limits import DEFAULT_LIMITS, InputLimits, check_frames, read_bytes
 from .options import ReaderOptions, skip_count
 from .units import units_or_default
 
@@ -113,7 +113,7 @@ def _declared_bytes(shape: Any, dtype: Any) -> float:
     return total
 
 
-def load_pickle(path: str, limits: ReaderLimits = DEFAULT_LIMITS) -> Any:
+def load_pickle(path: str, limits: InputLimits = DEFAULT_LIMITS) -> Any:
     """Unpickle ``path`` allowing only numpy arrays inside builtin containers; :class:`InputError` otherwise."""
     raw = read_bytes(path, limits)
     try:
@@ -129,7 +129,7 @@ def load_pickle(path: str, limits: ReaderLimits = DEFAULT_LIMITS) -> Any:
                          f"that cannot be loaded ({reason})") from None
 
 
-def keypoints_from(path: str, doc: Any, limits: ReaderLimits = DEFAULT_LIMITS,
+def keypoints_from(path: str, doc: Any, limits: InputLimits = DEFAULT_LIMITS,
                    fps: float = 60.0) -> tuple[np.ndarray, str]:
     """The ``(N, 17, 3)`` keypoint array and the key it came from (its frames checked against ``limits``)."""
     if not isinstance(doc, dict):

@@ -32,7 +32,7 @@ from ..motion import Motion, new_motion
 from . import skeletons
 from .derived_joints import derive_missing, missing_needed
 from .joint_map import MAP_EXAMPLE, load_joint_map
-from .limits import DEFAULT_LIMITS, ReaderLimits, check_frames, over_limit, read_bytes
+from ..limits import DEFAULT_LIMITS, InputLimits, check_frames, over_limit, read_bytes
 from .options import FPS_RANGE, ReaderOptions, fps_in_range, skip_count, snap_rate
 from .units import UNITS, resolve_scale
 from .up_axis import apply_up_axis, detect_up_axis
@@ -138,7 +138,7 @@ class _Tokens:
         return value
 
 
-def _parse_hierarchy(path: str, text: str, limits: ReaderLimits = DEFAULT_LIMITS) -> list[BvhJoint]:
+def _parse_hierarchy(path: str, text: str, limits: InputLimits = DEFAULT_LIMITS) -> list[BvhJoint]:
     """The joints of a HIERARCHY block in file order (parents first). Iterative, so nesting depth costs no
     recursion; the joint count and the depth are checked against ``limits`` as the joints are read."""
     toks = _Tokens(path, text)
@@ -219,7 +219,7 @@ _FRAMES = re.compile(r"^\s*Frames\s*:\s*(\S+)\s*$", re.I)
 _FRAME_TIME = re.compile(r"^\s*Frame\s+Time\s*:\s*(\S+)\s*$", re.I)
 
 
-def parse_bvh(path: str | os.PathLike[str], limits: ReaderLimits = DEFAULT_LIMITS) -> BvhFile:
+def parse_bvh(path: str | os.PathLike[str], limits: InputLimits = DEFAULT_LIMITS) -> BvhFile:
     """Parse a BVH file into its hierarchy and its ``(T, C)`` channel values. Raises :class:`InputError`.
 
     Sizes are checked before anything is allocated: the file size, the joint count and nesting depth, and the

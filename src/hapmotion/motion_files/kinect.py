@@ -17,7 +17,6 @@ Timing: ``timestamp_usec`` is the device clock. The frame rate is 1e6 / median s
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from typing import Any
@@ -27,8 +26,7 @@ import numpy as np
 from ..errors import InputError
 from ..joints import JOINTS, N_JOINTS, canonical
 from ..motion import Motion, new_motion
-from .json_scan import scan_json
-from .limits import DEFAULT_LIMITS, ReaderLimits, check_frames, over_limit, read_bytes
+from ..limits import check_frames, load_json
 from .options import FPS_RANGE, ReaderOptions, fps_in_range, skip_count, snap_rate
 
 MM = 0.001
@@ -120,7 +118,7 @@ def read_kinect_json(path: str | os.PathLike[str], options: ReaderOptions = Read
     """
     path = os.fspath(path)
     fps, body_id, skip_frames = options.fps, options.body_id, options.skip_frames
-    doc = _load_json(path, options.limits)
+    doc = load_json(path, options.limits, allow_nan=True)  # a NaN joint is a gap
     if not isinstance(doc, dict):
         raise InputError(path, "field (top level)", f"expected an object with 'frames', found {_kind(doc)}")
     frames = doc.get("frames")
@@ -254,29 +252,3 @@ def read_kinect_json(path: str | os.PathLike[str], options: ReaderOptions = Read
                          "found none")
     return new_motion(positions, rate, source=path, meta=meta)
 
-
-def _json_number(text: str) -> "int | float":
-    """JSON integers as Python numbers, without Python's 4,300-digit limit on ``int()`` (a ValueError) or
-    integers too large for a float (an OverflowError later): a long integer becomes a float, ``inf`` when out of
-    range, which the field checks then refuse like any other non-finite value."""
-    return int(text) if len(text) <= 18 else float(text)
-
-
-def _load_json(path: str, limits: ReaderLimits = DEFAULT_LIMITS) -> Any:
-    raw = read_bytes(path, limits)
-    # Python's JSON parser recurses once per nesting level and makes an object per value: check both first.
-    shape = scan_json(raw)
-    over_limit(path, None, "levels of JSON nesting", shape.depth, limits, "depth")
-    over_limit(path, None, f"MB of parsed JSON ({shape.containers} lists and objects, up to {shape.values} values)",
-               round(shape.parsed_bytes / 1e6), limits, "json_mb")
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise InputError(path, None, "expected UTF-8 JSON text, found binary data") from None
-    del raw  # the text replaces it
-    try:
-        return json.loads(text, parse_int=_json_number)
-    except json.JSONDecodeError as err:
-        raise InputError(path, f"line {err.lineno} column {err.colno}", f"expected valid JSON ({err.msg})") from None
-    except RecursionError:
-        raise InputError(path, None, "expected JSON nested a few levels deep, found deeper nesting") from None

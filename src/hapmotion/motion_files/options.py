@@ -13,7 +13,7 @@ from typing import Any, Mapping, Optional, Union
 import numpy as np
 
 from ..errors import InputError, UsageError
-from .limits import DEFAULT_LIMITS, ReaderLimits
+from ..limits import DEFAULT_LIMITS, InputLimits
 from .units import resolve_scale
 from .up_axis import normalise_up
 
@@ -49,7 +49,7 @@ class ReaderOptions:
         BVH: the user's joint names -> canonical joints, as a mapping or a ``.toml``/``.json`` file
         (see :mod:`hapmotion.motion_files.joint_map`).
     limits:
-        Size limits checked before allocating (:class:`~hapmotion.motion_files.limits.ReaderLimits`).
+        Size limits checked before allocating (:class:`~hapmotion.limits.InputLimits`).
     """
 
     units: Optional[str] = None
@@ -59,7 +59,7 @@ class ReaderOptions:
     up: Optional[str] = None
     body_id: Optional[int] = None
     joint_map: Optional[JointMapSource] = None
-    limits: ReaderLimits = field(default=DEFAULT_LIMITS)
+    limits: InputLimits = field(default=DEFAULT_LIMITS)
 
     @classmethod
     def format_option_names(cls) -> tuple[str, ...]:
@@ -88,8 +88,8 @@ class ReaderOptions:
         bid = self.body_id
         if bid is not None and (isinstance(bid, (bool, np.bool_)) or not isinstance(bid, (int, np.integer))):
             raise UsageError(f"{say('body_id', 'body_id')} must be a whole number, found {bid!r}")
-        if not isinstance(self.limits, ReaderLimits):
-            raise UsageError(f"limits must be a ReaderLimits, found {type(self.limits).__name__}")
+        if not isinstance(self.limits, InputLimits):
+            raise UsageError(f"limits must be a InputLimits, found {type(self.limits).__name__}")
         return replace(self, up=normalise_up(self.up))
 
 

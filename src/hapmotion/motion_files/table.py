@@ -30,7 +30,7 @@ from ..joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS, canonical
 from ..motion import Motion, new_motion
 from ..filesafety import atomic_path
 from .derived_joints import derive_missing
-from .limits import ReaderLimits, check_frames, over_limit, read_bytes
+from ..limits import InputLimits, check_frames, over_limit, read_bytes
 from .options import FPS_RANGE, MAX_FPS, MIN_FPS, STEP_RANGE, ReaderOptions, skip_count, fps_in_range
 from .units import units_or_default
 from .up_axis import apply_up_axis
@@ -347,7 +347,7 @@ NPZ_ARRAYS = ("positions", "joints", "fps", "confidence", "derived")
 """Arrays a motion NPZ may hold; others are not read."""
 
 
-def _npz_arrays(path: str, raw: bytes, limits: ReaderLimits) -> dict[str, np.ndarray]:
+def _npz_arrays(path: str, raw: bytes, limits: InputLimits) -> dict[str, np.ndarray]:
     """The known arrays of an NPZ archive, each checked before it is decompressed.
 
     Every member's ``.npy`` header is read first and its declared size compared with the limits (frames x 32
