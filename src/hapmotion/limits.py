@@ -154,19 +154,35 @@ def over_limit(source: "str | os.PathLike[str]", place: Optional[str], what: str
 
 def read_bytes(path: "str | os.PathLike[str]", limits: InputLimits = DEFAULT_LIMITS) -> bytes:
     """The whole file, after checking its size against ``limits.file_mb``; :class:`InputError` saying why not."""
+    check_file_size(path, limits)
     try:
-        size = os.path.getsize(path)
-        if size > limits.file_bytes:
-            raise InputError(path, None, f"expected a file of at most {limits.file_mb:g} MB (limit file_mb; raise it "
-                             f"with --limit file_mb=N), found {size / 1e6:.1f} MB")
         with open(path, "rb") as f:
             return f.read(limits.file_bytes + 1)
+    except OSError as err:
+        raise InputError(path, None, f"cannot read the file ({err.strerror or err})") from None
+
+
+def check_file_size(path: "str | os.PathLike[str]", limits: InputLimits = DEFAULT_LIMITS) -> None:
+    """:class:`InputError` unless ``path`` is a readable file within ``limits.file_mb``."""
+    try:
+        size = os.path.getsize(path)
+        if os.path.isdir(path):
+            raise IsADirectoryError
     except FileNotFoundError:
         raise InputError(path, None, "file not found") from None
     except IsADirectoryError:
         raise InputError(path, None, "expected a file, found a directory") from None
     except OSError as err:
         raise InputError(path, None, f"cannot read the file ({err.strerror or err})") from None
+    if size > limits.file_bytes:
+        raise InputError(path, None, f"expected a file of at most {limits.file_mb:g} MB (limit file_mb; raise it "
+                         f"with --limit file_mb=N), found {size / 1e6:.1f} MB")
+
+
+def check_track_rate(source: "str | os.PathLike[str]", place: Optional[str], fps: float) -> None:
+    """:class:`InputError` unless a track's frame rate is a number in (0, :data:`MAX_TRACK_FPS`]."""
+    if not (math.isfinite(fps) and 0 < fps <= MAX_TRACK_FPS):
+        raise InputError(source, place, f"expected a frame rate in (0, {MAX_TRACK_FPS:g}] fps, found {fps:g}")
 
 
 def check_frames(source: "str | os.PathLike[str]", place: Optional[str], n_frames: float, fps: Optional[float],

@@ -17,7 +17,8 @@ from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, Union
 
 
-from ..errors import InputError, UsageError
+from ..errors import UsageError
+from ..limits import checked_json_text
 from ..show import Show, live_music
 from .engine import AudioChannel, LiveEngine
 from .devices import DeviceMap
@@ -41,11 +42,8 @@ def build_source(ep: Endpoint, *, fps: Optional[float], speed: float, loop: bool
 def _registrations(ep: Endpoint) -> dict[str, Any]:
     regs = {}
     for path in ep.options.get("register", []):
-        try:
-            text = Path(path).read_text(encoding="utf-8")
-        except OSError as exc:
-            raise InputError(path, None, f"cannot read the .tact file to register ({exc.strerror})") from None
-        regs[Path(path).stem] = tact_project(text, path)
+        # the same guard as the .tact reader: size, nesting, parsed size and number length before parsing
+        regs[Path(path).stem] = tact_project(checked_json_text(path, what=".tact pattern"), path)
     return regs
 
 
