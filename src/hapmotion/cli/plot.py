@@ -8,7 +8,7 @@ import click
 
 from ..errors import UsageError
 from ..show import MODES
-from .motion_options import motion_options, read_motion
+from .motion_options import motion_options, read_motion, read_track
 from .render import progress_bar
 
 
@@ -68,7 +68,8 @@ def command(input_path, output, method, preset, mirror, audio_path, mode, mix_ra
     mode = mode or ("multimodal" if audio_path else "motion")
     show = Show(mirror=mirror, audio=audio_path, audio_offset_s=audio_offset, mix_ratio=parse_mix_ratio(mix_ratio))
     loaded = read_view_input(input_path, show, methods=[method], presets=[preset], modes=[mode],
-                             read_motion=lambda path: read_motion(path, **motion_opts), progress=progress_bar)
+                             read_motion=lambda path: read_motion(path, **motion_opts),
+                             read_track=lambda path: read_track(path, **motion_opts), progress=progress_bar)
     track = loaded.tracks[0]
     audio = load_audio_part(audio_path, fps=track.fps, offset_s=audio_offset) if audio_path is not None else None
     plot_track(track, output, title=title or input_path.name, audio=audio, start_s=start_s, end_s=end_s, dpi=dpi,

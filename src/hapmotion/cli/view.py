@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from ..errors import UsageError
-from .motion_options import motion_options, read_motion
+from .motion_options import motion_options, read_motion, read_track
 from .render import progress_bar
 
 @click.command("view")
@@ -78,7 +78,8 @@ def command(input_path, output, audio_path, audio_offset, modes, mix_ratio, meth
     if input_path is not None:
         show = Show(mirror=mirror, audio=audio_path, audio_offset_s=audio_offset, mix_ratio=parse_mix_ratio(mix_ratio))
         loaded = read_view_input(input_path, show, methods=method_list, presets=preset_list, modes=mode_list,
-                                 read_motion=lambda path: read_motion(path, **motion_opts), progress=progress_bar)
+                                 read_motion=lambda path: read_motion(path, **motion_opts),
+                                 read_track=lambda path: read_track(path, **motion_opts), progress=progress_bar)
         tracks, motion, notes, source_name = loaded.tracks, loaded.motion, loaded.notes, input_path.name
     audio = None
     if audio_path is not None:

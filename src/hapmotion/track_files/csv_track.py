@@ -34,12 +34,14 @@ def read_csv(path: Path, limits: InputLimits = DEFAULT_LIMITS) -> HapticTrack:
     except UnicodeDecodeError:
         raise InputError(path, "line 1", "expected a UTF-8 text CSV track, found binary data") from None
     del raw
-    header = text[:text.find("\n") if "\n" in text else len(text)].strip()
+    body_at = text.find("\n") + 1 if "\n" in text else len(text)
+    header = text[:body_at].strip()
     cols = header.split(",")
     if not cols or cols[0] != "time_s" or len(cols) < 2:
         raise InputError(path, "line 1", f"expected a header starting with time_s and actuator ids, found {header[:60]!r}")
     # rows and values counted on the text, before numpy builds them
-    check_frames(path, None, text.count("\n", len(header)), None, limits, columns=len(cols) - 1, of="track")
+    rows = text.count("\n", body_at) + (0 if text.endswith("\n") or body_at == len(text) else 1)  # blank ones too
+    check_frames(path, None, rows, None, limits, columns=len(cols) - 1, of="track")
     try:
         with warnings.catch_warnings():  # numpy warns on a header-only file; the check below says it in one line
             warnings.simplefilter("ignore")
