@@ -72,7 +72,9 @@ class VmcSender:
 
         side_up = _unit(joint("SHOULDER_RIGHT") - joint("SHOULDER_LEFT"))
         side_low = _unit(joint("HIP_RIGHT") - joint("HIP_LEFT"))
-        up = _unit(joint("NECK") - joint("PELVIS"))
+        neck = joint("NECK") if np.isfinite(joint("NECK")[0]).all() else \
+            0.5 * (joint("SHOULDER_LEFT") + joint("SHOULDER_RIGHT"))
+        up = _unit(neck - joint("PELVIS"))
         forward = _unit(np.cross(up, side_up))
         world_rot: dict[str, Rotation] = {}
         for b in self.bones:  # HumanBodyBones order puts every parent before its children except UpperChest

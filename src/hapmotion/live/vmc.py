@@ -34,10 +34,10 @@ pose of every bone and emits the chained skeleton when a frame is complete, at t
 3. a loose bone message for a bone already updated in the pending frame (the next frame has begun; this costs one
    frame of delay, so a sender should bundle or send the time).
 
-A frame is held back (not emitted; counted in :attr:`VmcDecoder.held`) while the sender says no avatar is loaded,
-while it is waiting for or doing calibration (the avatar is not following the performer then), and while it
-reports tracking lost; the live engine then fades out as for a silent source. When the avatar is unloaded the held
-bone poses are forgotten, so the next avatar starts from its own bones.
+While the sender says no avatar is loaded, its poses are ignored and the poses held so far forgotten (the next avatar
+starts from its own bones). A frame is held back (not emitted; counted in :attr:`VmcDecoder.held`) while the sender
+is waiting for or doing calibration (the avatar is not following the performer then) and while it reports
+tracking lost. Either way no frame comes, and the live engine fades out as for a silent source.
 
 Bad input is counted with the live fault kinds (:class:`hapmotion.live.protocol.Faults`) and skipped: ``malformed``
 (not OSC, too few arguments, wrong types, a zero quaternion), ``unknown_joint`` (a bone name that is not a
@@ -245,6 +245,9 @@ class VmcDecoder:
         return params[0], (px, py, pz), (qx / norm, qy / norm, qz / norm, qw / norm)
 
     def _bone(self, params: list, received: float, out: list[SkeletonFrame], loose: bool) -> None:
+        if self.loaded is False:  # no avatar: its poses mean nothing (and the next avatar has its own bones)
+            self.ignored += 1
+            return
         pose = self._pose_args(params, ADDR_BONE)
         if pose is None:
             return
@@ -265,6 +268,9 @@ class VmcDecoder:
         self._pending.add(b)
 
     def _root(self, params: list) -> None:
+        if self.loaded is False:
+            self.ignored += 1
+            return
         pose = self._pose_args(params, ADDR_ROOT)
         if pose is None:
             return
@@ -393,12 +399,13 @@ class VmcSource(Source):
 
     Loose messages the decoder does not read (blend shapes, cameras, devices) are dropped before parsing and cost
     nothing; the rest is admitted up to ``2 * VMC_MESSAGES_PER_FRAME`` datagrams per frame interval (bursts of four
-    frames' worth), since a sender that does not bundle sends a datagram per bone. Beyond that they are counted as
-    ``flood`` and dropped unparsed.
+    frames' worth), since a sender that does not bundle sends a datagram per bone; ``max_rate`` (datagrams per
+    second) sets another limit. Beyond it they are counted as ``flood`` and dropped unparsed.
     """
 
-    def __init__(self, host: str = VMC_HOST, port: int = VMC_PORT):
+    def __init__(self, host: str = VMC_HOST, port: int = VMC_PORT, *, max_rate: Optional[float] = None):
         self.host, self.port = host, port
+        self.max_rate = max_rate  # datagrams/s admitted; default 2 * VMC_MESSAGES_PER_FRAME * the frame rate
         self.name = f"vmc://{host}:{port}"
         self.decoder: Optional[VmcDecoder] = None
         self._transport: Optional[asyncio.DatagramTransport] = None
@@ -407,7 +414,8 @@ class VmcSource(Source):
     async def start(self, engine: "LiveEngine") -> None:
         await super().start(engine)
         self.decoder = VmcDecoder(engine.faults)
-        self._limiter = RateLimiter(2 * VMC_MESSAGES_PER_FRAME * engine.rate, 4 * VMC_MESSAGES_PER_FRAME)
+        self._limiter = RateLimiter(self.max_rate or 2 * VMC_MESSAGES_PER_FRAME * engine.rate,
+                                    4 * VMC_MESSAGES_PER_FRAME)
         loop = asyncio.get_running_loop()
         try:
             self._transport, _ = await loop.create_datagram_endpoint(lambda: _VmcProtocol(self),
