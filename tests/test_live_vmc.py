@@ -23,8 +23,10 @@ from hapmotion.humanoid import (BONE_INDEX, CANONICAL_TO_BONE, HUMAN_BODY_BONES,
                                 bone_name, present_parent)
 from hapmotion.joints import JOINT_INDEX as J
 from hapmotion.joints import JOINTS, RENDER_JOINTS
-from hapmotion.live.protocol import Faults
-from hapmotion.live.vmc import VMC_PORT, VmcDecoder, VmcSource
+from hapmotion.live.access import SenderAllowList
+from hapmotion.live.hygiene import Faults
+from hapmotion.live.vmc import VmcSource
+from hapmotion.live.wire.vmc_in import VMC_PORT, VmcDecoder
 from hapmotion.motion_files._common import derive_missing
 
 BYEBYE = MOTION / "dataset-1_byebye_happy_001.bvh"
@@ -400,7 +402,7 @@ def test_vmc_over_loopback_counts_faults_and_floods_and_goes_on(recording60):
         tap = Tap()
         # On loopback the kernel drops most of a flood before it is read; a 1000 datagrams/s limit (still 4 times
         # what this bundling sender needs) makes sure the limit itself is exercised, even on a busy machine.
-        task, engine = await start_session(VmcSource("127.0.0.1", 0, max_rate=1000.0), [tap], fps=fps)
+        task, engine = await start_session(VmcSource("127.0.0.1", 0, sender_rate=1000.0), [tap], fps=fps)
         port = engine.source.port
         raw = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         addr = ("127.0.0.1", port)
@@ -452,3 +454,22 @@ def test_joint_names_cover_the_canonical_set():
     # What a VMC frame can carry: every canonical joint but the fingertips, thumbs, nose and ears.
     assert sorted(set(JOINTS) - set(CANONICAL_TO_BONE)) == sorted(
         ["HANDTIP_LEFT", "THUMB_LEFT", "HANDTIP_RIGHT", "THUMB_RIGHT", "NOSE", "EAR_LEFT", "EAR_RIGHT"])
+
+
+def test_vmc_source_refuses_senders_outside_the_allow_list(recording60):
+    positions, fps = recording60
+    sender = VmcSender(positions[:10], fps)
+
+    async def scenario():
+        src = VmcSource("127.0.0.1", 0, allow_senders=SenderAllowList.parse(["10.1.2.0/24"]), max_senders=2)
+        task, engine = await start_session(src, [Tap()], fps=fps)
+        exposure = src.exposure()
+        await send_vmc(engine.source.port, sender)
+        await asyncio.sleep(0.1)
+        engine.request_stop("test over")
+        return await task, exposure
+
+    stats, exposure = asyncio.run(asyncio.wait_for(scenario(), 20))
+    assert stats.frames_in == 0 and stats.faults.counts["sender_refused"] >= 10
+    assert "this machine only" in exposure and "10.1.2.0/24" in exposure and "at most 2 senders" in exposure
+    assert "7680 messages/s" in exposure  # 2 x 64 datagrams per frame interval at 60 fps
