@@ -299,34 +299,47 @@ def test_ok_holds_frames_while_no_avatar_calibration_or_tracking_lost():
 
 
 # ----------------------------------------------------------------------------------------------- faults
-def test_bad_messages_are_counted_once_per_kind_and_skipped(caplog):
-    faults = Faults("vmc://test")
+class _Kept(logging.Handler):
+    def __init__(self) -> None:
+        super().__init__()
+        self.records: list[logging.LogRecord] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.records.append(record)
+
+
+def test_bad_messages_are_counted_once_per_kind_and_skipped():
+    # A logger of the test's own: the CLI, run in-process by other tests, stops hapmotion.live propagating.
+    logger = logging.getLogger("test_live_vmc.faults")
+    kept = _Kept()
+    logger.addHandler(kept)
+    faults = Faults("vmc://test", logger)
     d = VmcDecoder(faults)
     good = avatar_frame(AVATAR)
     first = feed(d, good)[0].positions
     hand = first[J["HAND_LEFT"]].copy()
-    with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
-        frames = feed(
-            d,
-            b"\x13garbage",                                                         # not OSC
-            bone("LeftHand", (0, 0, 0)).dgram[:-8],                                 # truncated: not OSC
-            msg("/VMC/Ext/Bone/Pos", "LeftHand", 0.1, 0.2, 0.3),                    # too few arguments
-            msg("/VMC/Ext/Bone/Pos", 17, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0),        # name of the wrong type
-            msg("/VMC/Ext/Bone/Pos", "LeftHand", "x", 0.0, 0.0, 0.0, 0.0, 0.0, 1.0),  # a string for a number
-            bone("LeftHand", (0, 0, 0), (0, 0, 0, 0)),                              # zero quaternion
-            msg("/VMC/Ext/T", "now"),                                               # time of the wrong type
-            bone("LeftWing", (0, 0, 0)), bone("Tail", (0, 0, 0)),                   # unknown bones
-            bone("LeftHand", (float("nan"), 0, 0)),                                 # NaN
-            bone("LeftHand", (0, 0, 0), (0, 0, float("inf"), 1)),                   # infinite quaternion
-            msg("/VMC/Ext/Root/Pos", "root", 0.0, float("inf"), 0.0, 0.0, 0.0, 0.0, 1.0),  # infinite root
-            bone("LastBone"),                                                       # sent by real senders: fine
-            msg("/VMC/Ext/Blend/Val", "Joy", 1.0), msg("/VMC/Ext/Blend/Apply"),     # not read: ignored
-            msg("/some/other/app", 1.0), bundle(msg("/VMC/Ext/Cam", "c", 1.0)),     # unknown addresses: ignored
-            bundle(bone("Spine", (0, 0.1, 0), IDENTITY, 9.0, "extra")),             # extra arguments: ignored
-        )
+    frames = feed(
+        d,
+        b"\x13garbage",                                                         # not OSC
+        bone("LeftHand", (0, 0, 0)).dgram[:-8],                                 # truncated: not OSC
+        msg("/VMC/Ext/Bone/Pos", "LeftHand", 0.1, 0.2, 0.3),                    # too few arguments
+        msg("/VMC/Ext/Bone/Pos", 17, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0),        # name of the wrong type
+        msg("/VMC/Ext/Bone/Pos", "LeftHand", "x", 0.0, 0.0, 0.0, 0.0, 0.0, 1.0),  # a string for a number
+        bone("LeftHand", (0, 0, 0), (0, 0, 0, 0)),                              # zero quaternion
+        msg("/VMC/Ext/T", "now"),                                               # time of the wrong type
+        bone("LeftWing", (0, 0, 0)), bone("Tail", (0, 0, 0)),                   # unknown bones
+        bone("LeftHand", (float("nan"), 0, 0)),                                 # NaN
+        bone("LeftHand", (0, 0, 0), (0, 0, float("inf"), 1)),                   # infinite quaternion
+        msg("/VMC/Ext/Root/Pos", "root", 0.0, float("inf"), 0.0, 0.0, 0.0, 0.0, 1.0),  # infinite root
+        bone("LastBone"),                                                       # sent by real senders: fine
+        msg("/VMC/Ext/Blend/Val", "Joy", 1.0), msg("/VMC/Ext/Blend/Apply"),     # not read: ignored
+        msg("/some/other/app", 1.0), bundle(msg("/VMC/Ext/Cam", "c", 1.0)),     # unknown addresses: ignored
+        bundle(bone("Spine", (0, 0.1, 0), IDENTITY, 9.0, "extra")),             # extra arguments: ignored
+    )
     c = faults.counts
     assert c == {"malformed": 7, "unknown_joint": 2, "nan": 3}
-    assert len(caplog.records) == 3  # logged once per kind
+    logger.removeHandler(kept)
+    assert len(kept.records) == 3 and all(r.levelno == logging.WARNING for r in kept.records)  # once per kind
     assert d.ignored == 5  # LastBone, the blend shapes, the other app, the camera bundle
     # The good messages in between still made frames; the bad ones changed nothing.
     assert len(frames) >= 1

@@ -85,13 +85,13 @@ VMC_MESSAGES_PER_FRAME = 64
 """Datagrams a sender that does not bundle needs per frame for what this decoder reads: the root, 55 bones (and
 LastBone), OK and the time."""
 
-_ROOT = N_BONES  # index of the avatar root in the pose arrays (after the 55 bones)
+_ROOT = N_BONES  # index of the avatar root in the pose lists (after the 55 bones)
 _MAPPED = tuple((JOINT_INDEX[j], BONE_INDEX[b]) for j, b in CANONICAL_TO_BONE.items())
 _NEEDED = np.array([JOINT_INDEX[j] for j in RENDER_JOINTS + ("SPINE_CHEST",)], dtype=np.intp)
 
 
 # ---------------------------------------------------------------------------------------------------- math
-# One frame chains about 25 bones; on plain floats that takes ~35 us where small numpy arrays take ~600 us.
+# One frame chains about 25 bones; on plain floats that took ~35 us here, on small numpy arrays ~600 us.
 Vec = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
 
