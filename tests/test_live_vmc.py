@@ -19,15 +19,15 @@ from support.vmc_sender import VmcSender, send_vmc
 
 import hapmotion
 from hapmotion.errors import UsageError
-from hapmotion.humanoid import (BONE_INDEX, CANONICAL_TO_BONE, HUMAN_BODY_BONES, HUMANOID_PARENT, ancestors,
-                                bone_name, present_parent)
+from hapmotion.humanoid import (BONE_INDEX, CANONICAL_TO_BONE, HUMAN_BODY_BONES, HUMANOID_PARENT, SPINE_BONES,
+                                ancestors, bone_name, present_parent)
 from hapmotion.joints import JOINT_INDEX as J
 from hapmotion.joints import JOINTS, RENDER_JOINTS
 from hapmotion.live.access import SenderAllowList
 from hapmotion.live.hygiene import Faults
 from hapmotion.live.vmc import VmcSource
 from hapmotion.live.wire.vmc_in import VMC_PORT, VmcDecoder
-from hapmotion.motion_files._common import derive_missing
+from hapmotion.motion_files.derived_joints import derive_missing
 
 BYEBYE = MOTION / "dataset-1_byebye_happy_001.bvh"
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
@@ -116,11 +116,11 @@ def test_humanoid_table_is_unitys_hierarchy():
 
 def test_bones_map_onto_canonical_joints_like_the_readers():
     assert set(CANONICAL_TO_BONE.values()) <= set(HUMAN_BODY_BONES)
-    assert set(RENDER_JOINTS) <= set(CANONICAL_TO_BONE)
+    assert set(RENDER_JOINTS) - {"SPINE_NAVEL"} <= set(CANONICAL_TO_BONE)
+    assert SPINE_BONES == ("Spine", "Chest", "UpperChest")  # SPINE_NAVEL and SPINE_CHEST: by position
     assert CANONICAL_TO_BONE["HAND_LEFT"] == CANONICAL_TO_BONE["WRIST_LEFT"] == "LeftHand"  # Unity's wrist
     assert CANONICAL_TO_BONE["SHOULDER_RIGHT"] == "RightUpperArm" and CANONICAL_TO_BONE["CLAVICLE_RIGHT"] == \
         "RightShoulder"
-    assert CANONICAL_TO_BONE["SPINE_NAVEL"] == "Spine" and CANONICAL_TO_BONE["SPINE_CHEST"] == "Chest"
     for joint, b in CANONICAL_TO_BONE.items():  # sides agree
         assert ("LEFT" in joint) == b.startswith("Left") and ("RIGHT" in joint) == b.startswith("Right")
 
@@ -128,24 +128,44 @@ def test_bones_map_onto_canonical_joints_like_the_readers():
 # ----------------------------------------------------------------------------------------------- chain and axes
 def test_chain_applies_the_parent_rotation_first_by_hand():
     # Root at (1, 0, 0) turned 90 deg about +Y; Hips 1 m above it; Spine 1 m along the hips' +Z, itself turned
-    # 90 deg about +X; Chest 1 m along the spine's +Y. In Unity's frame: R_y90 (0,0,1) = (1,0,0) and
-    # R_x90 (0,1,0) = (0,0,1), so Hips = (1,1,0), Spine = (1,1,0) + (1,0,0) = (2,1,0),
-    # Chest = Spine + R_y90 R_x90 (0,1,0) = Spine + R_y90 (0,0,1) = (3,1,0). Ours mirror X.
+    # 90 deg about +X; Chest 1 m along the spine's +Y; Neck 1 m along the chest's +Y. In Unity's frame:
+    # R_y90 (0,0,1) = (1,0,0) and R_x90 (0,1,0) = (0,0,1), so Hips = (1,1,0), Spine = (1,1,0) + (1,0,0) = (2,1,0),
+    # Chest = Spine + R_y90 R_x90 (0,1,0) = Spine + R_y90 (0,0,1) = (3,1,0), Neck = (4,1,0). Ours mirror X.
     d = VmcDecoder(Faults("t"))
     frames = feed(d, bundle(root((1, 0, 0), (0, S, 0, S)), bone("Hips", (0, 1, 0)),
-                            bone("Spine", (0, 0, 1), (S, 0, 0, S)), bone("Chest", (0, 1, 0))))
+                            bone("Spine", (0, 0, 1), (S, 0, 0, S)), bone("Chest", (0, 1, 0)), bone("Neck", (0, 1, 0))))
     assert len(frames) == 1 and frames[0].seq is None
     p = frames[0].positions
     np.testing.assert_allclose(p[J["PELVIS"]], [-1, 1, 0], atol=1e-6)
-    np.testing.assert_allclose(p[J["SPINE_NAVEL"]], [-2, 1, 0], atol=1e-6)
+    np.testing.assert_allclose(p[J["SPINE_NAVEL"]], [-2, 1, 0], atol=1e-6)  # 1/3 of Hips -> Neck
     np.testing.assert_allclose(p[J["SPINE_CHEST"]], [-3, 1, 0], atol=1e-6)  # child-first order would give (2,1,1)
+    np.testing.assert_allclose(p[J["NECK"]], [-4, 1, 0], atol=1e-6)
+    assert d.spine == {"SPINE_NAVEL": "Spine", "SPINE_CHEST": "Chest"}
     assert np.isnan(p[J["HAND_LEFT"]]).all()  # a bone the avatar did not send
 
 
 def test_a_non_unit_quaternion_is_normalised():
     d = VmcDecoder(Faults("t"))
-    frames = feed(d, bundle(root(), bone("Hips", (0, 1, 0), (0, 2 * S, 0, 2 * S)), bone("Spine", (0, 0, 1))))
-    np.testing.assert_allclose(frames[0].positions[J["SPINE_NAVEL"]], [-1, 1, 0], atol=1e-6)
+    frames = feed(d, bundle(root(), bone("Hips", (0, 1, 0), (0, 2 * S, 0, 2 * S)), bone("Neck", (0, 0, 1))))
+    np.testing.assert_allclose(frames[0].positions[J["NECK"]], [-1, 1, 0], atol=1e-6)
+
+
+def test_the_spine_bones_are_placed_by_position_like_the_readers():
+    # A VRoid-like avatar: Spine just above the hips (0.2 of Hips -> Neck), Chest at 0.4, UpperChest at 0.7: the
+    # navel is Chest, the chest point UpperChest (by name alone the navel would sit 9 cm too low).
+    world = dict(AVATAR, Spine=(0.0, 1.1, 0.0), Chest=(0.0, 1.2, 0.0), UpperChest=(0.0, 1.35, 0.0))
+    d = VmcDecoder(Faults("t"))
+    p = feed(d, avatar_frame(world))[0].positions
+    assert d.spine == {"SPINE_NAVEL": "Chest", "SPINE_CHEST": "UpperChest"}
+    np.testing.assert_allclose(p[J["SPINE_NAVEL"]], [0.0, 1.2, 0.0], atol=1e-6)
+    np.testing.assert_allclose(p[J["SPINE_CHEST"]], [0.0, 1.35, 0.0], atol=1e-6)
+    # The choice is kept while the avatar keeps its bones (a bending performer does not swap them) ...
+    bent = dict(world, Chest=(0.0, 1.12, 0.05))
+    assert d.spine == {"SPINE_NAVEL": "Chest", "SPINE_CHEST": "UpperChest"} and feed(d, avatar_frame(bent))
+    # ... and no bone near a point leaves it to be derived from PELVIS and NECK (0.38 of the way).
+    d2 = VmcDecoder(Faults("t"))
+    p2 = feed(d2, avatar_frame(dict(AVATAR, Spine=(0.0, 1.02, 0.0), Chest=(0.0, 1.45, 0.0))))[0].positions
+    assert d2.spine == {} and np.allclose(p2[J["SPINE_NAVEL"]], [0.0, 1.0 + 0.38 * 0.5, 0.0], atol=1e-6)
 
 
 def wave_frames(n: int = 120, fps: float = 60.0) -> list[bytes]:
@@ -465,7 +485,7 @@ def test_vmc_source_defaults_and_a_busy_port():
 
 def test_joint_names_cover_the_canonical_set():
     # What a VMC frame can carry: every canonical joint but the fingertips, thumbs, nose and ears.
-    assert sorted(set(JOINTS) - set(CANONICAL_TO_BONE)) == sorted(
+    assert sorted(set(JOINTS) - set(CANONICAL_TO_BONE) - {"SPINE_NAVEL", "SPINE_CHEST"}) == sorted(
         ["HANDTIP_LEFT", "THUMB_LEFT", "HANDTIP_RIGHT", "THUMB_RIGHT", "NOSE", "EAR_LEFT", "EAR_RIGHT"])
 
 

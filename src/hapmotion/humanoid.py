@@ -14,9 +14,10 @@ UpperChest has its shoulders and neck under Chest.
 Mapping onto the canonical (Azure Kinect) joints follows the readers' conventions
 (:mod:`hapmotion.motion_files.skeletons`): the ``*Hand`` bone, which Unity documents as the wrist, is both
 ``WRIST_*`` and ``HAND_*``; ``*UpperArm`` (the humerus head) is ``SHOULDER_*`` and ``*Shoulder`` is the clavicle;
-``Spine`` (Unity's "first spine bone") is ``SPINE_NAVEL`` and ``Chest`` is ``SPINE_CHEST``. Finger bones and the
-jaw are not mapped. Canonical joints without a bone (HANDTIP, THUMB, NOSE, EAR) are absent; the render joints
-missing from an avatar are derived as the readers derive them (``motion_files._common.derive_missing``).
+SPINE_NAVEL and SPINE_CHEST are the Spine/Chest/UpperChest bones that sit nearest the navel and chest points of
+the Hips-Neck line (:data:`SPINE_BONES`), as the readers place any spine. Finger bones and the jaw are not mapped.
+Canonical joints without a bone (HANDTIP, THUMB, NOSE, EAR) are absent; the render joints missing from an avatar
+are derived as the readers derive them (``motion_files.derived_joints.derive_missing``).
 """
 
 from __future__ import annotations
@@ -81,13 +82,20 @@ HUMANOID_PARENT: dict[str, Optional[str]] = {
 """Parent of each bone in Unity's full humanoid hierarchy (None for Hips, whose parent is the avatar's root)."""
 
 CANONICAL_TO_BONE: dict[str, str] = {
-    "PELVIS": "Hips", "SPINE_NAVEL": "Spine", "SPINE_CHEST": "Chest", "NECK": "Neck", "HEAD": "Head",
+    "PELVIS": "Hips", "NECK": "Neck", "HEAD": "Head",
     **{f"{stem}_{side.upper()}": f"{side}{bone}" for side in ("Left", "Right") for stem, bone in (
         ("CLAVICLE", "Shoulder"), ("SHOULDER", "UpperArm"), ("ELBOW", "LowerArm"), ("WRIST", "Hand"),
         ("HAND", "Hand"), ("HIP", "UpperLeg"), ("KNEE", "LowerLeg"), ("ANKLE", "Foot"), ("FOOT", "Toes"),
         ("EYE", "Eye"))},
 }
-"""Canonical joint -> the bone whose origin it is (WRIST_* and HAND_* share the ``*Hand`` bone)."""
+"""Canonical joint -> the bone whose origin it is (WRIST_* and HAND_* share the ``*Hand`` bone). SPINE_NAVEL and
+SPINE_CHEST are not here: they go to the :data:`SPINE_BONES` by position."""
+
+SPINE_BONES: tuple[str, ...] = ("Spine", "Chest", "UpperChest")
+"""The bones between Hips and Neck. Avatars place them very differently (one avatar's Spine sits just above the
+hips, another's at the navel), so, as the readers do for any skeleton
+(``motion_files.skeletons.assign_spine``), SPINE_NAVEL and SPINE_CHEST take the ones that sit nearest 0.38 and 0.60
+of the way from Hips to Neck."""
 
 
 def bone_name(name: str) -> str:

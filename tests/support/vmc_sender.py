@@ -32,9 +32,11 @@ from scipy.spatial.transform import Rotation
 from hapmotion.humanoid import CANONICAL_TO_BONE, HUMAN_BODY_BONES, LAST_BONE, present_parent
 from hapmotion.joints import JOINT_INDEX
 
-# The joint at each bone's origin (the *Hand bone is the wrist, HAND_* in the recordings) and the joint its Y axis
-# aims at; a bone without a child joint (head, hands, toes, eyes) takes its parent's orientation.
-BONE_JOINT: dict[str, str] = {b: j for j, b in CANONICAL_TO_BONE.items() if not j.startswith("WRIST")}
+# The joint at each bone's origin (the *Hand bone is the wrist, HAND_* in the recordings; this avatar's Spine and
+# Chest bones sit at the recording's navel and chest joints) and the joint its Y axis aims at; a bone without a
+# child joint (head, hands, toes, eyes) takes its parent's orientation.
+BONE_JOINT: dict[str, str] = {**{b: j for j, b in CANONICAL_TO_BONE.items() if not j.startswith("WRIST")},
+                              "Spine": "SPINE_NAVEL", "Chest": "SPINE_CHEST"}
 AIM: dict[str, str] = {
     "Hips": "SPINE_NAVEL", "Spine": "SPINE_CHEST", "Chest": "NECK", "Neck": "HEAD",
     **{f"{s}{b}": f"{j}_{s.upper()}" for s in ("Left", "Right") for b, j in (

@@ -57,8 +57,8 @@ import numpy as np
 from pythonosc.osc_bundle import OscBundle
 from pythonosc.osc_packet import OscPacket
 
-from ...humanoid import (BONE_INDEX, CANONICAL_TO_BONE, HUMAN_BODY_BONES, LAST_BONE, N_BONES, bone_name,
-                         present_parent)
+from ...humanoid import (BONE_INDEX, CANONICAL_TO_BONE, HUMAN_BODY_BONES, LAST_BONE, N_BONES, SPINE_BONES,
+                         bone_name, present_parent)
 from ...joints import JOINT_INDEX, N_JOINTS, RENDER_JOINTS
 from ..frames import SkeletonFrame
 from ..hygiene import Faults, is_number
@@ -87,6 +87,8 @@ LastBone), OK and the time."""
 
 _ROOT = N_BONES  # index of the avatar root in the pose lists (after the 55 bones)
 _MAPPED = tuple((JOINT_INDEX[j], BONE_INDEX[b]) for j, b in CANONICAL_TO_BONE.items())
+# Bones whose world pose is needed: the mapped ones and the spine candidates (their ancestors come along).
+_CHAINED = tuple(BONE_INDEX[b] for b in dict.fromkeys([*CANONICAL_TO_BONE.values(), *SPINE_BONES]))
 _NEEDED = np.array([JOINT_INDEX[j] for j in RENDER_JOINTS + ("SPINE_CHEST",)], dtype=np.intp)
 
 
@@ -157,6 +159,8 @@ class VmcDecoder:
         self._fresh_t: Optional[float] = None
         self._plan: Optional[list[tuple[int, int]]] = None
         self._joints: tuple[np.ndarray, np.ndarray] = (np.zeros(0, np.intp), np.zeros(0, np.intp))
+        self._spine_placed = False
+        self.spine: dict[str, str] = {}  # SPINE_NAVEL / SPINE_CHEST -> the bone chosen by position
         self._noted_address = False
 
     # ------------------------------------------------------------------ input
@@ -332,6 +336,7 @@ class VmcDecoder:
         and Hips poses."""
         if self._plan is None:
             self._plan, self._joints = self._make_plan()
+            self._spine_placed = False
         local = self.local
         world: list[Optional[tuple[Vec, Quat]]] = [None] * (N_BONES + 1)
         world[_ROOT] = local[_ROOT]
@@ -339,21 +344,23 @@ class VmcDecoder:
             (ppos, prot), (lpos, lrot) = world[p], local[b]  # type: ignore[misc]
             r = quat_rotate(prot, lpos)
             world[b] = ((ppos[0] + r[0], ppos[1] + r[1], ppos[2] + r[2]), quat_mul(prot, lrot))
+        if not self._spine_placed:
+            self._place_spine(world)
         joints, bones = self._joints
         pos = np.full((N_JOINTS, 3), np.nan)
         pos[joints] = unity_to_ours([world[b][0] for b in bones])  # type: ignore[index]
         if np.isnan(pos[_NEEDED]).any():
-            from ...motion_files._common import derive_missing
+            from ...motion_files.derived_joints import derive_missing
 
             derive_missing(pos[None])
         return pos
 
     def _make_plan(self) -> tuple[list[tuple[int, int]], tuple[np.ndarray, np.ndarray]]:
-        """The bones to chain: the mapped ones the avatar has and their ancestors, each with its nearest present
+        """The bones to chain: the mapped and spine bones the avatar has and their ancestors, each with its nearest present
         ancestor as parent (``_ROOT`` for the top), parents first; and the (joint, bone) index pairs to read."""
         have = {HUMAN_BODY_BONES[b] for b in range(N_BONES) if self.local[b] is not None}
         parent: dict[str, Optional[str]] = {}
-        for _, b in _MAPPED:
+        for b in _CHAINED:
             name: Optional[str] = HUMAN_BODY_BONES[b]
             while name is not None and name in have and name not in parent:
                 parent[name] = present_parent(name, have)
@@ -370,3 +377,28 @@ class VmcDecoder:
         plan = [(BONE_INDEX[n], _ROOT if parent[n] is None else BONE_INDEX[parent[n]]) for n in order]
         pairs = [(j, b) for j, b in _MAPPED if HUMAN_BODY_BONES[b] in have]
         return plan, (np.array([j for j, _ in pairs], dtype=np.intp), np.array([b for _, b in pairs], dtype=np.intp))
+
+    def _place_spine(self, world: list) -> None:
+        """Choose the SPINE_NAVEL and SPINE_CHEST bones by where they sit on Hips -> Neck in this pose (the first
+        after the avatar's bones arrived), as the readers place any spine; without a Neck bone the middle of the
+        upper arms stands for it. A point no bone sits near is left out and derived from PELVIS and NECK."""
+        from ...motion_files.skeletons import assign_spine
+
+        self._spine_placed = True
+        self.spine = {}
+        hips = world[BONE_INDEX["Hips"]]
+        neck = world[BONE_INDEX["Neck"]]
+        arms = world[BONE_INDEX["LeftUpperArm"]], world[BONE_INDEX["RightUpperArm"]]
+        if neck is not None:
+            top = np.array(neck[0])
+        elif arms[0] is not None and arms[1] is not None:
+            top = 0.5 * (np.array(arms[0][0]) + np.array(arms[1][0]))
+        else:
+            return
+        chain = {n: np.array(world[BONE_INDEX[n]][0]) for n in SPINE_BONES if world[BONE_INDEX[n]] is not None}
+        # Fractions along Hips -> Neck are the same in Unity's frame and in ours (a mirror keeps them).
+        self.spine = assign_spine(np.array(hips[0]), top, chain)
+        if self.spine:
+            joints, bones = self._joints
+            self._joints = (np.concatenate([joints, [JOINT_INDEX[c] for c in self.spine]]).astype(np.intp),
+                            np.concatenate([bones, [BONE_INDEX[b] for b in self.spine.values()]]).astype(np.intp))
