@@ -506,3 +506,16 @@ def test_vmc_source_refuses_senders_outside_the_allow_list(recording60):
     assert stats.frames_in == 0 and stats.faults.counts["sender_refused"] >= 10
     assert "this machine only" in exposure and "10.1.2.0/24" in exposure and "at most 2 senders" in exposure
     assert "7680 messages/s" in exposure  # 2 x 64 datagrams per frame interval at 60 fps
+
+
+def test_vmc_source_url_builds_a_loopback_vmc_source():
+    """``--source vmc://`` is a network source like osc:// and ws://: loopback and the VMC port by default."""
+    from hapmotion.errors import UsageError
+    from hapmotion.live.sources import network_source
+    from hapmotion.live.urls import parse_source
+    from hapmotion.live.vmc import VmcSource
+
+    src = network_source(parse_source("vmc://"))
+    assert isinstance(src, VmcSource) and (src.host, src.port) == ("127.0.0.1", 39539)
+    with pytest.raises(UsageError, match="--token and --allow-origin apply to ws://"):
+        network_source(parse_source("vmc://127.0.0.1:0"), token="secret")

@@ -20,6 +20,8 @@ SOURCE (one):
                              /hapmotion/joint/HAND_LEFT [seq t] x y z  +  /hapmotion/frame [seq t]
   ws://HOST:PORT             WebSocket server taking JSON text frames (default 127.0.0.1:8765):
                              {"seq": 7, "t": 0.116, "joints": {"HAND_LEFT": [x, y, z], ...}}
+  vmc://HOST:PORT            VMC protocol (VSeeFace, XR Animator, VirtualMotionCapture, SlimeVR, ...;
+                             default 127.0.0.1:39539; docs/vmc.md)
   replay:PATH                a recording (BVH, Kinect JSON, AIST++, CSV, NPZ) paced in real time (--speed, --loop;
                              the reader options --units, --up, --skip-frames, ... as for render)
 \b
