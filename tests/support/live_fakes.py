@@ -245,10 +245,8 @@ class FakePlayerV3(_Server):
                 first = False
                 if kind not in ("SdkRequestAuth", "SdkRequestAuthInit"):
                     self.errors.append(f"first message {kind!r}, expected auth")
-                elif not isinstance(payload, dict) or not {"applicationId", "sdkApiKey"} <= set(payload):
-                    self.errors.append("auth payload")
                 else:
-                    self.auths.append(payload)
+                    self.check_auth(payload)
                 try:
                     await ws.send(json.dumps({"Type": "ServerReady", "Message": None}))
                     await ws.send(json.dumps({"Type": "ServerDevices", "Message": json.dumps([
@@ -264,6 +262,17 @@ class FakePlayerV3(_Server):
                 self._check_dot(payload)
             else:
                 self.errors.append(f"type {kind!r}")
+
+    def check_auth(self, payload: Any) -> None:
+        """``SdkRequestAuth`` payload: the five fields, and ``version`` (when present) a JSON integer, as
+        bHaptics' own SimHub plugin sends it (``Sdk2Message.cs``: ``int Version = 1``)."""
+        if not isinstance(payload, dict) or not {"applicationId", "sdkApiKey"} <= set(payload):
+            self.errors.append("auth payload")
+            return
+        if "version" in payload and not _is_int(payload["version"]):
+            self.errors.append(f"auth version {payload['version']!r}, expected an integer")
+            return
+        self.auths.append(payload)
 
     def _check_dot(self, p: Any) -> None:
         if not isinstance(p, dict):
