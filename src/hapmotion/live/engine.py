@@ -315,6 +315,7 @@ class LiveEngine:
 
         async def off(s: Sink) -> None:
             if not started and not s.bounded_shutdown:
+                await s.abandon()  # the recorder removes its empty journal and writes nothing
                 return
             try:
                 if not s.bounded_shutdown:  # the recorder writes its file: it gets the time it needs

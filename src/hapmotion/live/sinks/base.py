@@ -76,6 +76,10 @@ class Sink:
     async def shutdown(self) -> None:
         """Turn every actuator off and release the sink's resources (the engine bounds the time)."""
 
+    async def abandon(self) -> None:
+        """The session never began: release what :meth:`start` opened, write nothing. Called instead of
+        :meth:`shutdown` for sinks whose shutdown is not time-bounded (the recorder)."""
+
     def describe(self) -> str:
         return self.name
 
