@@ -2,7 +2,8 @@
 
 TLS with the Player's self-signed certificate (no verification, as every SDK2 client does), ``SdkRequestAuth``
 first on every connection, then per row ``SdkPlayDotMode`` for position 0 (the 40-value X40 array: front 0..19,
-back 20..39) and positions 1/2 (ForearmL/ForearmR, 6 values). Stop sends zero rows and ``SdkStopAll``.
+back 20..39) and positions 1/2 (ForearmL/ForearmR, 6 values), at most once per 20 ms Player tick (the max of the
+tick's rows). Stop sends zero rows and ``SdkStopAll``.
 """
 
 from __future__ import annotations
@@ -17,8 +18,8 @@ from ...errors import UsageError
 from ..devices import DeviceMap
 from ..frames import OutFrame
 from ..wire.player_v3 import parse_v3_message, v3_auth_message, v3_dot_messages, v3_stop_all
-from .base import WebSocketClientSink
-from .player_v2 import _host, default_duration_ms
+from .ws_client import WebSocketClientSink
+from .player_v2 import PLAYER_TICK_S, _host, default_duration_ms
 
 
 def insecure_tls_context() -> ssl.SSLContext:
@@ -55,6 +56,7 @@ class PlayerV3Sink(WebSocketClientSink):
         scheme = "wss" if tls else "ws"
         url = f"{scheme}://{_host(host)}:{port}{path}?{query}"
         shown = f"{scheme}://{_host(host)}:{port}{path}"  # the api key stays out of logs
+        kwargs.setdefault("tick_s", PLAYER_TICK_S)
         super().__init__(name or f"player-v3 {shown}", url, fps=fps, ssl=insecure_tls_context() if tls else None,
                          **kwargs)
         self.dmap = dmap
