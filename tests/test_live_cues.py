@@ -204,3 +204,29 @@ def test_cue_options_fail_as_one_line(extra, message, tmp_path, capsys):
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert len(lines) == 1 and lines[0].startswith("error: ") and message in lines[0], err
     assert not (tmp_path / "never.csv").exists()
+
+
+def test_cues_over_a_played_track_match_the_offline_timeline(tmp_path):
+    """``play --cues``: on the track's own grid every row is the offline layering of the same cue list (sides
+    swapped and devices filtered as asked)."""
+    from hapmotion.live.playback import play
+    from hapmotion.track import HapticTrack
+
+    (tmp_path / "show.cues").write_text(f"0.5 {HEARTBEAT} gain=1.5\n"
+                                        f"1.0 {TACT / 'FeedbackFiles_Vest_SideWave.tact'} side=swap devices=VestBack\n")
+    cues = load_cues(tmp_path / "show.cues")
+    track = HapticTrack(np.full((100, N), BASE), 50.0, IDS, LAYOUT.name)
+
+    async def run():
+        tap = Tap()
+        await play(track, [tap], cues=str(tmp_path / "show.cues"), handle_signals=False)
+        return tap
+
+    tap = asyncio.run(run())
+    timeline = cue_layer(cues, fps=50.0, n_frames=100, actuators=IDS, mirror_map=LAYOUT.mirror_map())
+    assert timeline[:25].sum() == 0 and timeline[25:].any() and timeline[50:, :20].sum() < timeline[50:, 20:40].sum()
+    frames = [f for f in tap.frames if f.kind == "frame"]
+    assert len(frames) >= 90
+    for f in frames:
+        j = int(round(f.t * 50.0))
+        np.testing.assert_allclose(f.row, layer(np.full(N, BASE), timeline[j], show_power_limit(N)), atol=1e-9)

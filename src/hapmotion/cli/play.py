@@ -45,10 +45,14 @@ Examples:
               help="bHaptics SDK2 workspace (app) id for player-v3 [env BHAPTICS_WORKSPACE_ID].")
 @click.option("--api-key", envvar="BHAPTICS_API_KEY", default=None,
               help="bHaptics SDK2 API key for player-v3 [env BHAPTICS_API_KEY].")
+@click.option("--cues", "cues", type=click.Path(dir_okay=False), default=None,
+              help="Cue list layered over the track at its show times, as for 'hapmotion live'.")
+@click.option("--cue-port", default=None, metavar="[HOST:]PORT",
+              help="Also fire the cue list's named cues by OSC: /hapmotion/cue NAME [gain] (loopback by default).")
 @click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
 def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, layout_file: Optional[str],
             show_stats: bool, stats_json: Optional[str], workspace_id: Optional[str], api_key: Optional[str],
-            quiet: bool) -> None:
+            cues: Optional[str], cue_port: Optional[str], quiet: bool) -> None:
     from ..live.playback import run_play
     from .live import _finish, _setup_logging
 
@@ -64,11 +68,15 @@ def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, layout
         names = ", ".join(s.describe() for s in engine.sinks)
         click.echo(f"play: {engine.source.describe()} ({engine.source.n} rows at {engine.source.fps:g}/s"
                    f"{', looped' if loop else ''}) to {names}; Ctrl-C stops", err=True)
+        trigger = getattr(engine.cues, "trigger", None)
+        if trigger is not None:
+            click.echo(f"play: cues fired on {trigger.describe()} NAME [gain] ({trigger.exposure()}); "
+                       f"names: {', '.join(engine.cues.names)}", err=True)
 
     try:
         run_play(track, list(sinks), speed=speed, loop=loop, layout=layout_file, workspace_id=workspace_id,
                  api_key=api_key, on_ready=ready, stats_interval=1.0 if show_stats else None,
-                 on_stats=lambda text: click.echo(f"play: {text}", err=True))
+                 on_stats=lambda text: click.echo(f"play: {text}", err=True), cues=cues, cue_port=cue_port)
     finally:
         lost = _finish(started[0] if started else None, stats_json)
     if lost:

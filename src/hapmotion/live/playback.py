@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import InputError, UsageError
 from ..track import HapticTrack, parse_actuator_id
+from .cue_trigger import live_cues, run_with_cues
 from .devices import DeviceMap
 from .engine import AudioChannel, LiveEngine
 from .frames import SkeletonFrame
@@ -153,13 +154,16 @@ async def play(
     on_stats: Optional[Callable[[str], None]] = None,
     marks: Optional[Mapping[int, str]] = None,
     on_mark: Optional[Callable[[str], None]] = None,
+    cues: Any = None,
+    cue_port: "str | int | None" = None,
     **engine_options: Any,
 ) -> LiveStats:
     """Play ``track`` (a path :func:`hapmotion.load_track` reads, or a :class:`HapticTrack`) in real time to
     ``sinks`` (SINK strings as for ``hapmotion live``, or :class:`Sink` objects); return the session statistics.
 
     ``layout`` is the session layout (a :class:`~hapmotion.layout.Layout`, a layout file, or None for the default
-    X40 + shoulder sleeves). Every sink is sent turn-off before this returns or raises.
+    X40 + shoulder sleeves). ``cues`` and ``cue_port`` layer a cue list over the track and fire its named cues by
+    OSC, as in :func:`hapmotion.live.live`. Every sink is sent turn-off before this returns or raises.
     """
     from ..show import Show
     from .session import build_sink
@@ -181,6 +185,7 @@ async def play(
         track = track.resample(fps)
     dmap = DeviceMap.from_layout(session_layout)
     rows = layout_rows(track, dmap.actuators, name)
+    cue_layer = live_cues(cues, fps=fps, layout=session_layout, actuators=dmap.actuators, cue_port=cue_port)
     source = TrackSource(rows.shape[0], fps, speed=speed, loop=loop, name=name, marks=marks, on_mark=on_mark)
     channel = AudioChannel(rows, fps, _passthrough)
     meta = {"mode": "playback", "source": source.describe(), "track": name, "fps": fps}
@@ -193,8 +198,9 @@ async def play(
     engine_options.setdefault("stall_s", max(0.25, 3.0 / source.rate))
     engine = LiveEngine(None, sink_objs, n_actuators=dmap.n, fps=fps, rate=source.rate, audio=channel,
                         mode="audio", handle_signals=handle_signals, stats_interval=stats_interval,
-                        on_ready=on_ready, on_stats=on_stats, source_name=source.describe(), **engine_options)
-    return await engine.run(source)
+                        on_ready=on_ready, on_stats=on_stats, source_name=source.describe(), cues=cue_layer,
+                        **engine_options)
+    return await run_with_cues(engine, source)
 
 
 def _parse_sink(text: str):
