@@ -353,7 +353,7 @@ def test_never_reading_client_does_not_block_the_others(recording):
         stuck.transport.pause_reading()
         viewer = Viewer(sink.bound_port)
         vtask = asyncio.create_task(viewer.run())
-        await wait_for(lambda: len(sink._clients) == 2, 3)
+        await wait_for(lambda: sink.stats.extra["clients"] == 2, 5)
         await send_osc(engine.source.port, recording)
         await wait_for(lambda: engine.stats.rendered + engine.stats.superseded >= len(recording), 5)
         await wait_for(lambda: len(viewer.frames()) >= engine.stats.rendered, 5)

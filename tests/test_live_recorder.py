@@ -113,11 +113,13 @@ def test_a_stall_does_not_end_the_recording(tmp_path):
     track = load_track(rec.path)
     assert not rec.journal_path.exists()                       # replaced by the finished file
     assert track.duration >= 0.5 + 1.2 - 0.1                   # the silent tail is in the take
-    motion_rows = track.intensities[:25]
-    tail = track.intensities[int((0.5 + 0.25 + 0.05) * FPS):]  # after the 250 ms fade: silence
-    assert motion_rows.max() > 10 and len(tail) >= 0.8 * FPS and tail.max() == 0
+    sounding = np.flatnonzero(track.intensities.max(axis=1) > 0)
+    assert track.intensities[:25].max() > 10
+    # after the last frame and its 250 ms fade, silence until the stop: about 0.95 s of it (a busy machine may
+    # have stretched the 30 frames a little)
+    assert (track.n_frames - 1 - sounding[-1]) / FPS >= 1.2 - 0.25 - 0.15
     j = seen["journal"]
-    assert j.n_frames >= 0.5 * FPS + 0.5 * FPS                 # half the silence was already on disk
+    assert j.n_frames >= 30 + 0.3 * FPS                         # part of the silence was already on disk
     np.testing.assert_allclose(j.intensities, seen["rows_then"][:j.n_frames], atol=0.005)
     np.testing.assert_allclose(track.intensities[:j.n_frames], j.intensities, atol=0.005)
 
