@@ -9,7 +9,6 @@ import os
 import sys
 
 import numpy as np
-import pytest
 from support.live_fakes import FakePlayerV2, FakePlayerV3, self_signed_cert
 
 from hapmotion.layout import load_layout

@@ -21,7 +21,8 @@ SINK (one or more), as for 'hapmotion live':
   ws-broadcast[://HOST:PORT] WebSocket broadcast to viewers
   record:PATH                the session as a track at stop
 \b
-Safety: the end of the track, Ctrl-C, SIGTERM, SIGHUP and errors all send turn-off to every sink before exiting.
+Safety: the end of the track, Ctrl-C, SIGTERM, SIGHUP and errors all send turn-off to every sink before
+exiting.
 \b
 Examples:
   hapmotion play Heartbeat.tact --sink player

@@ -33,6 +33,7 @@ from .frames import SkeletonFrame
 from .sinks import Sink
 from .sources import Source
 from .stats import LiveStats
+from .urls import parse_sink
 
 log = logging.getLogger("hapmotion.live")
 
@@ -190,7 +191,7 @@ async def play(
     channel = AudioChannel(rows, fps, _passthrough)
     meta = {"mode": "playback", "source": source.describe(), "track": name, "fps": fps}
     sink_objs = [s if isinstance(s, Sink) else
-                 build_sink(_parse_sink(s), dmap=dmap, layout_name=session_layout.name, fps=fps,
+                 build_sink(parse_sink(s), dmap=dmap, layout_name=session_layout.name, fps=fps,
                             workspace_id=workspace_id, api_key=api_key, meta=meta, time_scale=speed)
                  for s in sinks]
     # The source is this process's own clock: the stall watchdog only has to see through a late wake-up, so its
@@ -201,12 +202,6 @@ async def play(
                         on_ready=on_ready, on_stats=on_stats, source_name=source.describe(), cues=cue_layer,
                         **engine_options)
     return await run_with_cues(engine, source)
-
-
-def _parse_sink(text: str):
-    from .urls import parse_sink
-
-    return parse_sink(text)
 
 
 def run_play(*args: Any, **kwargs: Any) -> LiveStats:
