@@ -11,7 +11,8 @@ from hapmotion.live.urls import parse_sink, parse_source
 def test_parse_sources():
     s = parse_source("osc://0.0.0.0:9100/dancer")
     assert (s.kind, s.host, s.port, s.path) == ("osc-in", "0.0.0.0", 9100, "/dancer")
-    assert (parse_source("osc").host, parse_source("osc").port) == ("0.0.0.0", 9000)
+    assert (parse_source("osc").host, parse_source("osc").port) == ("127.0.0.1", 9000)  # loopback unless asked
+    assert parse_source("osc://:9100").host == "127.0.0.1"
     w = parse_source("ws://127.0.0.1:8765")
     assert (w.kind, w.port) == ("ws", 8765)
     assert parse_source("replay:a/b c.bvh").path == "a/b c.bvh"

@@ -156,7 +156,7 @@ class LiveEngine:
         self._required: Optional[np.ndarray] = None
         if mode != "audio":
             from ..joints import JOINT_INDEX
-            from ..render.kernel import KERNEL_JOINTS
+            from ..joints import RENDER_JOINTS as KERNEL_JOINTS
 
             self._required = np.array([JOINT_INDEX[j] for j in KERNEL_JOINTS], dtype=np.intp)
         self.faults = Faults(source_name, log)

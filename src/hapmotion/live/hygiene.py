@@ -17,15 +17,19 @@ log = logging.getLogger("hapmotion.live")
 MAX_ABS_M = 20.0
 """Coordinates beyond this many metres from the origin are absurd for a performer on a stage."""
 
+DETAIL_CHARS = 200
+"""Longest fault detail written to the log."""
+
 
 class Faults:
     """Counts misbehaving input by kind and logs the first one of each kind.
 
     Kinds used by live mode: ``malformed`` (not parseable), ``unknown_address`` (OSC address outside the scheme),
     ``wrong_joint_count``, ``unknown_joint``, ``nan`` (non-finite coordinate), ``absurd`` (beyond
-    :data:`MAX_ABS_M`), ``empty`` (no usable joint left, or none the renderer
-    uses), ``late`` (older than the last accepted frame),
-    ``flood`` (over the message budget), ``binary`` (WebSocket binary frame), ``render_nan``.
+    :data:`MAX_ABS_M`), ``empty`` (no usable joint left, or none the renderer uses), ``late`` (older than the last
+    accepted frame), ``binary`` (WebSocket binary frame), ``render_nan``; and, from who may send
+    (:mod:`hapmotion.live.access`): ``flood`` (over a sender's budget), ``flood_closed``, ``too_many_senders``,
+    ``sender_refused``, ``token_refused``, ``origin_refused``, ``handshake``, ``connection``, ``socket``.
     """
 
     def __init__(self, source: str, logger: logging.Logger = log):
@@ -34,8 +38,12 @@ class Faults:
         self._log = logger
 
     def add(self, kind: str, detail: str) -> None:
+        """Count one fault of ``kind``; the first of each kind is logged, its detail cut to
+        :data:`DETAIL_CHARS` characters (a hostile message must not write a 64 KiB log line)."""
         self.counts[kind] += 1
         if self.counts[kind] == 1:
+            if len(detail) > DETAIL_CHARS:
+                detail = detail[:DETAIL_CHARS] + "..."
             self._log.warning("%s: %s: %s (skipped; further ones are counted, not logged)", self.source, kind, detail)
 
     def total(self) -> int:
@@ -48,18 +56,34 @@ def is_number(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
-def optional_seq(value: Any) -> Optional[int]:
-    """A sender's sequence number as an int, or None when it is not a whole finite number."""
-    if is_number(value) and math.isfinite(value) and float(value).is_integer():
-        return int(value)
-    return None
+SEQ_LIMIT = 2 ** 53
+"""Sequence numbers are whole numbers below this in magnitude (every such number is exact in a float64); a JSON
+sender can write a 400-digit integer, which is not a frame counter."""
 
 
-def optional_time(value: Any) -> Optional[float]:
-    """A sender's time in seconds as a float, or None when it is not a finite number."""
-    if is_number(value) and math.isfinite(value):
+def as_float(value: Any) -> Optional[float]:
+    """A number as a float (inf for a finite float beyond float64, as JSON decodes ``1e400``), or None when it is
+    not a number or is an integer too large for a float (JSON ints have unlimited digits)."""
+    if not is_number(value):
+        return None
+    try:
         return float(value)
-    return None
+    except OverflowError:
+        return None
+
+
+def seq_value(value: Any) -> Optional[int]:
+    """A sender's sequence number as an int, or None when it is not a whole number within :data:`SEQ_LIMIT`."""
+    x = as_float(value)
+    if x is None or not (abs(x) < SEQ_LIMIT) or not x.is_integer():
+        return None
+    return int(x)
+
+
+def time_value(value: Any) -> Optional[float]:
+    """A sender's time in seconds as a float, or None when it is not a finite number."""
+    x = as_float(value)
+    return x if x is not None and math.isfinite(x) else None
 
 
 def sanitize(positions: np.ndarray, faults: Faults, *, max_abs: float = MAX_ABS_M,

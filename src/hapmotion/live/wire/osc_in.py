@@ -19,7 +19,7 @@ from pythonosc.osc_packet import OscPacket
 
 from ...joints import N_JOINTS
 from ..frames import SkeletonFrame, joint_index
-from ..hygiene import Faults, is_number, optional_seq, optional_time
+from ..hygiene import Faults, is_number, seq_value, time_value
 from .osc_address import OSC_PREFIX, normalize_prefix
 
 
@@ -86,7 +86,7 @@ class OscSkeletonDecoder:
             return None
         seq = t = None
         if n == 3 * N_JOINTS + 2:
-            seq, t = optional_seq(params[0]), optional_time(params[1])
+            seq, t = seq_value(params[0]), time_value(params[1])
             params = params[2:]
         pos = np.array(params, dtype=np.float64).reshape(N_JOINTS, 3)
         return SkeletonFrame(pos, seq, t, received)
@@ -103,7 +103,7 @@ class OscSkeletonDecoder:
             return
         seq = t = None
         if len(params) == 5:
-            seq, t = optional_seq(params[0]), optional_time(params[1])
+            seq, t = seq_value(params[0]), time_value(params[1])
             params = params[2:]
             if self._pending is not None and seq is not None and self._pending_seq is not None \
                     and seq != self._pending_seq:
@@ -121,7 +121,7 @@ class OscSkeletonDecoder:
             if len(params) != 2 or not all(is_number(v) for v in params):
                 self.faults.add("malformed", f"{self.addr_frame} takes seq and t, found {len(params)} arguments")
             else:
-                self._pending_seq, self._pending_t = optional_seq(params[0]), optional_time(params[1])
+                self._pending_seq, self._pending_t = seq_value(params[0]), time_value(params[1])
         if self._pending is not None:
             out.append(SkeletonFrame(self._pending, self._pending_seq, self._pending_t, received))
         self._pending = None

@@ -22,7 +22,9 @@ def to_int_percent(values: np.ndarray) -> list[int]:
 
 
 def get_ci(obj: Mapping[str, Any], key: str, default: Any = None) -> Any:
-    """Case-insensitive key lookup: the Player and SDKs disagree on casing (docs §2.2, §3.1)."""
+    """Case-insensitive key lookup: bHaptics' own clients disagree on casing (tact-python ``Register``/``Key``,
+    the C# sample lower-case ``type``/``key``; the Player answers SDK2 with ``Type``/``Message``) and the Player
+    accepts them all."""
     if key in obj:
         return obj[key]
     low = key.lower()

@@ -1,5 +1,7 @@
-"""bHaptics Player SDK1 (``/v2/feedbacks``): ``Submit`` frames, ``turnOffAll``, ``Register`` and the Player's
-status replies (docs/bhaptics-protocol.md §2)."""
+"""bHaptics Player SDK1 (``ws://127.0.0.1:15881/v2/feedbacks``): ``Submit`` frames, ``turnOffAll``, ``Register``
+and the Player's status replies, as bHaptics' own clients send them (GitHub ``bhaptics/tact-python``
+``bhaptics/better_haptic_player.py``, ``bhaptics/tact-js`` branch ``tact-js-v1`` ``src/PlayerSocket.ts``,
+``bhaptics/haptic-library`` ``samples/csharp/src/Bhaptics.Tact/PlayerRequest.cs``)."""
 
 from __future__ import annotations
 
@@ -12,8 +14,8 @@ from ...errors import InputError
 from ..devices import DeviceMap
 from .player_json import get_ci, json_object, to_int_percent
 
-# SDK1 frame positions (§2.4 table). "Vest" is deliberately absent: bHaptics staff say frames go to VestFront and
-# VestBack separately.
+# SDK1 frame positions (the position names of the clients above). "Vest" is deliberately absent: bHaptics staff say
+# frames go to VestFront and VestBack separately (bhaptics/haptic-library issue #216).
 V2_POSITIONS: frozenset[str] = frozenset({
     "VestFront", "VestBack", "ForearmL", "ForearmR", "Head", "HandL", "HandR", "FootL", "FootR", "GloveL", "GloveR",
 })
@@ -21,7 +23,7 @@ V2_POSITIONS: frozenset[str] = frozenset({
 
 def v2_frame_message(row: np.ndarray, dmap: DeviceMap, duration_ms: int, key_prefix: str = "hapmotion") -> str:
     """One ``/v2/feedbacks`` request that plays ``row`` on every SDK1 device: one ``Submit`` of ``Type: frame`` per
-    device, each under its own Key (``<prefix>_<Device>``) so the panels play together (docs §2.4), with every dot
+    device, each under its own Key (``<prefix>_<Device>``) so the panels play together, with every dot
     listed (zeros included, so a key's previous frame is fully replaced)."""
     submits = []
     for device, cols in dmap.devices.items():
