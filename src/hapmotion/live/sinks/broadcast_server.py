@@ -3,7 +3,7 @@
 Why a process: serving viewers is Python work (handshakes, a write per viewer per frame, skipping and dropping
 the slow ones). In the session's process it would share the interpreter lock and the event loop with the Player
 sinks, and a thousand viewers that never read did cost the Players tens of milliseconds. Here it costs the session
-one pipe write per frame. The process runs at a lower CPU priority (nice +10), so on a busy machine the session
+one pipe write per frame. The process runs at a lower CPU priority (nice +5), so on a busy machine the session
 wins the CPU.
 
 This file is run by path (``python broadcast_server.py HOST PORT CLIENT_BUFFER SLOW_S SNDBUF``) and imports
@@ -178,7 +178,7 @@ def frame_record(received: Optional[float], message: str) -> bytes:
 
 if __name__ == "__main__":
     try:
-        os.nice(10)
+        os.nice(5)
     except (AttributeError, OSError):
         pass
     # Ctrl-C, a closed terminal etc. reach the whole process group: the session decides when this server stops
