@@ -230,3 +230,20 @@ def test_cues_over_a_played_track_match_the_offline_timeline(tmp_path):
     for f in frames:
         j = int(round(f.t * 50.0))
         np.testing.assert_allclose(f.row, layer(np.full(N, BASE), timeline[j], show_power_limit(N)), atol=1e-9)
+
+
+def test_a_cue_fired_while_nothing_is_sent_is_dropped_not_played_late(tmp_path, live_log):
+    from hapmotion.live.cue_layer import FIRE_WAIT_S, LiveCues
+
+    (tmp_path / "show.cues").write_text(f"3600 {HEARTBEAT} name=beat\n")
+    cues = LiveCues(load_cues(tmp_path / "show.cues"), fps=50.0, actuators=IDS, mirror_map=LAYOUT.mirror_map())
+    base = np.full(N, BASE)
+    assert cues.fire("beat") and not cues.fire("other")
+    assert np.array_equal(cues.layer(base, 0.0), base)      # it starts here; the pattern's first row is silent
+    assert cues.layer(base, 0.02).max() > BASE               # its second row plays on the next one
+    fresh = LiveCues(load_cues(tmp_path / "show.cues"), fps=50.0, actuators=IDS, mirror_map=LAYOUT.mirror_map())
+    fresh.fire("beat")
+    fresh._pending = [(t - FIRE_WAIT_S - 0.1, e) for t, e in fresh._pending]   # fired before a long stall
+    assert np.array_equal(fresh.layer(base, 5.0), base) and np.array_equal(fresh.layer(base, 5.5), base)
+    assert fresh.dropped == 1
+    assert len([r for r in live_log if "dropped, not played late" in r.getMessage()]) == 1

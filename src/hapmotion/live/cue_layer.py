@@ -7,7 +7,8 @@ then, added by :func:`hapmotion.cues.layer` under the show's power limit, exactl
 * a cue of the list plays its pattern row ``j - round(time_s * fps)`` (the offline timeline's placement), so a
   replay (or a ``--loop`` of it, whose show time starts again) plays its cues where ``hapmotion render`` puts them;
 * a fired cue starts at the first row sent after the message arrived and plays through its pattern; a show time
-  that jumps back (a looping replay, a sender restart) ends it.
+  that jumps back (a looping replay, a sender restart) ends it, and one that finds no row within
+  :data:`FIRE_WAIT_S` (a stalled source) is dropped rather than played late.
 
 Patterns are read once, before the show; each distinct (pattern, gain, side, devices) is prepared once at the
 session rate as energy rows ``(g I / 100)^2``, so memory follows the distinct patterns, not the number of cues.
@@ -17,6 +18,7 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
@@ -29,6 +31,9 @@ log = logging.getLogger("hapmotion.live")
 
 MAX_ACTIVE_FIRED = 64
 """Fired cues playing at once; a desk that fires more (a stuck button) has the oldest ones end first."""
+FIRE_WAIT_S = 0.5
+"""A fired cue that finds no row to start on within this many seconds (the source is stalled, nothing is being
+sent) is dropped rather than played late, when the performer comes back."""
 
 
 def show_power_limit(n_actuators: int) -> Optional[float]:
@@ -75,10 +80,11 @@ class LiveCues:
         self._ends = self._starts + np.array([self._energy[k].shape[0] for k in keys], dtype=np.int64)
         for note in cue_list.notes:
             log.warning("cues: %s", note)
-        self._pending: list[np.ndarray] = []
+        self._pending: list[tuple[float, np.ndarray]] = []  # (perf_counter time fired, energy rows)
         self._active: list[tuple[int, np.ndarray]] = []  # (start frame, energy rows)
         self._last_frame: Optional[int] = None
         self.fired = 0
+        self.dropped = 0
         self.trigger: Any = None
         """The :class:`~hapmotion.live.cue_trigger.CueTrigger` that fires these cues by OSC, if any."""
 
@@ -106,7 +112,7 @@ class LiveCues:
             return False
         if gain is not None and not (math.isfinite(gain) and 0.0 <= gain <= MAX_GAIN):
             raise ValueError(f"gain {gain} outside 0..{MAX_GAIN:g}")
-        self._pending.append(self._energy[self._prepare(cue, gain)])
+        self._pending.append((time.perf_counter(), self._energy[self._prepare(cue, gain)]))
         self.fired += 1
         return True
 
@@ -116,9 +122,17 @@ class LiveCues:
         if self._last_frame is not None and j < self._last_frame:
             self._active.clear()  # the show time went back: fired cues belong to the time they were fired in
         self._last_frame = j
-        for energy in self._pending:
-            self._active.append((j, energy))
-        self._pending.clear()
+        if self._pending:
+            now = time.perf_counter()
+            for fired_at, energy in self._pending:
+                if now - fired_at <= FIRE_WAIT_S:
+                    self._active.append((j, energy))
+                else:
+                    self.dropped += 1
+                    if self.dropped == 1:
+                        log.warning("cues: a cue fired while no rows were being sent (stalled source) was dropped, "
+                                    "not played late (logged once)")
+            self._pending.clear()
         if len(self._active) > MAX_ACTIVE_FIRED:
             del self._active[: len(self._active) - MAX_ACTIVE_FIRED]
         total = np.zeros(len(self.actuators))
