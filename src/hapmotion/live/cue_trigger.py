@@ -197,3 +197,5 @@ async def run_with_cues(engine: Any, source: Any) -> Any:
         return await engine.run(source)
     finally:
         await trigger.close()
+        log.info("cues: %d fired by OSC on %s%s", engine.cues.fired, trigger.describe(),
+                 f", {engine.cues.dropped} dropped in a stall" if engine.cues.dropped else "")
