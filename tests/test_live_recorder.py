@@ -80,9 +80,10 @@ def test_sigkill_leaves_a_journal_that_is_the_take_so_far(tmp_path):
              for k in range(n)]
     assert expected[:n].max() > 10 and np.mean(close) >= 0.9
     rec = recover_journal(journal, tmp_path / "recovered.tact")
-    again = load_track(tmp_path / "recovered.tact")
-    assert again.n_frames == rec.n_frames == track.n_frames
-    np.testing.assert_allclose(again.intensities, track.intensities, atol=0.51)  # .tact stores whole percents
+    again = load_track(tmp_path / "recovered.tact")   # (.tact is written at the Player's own tick)
+    assert rec.n_frames == track.n_frames and abs(again.duration - track.duration) <= 0.05
+    # the take's peaks survive (.tact stores whole percents)
+    np.testing.assert_allclose(again.intensities.max(axis=0), track.intensities.max(axis=0), atol=0.51)
 
 
 def _record_session(tmp_path, frames, *, wait_after: float, **kw):
