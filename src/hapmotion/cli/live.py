@@ -137,6 +137,12 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
         from ..audio import parse_mix_ratio
 
         ratio = parse_mix_ratio(mix_ratio)
+    cue_list = None
+    if cues is not None:  # read here, within the --limit values, like every file the command reads
+        from ..cues import load_cues
+        from .motion_options import cli_limits
+
+        cue_list = load_cues(cues, limits=cli_limits(motion_opts.get("limits")))
     src = _source(source, fps=fps, speed=speed, loop=loop, motion_opts=motion_opts,
                   allow_origins=_split(allow_origins), token=token, allow_senders=allow_senders,
                   max_senders=max_senders)
@@ -145,7 +151,7 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
                  loop=loop, audio=audio, audio_offset=audio_offset, mode=mode, ratio=ratio, domain=mix_domain,
                  stall_ms=stall_ms, stats_interval=1.0 if show_stats else None, workspace_id=workspace_id,
                  api_key=api_key, on_ready=ready, on_stats=lambda text: click.echo(f"live: {text}", err=True),
-                 cues=cues, cue_port=cue_port)
+                 cues=cue_list, cue_port=cue_port)
     finally:
         # The summary is printed however the session ended (turn-off has been sent by then). Nothing here raises:
         # a session error in flight stays the one reported.

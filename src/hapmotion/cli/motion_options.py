@@ -27,6 +27,12 @@ CLI_SPELLING = {"units": "--units", "scale": "--scale", "skip_frames": "--skip-f
 UP_CHOICES = ("y", "z", "-y", "-z", "x", "-x")
 
 
+limit_option = click.option(
+    "--limit", "limits", multiple=True, metavar="NAME=N",
+    help=f"Raise a size limit of the motion and track readers: {DEFAULT_LIMITS.help_text()}. Repeatable.")
+"""The ``--limit NAME=N`` option alone, for commands that read tracks or patterns but no motion (``play``)."""
+
+
 def motion_options(f: Callable[..., Any]) -> Callable[..., Any]:
     """Click decorator: add the reader options and hand them to the command as one keyword, ``motion_opts``.
 
@@ -69,9 +75,7 @@ def motion_options(f: Callable[..., Any]) -> Callable[..., Any]:
         click.option("--joint-map", type=click.Path(dir_okay=False), default=None, metavar="MAP.toml|MAP.json",
                      help="BVH: a file of '\"their joint\" = \"HAND_LEFT\"' lines naming joints the automatic "
                      "matching misses."),
-        click.option("--limit", "limits", multiple=True, metavar="NAME=N",
-                     help=f"Raise a size limit of the motion and track readers: {DEFAULT_LIMITS.help_text()}. "
-                     "Repeatable."),
+        limit_option,
     ]
     for option in reversed(options):  # click lists params in decoration order, bottom first
         wrapper = option(wrapper)

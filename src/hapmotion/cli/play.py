@@ -6,6 +6,8 @@ from typing import Optional
 
 import click
 
+from .motion_options import cli_limits, limit_option
+
 HELP = """Play TRACK in real time to the same sinks as 'hapmotion live'.
 
 TRACK is any track or pattern 'hapmotion.load_track' reads: a rendered track (.csv .json .npz .tact) or a
@@ -51,13 +53,20 @@ Examples:
 @click.option("--cue-port", default=None, metavar="[HOST:]PORT",
               help="Also fire the cue list's named cues by OSC: /hapmotion/cue NAME [gain] (loopback by default).")
 @click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
+@limit_option
 def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, layout_file: Optional[str],
             show_stats: bool, stats_json: Optional[str], workspace_id: Optional[str], api_key: Optional[str],
-            cues: Optional[str], cue_port: Optional[str], quiet: bool) -> None:
+            cues: Optional[str], cue_port: Optional[str], quiet: bool, limits: tuple[str, ...]) -> None:
     from ..live.playback import run_play
     from .live import _finish, _setup_logging
 
     _setup_logging(quiet)
+    input_limits = cli_limits(limits)
+    cue_list = None
+    if cues is not None:
+        from ..cues import load_cues
+
+        cue_list = load_cues(cues, limits=input_limits)
     if stats_json:
         from ..filesafety import check_writable
 
@@ -77,7 +86,8 @@ def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, layout
     try:
         run_play(track, list(sinks), speed=speed, loop=loop, layout=layout_file, workspace_id=workspace_id,
                  api_key=api_key, on_ready=ready, stats_interval=1.0 if show_stats else None,
-                 on_stats=lambda text: click.echo(f"play: {text}", err=True), cues=cues, cue_port=cue_port)
+                 on_stats=lambda text: click.echo(f"play: {text}", err=True), cues=cue_list, cue_port=cue_port,
+                 limits=input_limits)
     finally:
         lost = _finish(started[0] if started else None, stats_json)
     if lost:

@@ -73,7 +73,7 @@ class LiveCues:
         self._energy: dict[tuple, np.ndarray] = {}
         for cue in cue_list.cues:
             if cue.pattern not in self._tracks:
-                self._tracks[cue.pattern] = load_track(cue.pattern)
+                self._tracks[cue.pattern] = load_track(cue.pattern, limits=cue_list.limits)
         keys = [self._prepare(cue) for cue in cue_list.cues]
         self._keys = keys
         self._starts = np.array([int(round(c.time_s * self.fps)) for c in cue_list.cues], dtype=np.int64)

@@ -156,6 +156,7 @@ async def play(
     marks: Optional[Mapping[int, str]] = None,
     on_mark: Optional[Callable[[str], None]] = None,
     cues: Any = None,
+    limits: Any = None,
     cue_port: "str | int | None" = None,
     **engine_options: Any,
 ) -> LiveStats:
@@ -164,7 +165,8 @@ async def play(
 
     ``layout`` is the session layout (a :class:`~hapmotion.layout.Layout`, a layout file, or None for the default
     X40 + shoulder sleeves). ``cues`` and ``cue_port`` layer a cue list over the track and fire its named cues by
-    OSC, as in :func:`hapmotion.live.live`. Every sink is sent turn-off before this returns or raises.
+    OSC, as in :func:`hapmotion.live.live`. ``limits`` (:class:`~hapmotion.limits.InputLimits` or a mapping of
+    raised limits) bound the track file read. Every sink is sent turn-off before this returns or raises.
     """
     from ..show import Show
     from .session import build_sink
@@ -177,7 +179,7 @@ async def play(
         from ..track_files import load_track
 
         name = os.fspath(track)
-        track = load_track(track)
+        track = load_track(track, limits=limits)
     session_layout = Show(layout=layout).load_layout()
     fps = play_rate(track.fps)
     if fps != track.fps:
