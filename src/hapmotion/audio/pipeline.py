@@ -24,9 +24,9 @@ import numpy as np
 from ..errors import UsageError
 from ..track import HapticTrack
 from .analysis import analyze_file
-from .mix import check_ratio, limit_power, mix
-from .params import DEFAULT_PARAMS, MIX_DOMAINS, AudioParams
-from .pattern import actuators_of, audio_track
+from .mix import check_ratio, limit_power, mix, resolve_rule
+from .params import AudioParams, params_for_preset
+from .pattern import actuators_of, audio_track, layout_of
 
 MODES = ("multimodal", "audio", "motion")
 LENGTH_RULES = ("longer", "motion")
@@ -66,15 +66,17 @@ def power_limit_for(fraction: float | None, n_actuators: int) -> float | None:
 
 
 def output_stage(motion_rows: np.ndarray, audio_rows: np.ndarray, *, mode: str, ratio: "tuple[float, float]",
-                 domain: str, power_limit: float | None) -> np.ndarray:
+                 domain: str | None = None, power_limit: float | None, rule: str | None = None,
+                 positions: np.ndarray | None = None, params: AudioParams | None = None) -> np.ndarray:
     """What the three study-2 conditions send, from motion and audio rows ``(N,)`` or ``(T, N)`` 0..100.
 
-    ``multimodal``: the mix (:func:`mix`); ``motion`` / ``audio``: that channel alone; all clipped to 0..100 and
-    power-limited the same way. Used by :func:`combine` offline and per frame by live mode, so both send the same
-    numbers.
+    ``multimodal``: the mix (:func:`mix`, with ``rule``/``domain``, ``positions`` and ``params`` passed on);
+    ``motion`` / ``audio``: that channel alone; all clipped to 0..100 and power-limited the same way. Used by
+    :func:`combine` offline and per frame by live mode, so both send the same numbers.
     """
     if mode == "multimodal":
-        return mix(motion_rows, audio_rows, ratio=ratio, domain=domain, power_limit=power_limit)
+        return mix(motion_rows, audio_rows, ratio=ratio, domain=domain, power_limit=power_limit, rule=rule,
+                   positions=positions, params=params)
     if mode not in ("motion", "audio"):
         raise UsageError(f"mode must be motion, audio or multimodal, not {mode!r}")
     return limit_power(np.clip(motion_rows if mode == "motion" else audio_rows, 0.0, 100.0), power_limit)
@@ -82,9 +84,10 @@ def output_stage(motion_rows: np.ndarray, audio_rows: np.ndarray, *, mode: str, 
 
 def combine(motion_track: HapticTrack | None, audio_path: "str | os.PathLike[str] | None",
             mode: str = "multimodal", ratio: "tuple[float, float]" = (2, 3), offset_s: float = 0.0,
-            fps: float = 60.0, domain: str = "linear", length: str = "longer",
+            fps: float = 60.0, domain: str | None = None, length: str = "longer",
             actuators: "Sequence[str] | Any | None" = None, params: AudioParams | None = None,
-            power_limit_fraction: float | None | str = "params", analysis: Any = None) -> HapticTrack:
+            power_limit_fraction: float | None | str = "params", analysis: Any = None,
+            mix_rule: str | None = None) -> HapticTrack:
     """Render one of the study-2 conditions.
 
     Parameters
@@ -103,14 +106,18 @@ def combine(motion_track: HapticTrack | None, audio_path: "str | os.PathLike[str
     fps:
         Frame rate when there is no motion track.
     domain:
-        ``"linear"`` (paper) or ``"energy"`` mix, see :func:`hapmotion.audio.mix.mix`.
+        Older spelling of the mix rule: ``"linear"`` (= ``paper``) or ``"energy"``; ``None``: see ``mix_rule``.
+    mix_rule:
+        ``"duck"``, ``"paper"`` or ``"energy"`` (:mod:`hapmotion.audio.mix`); ``None``: ``domain`` if given, else
+        ``params.mix_rule``.
     length:
         ``"longer"`` or ``"motion"`` (see the module docstring).
     actuators:
         Ids (or a Layout, anything with ``.actuators`` and ``.name``) when there is no motion track (default: the 52
         of the default layout). With a motion track they must equal its actuators.
     params:
-        :class:`AudioParams` (default values if ``None``).
+        :class:`AudioParams`; ``None``: those of the motion track's preset (:func:`params_for_preset`: the paper's
+        whole-suit pattern and 2:3 weighted sum for ``paper``, the layered pattern and the ``duck`` mix otherwise).
     power_limit_fraction:
         Total power limit as a fraction of all actuators at full drive, applied to every frame in every mode so the
         three conditions share one output stage; ``"params"`` takes ``params.power_limit_fraction``, ``None``
@@ -126,13 +133,13 @@ def combine(motion_track: HapticTrack | None, audio_path: "str | os.PathLike[str
         limit and the analysis facts; ``debug`` holds the motion track's arrays (extended past its end) and the
         audio ones (``audio_envelope``, ``audio_kick``, ...).
     """
-    p = params or DEFAULT_PARAMS
+    preset = motion_track.meta.get("preset") if motion_track is not None else None
+    p = params or params_for_preset(preset)
     if mode not in MODES:
         raise UsageError(f"mode {mode!r}: expected {', '.join(MODES)}")
     if length not in LENGTH_RULES:
         raise UsageError(f"length {length!r}: expected {' or '.join(LENGTH_RULES)}")
-    if domain not in MIX_DOMAINS:
-        raise UsageError(f"mix domain {domain!r}: expected {' or '.join(MIX_DOMAINS)}")
+    rule = resolve_rule(mix_rule, domain, p)
     ratio = check_ratio(ratio)
     try:
         offset_s = float(offset_s)
@@ -169,11 +176,15 @@ def combine(motion_track: HapticTrack | None, audio_path: "str | os.PathLike[str
 
     fraction = p.power_limit_fraction if power_limit_fraction == "params" else power_limit_fraction
     limit = power_limit_for(fraction, n)
-    rows = output_stage(motion_rows, audio_rows, mode=mode, ratio=ratio, domain=domain, power_limit=limit)
+    geometry = layout_of(ids)
+    positions = geometry.positions() if geometry is not None else None
+    rows = output_stage(motion_rows, audio_rows, mode=mode, ratio=ratio, power_limit=limit, rule=rule,
+                        positions=positions, params=p)
 
     meta: dict[str, Any] = dict(motion_track.meta) if motion_track is not None else {}
     meta.update({
-        "mode": mode, "mix_ratio": [ratio[0], ratio[1]], "mix_domain": domain,
+        "mode": mode, "mix_ratio": [ratio[0], ratio[1]], "mix_rule": rule,
+        "mix_domain": {"paper": "linear", "energy": "energy"}.get(rule),
         "audio_path": os.fspath(audio_path) if audio_path is not None else None, "audio_offset_s": offset_s,
         "length": length, "power_limit": limit, "frames_motion": n_motion, "frames_audio": n_audio,
     })
