@@ -1,17 +1,19 @@
-# Two targets do all the set-up on a fresh machine (see README.md).
-PY ?= python3
+# Two targets do all the set-up on a fresh machine (see README.md): both create and use the project's own
+# virtual environment .venv (scripts/setup-env), so Debian's system Python works as it is.
+VENV ?= .venv
+PY := $(VENV)/bin/python
 
 .PHONY: demo test bench install
 
 install:
-	$(PY) -m pip install --quiet -e '.[test]'
+	bash scripts/setup-env --test
 
 demo:
-	$(PY) -m pip install --quiet -e .
-	hapmotion demo -o out
+	bash scripts/setup-env
+	$(PY) -m hapmotion demo -o out
 
 test:
-	bash scripts/setup-test-env
+	bash scripts/setup-env --test
 	$(PY) -m pytest -q
 
 bench: install

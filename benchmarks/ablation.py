@@ -90,7 +90,7 @@ def markdown(results: dict[str, dict[str, float]]) -> str:
 
 
 def _parse(spec: str) -> tuple[str, dict[str, Any]]:
-    from hapmotion.cli.render import parse_param_overrides
+    from hapmotion.show import parse_param_overrides
 
     return spec, parse_param_overrides(tuple(spec.split(",")))
 

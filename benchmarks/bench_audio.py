@@ -1,4 +1,4 @@
-"""Benchmark of the audio channel (issue 3): speed, memory on an hour-long file, onset/beat agreement.
+"""Benchmark of the audio channel: speed, memory on an hour-long file, onset/beat agreement.
 
 Run:  python benchmarks/bench_audio.py                (about 30 s; writes ~250 MB of test files to /tmp)
       python benchmarks/bench_audio.py --no-hour      (skips the one-hour memory test)

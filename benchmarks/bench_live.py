@@ -147,7 +147,7 @@ class PlayerV3(Player):
         import ssl
 
         sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-        from test_live_support import self_signed_cert
+        from support.live_fakes import self_signed_cert
 
         cert, key = self_signed_cert(tmp)
         self.ctx = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)

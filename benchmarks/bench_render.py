@@ -1,4 +1,4 @@
-"""Renderer speed: batch frames per second and Renderer.step latency, each printed beside its target (issue 2).
+"""Renderer speed: batch frames per second and Renderer.step latency, each printed beside its target.
 
 Run: python benchmarks/bench_render.py
 """

@@ -1,4 +1,4 @@
-"""Viewer page size and speed for a one-hour recording (issue 5).
+"""Viewer page size and speed for a one-hour recording.
 
 Builds a synthetic one-hour 60 fps recording (all 32 joints, smooth multi-frequency arm and body motion plus 1 mm
 sensor jitter, travelling on the floor), renders it with the real renderer (mst, paper), writes the viewer page and

@@ -190,3 +190,56 @@ def test_a_stats_json_failure_never_hides_the_session_error(short_replay, tmp_pa
     err = capsys.readouterr().err
     assert code == 1 and "internal error: RuntimeError: renderer bug at frame 4" in err, err
     assert f"--stats-json {summary} not written: " in err and "frames in" in err
+
+
+def test_replay_takes_the_reader_options(short_replay, tmp_path, capsys):
+    summary = tmp_path / "stats.json"
+    code = main(["live", "--source", f"replay:{short_replay}", "--speed", "4", "--skip-frames", "5",
+                 "--sink", "ws-broadcast://127.0.0.1:0", "--stats-json", str(summary)])
+    assert code == 0, capsys.readouterr().err
+    assert json.loads(summary.read_text())["frames_in"] == 20 - 5  # the 20-frame clip without its first 5
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--source", "ws://127.0.0.1:0", "--units", "cm"], "--units is a reader option: it applies to replay:FILE"),
+    (["--source", "osc://127.0.0.1:0", "--token", "x"], "--token and --allow-origin apply to ws:// sources"),
+    (["--source", "osc://127.0.0.1:0", "--allow-origin", "https://a.example"], "apply to ws:// sources"),
+    (["--source", "replay:x.bvh", "--allow-sender", "10.0.0.1"], "--allow-sender applies to network sources"),
+    (["--source", "ws://127.0.0.1:0", "--allow-sender", "10.0.0.300"], "--allow-sender '10.0.0.300': expected"),
+    (["--mode", "audio", "--audio", "x.ogg", "--up", "z"], "--up applies to a --source"),
+])
+def test_options_given_to_a_source_they_do_not_fit(args, message, capsys):
+    code = main(["live", *args, "--sink", "player"])
+    one_line_error(code, capsys.readouterr().err, message)
+
+
+async def _startup_lines(*args: str) -> str:
+    """Start ``hapmotion live`` with ``args``, return its stderr up to the startup line, then stop it (SIGINT)."""
+    proc = await asyncio.create_subprocess_exec(*HAPMOTION, "live", *args, "--sink", "ws-broadcast://127.0.0.1:0",
+                                                stderr=asyncio.subprocess.PIPE,
+                                                env={**os.environ, "PYTHONUNBUFFERED": "1",
+                                                     "HAPMOTION_LIVE_TOKEN": ""})
+    lines = []
+    while not lines or "listening on" not in lines[-1]:
+        line = (await asyncio.wait_for(proc.stderr.readline(), 60)).decode()
+        assert line, "".join(lines)
+        lines.append(line)
+    proc.send_signal(signal.SIGINT)
+    await asyncio.wait_for(proc.wait(), 15)
+    return "".join(lines)
+
+
+def test_the_startup_line_says_what_is_exposed():
+    ws = asyncio.run(_startup_lines("--source", "ws://127.0.0.1:0", "--token", "s3cret",
+                                    "--allow-origin", "https://show.example,https://backup.example"))
+    assert re.search(r"listening on ws://127\.0\.0\.1:\d+ \(reachable from this machine only; senders: any address; "
+                     r"token: required \(Authorization: Bearer header or \?token=\); browser pages: "
+                     r"https://show\.example, https://backup\.example; at most 8 senders, 240 messages/s each\)",
+                     ws), ws
+    assert "s3cret" not in ws  # the secret itself is never printed
+    osc = asyncio.run(_startup_lines("--source", "osc://0.0.0.0:0", "--allow-sender", "127.0.0.1,10.1.0.0/16"))
+    assert re.search(r"listening on osc://0\.0\.0\.0:\d+ \(reachable from every network interface; senders: "
+                     r"127\.0\.0\.1, 10\.1\.0\.0/16; at most 8 senders, 2400 messages/s each\)", osc), osc
+    open_osc = asyncio.run(_startup_lines("--source", "osc://0.0.0.0:0", "--max-senders", "2"))
+    assert "any sender is accepted; --allow-sender limits who may send" in open_osc  # a warning before the line
+    assert "senders: any address; at most 2 senders" in open_osc

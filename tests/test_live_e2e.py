@@ -18,7 +18,7 @@ from support.live_fakes import (BVH, FakePlayerV2, FakePlayerV3, OscReceiver, Ta
 from websockets.asyncio.client import connect
 
 import hapmotion
-from hapmotion.live import BroadcastSink, ReplaySource
+from hapmotion.live import BroadcastSink, OscSource, ReplaySource
 from hapmotion.track_files import load_track
 
 FPS = 60.0
@@ -207,9 +207,9 @@ def test_websocket_source_with_bad_messages(recording, expected):
 def test_osc_faults_and_flood_do_not_stop_the_stream(recording):
     async def scenario():
         player = await FakePlayerV2().start()
-        # On loopback the kernel drops most of a flood before it is read; a 200 messages/s limit (still over 3 x
-        # the frame rate) makes sure the limit itself is exercised too, even on a busy machine.
-        task, engine = await start_session("osc://127.0.0.1:0", [player.url()], flood_rate=200.0)
+        # On loopback the kernel drops most of a flood before it is read; a 200 messages/s budget per sender (still
+        # over 3 x the frame rate) makes sure the limit itself is exercised too, even on a busy machine.
+        task, engine = await start_session(OscSource("127.0.0.1", 0, sender_rate=200.0), [player.url()])
         port = engine.source.port
         raw = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         client = SimpleUDPClient("127.0.0.1", port)

@@ -283,36 +283,3 @@ def test_audio_only_mode_plays_the_song_rows_on_the_clock():
     assert stats.rendered == len(rows) and 6 <= len(rows) <= 12   # 12 ticks; a late tick is skipped, not queued
     assert np.all(np.isin(rows[:, 0], audio_rows[:, 0])) and rows[0, 0] == 0.0
     assert stats.stop_reason == "source ended"
-
-
-def test_session_audio_goes_through_the_offline_output_stage(monkeypatch):
-    """``build_audio`` uses ``audio.pipeline.output_stage`` / ``power_limit_for`` (no copy of them), so the song
-    alone equals offline ``combine(mode="audio")`` and each mixed row equals the offline stage on the same rows."""
-    from pathlib import Path
-
-    from hapmotion.audio import combine, pipeline
-    from hapmotion.layout import load_layout
-    from hapmotion.live.session import build_audio
-
-    song = AUDIO / "vibe_ace.ogg"
-    layout = load_layout()
-    real_stage, calls = pipeline.output_stage, []
-
-    def spy(motion_rows, audio_rows, **kw):
-        calls.append(kw)
-        return real_stage(motion_rows, audio_rows, **kw)
-
-    monkeypatch.setattr(pipeline, "output_stage", spy)
-    limit = pipeline.power_limit_for(hapmotion.audio.DEFAULT_PARAMS.power_limit_fraction, N)
-    solo = build_audio(song, fps=FPS, layout=layout, actuators=layout.actuators, solo=True)
-    assert calls[0] == {"mode": "audio", "ratio": (2, 3), "domain": "linear", "power_limit": limit}
-    offline = combine(None, song, mode="audio", fps=FPS, actuators=layout)
-    np.testing.assert_array_equal(solo.rows, offline.intensities)
-
-    channel = build_audio(song, fps=FPS, layout=layout, actuators=layout.actuators, ratio=(1, 1), domain="energy")
-    calls.clear()
-    motion_row = np.linspace(0, 100, N)
-    got = channel.mixed(motion_row, 2.0)
-    assert calls == [{"mode": "multimodal", "ratio": (1, 1), "domain": "energy", "power_limit": limit}]
-    np.testing.assert_array_equal(got, real_stage(motion_row, channel.row(2.0), mode="multimodal", ratio=(1, 1),
-                                                  domain="energy", power_limit=limit))

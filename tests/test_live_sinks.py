@@ -10,7 +10,8 @@ import numpy as np
 from support.live_fakes import OscReceiver
 
 from hapmotion.layout import load_layout
-from hapmotion.live.protocol import DeviceMap, OutFrame
+from hapmotion.live.devices import DeviceMap
+from hapmotion.live.frames import OutFrame
 from hapmotion.live.sinks import OscOutSink, PlayerV2Sink
 
 

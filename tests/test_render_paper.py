@@ -14,7 +14,7 @@ import hapmotion
 from hapmotion.body.model import BodyModel
 from hapmotion.joints import JOINT_INDEX
 from hapmotion.layout import load_layout
-from hapmotion.render import kernel as K
+from hapmotion.render.steps.phantom import split_energy, split_paper
 from hapmotion.render.params import alpha_at
 
 LAYOUT = load_layout()
@@ -104,13 +104,13 @@ def test_acceleration_boost_adds_up_to_two_levels_and_stops_at_eight():
 
 def test_phantom_split_paper_1d_and_2d():
     raw = np.zeros(20)
-    K._split_paper(1.25, 2.0, 4, 5, 50.0, 0.05, 0, raw)  # on row 2, a = 0.25 from col 1 to col 2
+    split_paper(1.25, 2.0, 4, 5, 50.0, 0.05, 0, raw)  # on row 2, a = 0.25 from col 1 to col 2
     expect = np.zeros(20)
     expect[2 * 4 + 1] = 50 * 0.75
     expect[2 * 4 + 2] = 50 * 0.25
     np.testing.assert_allclose(raw, expect)
     raw[:] = 0
-    K._split_paper(1.3, 2.2, 4, 5, 40.0, 0.05, 0, raw)  # 2D: main (1, 2) x 0.5, neighbours K a, diagonal mean
+    split_paper(1.3, 2.2, 4, 5, 40.0, 0.05, 0, raw)  # 2D: main (1, 2) x 0.5, neighbours K a, diagonal mean
     expect[:] = 0
     expect[2 * 4 + 1] = 20.0
     expect[2 * 4 + 2] = 40 * 0.3
@@ -124,7 +124,7 @@ def test_phantom_split_energy_preserves_energy_and_centroid():
     for _ in range(50):
         cu, cv = rng.uniform(0, 3), rng.uniform(0, 4)
         raw = np.zeros(20)
-        K._split_energy(cu, cv, 4, 5, 30.0, 0, raw)
+        split_energy(cu, cv, 4, 5, 30.0, 0, raw)
         assert (raw ** 2).sum() == pytest.approx(900.0)
         cols = np.arange(20) % 4
         rows = np.arange(20) // 4
@@ -135,7 +135,7 @@ def test_phantom_split_energy_preserves_energy_and_centroid():
 
 def test_linear_split_loses_3_db_at_the_midpoint():
     raw = np.zeros(20)
-    K._split_paper(1.5, 0.0, 4, 5, 1.0, 0.05, 0, raw)
+    split_paper(1.5, 0.0, 4, 5, 1.0, 0.05, 0, raw)
     assert 10 * np.log10((raw ** 2).sum()) == pytest.approx(-3.0103, abs=1e-3)
 
 

@@ -63,31 +63,52 @@ def test_json_and_npz_round_trip(track, tmp_path, ext):
 def test_tact_files_follow_the_designer_format(track, tmp_path):
     path = tmp_path / "show.tact"
     track.save(path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["show.ForearmL.tact", "show.ForearmR.tact", "show.tact"]
     vest = json.loads(path.read_text())
     arms = {side: json.loads((tmp_path / f"show.Forearm{side}.tact").read_text()) for side in "LR"}
+    ticked = track.resample(50.0)
     proj = vest["project"]
     assert proj["layout"]["type"] == "Tactot"
     assert set(proj["layout"]["layouts"]) == {"VestFront", "VestBack"}
     assert len(proj["layout"]["layouts"]["VestFront"]) == 20
     assert vest["intervalMillis"] == 20 and vest["size"] == 20
     effect = proj["tracks"][0]["effects"][0]
-    assert effect["offsetTime"] == round(track.duration * 1000)
-    for pos, mode in effect["modes"].items():
-        assert mode["mode"] == "DOT_MODE"
-        cols = track.device_columns(pos)
-        for fb in mode["dotMode"]["feedback"]:
-            assert 0 <= fb["startTime"] < fb["endTime"] <= effect["offsetTime"]
-            for pt in fb["pointList"]:
-                assert 0 <= pt["index"] < 20
-                assert 0.0 < pt["intensity"] <= 1.0
-                # the value is the track's at the span's first frame
-                frame = round(fb["startTime"] * track.fps / 1000)
-                assert pt["intensity"] * 100 == pytest.approx(track.intensities[frame, cols[pt["index"]]], abs=0.5)
+    assert effect["offsetTime"] == ticked.n_frames * 20
+    for doc in (vest, arms["L"], arms["R"]):
+        for pos, mode in doc["project"]["tracks"][0]["effects"][0]["modes"].items():
+            assert mode["mode"] == "DOT_MODE"
+            cols = ticked.device_columns(pos)
+            for fb in mode["dotMode"]["feedback"]:
+                # every frame sits on the Player's 20 ms tick
+                assert fb["startTime"] % 20 == 0 and fb["endTime"] % 20 == 0
+                assert 0 <= fb["startTime"] < fb["endTime"] <= effect["offsetTime"]
+                for pt in fb["pointList"]:
+                    assert 0.0 < pt["intensity"] <= 1.0
+                    tick = fb["startTime"] // 20
+                    assert pt["intensity"] * 100 == pytest.approx(ticked.intensities[tick, cols[pt["index"]]], abs=0.5)
+    # each sleeve file lists both sleeves, as every Designer sleeve file does, and plays its own side only
     for side, doc in arms.items():
+        other = "R" if side == "L" else "L"
         assert doc["project"]["layout"]["type"] == "Tactosy2"
-        assert list(doc["project"]["layout"]["layouts"]) == [f"Forearm{side}"]
+        assert set(doc["project"]["layout"]["layouts"]) == {"ForearmL", "ForearmR"}
+        modes = doc["project"]["tracks"][0]["effects"][0]["modes"]
+        assert set(modes) == {"ForearmL", "ForearmR"} and modes[f"Forearm{other}"]["dotMode"]["feedback"] == []
+        plays = ticked.intensities[:, ticked.device_columns(f"Forearm{side}")].max() >= 0.5
+        assert bool(modes[f"Forearm{side}"]["dotMode"]["feedback"]) == plays
     back = load_track(path)
-    np.testing.assert_allclose(back.intensities, track.intensities, atol=0.5 + 1e-9)
+    assert back.fps == 50.0 and back.actuators == track.actuators and back.layout == "x40_shoulders"
+    np.testing.assert_allclose(back.intensities, np.rint(ticked.intensities), atol=1e-9)
+
+
+def test_tact_keeps_a_peak_shorter_than_a_tick(tmp_path):
+    """A 1-frame burst at 120 fps (8 ms) survives the 20 ms tick of the written file."""
+    ids = load_layout().actuators
+    rows = np.zeros((120, len(ids)))
+    rows[61, 5] = 80.0  # 508..517 ms: inside tick 25 (500..520 ms)
+    HapticTrack(rows, 120.0, ids).save(tmp_path / "burst.tact")
+    back = load_track(tmp_path / "burst.tact")
+    assert back.intensities[25, 5] == 80.0
+    assert np.count_nonzero(back.intensities) == 1
 
 
 def test_failed_write_leaves_nothing_behind(track, tmp_path, monkeypatch):
@@ -139,11 +160,12 @@ def test_track_refuses_nan():
         ("null.json", '{"format":"hapmotion-track","fps":60,"actuators":["VestFront_0"],"frames":[[1],[null]]}',
          "field frames[1]"),
         ("fps.json", '{"format":"hapmotion-track","fps":0,"actuators":["VestFront_0"],"frames":[[1]]}', "field fps"),
-        ("start.tact", '{"project":{"mediaFileDuration":1,"hapmotion":{"fps":60},"tracks":[{"effects":[{"modes":'
-                       '{"VestFront":{"dotMode":{"feedback":[{"endTime":100,"pointList":[]}]}}}}]}]}}', "effects[0]"),
-        ("index.tact", '{"project":{"mediaFileDuration":1,"hapmotion":{"fps":60},"tracks":[{"effects":[{"modes":'
+        ("start.tact", '{"project":{"mediaFileDuration":1,"layout":{"type":"Tactot"},"tracks":[{"effects":[{"modes":'
+                       '{"VestFront":{"dotMode":{"feedback":[{"startTime":"soon","pointList":[]}]}}}}]}]}}',
+         "field project.tracks[0].effects[0].modes.VestFront.dotMode.feedback[0].startTime"),
+        ("index.tact", '{"project":{"mediaFileDuration":1,"layout":{"type":"Tactot"},"tracks":[{"effects":[{"modes":'
                        '{"VestFront":{"dotMode":{"feedback":[{"startTime":0,"endTime":100,"pointList":'
-                       '[{"index":99,"intensity":0.5}]}]}}}}]}]}}', "effects[0]"),
+                       '[{"index":99,"intensity":0.5}]}]}}}}]}]}}', "pointList[0].index"),
     ],
 )
 def test_bad_track_files_are_one_line_input_errors(tmp_path, name, content, place):
@@ -167,8 +189,8 @@ def test_tact_reads_only_its_own_sleeve_files(tmp_path, track):
     track.save(tmp_path / "show.tact")
     HapticTrack(np.full((10, 52), 77.0), 30.0, track.actuators).save(tmp_path / "show.backup.tact")
     back = load_track(tmp_path / "show.tact")
-    np.testing.assert_allclose(back.intensities, track.intensities, atol=0.5 + 1e-9)
-    assert back.fps == track.fps
+    np.testing.assert_allclose(back.intensities, np.rint(track.resample(50.0).intensities), atol=1e-9)
+    assert back.fps == 50.0
 
 
 def test_writing_onto_a_directory_is_a_one_line_error(tmp_path, track):
@@ -193,10 +215,14 @@ def test_json_meta_never_holds_nan(tmp_path, track):
         ('{"devices": [{"name": "VestFront", "rows": 5, "cols": 4, "chart": "front", "x_span": [0.6]}]}', r"devices\[0\]"),
         ('{"devices": [{"name": "VestFront", "rows": 5, "cols": 4, "chart": "front", "x_span": [0.6, 0.6]}]}',
          r"devices\[0\]"),
-        ('{"devices": [{"name": "A", "rows": 5, "cols": 4, "chart": "front", "x_span": [-0.6, 0.6]},'
-         '{"name": "B", "rows": 5, "cols": 4, "chart": "back", "x_span": [-0.6, 0.6]},'
-         '{"name": "C", "rows": 2, "cols": 3, "chart": "shoulder", "side": "left", "x_span": [0.7, 1]},'
-         '{"name": "D", "rows": 3, "cols": 3, "chart": "shoulder", "side": "right", "x_span": [0.7, 1]}]}', "same grid"),
+        ('{"devices": [{"name": "VestFront", "rows": 5, "cols": 4, "chart": "front", "x_span": [-0.6, 0.6]},'
+         '{"name": "VestBack", "rows": 5, "cols": 4, "chart": "back", "x_span": [-0.6, 0.6]},'
+         '{"name": "ForearmL", "rows": 2, "cols": 3, "chart": "shoulder", "side": "left", "x_span": [0.7, 1]},'
+         '{"name": "ForearmR", "rows": 3, "cols": 2, "chart": "shoulder", "side": "right", "x_span": [0.7, 1]}]}',
+         "same grid"),
+        # a device the renderer drives must be a bHaptics position with that many motors
+        ('{"devices": [{"name": "VestFront", "rows": 4, "cols": 4, "chart": "front", "x_span": [-0.6, 0.6]}]}',
+         "bHaptics position with 16 motors"),
     ],
 )
 def test_bad_layout_files(tmp_path, doc, expect):

@@ -20,7 +20,7 @@ import hapmotion
 from hapmotion.cli import main
 from hapmotion.joints import BONES, JOINTS
 from hapmotion.viewer import write_page
-from hapmotion.viewer.inputs import apply_modes
+from hapmotion.show import Show, render_variants
 from hapmotion.viewer.page import read_page
 from support.data import SHARED_DATA
 
@@ -59,8 +59,7 @@ def page(browser):
 def show(tmp_path_factory):
     """The salsa clip with its music, mst and baseline, as the wearer feels it (motion and music mixed 2:3)."""
     motion = hapmotion.load_motion(SALSA)
-    tracks = apply_modes([hapmotion.render(motion, method=m, preset="paper") for m in ("mst", "baseline")],
-                         ["multimodal"], SONG)
+    tracks = render_variants(Show(audio=SONG), motion, ["mst", "baseline"], ["paper"], ["multimodal"])
     from hapmotion.viewer.page import load_audio_part
 
     path = tmp_path_factory.mktemp("viewer") / "salsa.html"

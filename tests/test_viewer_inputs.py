@@ -15,7 +15,9 @@ import hapmotion
 from hapmotion.cli import main
 from hapmotion.layout import load_layout
 from hapmotion.motion_files import save_motion_table
-from hapmotion.viewer.inputs import is_track_file, load_input
+from hapmotion.cli.view_input import read_view_input
+from hapmotion.show import Show
+from hapmotion.track_files.sniff import is_track_file
 from hapmotion.viewer.page import read_page
 from support.data import SHARED_DATA
 
@@ -69,7 +71,8 @@ def test_motion_table_csv_is_rendered_as_motion(motion_csv):
     motion, path = motion_csv
     assert path.read_text(encoding="utf-8").startswith("time_s,")   # the case that fooled the old sniffing
     assert not is_track_file(path)
-    loaded = load_input(path)
+    loaded = read_view_input(path, Show(), methods=["mst"], presets=["paper"], modes=["motion"],
+                             read_motion=hapmotion.load_motion)
     assert loaded.motion is not None and loaded.motion.n_frames == motion.n_frames == 224
     assert loaded.tracks[0].actuators == tuple(load_layout().actuators)
 

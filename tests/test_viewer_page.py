@@ -14,7 +14,7 @@ from hapmotion.cli import main
 from hapmotion.joints import JOINT_INDEX
 from hapmotion.motion import new_motion
 from hapmotion.viewer import write_page
-from hapmotion.viewer.inputs import is_track_file
+from hapmotion.track_files.sniff import is_track_file
 from hapmotion.viewer.page import AudioPart, read_page
 from hapmotion.viewer.signals import triangle_vertices
 from support.data import SHARED_DATA

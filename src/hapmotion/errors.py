@@ -56,8 +56,3 @@ class InputError(HapMotionError):
 
 class UsageError(HapMotionError):
     """Options that do not fit together or an unknown value (a preset, a mode, an extension)."""
-
-
-def expected(what: str, found: object) -> str:
-    """Format the usual ``expected X, found Y`` phrase."""
-    return f"expected {what}, found {found}"

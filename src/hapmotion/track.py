@@ -93,6 +93,37 @@ class HapticTrack:
                 seen.append(d)
         return seen
 
+    # ------------------------------------------------------------------ rates
+    def resample(self, fps: float) -> "HapticTrack":
+        """The track at ``fps`` rows per second, keeping every peak.
+
+        Rule: output row ``j`` covers ``[j / fps, (j + 1) / fps)`` and takes, per column, the **maximum** of the
+        input rows whose hold intervals overlap it. Going down in rate no short peak is lost (a 10 ms burst in a
+        120 fps track fills the whole 20 ms tick it falls in); going up in rate each output row repeats the input
+        row it lies in (sample and hold); at the same rate the track is unchanged. The output has
+        ``ceil(duration * fps)`` rows. Renderer ``debug`` arrays are per input frame and are not carried over;
+        ``meta["resampled_from_fps"]`` records the input rate.
+        """
+        fps = float(fps)
+        if not (np.isfinite(fps) and fps > 0):
+            raise ValueError(f"fps must be a positive number, got {fps}")
+        meta = dict(self.meta)
+        if fps == self.fps:
+            return HapticTrack(self.intensities.copy(), self.fps, self.actuators, self.layout, meta, dict(self.debug))
+        meta.setdefault("resampled_from_fps", self.fps)
+        n_in = self.n_frames
+        n_out = max(1, int(np.ceil(n_in * fps / self.fps - 1e-9))) if n_in else 0
+        ratio = self.fps / fps  # input rows per output row
+        j = np.arange(n_out, dtype=np.float64)
+        lo = np.minimum(np.floor(j * ratio + 1e-9).astype(np.int64), max(n_in - 1, 0))
+        hi = np.clip(np.ceil((j + 1) * ratio - 1e-9).astype(np.int64), lo + 1, n_in)  # exclusive
+        out = np.zeros((n_out, self.intensities.shape[1]))
+        if n_in:
+            out[:] = self.intensities[lo]
+            for k in range(1, int((hi - lo).max(initial=1))):
+                out = np.maximum(out, self.intensities[np.minimum(lo + k, hi - 1)])
+        return HapticTrack(out, fps, self.actuators, self.layout, meta)
+
     # ------------------------------------------------------------------ files
     def save(self, path: "str | os.PathLike[str]") -> None:
         """Write the track; the format follows the extension (``.csv``, ``.json``, ``.npz``, ``.tact``).

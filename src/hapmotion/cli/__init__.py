@@ -1,15 +1,21 @@
 """The ``hapmotion`` command line: a click group; each command lives in its own module.
 
 User mistakes (:class:`~hapmotion.errors.HapMotionError`, missing or unreadable files) end with one line on
-stderr and exit code 2; no traceback. Ctrl-C exits with 130. An unexpected internal error prints one line too,
-with the full traceback only when ``HAPMOTION_DEBUG=1``.
+stderr and exit code 2; no traceback. Ctrl-C exits with 130; SIGTERM, SIGHUP and SIGQUIT (a closed terminal or
+ssh session) end the same way, with 128 + the signal number, after the same clean-up (no half-written ``.part``
+file is left behind). An unexpected internal error prints one line too, with the full traceback only when
+``HAPMOTION_DEBUG=1``.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
 import sys
+import threading
 import traceback
+from typing import Iterator
 
 import click
 
@@ -42,11 +48,43 @@ def _register() -> None:
 _register()
 
 
+TERMINATING_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP", "SIGQUIT") if hasattr(signal, name))
+"""Signals that end a command like Ctrl-C (SIGINT already raises KeyboardInterrupt)."""
+
+
+class Terminated(BaseException):
+    """Raised in the main thread by a terminating signal, so every ``finally`` and clean-up runs as for Ctrl-C."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+@contextlib.contextmanager
+def signals_raise() -> Iterator[None]:
+    """While the command runs, :data:`TERMINATING_SIGNALS` raise :class:`Terminated` (live mode installs its own
+    handlers on top, which turn every sink off first). The previous handlers come back afterwards."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum: int, frame: object) -> None:
+        raise Terminated(signum)
+
+    previous = {s: signal.signal(s, handler) for s in TERMINATING_SIGNALS}
+    try:
+        yield
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``hapmotion`` script."""
     try:
         # without standalone mode click returns ctx.exit(n)'s code instead of exiting
-        rv = cli.main(args=argv, prog_name="hapmotion", standalone_mode=False)
+        with signals_raise():
+            rv = cli.main(args=argv, prog_name="hapmotion", standalone_mode=False)
     except click.exceptions.Abort:
         click.echo("aborted", err=True)
         return 130
@@ -68,6 +106,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         click.echo("interrupted", err=True)
         return 130
+    except Terminated as stop:
+        click.echo(f"stopped by {signal.Signals(stop.signum).name}", err=True)
+        return 128 + stop.signum
     except Exception as err:  # a bug, not a user mistake: one line unless asked for details
         if os.environ.get("HAPMOTION_DEBUG") == "1":
             traceback.print_exc()

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import click
 
+from ..show import MODES, Show, render_show
+
 EXAMPLE_MOTION = "60_12_scaled.bvh"
 """CMU Graphics Lab Motion Capture Database, subject 60 trial 12 (salsa, lead dancer), Daz-friendly BVH,
 uniformly rescaled by a third party. See examples/ATTRIBUTION.md."""
@@ -22,23 +24,19 @@ def example_path(name: str) -> Path:
 @click.command()
 @click.option("-o", "--out-dir", type=click.Path(file_okay=False), default="out", show_default=True,
               help="Folder for the results (created if missing).")
-@click.option("--mode", type=click.Choice(["multimodal", "motion", "audio"]), default="multimodal", show_default=True)
+@click.option("--mode", type=click.Choice(MODES), default="multimodal", show_default=True)
 @click.option("--preset", default="energy", show_default=True,
               help="energy (default here: with the paper's numbers the motion mostly sits under the music bed, see docs/metrics.md) or paper.")
 def command(out_dir, mode, preset):
     """Render the bundled salsa clip (CMU mocap) with the bundled music ("Vibe Ace", Kevin MacLeod) into
     OUT_DIR/demo.tact (+ sleeve files), demo.csv, a plot demo.png and a viewer page demo.html."""
-    from ..audio import combine
     from ..motion_files import load_motion
-    from ..render import render
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     motion = load_motion(example_path(EXAMPLE_MOTION))
     audio = example_path(EXAMPLE_AUDIO)
-    motion_track = render(motion, method="mst", preset=preset)
-    track = combine(motion_track, audio, mode=mode, ratio=(2.0, 3.0), offset_s=0.0, fps=motion_track.fps,
-                    domain="linear", length="motion", actuators=motion_track.actuators)
+    track = render_show(Show(method="mst", preset=preset, mode=mode, audio=audio, length="motion"), motion)
     from ..viewer.page import load_audio_part, write_page
     from ..viewer.plot import plot_track
 

@@ -8,8 +8,8 @@ from pathlib import Path
 import click
 
 from ..errors import UsageError
+from ..show import parse_param_overrides
 from .motion_options import motion_options, read_motion
-from .render import parse_param_overrides
 
 
 def _names(text: str, option: str) -> list[str]:

@@ -1,4 +1,4 @@
-"""``hapmotion live``: performer motion in, vest vibration out, in real time (issue 4; docs/live.md)."""
+"""``hapmotion live``: performer motion in, vest vibration out, in real time (docs/live.md)."""
 
 from __future__ import annotations
 
@@ -9,17 +9,24 @@ from typing import Optional
 
 import click
 
+from .motion_options import CLI_SPELLING, motion_options, read_motion
 
 HELP = """Render a live skeleton stream frame by frame and drive haptic devices, recorders and viewers.
 
 \b
 SOURCE (one):
-  osc://HOST:PORT[/PREFIX]   OSC over UDP (default 0.0.0.0:9000, prefix /hapmotion):
+  osc://HOST:PORT[/PREFIX]   OSC over UDP (default 127.0.0.1:9000: this machine only; prefix /hapmotion):
                              /hapmotion/skeleton [seq t] x0 y0 z0 .. x31 y31 z31  (32 joints, metres, +Y up)
                              /hapmotion/joint/HAND_LEFT [seq t] x y z  +  /hapmotion/frame [seq t]
-  ws://HOST:PORT             WebSocket server taking JSON text frames:
+  ws://HOST:PORT             WebSocket server taking JSON text frames (default 127.0.0.1:8765):
                              {"seq": 7, "t": 0.116, "joints": {"HAND_LEFT": [x, y, z], ...}}
-  replay:PATH                a recording (BVH, Kinect JSON, AIST++, CSV, NPZ) paced in real time (--speed, --loop)
+  replay:PATH                a recording (BVH, Kinect JSON, AIST++, CSV, NPZ) paced in real time (--speed, --loop;
+                             the reader options --units, --up, --skip-frames, ... as for render)
+\b
+Who may send: sources listen on loopback unless SOURCE names another interface (osc://0.0.0.0:9000). Browser
+pages are refused unless --allow-origin lists them; --token makes WebSocket senders present a shared secret
+(header "Authorization: Bearer TOKEN" or ws://HOST:PORT/?token=TOKEN); --allow-sender limits sender addresses.
+At most --max-senders senders at once, each with its own message budget. The startup line says what is exposed.
 \b
 SINK (one or more):
   player[://HOST:PORT]       bHaptics Player SDK1, ws://127.0.0.1:15881/v2/feedbacks
@@ -36,7 +43,7 @@ error sends turn-off to every sink before exiting. A summary (frames in/out/drop
 printed at exit.
 \b
 Examples:
-  hapmotion live --source osc://0.0.0.0:9000 --sink player --sink ws-broadcast
+  hapmotion live --source osc://0.0.0.0:9000 --allow-sender 192.168.1.20 --sink player --sink ws-broadcast
   hapmotion live --source replay:dance.bvh --loop --audio song.ogg --sink player --sink record:show.tact
 """
 
@@ -73,12 +80,24 @@ Examples:
               help="bHaptics SDK2 workspace (app) id for player-v3 [env BHAPTICS_WORKSPACE_ID].")
 @click.option("--api-key", envvar="BHAPTICS_API_KEY", default=None,
               help="bHaptics SDK2 API key for player-v3 [env BHAPTICS_API_KEY].")
+@click.option("--allow-origin", "allow_origins", metavar="ORIGIN[,ORIGIN]", multiple=True,
+              help="ws:// source: web page origins (https://show.example) allowed to connect; browser pages are "
+                   "refused otherwise. Programs (no Origin header) are not affected.")
+@click.option("--token", envvar="HAPMOTION_LIVE_TOKEN", default=None, metavar="SECRET",
+              help="ws:// source: senders must present this secret, as 'Authorization: Bearer SECRET' or "
+                   "?token=SECRET in the URL [env HAPMOTION_LIVE_TOKEN].")
+@click.option("--allow-sender", "allow_senders", metavar="IP[,IP]", multiple=True,
+              help="Network sources: only these sender addresses (or networks, 10.0.0.0/24) may send.")
+@click.option("--max-senders", type=click.IntRange(min=1), default=8, show_default=True,
+              help="Network sources: senders served at once (WebSocket connections, OSC sender addresses).")
 @click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
+@motion_options
 def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: str, mirror: Optional[bool],
             fps: Optional[float], speed: float, loop: bool, audio: Optional[str], audio_offset: float,
             mode: Optional[str], mix_ratio: str, mix_domain: str, stall_ms: float, show_stats: bool,
-            stats_json: Optional[str],
-            workspace_id: Optional[str], api_key: Optional[str], quiet: bool) -> None:
+            stats_json: Optional[str], workspace_id: Optional[str], api_key: Optional[str],
+            allow_origins: tuple[str, ...], token: Optional[str], allow_senders: tuple[str, ...], max_senders: int,
+            quiet: bool, motion_opts: dict) -> None:
     from ..live import run_live
 
     _setup_logging(quiet)
@@ -88,7 +107,9 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
     def ready(engine) -> None:
         started.append(engine)
         names = ", ".join(s.describe() for s in engine.sinks)
-        click.echo(f"live: listening on {engine.source.describe()}; sinks: {names}; Ctrl-C stops", err=True)
+        exposure = engine.source.exposure()
+        click.echo(f"live: listening on {engine.source.describe()}" + (f" ({exposure})" if exposure else "")
+                   + f"; sinks: {names}; Ctrl-C stops", err=True)
 
     # User mistakes (HapMotionError) and Ctrl-C before the session is up are reported by hapmotion.cli.main as one
     # line (exit 2 / 130); once the session runs, SIGINT/SIGTERM are a clean stop (exit 0).
@@ -101,8 +122,11 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
         from ..audio import parse_mix_ratio
 
         ratio = parse_mix_ratio(mix_ratio)
+    src = _source(source, fps=fps, speed=speed, loop=loop, motion_opts=motion_opts,
+                  allow_origins=_split(allow_origins), token=token, allow_senders=allow_senders,
+                  max_senders=max_senders)
     try:
-        run_live(source, list(sinks), method=method, preset=preset, mirror=mirror, fps=fps, speed=speed,
+        run_live(src, list(sinks), method=method, preset=preset, mirror=mirror, fps=fps, speed=speed,
                  loop=loop, audio=audio, audio_offset=audio_offset, mode=mode, ratio=ratio, domain=mix_domain,
                  stall_ms=stall_ms, stats_interval=1.0 if show_stats else None, workspace_id=workspace_id,
                  api_key=api_key, on_ready=ready, on_stats=lambda text: click.echo(f"live: {text}", err=True))
@@ -112,6 +136,40 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
         lost = _finish(started[0] if started else None, stats_json)
     if lost:  # the show ran but an output it was asked for is missing (already logged)
         raise click.exceptions.Exit(1)
+
+
+def _split(values: tuple[str, ...]) -> tuple[str, ...]:
+    """Repeated and comma-separated option values as one tuple."""
+    return tuple(v.strip() for value in values for v in value.split(",") if v.strip())
+
+
+def _source(text: Optional[str], *, fps: Optional[float], speed: float, loop: bool, motion_opts: dict,
+            allow_origins: tuple[str, ...], token: Optional[str], allow_senders: tuple[str, ...],
+            max_senders: int):
+    """The source object for ``--source`` with every option that applies to it; UsageError naming an option given
+    to a source it does not apply to. None without ``--source`` (``--mode audio``)."""
+    from ..errors import UsageError
+    from ..live.access import SenderAllowList
+    from ..live.sources import ReplaySource, network_source
+    from ..live.urls import parse_source
+
+    reader_given = [CLI_SPELLING.get(k if k != "fps_in" else "fps", k) for k, v in motion_opts.items()
+                    if v is not None]
+    access_given = [name for name, v in (("--allow-origin", allow_origins), ("--token", token),
+                                         ("--allow-sender", allow_senders)) if v]
+    if text is None:
+        if reader_given or access_given:
+            raise UsageError(f"{(reader_given + access_given)[0]} applies to a --source")
+        return None
+    ep = parse_source(text)
+    if ep.kind == "replay":
+        if access_given:
+            raise UsageError(f"{access_given[0]} applies to network sources (osc://, ws://), not to replay:")
+        return ReplaySource(read_motion(ep.path, **motion_opts), fps=fps, speed=speed, loop=loop, path=ep.path)
+    if reader_given:
+        raise UsageError(f"{reader_given[0]} is a reader option: it applies to replay:FILE sources")
+    return network_source(ep, allow_origins=allow_origins, token=token,
+                          allow_senders=SenderAllowList.parse(allow_senders), max_senders=max_senders)
 
 
 def _finish(engine, stats_json: Optional[str]) -> list[str]:

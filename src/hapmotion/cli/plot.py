@@ -7,6 +7,7 @@ from pathlib import Path
 import click
 
 from ..errors import UsageError
+from ..show import MODES
 from .motion_options import motion_options, read_motion
 from .render import progress_bar
 
@@ -21,7 +22,7 @@ from .render import progress_bar
               help="Audience feels the performer mirrored (default: the preset's choice, mirrored).")
 @click.option("--audio", "audio_path", type=click.Path(dir_okay=False, path_type=Path),
               help="Music: adds its waveform and onsets as a fourth panel (and is mixed in, see --mode).")
-@click.option("--mode", type=click.Choice(["motion", "multimodal", "audio"]), default=None,
+@click.option("--mode", type=click.Choice(MODES), default=None,
               help="What the heat map shows: motion, multimodal (music and motion mixed) or audio. "
                    "Default: multimodal with --audio, else motion.")
 @click.option("--mix", "mix_ratio", default="2:3", show_default=True, help="audio:motion ratio of the multimodal mix.")
@@ -46,9 +47,11 @@ def command(input_path, output, method, preset, mirror, audio_path, mode, mix_ra
       hapmotion plot dance.bvh -o dance.png
       hapmotion plot dance.npz --start 10 --end 40 -o detail.pdf
     """
+    from ..audio.mix import parse_mix_ratio
     from ..render.params import METHODS, PRESETS
-    from ..viewer.inputs import apply_modes, load_input, split_list
+    from ..show import Show, split_list
     from ..viewer.page import load_audio_part
+    from .view_input import read_view_input
     from ..viewer.plot import plot_track
 
     if vmax != "auto":
@@ -62,10 +65,11 @@ def command(input_path, output, method, preset, mirror, audio_path, mode, mix_ra
         output = Path(input_path.stem + ".png")
     if output.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise UsageError(f"{output}: the figure format follows the extension; use .png, .pdf or .svg")
-    loaded = load_input(input_path, methods=[method], presets=[preset], mirror=mirror,
-                        read_motion=lambda path: read_motion(path, **motion_opts), progress=progress_bar)
     mode = mode or ("multimodal" if audio_path else "motion")
-    track = apply_modes(loaded.tracks, [mode], audio_path, audio_offset, mix_ratio)[0]
+    show = Show(mirror=mirror, audio=audio_path, audio_offset_s=audio_offset, mix_ratio=parse_mix_ratio(mix_ratio))
+    loaded = read_view_input(input_path, show, methods=[method], presets=[preset], modes=[mode],
+                             read_motion=lambda path: read_motion(path, **motion_opts), progress=progress_bar)
+    track = loaded.tracks[0]
     audio = load_audio_part(audio_path, fps=track.fps, offset_s=audio_offset) if audio_path is not None else None
     plot_track(track, output, title=title or input_path.name, audio=audio, start_s=start_s, end_s=end_s, dpi=dpi,
                vmax=vmax)

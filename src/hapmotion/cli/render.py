@@ -8,39 +8,11 @@ from pathlib import Path
 
 import click
 
+from ..audio.params import MIX_DOMAINS
 from ..errors import UsageError
+from ..render.params import METHODS
+from ..show import LENGTH_RULES, MODES, Show, parse_param_overrides, render_show
 from .motion_options import motion_options, read_motion
-
-MODES = ("multimodal", "motion", "audio")
-
-
-def parse_param_overrides(items: tuple[str, ...]) -> dict:
-    """``("release_alpha=0.2", "phantom=energy")`` -> typed overrides for :class:`~hapmotion.render.Params`."""
-    from dataclasses import fields
-
-    from ..render.params import Params
-
-    types = {f.name: f.type for f in fields(Params)}
-    out: dict = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        key = key.strip()
-        if not sep or key not in types:
-            known = ", ".join(sorted(types))
-            raise UsageError(f"--param {item!r}: expected NAME=VALUE with NAME one of: {known}")
-        kind = types[key]
-        try:
-            if kind in ("bool", bool):
-                if value.lower() not in ("true", "false", "1", "0", "yes", "no"):
-                    raise ValueError(value)
-                out[key] = value.lower() in ("true", "1", "yes")
-            elif kind in ("float", float):
-                out[key] = float(value)
-            else:
-                out[key] = value
-        except ValueError:
-            raise UsageError(f"--param {item!r}: expected a {kind} value, found {value!r}") from None
-    return out
 
 
 def progress_bar(total: int, label: str):
@@ -56,7 +28,7 @@ def progress_bar(total: int, label: str):
 @click.argument("motion_file", required=False, type=click.Path(dir_okay=False))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
               help="Track file to write: .tact (bHaptics Designer; sleeves go to OUT.ForearmL/R.tact), .csv, .json, .npz.")
-@click.option("--method", type=click.Choice(["mst", "baseline"]), default="mst", show_default=True,
+@click.option("--method", type=click.Choice(METHODS), default="mst", show_default=True,
               help="mst: the paper's motion salient triangle; baseline: the active hand itself.")
 @click.option("--preset", default="paper", show_default=True,
               help="Parameter preset: paper (the paper's values) or energy (energy-preserving split, ERM-aware smoothing).")
@@ -74,11 +46,11 @@ def progress_bar(total: int, label: str):
               help="Which channels: motion, audio, or multimodal (both mixed). Default: multimodal with a motion file and "
                    "--audio, audio with --audio alone, else motion.")
 @click.option("--mix", "mix_ratio", default="2:3", show_default=True, help="audio:motion ratio of the multimodal mix.")
-@click.option("--mix-domain", type=click.Choice(["linear", "energy"]), default="linear", show_default=True,
+@click.option("--mix-domain", type=click.Choice(MIX_DOMAINS), default="linear", show_default=True,
               help="linear: the paper's weighted sum; energy: weighted sum of squared intensities.")
 @click.option("--audio-offset", type=float, default=0.0, show_default=True,
               help="Seconds to delay the music against the motion (negative: skip the start of the song).")
-@click.option("--length", type=click.Choice(["longer", "motion"]), default="longer", show_default=True,
+@click.option("--length", type=click.Choice(LENGTH_RULES), default="longer", show_default=True,
               help="Track length with both inputs: as long as the longer one, or cut to the motion.")
 @motion_options
 def command(motion_file, output, method, preset, params, no_mirror, fps, layout_file, audio_file, mode, mix_ratio,
@@ -88,46 +60,25 @@ def command(motion_file, output, method, preset, params, no_mirror, fps, layout_
     With --audio the music is rendered too and mixed with the motion (audio:motion = 2:3 by default, as in the
     HapMotion paper); with --audio and no MOTION_FILE the track is the music alone.
     """
-    from ..layout import load_layout
-    from ..render import render
-    from ..render.renderer import resolve_params
+    from ..audio.mix import parse_mix_ratio
 
     if fps is not None and not math.isfinite(fps):  # click's FloatRange lets nan through
         raise UsageError(f"--fps must be a number in 1..1000, not {fps}")
-    if not math.isfinite(audio_offset) or abs(audio_offset) > 86400:
-        raise UsageError(f"--audio-offset must be within a day (+-86400 s), not {audio_offset}")
-    if mode is None:
-        mode = "motion" if not audio_file else ("multimodal" if motion_file else "audio")
-    if mode in ("audio", "multimodal") and not audio_file:
-        raise UsageError(f"--mode {mode} needs --audio SONG")
-    if mode in ("motion", "multimodal") and not motion_file:
-        raise UsageError(f"--mode {mode} needs a MOTION_FILE")
     overrides = parse_param_overrides(params)
-    if no_mirror:
-        overrides["mirror"] = False
-    prm = resolve_params(preset, None, **overrides)
-    layout = load_layout(layout_file) if layout_file else load_layout()
+    show = Show(method=method, preset=preset, overrides=overrides, mirror=False if no_mirror else None, mode=mode,
+                audio=audio_file, audio_offset_s=audio_offset, mix_ratio=parse_mix_ratio(mix_ratio),
+                mix_domain=mix_domain, length=length, fps=fps, layout=layout_file)
+    mode = show.resolved_mode(motion_file is not None)
     out_path = Path(output)
-
-    motion_track = None
-    if mode != "audio":
+    motion = None
+    if motion_file is not None:  # in audio mode too: the music then plays on the motion's timeline
         motion = read_motion(motion_file, **(motion_opts or {}))
-        if fps is not None:
-            motion = motion.resample(fps)
-        update, close = progress_bar(motion.n_frames, "rendering")
-        try:
-            motion_track = render(motion, method=method, params=prm, layout=layout, progress=update)
-        finally:
-            close()
-        motion_track.meta["preset"] = preset
-    track = motion_track
-    if audio_file:
-        from ..audio import combine
-        from ..audio.mix import parse_mix_ratio
-
-        track = combine(motion_track, audio_file, mode=mode, ratio=parse_mix_ratio(mix_ratio), offset_s=audio_offset,
-                        fps=(fps or 60.0) if motion_track is None else motion_track.fps, domain=mix_domain,
-                        length=length, actuators=layout)
+    total = motion.n_frames if motion is not None else 0
+    update, close = progress_bar(total, "rendering")
+    try:
+        track = render_show(show, motion, progress=update)
+    finally:
+        close()
     track.save(out_path)
     peak = float(track.intensities.max()) if track.n_frames else 0.0
     click.echo(f"wrote {out_path} ({track.n_frames} frames at {track.fps:g} fps, {track.duration:.2f} s, "

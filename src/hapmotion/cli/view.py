@@ -54,9 +54,11 @@ def command(input_path, output, audio_path, audio_offset, modes, mix_ratio, meth
       hapmotion view --live ws://127.0.0.1:8766 -o live.html
     """
     from .. import __version__
+    from ..audio.mix import parse_mix_ratio
     from ..render.params import METHODS, PRESETS
-    from ..viewer.inputs import MODES, apply_modes, load_input, split_list
+    from ..show import MODES, Show, split_list
     from ..viewer.page import load_audio_part, write_page
+    from .view_input import read_view_input
 
     if input_path is None and not live_url:
         raise UsageError("give a motion or track file to view, or --live URL for a live page")
@@ -74,10 +76,10 @@ def command(input_path, output, audio_path, audio_offset, modes, mix_ratio, meth
 
     tracks, motion, notes, source_name = [], None, [], ""
     if input_path is not None:
-        loaded = load_input(input_path, methods=method_list, presets=preset_list, mirror=mirror,
-                            read_motion=lambda path: read_motion(path, **motion_opts), progress=progress_bar)
-        motion, notes, source_name = loaded.motion, loaded.notes, input_path.name
-        tracks = apply_modes(loaded.tracks, mode_list, audio_path, audio_offset, mix_ratio)
+        show = Show(mirror=mirror, audio=audio_path, audio_offset_s=audio_offset, mix_ratio=parse_mix_ratio(mix_ratio))
+        loaded = read_view_input(input_path, show, methods=method_list, presets=preset_list, modes=mode_list,
+                                 read_motion=lambda path: read_motion(path, **motion_opts), progress=progress_bar)
+        tracks, motion, notes, source_name = loaded.tracks, loaded.motion, loaded.notes, input_path.name
     audio = None
     if audio_path is not None:
         audio = load_audio_part(audio_path, fps=tracks[0].fps if tracks else 60.0, offset_s=audio_offset)

@@ -1,16 +1,19 @@
-"""Live mode (issue 4): a skeleton stream in, rendered frame by frame, out to haptic devices, recorders and
+"""Live mode: a skeleton stream in, rendered frame by frame, out to haptic devices, recorders and
 viewers, in real time and safely.
 
 * :func:`run_live` / :func:`live` - the whole session from SOURCE/SINK strings (what ``hapmotion live`` calls);
 * :class:`LiveEngine` - the loop itself, for custom sources and sinks;
-* :mod:`~hapmotion.live.protocol` - sans-I/O message building and parsing for every wire format;
+* :mod:`~hapmotion.live.frames` (what flows), :mod:`~hapmotion.live.hygiene` (cleaning incoming frames),
+  :mod:`~hapmotion.live.devices` (row columns per device, from the layout);
+* :mod:`~hapmotion.live.wire` - sans-I/O message building and parsing, one module per wire format;
 * :mod:`~hapmotion.live.sources`, :mod:`~hapmotion.live.sinks` - the network edges.
 
 docs/live.md describes the address scheme, message schemas, SOURCE/SINK syntax, safety behaviour and timing.
 """
 
 from .engine import AudioChannel, LiveEngine
-from .protocol import DeviceMap, OutFrame, SkeletonFrame
+from .devices import DeviceMap
+from .frames import OutFrame, SkeletonFrame
 from .session import build_sink, build_source, live, run_live
 from .sinks import BroadcastSink, OscOutSink, PlayerV2Sink, PlayerV3Sink, RecorderSink, Sink
 from .sources import ClockSource, OscSource, ReplaySource, Source, WsSource

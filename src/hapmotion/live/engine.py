@@ -25,7 +25,8 @@ from typing import Any, Callable, Optional, Protocol, Sequence
 
 import numpy as np
 
-from .protocol import MAX_ABS_M, Faults, FrameOrder, OutFrame, RateLimiter, SkeletonFrame, sanitize
+from .frames import OutFrame, SkeletonFrame
+from .hygiene import MAX_ABS_M, Faults, FrameOrder, RateLimiter, sanitize
 from .sinks.base import Sink
 from .sources import Source
 from .stats import LiveStats
@@ -148,7 +149,7 @@ class LiveEngine:
         self._required: Optional[np.ndarray] = None
         if mode != "audio":
             from ..joints import JOINT_INDEX
-            from ..render.kernel import KERNEL_JOINTS
+            from ..joints import RENDER_JOINTS as KERNEL_JOINTS
 
             self._required = np.array([JOINT_INDEX[j] for j in KERNEL_JOINTS], dtype=np.intp)
         self.faults = Faults(source_name, log)

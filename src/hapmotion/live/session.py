@@ -16,30 +16,26 @@ import os
 from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, Union
 
-import numpy as np
 
 from ..errors import InputError, UsageError
+from ..show import Show, live_music
 from .engine import AudioChannel, LiveEngine
-from .protocol import DeviceMap, tact_project
+from .devices import DeviceMap
+from .wire.player_v2 import tact_project
 from .sinks import BroadcastSink, OscOutSink, PlayerV2Sink, PlayerV3Sink, RecorderSink, Sink
-from .sources import ClockSource, OscSource, ReplaySource, Source, WsSource
+from .sources import ClockSource, ReplaySource, Source, network_source
 from .stats import LiveStats
 from .urls import Endpoint, parse_sink, parse_source
 
 log = logging.getLogger("hapmotion.live")
 
-MODES = ("motion", "multimodal", "audio")
-
-
-def build_source(ep: Endpoint, *, fps: Optional[float], speed: float, loop: bool) -> Source:
-    """A source object for a parsed ``--source``."""
+def build_source(ep: Endpoint, *, fps: Optional[float], speed: float, loop: bool,
+                 reader_options: Optional[dict[str, Any]] = None, **access: Any) -> Source:
+    """A source object for a parsed ``--source``: a replay read with ``reader_options``, or a network source with
+    the ``access`` rules of :func:`~hapmotion.live.sources.network_source` (default: only this machine may send)."""
     if ep.kind == "replay":
-        return ReplaySource.from_path(ep.path, fps=fps, speed=speed, loop=loop)
-    if ep.kind == "osc-in":
-        return OscSource(ep.host, ep.port, prefix=ep.path.rstrip("/") or "/hapmotion")
-    if ep.kind == "ws":
-        return WsSource(ep.host, ep.port)
-    raise UsageError(f"--source {ep.text!r}: unknown kind {ep.kind}")  # pragma: no cover (parse_source guards)
+        return ReplaySource.from_path(ep.path, fps=fps, speed=speed, loop=loop, reader_options=reader_options)
+    return network_source(ep, **access)
 
 
 def _registrations(ep: Endpoint) -> dict[str, Any]:
@@ -81,38 +77,6 @@ def build_sink(ep: Endpoint, *, dmap: DeviceMap, layout_name: str, fps: float,
     raise UsageError(f"--sink {ep.text!r}: unknown kind {ep.kind}")  # pragma: no cover
 
 
-def build_audio(path: "str | os.PathLike[str]", *, fps: float, layout: Any, actuators: Sequence[str],
-                offset_s: float = 0.0, ratio: tuple[float, float] = (2, 3), domain: str = "linear",
-                solo: bool = False) -> AudioChannel:
-    """Analyse the song once and keep its haptic track for per-frame mixing (``hapmotion.audio``).
-
-    Rows go through offline rendering's output stage (``audio.pipeline.output_stage`` with the limit of
-    ``power_limit_for``), so live and offline send the same numbers: the music's own rows when it plays ``solo``
-    (audio mode), each motion row mixed with the music's otherwise.
-    """
-    try:
-        from ..audio import analyze_file, audio_track
-        from ..audio.pipeline import output_stage, power_limit_for
-    except ImportError as exc:  # the audio part is optional at run time
-        raise UsageError(f"--audio needs hapmotion.audio, which cannot be imported ({exc})") from None
-    analysis = analyze_file(path, fps=fps, offset_s=offset_s)
-    track = audio_track(analysis, layout=layout)
-    index = {a: i for i, a in enumerate(track.actuators)}
-    missing = [a for a in actuators if a not in index]
-    if missing:
-        raise UsageError(f"--audio: the audio track has no column {missing[0]} of the session layout")
-    limit = power_limit_for(analysis.params.power_limit_fraction, len(actuators))
-    rows = track.intensities[:, [index[a] for a in actuators]]
-    if solo:
-        rows = output_stage(np.zeros_like(rows), rows, mode="audio", ratio=ratio, domain=domain, power_limit=limit)
-
-    def mix_row(motion_row: np.ndarray, audio_row: np.ndarray) -> np.ndarray:
-        return output_stage(motion_row, audio_row, mode="multimodal", ratio=ratio, domain=domain, power_limit=limit)
-
-    mix_row(rows[0] * 0, rows[0] * 0)  # a bad ratio or domain is a UsageError now, not mid-show
-    return AudioChannel(rows, fps, mix_row)
-
-
 async def live(
     source: Union[str, Source, None],
     sinks: Sequence[Union[str, Sink]],
@@ -135,26 +99,26 @@ async def live(
     renderer: Any = None,
     handle_signals: bool = True,
     on_ready: Optional[Callable[[LiveEngine], None]] = None,
+    show: Optional[Show] = None,
     **engine_options: Any,
 ) -> LiveStats:
     """Run a live session until the source ends or a stop signal; return its statistics.
 
     ``source`` and ``sinks`` are SOURCE/SINK strings (see :mod:`hapmotion.live.urls`) or ready-made objects.
-    ``mode`` defaults to ``"multimodal"`` with ``audio`` and ``"motion"`` without; ``"audio"`` plays the song's
-    channel alone (no source). ``renderer`` replaces the default ``hapmotion.Renderer(method, preset, mirror, fps)``.
-    Every sink is sent turn-off before this returns or raises.
+    How the show is rendered and mixed is ``show`` (:class:`hapmotion.show.Show`); without it one is made from
+    ``method``, ``preset``, ``mirror``, ``audio``, ``audio_offset``, ``mode``, ``ratio`` and ``domain``. The mode
+    defaults to ``"multimodal"`` with music and ``"motion"`` without; ``"audio"`` plays the song's channel alone
+    (no source). ``renderer`` replaces the show's ``Renderer``. Every sink is sent turn-off before this returns or
+    raises.
     """
-    mode = mode or ("multimodal" if audio else "motion")
-    if mode not in MODES:
-        raise UsageError(f"--mode {mode!r}: expected one of {', '.join(MODES)}")
-    if mode in ("multimodal", "audio") and not audio:
-        raise UsageError(f"--mode {mode} needs --audio SONG")
+    if show is None:
+        show = Show(method=method, preset=preset, mirror=mirror, mode=mode, audio=audio, audio_offset_s=audio_offset,
+                    mix_ratio=ratio, mix_domain=domain)
+    mode = show.resolved_mode(has_motion=source is not None or show.mode != "audio")
     if mode == "audio" and source is not None:
         raise UsageError("--mode audio plays the song's haptic channel alone: leave out --source")
     if mode != "audio" and source is None:
         raise UsageError("--source is required (osc://, ws:// or replay:PATH)")
-    if mode == "motion" and audio:
-        log.info("--mode motion: the audio channel is not used")
     if not sinks:
         raise UsageError("at least one --sink is required")
     if not (stall_ms > 0):
@@ -177,26 +141,20 @@ async def live(
     rate = src.rate if isinstance(src, ReplaySource) else fps
 
     if renderer is None and mode != "audio":
-        from ..render import Renderer
-
-        renderer = Renderer(method, preset, mirror=mirror, fps=fps, body=body)
-    layout = getattr(renderer, "layout", None)
-    if layout is None:
-        from ..layout import load_layout
-
-        layout = load_layout()
+        renderer = show.renderer(fps, body=body)
+    layout = getattr(renderer, "layout", None) or show.load_layout()
     dmap = DeviceMap.from_layout(layout)
     channel = None
     if mode != "motion":
-        assert audio is not None
-        channel = build_audio(audio, fps=fps, layout=layout, actuators=dmap.actuators, offset_s=audio_offset,
-                              ratio=ratio, domain=domain, solo=mode == "audio")
+        music = live_music(show, mode, fps=fps, layout=layout, actuators=dmap.actuators)
+        channel = AudioChannel(music.rows, music.fps, music.mix_row)
     if src is None:
         assert channel is not None
         src = ClockSource(fps, channel.duration_s, loop=loop)
 
-    meta = {"method": method, "preset": preset, "mirror": getattr(getattr(renderer, "params", None), "mirror", mirror),
-            "mode": mode, "source": src.describe(), "audio": os.fspath(audio) if audio else None}
+    meta = {**show.describe(mode), "source": src.describe(), "audio": os.fspath(show.audio) if show.audio else None}
+    if renderer is not None and getattr(renderer, "params", None) is not None:
+        meta["mirror"] = renderer.params.mirror
     sink_objs = [s if isinstance(s, Sink) else
                  build_sink(parse_sink(s), dmap=dmap, layout_name=layout.name, fps=fps, workspace_id=workspace_id,
                             api_key=api_key, meta=meta,

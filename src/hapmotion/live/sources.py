@@ -1,29 +1,46 @@
 """Live sources: where skeleton frames come from (OSC over UDP, WebSocket JSON, paced replay of a recording, and
 a plain clock for the audio-only mode).
 
-A source decodes messages with :mod:`hapmotion.live.protocol` and hands each frame to ``engine.submit`` the
-moment it is read; it never queues. Before decoding, every raw message asks ``engine.admit`` (a flood limit), so a
-sender far above the frame rate costs little.
+A source decodes messages with its :mod:`hapmotion.live.wire` module and hands each frame to ``engine.submit`` the
+moment it is read; it never queues. Before decoding, every raw message is checked against who may send and that
+sender's own message budget (:mod:`hapmotion.live.access`), so a stranger or a sender far above the frame rate
+costs little and cannot use up anyone else's budget.
 """
 
 from __future__ import annotations
 
 import asyncio
+import logging
 import math
 import os
 import time
-from typing import TYPE_CHECKING, Any, Optional
+import weakref
+from http import HTTPStatus
+from typing import TYPE_CHECKING, Any, Mapping, Optional, Sequence
+from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
+from websockets.frames import CloseCode
+from websockets.http11 import Request, Response
+from websockets.protocol import State
 
 from ..errors import UsageError
-from .protocol import OSC_PREFIX, OscSkeletonDecoder, SkeletonFrame, decode_ws_skeleton
+from .access import (MAX_SENDERS, OSC_MESSAGE_BUDGET, TOKEN_HEADER, TOKEN_QUERY, WS_MESSAGE_BUDGET, SenderAllowList,
+                     SenderBudgets, bearer_token, burst_for, exposure_line, is_loopback, reach, token_matches)
+from .frames import SkeletonFrame
+from .hygiene import RateLimiter
+from .wire.osc_address import OSC_PREFIX
+from .wire.osc_in import OscSkeletonDecoder
+from .wire.ws_in import decode_ws_skeleton
 
 if TYPE_CHECKING:
     from ..motion import Motion
     from .engine import LiveEngine
+    from .urls import Endpoint
+
+log = logging.getLogger("hapmotion.live")
 
 
 class Source:
@@ -45,6 +62,10 @@ class Source:
     def describe(self) -> str:
         return self.name
 
+    def exposure(self) -> str:
+        """Who can reach the source and who may send, for the startup line ("" for sources that do not listen)."""
+        return ""
+
 
 # ---------------------------------------------------------------------------------------------------- OSC
 class _OscProtocol(asyncio.DatagramProtocol):
@@ -52,24 +73,45 @@ class _OscProtocol(asyncio.DatagramProtocol):
         self.source = source
 
     def datagram_received(self, data: bytes, addr: Any) -> None:
-        self.source.on_datagram(data, time.perf_counter())
+        self.source.on_datagram(data, time.perf_counter(), addr[0])
 
     def error_received(self, exc: Exception) -> None:
         self.source.engine.faults.add("socket", f"UDP receive error ({exc})")
 
 
 class OscSource(Source):
-    """Listens for OSC skeleton messages on UDP ``host:port`` (port 0: any free port)."""
+    """Listens for OSC skeleton messages on UDP ``host:port`` (port 0: any free port).
 
-    def __init__(self, host: str = "0.0.0.0", port: int = 9000, prefix: str = OSC_PREFIX):
+    Parameters
+    ----------
+    host:
+        Interface to listen on: loopback by default, so only programs on this machine can send; ``0.0.0.0`` (every
+        interface) or one address is an explicit choice.
+    allow_senders:
+        Sender addresses allowed to send (empty: any); datagrams from others are counted as ``sender_refused``.
+    max_senders, sender_rate:
+        At most ``max_senders`` sender addresses at once, each within ``sender_rate`` messages per second (default
+        :data:`~hapmotion.live.access.OSC_MESSAGE_BUDGET` x the frame rate); the excess is counted as ``flood`` or
+        ``too_many_senders`` and never decoded.
+    """
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 9000, prefix: str = OSC_PREFIX, *,
+                 allow_senders: Optional[SenderAllowList] = None, max_senders: int = MAX_SENDERS,
+                 sender_rate: Optional[float] = None):
         self.host, self.port, self.prefix = host, port, prefix
         self.name = f"osc://{host}:{port}"
+        self.allow_senders = allow_senders or SenderAllowList()
+        self.max_senders = max_senders
+        self.sender_rate = sender_rate
         self._transport: Optional[asyncio.DatagramTransport] = None
         self._decoder: Optional[OscSkeletonDecoder] = None
+        self._budgets: Optional[SenderBudgets] = None
 
     async def start(self, engine: "LiveEngine") -> None:
         await super().start(engine)
         self._decoder = OscSkeletonDecoder(engine.faults, self.prefix)
+        rate = self.sender_rate or OSC_MESSAGE_BUDGET * engine.rate
+        self._budgets = SenderBudgets(rate, burst_for(engine.rate), self.max_senders)
         loop = asyncio.get_running_loop()
         try:
             self._transport, _ = await loop.create_datagram_endpoint(lambda: _OscProtocol(self),
@@ -78,49 +120,180 @@ class OscSource(Source):
             raise UsageError(f"--source {self.name}: cannot listen ({exc.strerror or exc})") from None
         self.port = self._transport.get_extra_info("sockname")[1]
         self.name = f"osc://{self.host}:{self.port}"
+        if not is_loopback(self.host) and not self.allow_senders:
+            log.warning("%s: reachable from %s and any sender is accepted; --allow-sender limits who may send",
+                        self.name, reach(self.host))
 
-    def on_datagram(self, data: bytes, now: float) -> None:
-        if not self.engine.admit(now):
+    def exposure(self) -> str:
+        assert self._budgets is not None
+        return exposure_line(self.host, self.allow_senders, max_senders=self.max_senders, budget=self._budgets.rate)
+
+    def on_datagram(self, data: bytes, now: float, sender: str) -> None:
+        """One datagram from ``sender`` (an IP address): checked, budgeted, then decoded."""
+        engine = self.engine
+        if not self.allow_senders.allows(sender):
+            engine.faults.add("sender_refused", f"a datagram from {sender}, which is not in --allow-sender")
             return
-        assert self._decoder is not None
+        assert self._budgets is not None and self._decoder is not None
+        refused = self._budgets.admit(sender, now)
+        if refused is not None:
+            _count_refusal(engine, refused, sender, self._budgets)
+            return
         for frame in self._decoder.feed(data, now):
-            self.engine.submit(frame)
+            engine.submit(frame)
 
     async def close(self) -> None:
         if self._transport is not None:
             self._transport.close()
 
 
-# ---------------------------------------------------------------------------------------------------- WebSocket
-class WsSource(Source):
-    """A WebSocket server on ``host:port`` that takes skeleton JSON text frames from any number of senders.
+def _count_refusal(engine: "LiveEngine", kind: str, sender: str, budgets: SenderBudgets) -> None:
+    """Count a message refused before decoding (``flood`` also counts in the session's flood figure)."""
+    if kind == "flood":
+        engine.stats.flood += 1
+        engine.faults.add("flood", f"{sender} sent more than {budgets.rate:g} messages/s; the excess is dropped")
+    else:
+        engine.faults.add(kind, f"{sender} is one sender too many (at most {budgets.max_senders} at once)")
 
-    Messages over ``max_size`` bytes close that sender's connection (code 1009); others are not affected.
+
+# ---------------------------------------------------------------------------------------------------- WebSocket
+# The websockets library logs every refused or failed handshake; the source counts those itself as faults, so its
+# messages go to a quiet child of the live logger (warnings and errors only).
+_WS_LOG = logging.getLogger("hapmotion.live.websockets")
+_WS_LOG.setLevel(logging.WARNING)
+
+
+class WsSource(Source):
+    """A WebSocket server on ``host:port`` that takes skeleton JSON text frames from a few senders.
+
+    Parameters
+    ----------
+    host:
+        Interface to listen on (loopback by default).
+    allow_origins:
+        Web page origins (``https://show.example``) allowed to connect. A browser always sends its page's
+        ``Origin`` and any other origin is refused (HTTP 403; checked by the websockets library's ``origins``), so a
+        web page the performer happens to open cannot drive the vest. A request without ``Origin`` comes from a
+        program, not a browser, and is allowed.
+    token:
+        Shared secret a sender must present in its opening request, as ``Authorization: Bearer <token>`` or as the
+        ``token`` query parameter (``ws://host:port/?token=...``, the only way for a browser); compared in
+        constant time. Others are refused with HTTP 401.
+    allow_senders:
+        Sender addresses allowed to connect (empty: any); others are refused with HTTP 403.
+    max_senders, sender_rate:
+        At most ``max_senders`` connections at once (others are refused with HTTP 503), each within
+        ``sender_rate`` messages per second (default :data:`~hapmotion.live.access.WS_MESSAGE_BUDGET` x the frame
+        rate; the excess is counted as ``flood`` and never decoded). A sender that is streaming keeps its place and
+        budget however many others try to connect.
+    max_size:
+        Messages over this many bytes close that sender's connection (code 1009); others are not affected.
     """
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 8765, max_size: int = 2 ** 16):
+    def __init__(self, host: str = "127.0.0.1", port: int = 8765, max_size: int = 2 ** 16, *,
+                 allow_origins: Sequence[str] = (), token: Optional[str] = None,
+                 allow_senders: Optional[SenderAllowList] = None, max_senders: int = MAX_SENDERS,
+                 sender_rate: Optional[float] = None):
+        if max_senders < 1:
+            raise UsageError(f"--max-senders must be at least 1, got {max_senders}")
         self.host, self.port, self.max_size = host, port, max_size
         self.name = f"ws://{host}:{port}"
+        self.allow_origins = tuple(allow_origins)
+        self.token = token or None
+        self.allow_senders = allow_senders or SenderAllowList()
+        self.max_senders = max_senders
+        self.sender_rate = sender_rate
         self._server: Optional[Server] = None
-        self.connections = 0
+        self._rate = 0.0
+        self._burst = 0.0
+        self._slots: set[ServerConnection] = set()  # accepted or being accepted, not yet finished
+        self._refused: "weakref.WeakSet[ServerConnection]" = weakref.WeakSet()  # refusals already counted
 
     async def start(self, engine: "LiveEngine") -> None:
         await super().start(engine)
+        self._rate = self.sender_rate or WS_MESSAGE_BUDGET * engine.rate
+        self._burst = burst_for(engine.rate)
         try:
             self._server = await serve(self._handler, self.host, self.port, compression=None,
-                                       max_size=self.max_size, max_queue=4, close_timeout=1.0)
+                                       max_size=self.max_size, max_queue=4, close_timeout=1.0,
+                                       origins=[None, *self.allow_origins], process_request=self._check_request,
+                                       process_response=self._check_response, logger=_WS_LOG)
         except OSError as exc:
             raise UsageError(f"--source {self.name}: cannot listen ({exc.strerror or exc})") from None
         self.port = self._server.sockets[0].getsockname()[1]
         self.name = f"ws://{self.host}:{self.port}"
+        if not is_loopback(self.host) and not self.token:
+            log.warning("%s: reachable from %s without a token: anyone who can connect may drive the vest; "
+                        "set --token (or HAPMOTION_LIVE_TOKEN)", self.name, reach(self.host))
+
+    @property
+    def senders(self) -> int:
+        """Connections served now (or being accepted)."""
+        return len(self._slots)
+
+    def exposure(self) -> str:
+        return exposure_line(self.host, self.allow_senders, max_senders=self.max_senders, budget=self._rate,
+                             origins=self.allow_origins, token=self.token)
+
+    def _refuse(self, conn: ServerConnection, status: HTTPStatus, kind: str, detail: str) -> Response:
+        self._refused.add(conn)
+        self.engine.faults.add(kind, detail)
+        return conn.respond(status, f"{status.phrase}: {detail}\n")
+
+    def _check_request(self, conn: ServerConnection, request: Request) -> Optional[Response]:
+        """Before the handshake: sender address, token, room. (The Origin is checked next, by the library.)"""
+        sender = _address(conn)
+        if not self.allow_senders.allows(sender):
+            return self._refuse(conn, HTTPStatus.FORBIDDEN, "sender_refused",
+                                f"a connection from {sender}, which is not in --allow-sender")
+        if self.token is not None:
+            given = bearer_token(request.headers.get(TOKEN_HEADER))
+            if given is None:
+                given = _query_value(request.path, TOKEN_QUERY)
+            if not token_matches(self.token, given):
+                return self._refuse(conn, HTTPStatus.UNAUTHORIZED, "token_refused",
+                                    f"a connection from {sender} without the right token")
+        self._slots = {c for c in self._slots if c.state is not State.CLOSED}
+        if len(self._slots) >= self.max_senders:
+            return self._refuse(conn, HTTPStatus.SERVICE_UNAVAILABLE, "too_many_senders",
+                                f"a connection from {sender}: {self.max_senders} senders are already connected")
+        self._slots.add(conn)
+        return None
+
+    def _check_response(self, conn: ServerConnection, request: Request, response: Response) -> None:
+        """After the handshake decision: count the library's refusals (a browser Origin that is not allowed)."""
+        if response.status_code == HTTPStatus.SWITCHING_PROTOCOLS:
+            return
+        self._slots.discard(conn)
+        if conn in self._refused:
+            return
+        origin = request.headers.get("Origin")
+        if response.status_code == HTTPStatus.FORBIDDEN and origin is not None:
+            self.engine.faults.add("origin_refused", f"a browser page from {origin!r}, which is not in "
+                                                     f"--allow-origin")
+        else:
+            self.engine.faults.add("handshake", f"a connection from {_address(conn)} refused with "
+                                                f"HTTP {response.status_code}")
 
     async def _handler(self, conn: ServerConnection) -> None:
-        self.connections += 1
         engine = self.engine
+        budget = RateLimiter(self._rate, self._burst)
+        # Refused messages use up a second bucket of the same size: a sender that keeps sending at more than twice
+        # its budget is disconnected, so reading its flood stops costing the event loop anything.
+        strikes = RateLimiter(self._rate, self._burst)
+        sender = _address(conn)
         try:
             async for message in conn:
                 now = time.perf_counter()
-                if not engine.admit(now):
+                if not budget.allow(now):
+                    engine.stats.flood += 1
+                    engine.faults.add("flood", f"{sender} sent more than {self._rate:g} messages/s; the excess "
+                                               f"is dropped")
+                    if not strikes.allow(now):
+                        engine.faults.add("flood_closed", f"{sender} kept sending over twice its budget: "
+                                                          f"disconnected")
+                        await conn.close(CloseCode.POLICY_VIOLATION, "over the message budget")
+                        return
                     continue
                 frame = decode_ws_skeleton(message, now, engine.faults)
                 if frame is not None:
@@ -128,6 +301,8 @@ class WsSource(Source):
         except ConnectionClosed as exc:
             if exc.rcvd is None or exc.rcvd.code not in (1000, 1001):
                 engine.faults.add("connection", f"a sender's connection ended abnormally ({exc})")
+        finally:
+            self._slots.discard(conn)
 
     async def close(self) -> None:
         if self._server is not None:
@@ -136,6 +311,35 @@ class WsSource(Source):
                 await asyncio.wait_for(self._server.wait_closed(), 1.5)
             except asyncio.TimeoutError:
                 pass
+
+
+def _address(conn: ServerConnection) -> str:
+    peer = conn.remote_address
+    return str(peer[0]) if peer else "?"
+
+
+def _query_value(path: str, name: str) -> Optional[str]:
+    values = parse_qs(urlsplit(path).query).get(name)
+    return values[-1] if values else None
+
+
+def network_source(ep: "Endpoint", *, allow_origins: Sequence[str] = (), token: Optional[str] = None,
+                   allow_senders: Optional[SenderAllowList] = None, max_senders: int = MAX_SENDERS) -> Source:
+    """The source of a parsed network ``--source`` (``osc://``, ``ws://``) with who may send to it.
+
+    ``allow_origins`` and ``token`` are WebSocket handshake checks: UsageError for an OSC source, which has no
+    handshake (its senders are checked by address, ``allow_senders``).
+    """
+    if ep.kind == "osc-in":
+        if token or allow_origins:
+            raise UsageError("--token and --allow-origin apply to ws:// sources; OSC over UDP has no handshake to "
+                             "check (use --allow-sender, and keep it on loopback unless the network is trusted)")
+        return OscSource(ep.host, ep.port, prefix=ep.path.rstrip("/") or OSC_PREFIX, allow_senders=allow_senders,
+                         max_senders=max_senders)
+    if ep.kind == "ws":
+        return WsSource(ep.host, ep.port, allow_origins=allow_origins, token=token, allow_senders=allow_senders,
+                        max_senders=max_senders)
+    raise UsageError(f"--source {ep.text!r}: not a network source")
 
 
 # ---------------------------------------------------------------------------------------------------- replay
@@ -148,10 +352,13 @@ class ReplaySource(Source):
     again after its last frame (sequence numbers keep increasing; show time starts again at 0).
     """
 
-    def __init__(self, motion: "Motion", *, speed: float = 1.0, loop: bool = False, path: str = ""):
+    def __init__(self, motion: "Motion", *, fps: Optional[float] = None, speed: float = 1.0, loop: bool = False,
+                 path: str = ""):
         if not (speed > 0 and math.isfinite(speed)):
             raise UsageError(f"--speed must be a positive number, got {speed}")
-        self.motion = motion
+        self._recording = motion
+        self._fps = fps
+        self._motion: Optional["Motion"] = None
         self.speed = float(speed)
         self.loop = loop
         self.name = f"replay:{path or motion.meta.get('path', '?')}"
@@ -159,14 +366,20 @@ class ReplaySource(Source):
 
     @classmethod
     def from_path(cls, path: "str | os.PathLike[str]", *, fps: Optional[float] = None, speed: float = 1.0,
-                  loop: bool = False) -> "ReplaySource":
-        """Load with :func:`hapmotion.load_motion` (InputError on a bad file), resample to ``fps`` if given."""
+                  loop: bool = False, reader_options: Optional[Mapping[str, Any]] = None) -> "ReplaySource":
+        """Load with :func:`hapmotion.load_motion` and its ``reader_options`` (``units``, ``up``, ``skip_frames``,
+        ``body_id``, the file's ``fps``, ...; InputError on a bad file), then resample to ``fps`` if given."""
         from .. import load_motion
 
-        motion = load_motion(path)
-        if fps is not None:
-            motion = motion.resample(fps)
-        return cls(motion, speed=speed, loop=loop, path=os.fspath(path))
+        motion = load_motion(path, **dict(reader_options or {}))
+        return cls(motion, fps=fps, speed=speed, loop=loop, path=os.fspath(path))
+
+    @property
+    def motion(self) -> "Motion":
+        """The recording at the session's ``fps`` (resampled on first use, so a session checks ``fps`` first)."""
+        if self._motion is None:
+            self._motion = self._recording if self._fps is None else self._recording.resample(self._fps)
+        return self._motion
 
     @property
     def rate(self) -> float:

@@ -20,7 +20,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from .protocol import Faults
+from .hygiene import Faults
 
 
 class LatencyLog:
@@ -106,12 +106,6 @@ class LiveStats:
     stalls: int = 0
     sinks: dict[str, SinkStats] = field(default_factory=dict)
     stop_reason: str = ""
-
-    def sink(self, name: str) -> SinkStats:
-        """The stats of sink ``name`` (created on first use; names are made unique by the caller)."""
-        if name not in self.sinks:
-            self.sinks[name] = SinkStats(name)
-        return self.sinks[name]
 
     @property
     def dropped(self) -> int:

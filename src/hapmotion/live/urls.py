@@ -2,7 +2,7 @@
 
 Sources::
 
-    osc://HOST:PORT[/PREFIX]       OSC over UDP (default 0.0.0.0:9000, prefix /hapmotion)
+    osc://HOST:PORT[/PREFIX]       OSC over UDP (default 127.0.0.1:9000, prefix /hapmotion)
     ws://HOST:PORT                 WebSocket server taking skeleton JSON (default 127.0.0.1:8765)
     replay:PATH                    a recording, paced in real time
 
@@ -28,10 +28,13 @@ SINK_HELP = ("player[://HOST:PORT] | player-v3[://HOST:PORT] | osc://HOST:PORT[/
              "ws-broadcast[://HOST:PORT] | record:PATH")
 
 _DEFAULTS = {
-    "osc-in": ("0.0.0.0", 9000), "ws": ("127.0.0.1", 8765),
+    "osc-in": ("127.0.0.1", 9000), "ws": ("127.0.0.1", 8765),
     "player": ("127.0.0.1", 15881), "player-v3": ("127.0.0.1", 15882),
     "osc": ("127.0.0.1", 9001), "ws-broadcast": ("127.0.0.1", 8766),
 }
+# Network sources: scheme -> kind (its default address is in _DEFAULTS). Sources listen on loopback unless the
+# SOURCE names another interface. A new network source kind is one line here and one in _DEFAULTS.
+_NETWORK_SOURCES = {"osc": "osc-in", "ws": "ws"}
 _SINK_QUERY = {
     "player": {"app_id", "app_name", "duration", "key", "register"},
     "player-v3": {"workspace_id", "api_key", "version", "duration"},
@@ -115,10 +118,9 @@ def parse_source(text: str) -> Endpoint:
     t = text.strip()
     if t.startswith("replay:"):
         return _file(t, "replay", "--source")
-    if t == "osc" or t.startswith("osc://"):
-        return _network(t, "osc-in", 3, "--source", set())
-    if t == "ws" or t.startswith("ws://"):
-        return _network(t, "ws", 2, "--source", set())
+    for scheme, kind in _NETWORK_SOURCES.items():
+        if t == scheme or t.startswith(scheme + "://"):
+            return _network(t, kind, len(scheme), "--source", set())
     raise UsageError(f"--source {text!r}: expected {SOURCE_HELP}")
 
 

@@ -293,7 +293,8 @@ def bench_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path:
 # ---------------------------------------------------------------------------------------------------- engine
 def _audio_api():
     try:
-        from ..audio import analyze_file, combine
+        from ..audio import analyze_file
+        from ..show import combine
     except ImportError:
         raise UsageError("--audio needs the audio module (hapmotion.audio), which is not installed") from None
     return analyze_file, combine

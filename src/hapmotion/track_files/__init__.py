@@ -1,6 +1,8 @@
 """Track files: ``save_track`` / ``load_track`` by extension (.csv, .json, .npz, .tact).
 
-Every writer goes through :func:`atomic_path`, so an output file appears whole or not at all.
+Every writer goes through :func:`atomic_path`, so an output file appears whole or not at all. Every reader keeps to
+the limits of :mod:`.limits` (file size, frames, duration, JSON nesting and integer length, declared array sizes)
+and refuses bad input with a one-line :class:`~hapmotion.errors.InputError`.
 """
 
 from __future__ import annotations
@@ -37,7 +39,12 @@ def save_track(track: HapticTrack, path: "str | os.PathLike[str]") -> None:
 
 
 def load_track(path: "str | os.PathLike[str]") -> HapticTrack:
-    """Read a track written by :func:`save_track` (CSV files from other tools work if they follow the schema)."""
+    """Read any track or pattern: ours (.csv, .json, .npz, .tact) or a bHaptics Designer / Player ``.tact``.
+
+    CSV, JSON and NPZ tracks come back at their own frame rate; a ``.tact`` pattern comes back as the Player plays
+    it, on its 20 ms tick (50 fps), with one column per motor of each bHaptics position the pattern covers (see
+    :mod:`.tact`). Use :meth:`HapticTrack.resample` for another rate. Bad files raise a one-line InputError.
+    """
     ext = _ext(path, READERS)
     p = Path(path)
     if not p.is_file():

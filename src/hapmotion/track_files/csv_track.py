@@ -7,13 +7,15 @@ One row per frame; ``time_s`` is the frame start in seconds (6 decimals); intens
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
-from ..track import HapticTrack
 from ..filesafety import atomic_path
+from ..track import HapticTrack
+from .limits import MAX_FILE_BYTES, check_frames
 
 
 def write_csv(track: HapticTrack, path: Path) -> None:
@@ -25,6 +27,9 @@ def write_csv(track: HapticTrack, path: Path) -> None:
 
 
 def read_csv(path: Path) -> HapticTrack:
+    size = path.stat().st_size
+    if size > MAX_FILE_BYTES:
+        raise InputError(path, None, f"is {size:,} bytes, over the limit of {MAX_FILE_BYTES:,} for a CSV track")
     try:
         with open(path, encoding="utf-8") as fh:
             header = fh.readline().strip()
@@ -34,7 +39,9 @@ def read_csv(path: Path) -> HapticTrack:
     if not cols or cols[0] != "time_s" or len(cols) < 2:
         raise InputError(path, "line 1", f"expected a header starting with time_s and actuator ids, found {header[:60]!r}")
     try:
-        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        with warnings.catch_warnings():  # numpy warns on a header-only file; the check below says it in one line
+            warnings.simplefilter("ignore")
+            data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     except (ValueError, UnicodeDecodeError) as err:
         raise InputError(path, None, f"expected {len(cols)} numbers per row: {err}") from None
     if data.shape[0] == 0:
@@ -54,4 +61,5 @@ def read_csv(path: Path) -> HapticTrack:
     # the whole span is more precise than one 6-decimal step (1/60 s is written 0.016667)
     span = float(times[-1] - times[0])
     fps = round((len(times) - 1) / span, 4) if len(times) > 1 and span > 0 else 60.0
+    check_frames(path, "column time_s", len(times), len(cols) - 1, fps)
     return HapticTrack(intensities=data[:, 1:], fps=fps, actuators=tuple(cols[1:]), meta={"source": str(path)})

@@ -11,8 +11,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..track import HapticTrack
 from ..filesafety import atomic_path
+from ..track import HapticTrack
+from .limits import check_frames, load_json
 
 
 def _jsonable(obj):
@@ -52,23 +53,44 @@ def _check_values(path: Path, frames: np.ndarray, fps: float, where: str, where_
         raise InputError(path, where_fps, f"expected a positive frame rate, found {fps}")
 
 
+def _ids(path: Path, value, place: str) -> tuple[str, ...]:
+    """Actuator ids: a non-empty list of distinct strings."""
+    if not isinstance(value, list) or not value or not all(isinstance(a, str) and a for a in value):
+        raise InputError(path, place, f"expected a list of actuator ids (strings), found {type(value).__name__}")
+    if len(set(value)) != len(value):
+        raise InputError(path, place, "expected distinct actuator ids")
+    return tuple(value)
+
+
 def read_json(path: Path) -> HapticTrack:
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        raise InputError(path, None, "expected a UTF-8 JSON track, found binary data") from None
-    except json.JSONDecodeError as err:
-        raise InputError(path, f"line {err.lineno}", f"expected JSON: {err.msg}") from None
+    doc = load_json(path, "JSON track")
     if not isinstance(doc, dict) or doc.get("format") != "hapmotion-track":
         raise InputError(path, "field format", "expected \"hapmotion-track\"")
-    try:
-        frames = np.asarray([[np.nan if v is None else v for v in row] for row in doc["frames"]], dtype=np.float64)
-        actuators = tuple(doc["actuators"])
-        fps = float(doc["fps"])
-    except (KeyError, TypeError, ValueError) as err:
-        raise InputError(path, "field frames/actuators/fps", f"expected a list of rows, ids and a rate: {err}") from None
-    if frames.ndim != 2 or frames.shape[1] != len(actuators) or frames.shape[0] == 0:
-        raise InputError(path, "field frames", f"expected rows of {len(actuators)} values, found shape {frames.shape}")
+    actuators = _ids(path, doc.get("actuators"), "field actuators")
+    fps = doc.get("fps")
+    if isinstance(fps, bool) or not isinstance(fps, (int, float)):
+        raise InputError(path, "field fps", f"expected a number, found {type(fps).__name__}")
+    fps = float(fps)
+    if not (np.isfinite(fps) and fps > 0):
+        raise InputError(path, "field fps", f"expected a positive frame rate, found {fps}")
+    meta = doc.get("meta", {})
+    if meta is None:
+        meta = {}
+    if not isinstance(meta, dict):
+        raise InputError(path, "field meta", f"expected an object, found {type(meta).__name__}")
+    layout = doc.get("layout", "")
+    if not isinstance(layout, str):
+        raise InputError(path, "field layout", f"expected a layout name, found {type(layout).__name__}")
+    rows = doc.get("frames")
+    if not isinstance(rows, list) or not rows:
+        raise InputError(path, "field frames", "expected a non-empty list of rows")
+    check_frames(path, "field frames", len(rows), len(actuators), fps)
+    width = len(actuators)
+    for k, row in enumerate(rows):
+        if not isinstance(row, list) or len(row) != width:
+            raise InputError(path, f"field frames[{k}]", f"expected a row of {width} values")
+        if not all(v is None or (isinstance(v, (int, float)) and not isinstance(v, bool)) for v in row):
+            raise InputError(path, f"field frames[{k}]", "expected numbers")
+    frames = np.asarray([[np.nan if v is None else v for v in row] for row in rows], dtype=np.float64)
     _check_values(path, frames, fps, "field frames", "field fps")
-    return HapticTrack(intensities=frames, fps=fps, actuators=actuators, layout=str(doc.get("layout", "")),
-                       meta=dict(doc.get("meta") or {}))
+    return HapticTrack(intensities=frames, fps=fps, actuators=actuators, layout=layout, meta=meta)

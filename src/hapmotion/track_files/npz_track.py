@@ -1,17 +1,28 @@
 """NPZ track: arrays ``intensities`` (T, N) float64, ``times`` (T,), ``actuators`` (N,) str, ``fps`` scalar,
-``layout`` str, ``meta_json`` str, and every renderer debug array as ``debug_<name>``."""
+``layout`` str, ``meta_json`` str, and every renderer debug array as ``debug_<name>``.
+
+Reading checks what the archive declares before inflating anything: each member's uncompressed size and each
+array header's shape must fit the limits of :mod:`.limits`.
+"""
 
 from __future__ import annotations
 
 import json
+import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
+import numpy.lib.format as npformat
 
 from ..errors import InputError
-from ..track import HapticTrack
 from ..filesafety import atomic_path
+from ..track import HapticTrack
 from .json_track import _check_values, _jsonable
+from .limits import MAX_CELLS, MAX_FILE_BYTES, MAX_FPS, check_frames
+
+MAX_INFLATED_BYTES = 8 * MAX_CELLS
+"""Largest uncompressed NPZ content accepted (all members together, bytes)."""
 
 
 def write_npz(track: HapticTrack, path: Path) -> None:
@@ -30,8 +41,39 @@ def write_npz(track: HapticTrack, path: Path) -> None:
             np.savez_compressed(fh, **arrays)
 
 
+def _header(fh) -> tuple[tuple[int, ...], np.dtype]:
+    """Shape and dtype from a ``.npy`` member's header, reading nothing else."""
+    major, _ = npformat.read_magic(fh)
+    read = npformat.read_array_header_1_0 if major == 1 else npformat.read_array_header_2_0
+    shape, _, dtype = read(fh)
+    return shape, dtype
+
+
+def _check_declared(path: Path) -> None:
+    """InputError unless every member's declared size and array shape fit the limits (nothing is inflated)."""
+    size = path.stat().st_size
+    if size > MAX_FILE_BYTES:
+        raise InputError(path, None, f"is {size:,} bytes, over the limit of {MAX_FILE_BYTES:,} for an NPZ track")
+    with zipfile.ZipFile(path) as zf:
+        infos = zf.infolist()
+        total = sum(i.file_size for i in infos)
+        if total > MAX_INFLATED_BYTES:
+            raise InputError(path, None, f"declares {total:,} uncompressed bytes, over the limit of "
+                             f"{MAX_INFLATED_BYTES:,}")
+        for info in infos:
+            with zf.open(info) as fh:
+                shape, dtype = _header(fh)
+            cells = int(np.prod(shape, dtype=np.float64)) if shape else 1
+            if cells * max(1, dtype.itemsize) > MAX_INFLATED_BYTES:
+                raise InputError(path, f"array {info.filename[:-4]}", f"declares shape {shape}, over the limit of "
+                                 f"{MAX_INFLATED_BYTES:,} bytes")
+            if info.filename == "intensities.npy" and len(shape) == 2:
+                check_frames(path, "array intensities", shape[0], shape[1], MAX_FPS)  # rows and cells only
+
+
 def read_npz(path: Path) -> HapticTrack:
     try:
+        _check_declared(path)
         with np.load(path, allow_pickle=False) as z:
             intensities = z["intensities"]
             actuators = tuple(str(a) for a in z["actuators"])
@@ -39,9 +81,16 @@ def read_npz(path: Path) -> HapticTrack:
             layout = str(z["layout"]) if "layout" in z else ""
             meta = json.loads(str(z["meta_json"])) if "meta_json" in z else {}
             debug = {k[len("debug_"):]: z[k] for k in z.files if k.startswith("debug_")}
-    except (OSError, ValueError, KeyError, TypeError, json.JSONDecodeError) as err:
-        raise InputError(path, None, f"expected a hapmotion track NPZ (intensities, actuators, fps): {err}") from None
+    except InputError:
+        raise
+    except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile, zlib.error,
+            NotImplementedError, RecursionError) as err:
+        raise InputError(path, None, f"expected a hapmotion track NPZ (intensities, actuators, fps): "
+                         f"{type(err).__name__}: {err}") from None
+    if not isinstance(meta, dict):
+        raise InputError(path, "array meta_json", f"expected a JSON object, found {type(meta).__name__}")
     if intensities.ndim != 2 or intensities.shape[1] != len(actuators) or intensities.shape[0] == 0:
         raise InputError(path, "array intensities", f"expected (T, {len(actuators)}), found {intensities.shape}")
     _check_values(path, intensities, fps, "array intensities", "array fps")
+    check_frames(path, "array fps", intensities.shape[0], intensities.shape[1], fps)
     return HapticTrack(intensities=intensities, fps=fps, actuators=actuators, layout=layout, meta=meta, debug=debug)

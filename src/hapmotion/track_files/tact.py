@@ -1,17 +1,25 @@
-"""bHaptics ``.tact`` export (Designer / Player "Register" project format, docs/bhaptics-protocol.md section 5).
+"""bHaptics ``.tact`` files: any Designer / Player pattern in, Designer-shaped patterns out.
 
-A ``.tact`` project holds one device type (``layout.type``): ``Tactot`` for the vest (positions VestFront and
-VestBack) or ``Tactosy2`` for an arm sleeve. So ``save_track(track, "show.tact")`` writes
+Reading (:func:`read_tact`) renders the project the way the Player plays it (:mod:`.tact_render`): a track at the
+Player's 20 ms tick (50 fps) with one column per motor of every position the file's device type covers
+(``VestFront_0..19``, ``ForearmL_0..5``, ``Head_0..5`` ...), whole numbers 0..100.
 
-- ``show.tact``: the vest (VestFront + VestBack), and
-- ``show.ForearmL.tact`` / ``show.ForearmR.tact``: one per sleeve,
+Writing (:func:`write_tact`): a ``.tact`` project holds one device type, and Designer keeps one file per sleeve, so
+``save_track(track, "show.tact")`` writes
 
-each a single effect in DOT_MODE whose ``feedback`` list has one entry per run of identical frames (intensities
-0..1, quantised to 1 %, the Player's integer resolution; silent runs are left out). All files are written first to
-temporary files and renamed together at the end.
+- ``show.tact``: the vest (``Tactot``: VestFront + VestBack), and
+- ``show.ForearmL.tact`` / ``show.ForearmR.tact``: one per sleeve (``Tactosy2``), each listing both ForearmL and
+  ForearmR as every Designer sleeve file does, with its own side's frames (the other side's list is empty),
 
-The project also carries a ``hapmotion`` member (``fps``, ``actuators``) so :func:`read_tact` can rebuild the track;
-bHaptics tools ignore extra members (protocol doc 2.3).
+(in general: the vest in ``show.tact``, every other device in ``show.<position>.tact``; a track without a vest puts
+its first device in ``show.tact``). Each holds one effect in DOT_MODE whose frames sit on the Player's 20 ms tick:
+the track is first resampled to 50 fps with :meth:`HapticTrack.resample` (each tick takes the maximum of the rows it
+overlaps, so no short peak is lost), then runs of identical ticks become one frame (intensities quantised to 1 %,
+the Player's resolution; silent runs left out). All files are written to temporary files first and renamed
+together at the end.
+
+:func:`read_tact` also reads the sibling files ``NAME.<position>.tact`` beside ``NAME.tact``; what several files
+play on one position adds up (clipped at 100), as it does on the Player.
 """
 
 from __future__ import annotations
@@ -22,29 +30,43 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
-from ..track import HapticTrack
+from ..errors import InputError, UsageError
 from ..filesafety import atomic_path
+from ..layout import bhaptics_devices, load_layout, position_order, type_for_position
+from ..track import HapticTrack
+from .limits import check_frames, load_json
+from .tact_project import parse_project
+from .tact_render import TICK_MS, render
 
-# Designer layout coordinates (protocol doc 4.1 and 4.3)
-_VEST_POINTS = [{"index": r * 4 + c, "x": round(c / 3, 3), "y": r / 4} for r in range(5) for c in range(4)]
-_ARM_POINTS = [{"index": r * 3 + c, "x": c / 2, "y": float(r)} for r in range(2) for c in range(3)]
-
-
-def tact_paths(path: Path, devices: list[str]) -> dict[str, Path]:
-    """The file each device group goes to: ``{"Vest": path, "ForearmL": path.ForearmL.tact, ...}``."""
-    out: dict[str, Path] = {}
-    if any(d.startswith("Vest") for d in devices):
-        out["Vest"] = path
-    for d in devices:
-        if not d.startswith("Vest"):
-            out[d] = path.with_name(f"{path.stem}.{d}{path.suffix}")
-    return out
+TICK_FPS = 1000.0 / TICK_MS
 
 
-def _feedback(rows: np.ndarray, fps: float) -> list[dict]:
-    """Dot-mode feedback entries for one position: runs of identical quantised rows, silent runs dropped."""
-    q = np.rint(rows).astype(np.int64)  # 0..100 integer percent
+# ------------------------------------------------------------------------------------------------------ writing
+def _files(track: HapticTrack, path: Path) -> dict[Path, tuple[str, list[str]]]:
+    """Target file -> (device type, the track's devices it carries)."""
+    plan: dict[Path, tuple[str, list[str]]] = {}
+    for dev in track.devices():
+        t = type_for_position(dev, len(track.device_columns(dev)))
+        if t is None:
+            raise UsageError(f"cannot write {dev!r} to a .tact file: expected a bHaptics position with its motor "
+                             "count (VestFront/VestBack 20, ForearmL/ForearmR 6, ...)")
+        vest = t.name == "Tactot"
+        target = path if vest else path.with_name(f"{path.stem}.{dev}{path.suffix}")
+        plan.setdefault(target, (t.name, []))[1].append(dev)
+    if path not in plan and plan:  # no vest: the first device's file takes the plain name
+        first = next(iter(plan))
+        plan = {(path if k == first else k): v for k, v in plan.items()}
+    return plan
+
+
+def tact_paths(path: Path, devices: list[str]) -> list[Path]:
+    """Sibling files :func:`read_tact` reads beside ``path``: ``NAME.<position>.tact`` for every bHaptics position."""
+    return [path.with_name(f"{path.stem}.{d}{path.suffix}") for d in devices]
+
+
+def _feedback(rows: np.ndarray) -> list[dict]:
+    """Dot-mode frames for one position from ``rows`` (T, M) on the 20 ms tick: runs of identical ticks."""
+    q = np.rint(rows).astype(np.int64)
     n = q.shape[0]
     change = np.ones(n, dtype=bool)
     change[1:] = (q[1:] != q[:-1]).any(axis=1)
@@ -52,60 +74,42 @@ def _feedback(rows: np.ndarray, fps: float) -> list[dict]:
     ends = np.append(starts[1:], n)
     entries = []
     for s, e in zip(starts, ends):
-        row = q[s]
-        idx = np.flatnonzero(row)
-        if idx.size == 0:
-            continue
-        entries.append({
-            "startTime": int(round(s * 1000.0 / fps)),
-            "endTime": int(round(e * 1000.0 / fps)),
-            "playbackType": "NONE",
-            "pointList": [{"index": int(i), "intensity": round(row[i] / 100.0, 2)} for i in idx],
-        })
+        idx = np.flatnonzero(q[s])
+        if idx.size:
+            entries.append({"startTime": int(s) * TICK_MS, "endTime": int(e) * TICK_MS, "playbackType": "NONE",
+                            "pointList": [{"index": int(i), "intensity": round(q[s, i] / 100.0, 2)} for i in idx]})
     return entries
 
 
-def _project(name: str, layout_type: str, positions: dict[str, np.ndarray], points: list, fps: float,
-             duration_ms: int, ids: list[str]) -> dict:
-    modes = {
-        pos: {
-            "mode": "DOT_MODE",
-            "dotMode": {"dotConnected": False, "feedback": _feedback(rows, fps)},
-            "pathMode": {"feedback": []},
-        }
-        for pos, rows in positions.items()
-    }
+def _project(name: str, type_name: str, rows: dict[str, np.ndarray], duration_ms: int) -> dict:
+    dtype = bhaptics_devices()[type_name]
+    points = [{"index": i, "x": float(x), "y": float(y)} for i, (x, y) in enumerate(dtype.points)]
+    modes = {pos: {"mode": "DOT_MODE",
+                   "dotMode": {"dotConnected": False, "feedback": _feedback(rows[pos]) if pos in rows else []},
+                   "pathMode": {"feedback": []}}
+             for pos in dtype.positions}
     return {
         "project": {
             "name": name,
             "description": "rendered by hapmotion",
             "mediaFileDuration": duration_ms / 1000.0,
-            "layout": {"name": layout_type, "type": layout_type, "layouts": {pos: points for pos in positions}},
+            "layout": {"name": type_name, "type": type_name, "layouts": {pos: points for pos in dtype.positions}},
             "tracks": [{"enable": True, "effects": [
                 {"name": name, "startTime": 0, "offsetTime": duration_ms, "modes": modes}]}],
-            "hapmotion": {"fps": fps, "actuators": ids},
         },
         "durationMillis": 0,
-        "intervalMillis": 20,
+        "intervalMillis": TICK_MS,
         "size": 20,
     }
 
 
 def write_tact(track: HapticTrack, path: Path) -> None:
-    devices = track.devices()
-    targets = tact_paths(path, devices)
-    duration_ms = int(round(track.duration * 1000))
-    docs: dict[Path, dict] = {}
-    for group, target in targets.items():
-        if group == "Vest":
-            names = [d for d in devices if d.startswith("Vest")]
-            layout_type, points = "Tactot", _VEST_POINTS
-        else:
-            names = [group]
-            layout_type, points = "Tactosy2", _ARM_POINTS
-        positions = {d: track.intensities[:, track.device_columns(d)] for d in names}
-        ids = [track.actuators[i] for d in names for i in track.device_columns(d)]
-        docs[target] = _project(path.stem, layout_type, positions, points, track.fps, duration_ms, ids)
+    plan = _files(track, path)
+    ticked = track.resample(TICK_FPS)
+    duration_ms = ticked.n_frames * TICK_MS
+    docs = {target: _project(path.stem, type_name, {d: ticked.intensities[:, ticked.device_columns(d)] for d in devs},
+                             duration_ms)
+            for target, (type_name, devs) in plan.items()}
     with contextlib.ExitStack() as stack:
         # every file is complete before any is renamed into place
         tmps = {target: stack.enter_context(atomic_path(target)) for target in docs}
@@ -113,56 +117,44 @@ def write_tact(track: HapticTrack, path: Path) -> None:
             tmps[target].write_text(json.dumps(doc, separators=(",", ":")), encoding="utf-8")
 
 
-SLEEVES = ("ForearmL", "ForearmR")
-_SIZES = {"VestFront": 20, "VestBack": 20, "ForearmL": 6, "ForearmR": 6}
+# ------------------------------------------------------------------------------------------------------ reading
+def _read_one(path: Path) -> tuple[str, dict[str, np.ndarray]]:
+    type_name, layout, effects, end_ms = parse_project(path, load_json(path, ".tact pattern"))
+    n_ticks = int(end_ms // TICK_MS) + 1
+    check_frames(path, "field project.mediaFileDuration / effects", n_ticks, sum(p.shape[0] for p in layout.values()),
+                 TICK_FPS)
+    cols = render(effects, layout, n_ticks)
+    if n_ticks > 1 and (n_ticks - 1) * TICK_MS == end_ms and not any(r[-1].any() for r in cols.values()):
+        # the end falls on a tick and nothing plays there (dot frames end exclusive): the track stops before it
+        cols = {pos: r[:-1] for pos, r in cols.items()}
+    return type_name, cols
 
 
 def read_tact(path: Path) -> HapticTrack:
-    """Rebuild a track from a hapmotion ``.tact`` file and the sleeve files written beside it (if present).
-
-    Only the exact siblings :func:`write_tact` writes (``NAME.ForearmL.tact``, ``NAME.ForearmR.tact``) are read.
-    """
-    files = [path] + [f for f in tact_paths(path, list(SLEEVES)).values() if f != path and f.is_file()]
-    docs = []
+    """Render a ``.tact`` pattern (and its ``NAME.<position>.tact`` siblings) on the Player's 20 ms tick."""
+    siblings = [f for f in tact_paths(path, list(position_order())) if f != path and f.is_file()]
+    files = [path] + siblings
+    types, columns = [], {}
     for f in files:
-        try:
-            doc = json.loads(f.read_text(encoding="utf-8"))
-            proj = doc["project"]
-            fps = float(proj.get("hapmotion", {}).get("fps", 50.0))
-            duration = float(proj.get("mediaFileDuration", 0.0))
-            effects = proj["tracks"][0]["effects"]
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, IndexError, TypeError, ValueError,
-                AttributeError) as err:
-            raise InputError(f, "field project", f"expected a .tact project with tracks and effects: {err}") from None
-        if not (np.isfinite(fps) and fps > 0) or not (np.isfinite(duration) and 0 <= duration < 86400):
-            raise InputError(f, "field project.hapmotion.fps / mediaFileDuration",
-                             f"expected a positive rate and a duration under a day, found {fps} and {duration}")
-        docs.append((f, fps, duration, effects))
-    fps = docs[0][1]
-    n = max(1, int(round(max(d for _, _, d, _ in docs) * fps)))
-    columns: dict[str, np.ndarray] = {}
-    for f, _, _, effects in docs:
-        for k, eff in enumerate(effects):
-            try:
-                t0 = float(eff.get("startTime", 0))
-                for pos, mode in eff.get("modes", {}).items():
-                    size = _SIZES.get(pos, 20)
-                    rows = columns.setdefault(pos, np.zeros((n, size)))
-                    for fb in mode.get("dotMode", {}).get("feedback", []):
-                        s0 = int(round((t0 + float(fb["startTime"])) * fps / 1000.0))
-                        e0 = int(round((t0 + float(fb["endTime"])) * fps / 1000.0))
-                        for p in fb.get("pointList", []):
-                            i, v = int(p["index"]), float(p["intensity"])
-                            if not (0 <= i < size and np.isfinite(v) and 0 <= v <= 1):
-                                raise ValueError(f"point index {i} (0..{size - 1}) intensity {v} (0..1)")
-                            rows[max(0, s0):max(0, e0), i] = v * 100.0
-            except (KeyError, TypeError, ValueError, AttributeError) as err:
-                raise InputError(f, f"field effects[{k}]", f"expected dot-mode feedback with startTime, endTime, "
-                                 f"pointList: {err}") from None
-    order = [d for d in ("VestFront", "VestBack", *SLEEVES) if d in columns]
-    order += [d for d in columns if d not in order]
-    if not order:
-        raise InputError(path, "field effects", "expected at least one position with dot-mode feedback")
-    data = np.column_stack([columns[d] for d in order])
-    ids = tuple(f"{d}_{i}" for d in order for i in range(columns[d].shape[1]))
-    return HapticTrack(intensities=data, fps=fps, actuators=ids, meta={"source": str(path)})
+        type_name, cols = _read_one(f)
+        types.append(type_name)
+        for pos, rows in cols.items():
+            have = columns.get(pos)
+            if have is not None and have.shape[1] != rows.shape[1]:
+                raise InputError(f, f"field project.layout.layouts.{pos}", f"expected {have.shape[1]} motors as in "
+                                 f"{files[0].name}, found {rows.shape[1]}")
+            if have is None:
+                columns[pos] = rows
+            else:  # what several files play on one position adds up, as on the Player
+                n = max(len(have), len(rows))
+                columns[pos] = np.minimum(100.0, np.pad(have, ((0, n - len(have)), (0, 0)))
+                                          + np.pad(rows, ((0, n - len(rows)), (0, 0))))
+    order = [p for p in position_order() if p in columns] + sorted(p for p in columns if p not in position_order())
+    n = max(columns[p].shape[0] for p in order)
+    data = np.column_stack([np.pad(columns[p], ((0, n - columns[p].shape[0]), (0, 0))) for p in order])
+    ids = tuple(f"{p}_{i}" for p in order for i in range(columns[p].shape[1]))
+    default = load_layout()
+    # our own vest + sleeve files come back on the renderer's layout; anything else is named by its device types
+    layout = default.name if ids == default.actuators else "+".join(dict.fromkeys(types))
+    return HapticTrack(intensities=data, fps=TICK_FPS, actuators=ids, layout=layout,
+                       meta={"source": str(path), "files": [str(f) for f in files]})

@@ -1,4 +1,4 @@
-"""Issue 5, "See what the vest feels": the self-contained HTML viewer and the static matplotlib figure.
+"""Seeing what the vest feels: the self-contained HTML viewer and the static matplotlib figure.
 
     from hapmotion.viewer import write_page, plot_track
     write_page("show.html", [track], motion, audio=load_audio_part("song.ogg"))

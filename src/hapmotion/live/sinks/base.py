@@ -16,7 +16,7 @@ from typing import Any, Optional
 from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed
 
-from ..protocol import OutFrame
+from ..frames import OutFrame
 from ..stats import SinkStats
 
 log = logging.getLogger("hapmotion.live")

@@ -19,7 +19,8 @@ from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
 
 from ...errors import UsageError
-from ..protocol import OutFrame, broadcast_frame, broadcast_hello, broadcast_stop
+from ..frames import OutFrame
+from ..wire.broadcast import broadcast_frame, broadcast_hello, broadcast_stop
 from .base import Sink, log, with_timeout
 
 

@@ -14,7 +14,10 @@ from typing import Any, Optional
 import numpy as np
 
 from ...errors import UsageError
-from ..protocol import OSC_PREFIX, DeviceMap, OscOutEncoder, OutFrame
+from ..devices import DeviceMap
+from ..frames import OutFrame
+from ..wire.osc_address import OSC_PREFIX
+from ..wire.osc_out import OscOutEncoder
 from .base import Sink
 
 

@@ -12,7 +12,9 @@ import math
 from typing import Any, Mapping, Optional
 from urllib.parse import urlencode
 
-from ..protocol import DeviceMap, OutFrame, parse_v2_status, v2_frame_message, v2_register_message, v2_turn_off_all
+from ..devices import DeviceMap
+from ..frames import OutFrame
+from ..wire.player_v2 import parse_v2_status, v2_frame_message, v2_register_message, v2_turn_off_all
 from .base import WebSocketClientSink
 
 import numpy as np

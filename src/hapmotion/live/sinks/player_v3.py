@@ -13,7 +13,9 @@ from urllib.parse import urlencode
 
 import numpy as np
 
-from ..protocol import DeviceMap, OutFrame, parse_v3_message, v3_auth_message, v3_dot_messages, v3_stop_all
+from ..devices import DeviceMap
+from ..frames import OutFrame
+from ..wire.player_v3 import parse_v3_message, v3_auth_message, v3_dot_messages, v3_stop_all
 from .base import WebSocketClientSink
 from .player_v2 import _host, default_duration_ms
 

@@ -21,7 +21,7 @@ from ...errors import UsageError
 from ...track import HapticTrack
 from ...track_files import save_track
 from ...filesafety import check_writable
-from ..protocol import OutFrame
+from ..frames import OutFrame
 from .base import Sink, log
 
 FORMATS = (".csv", ".json", ".npz", ".tact")

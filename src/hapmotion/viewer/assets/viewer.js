@@ -294,7 +294,7 @@
       const J = (n) => d && d.joints ? d.joints[JOINTS.indexOf(n)] : null;
       const sl = J("SHOULDER_LEFT"), sr = J("SHOULDER_RIGHT"), nk = J("NECK"), pv = J("PELVIS");
       if (!V.ok(sl) || !V.ok(sr) || !V.ok(nk) || !V.ok(pv)) return [0, 0, 1];
-      // forward = up x right (out of the chest), see DESIGN.md "Body frame".
+      // forward = up x right (out of the chest), the same body frame as the renderer (docs/algorithm.md, Conventions).
       const f = V.cross(V.sub(nk, pv), V.sub(sr, sl));
       const h = [f[0], 0, f[2]];
       return Math.hypot(h[0], h[2]) > 1e-6 ? V.norm(h) : [0, 0, 1];

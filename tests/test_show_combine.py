@@ -10,8 +10,8 @@ import pytest
 import soundfile as sf
 
 import hapmotion
-import hapmotion
-from hapmotion.audio import PAPER_PARAMS, analyze_file, audio_track, combine, mix
+from hapmotion.audio import PAPER_PARAMS, analyze_file, audio_track, mix
+from hapmotion.show import combine
 from support.audio_synth import drum_hit, place_hits
 from hapmotion.errors import InputError, UsageError
 from hapmotion.track import HapticTrack
@@ -205,6 +205,6 @@ def test_combine_reuses_a_given_analysis(monkeypatch):
     def no_second_analysis(*args, **kwargs):
         raise AssertionError("the song was analysed again")
 
-    monkeypatch.setattr("hapmotion.audio.pipeline.analyze_file", no_second_analysis)
+    monkeypatch.setattr("hapmotion.show.analyze_file", no_second_analysis)
     reused = combine(motion, song, mode="multimodal", fps=60.0, length="motion", analysis=an)
     np.testing.assert_array_equal(reused.intensities, fresh.intensities)

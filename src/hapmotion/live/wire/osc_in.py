@@ -1,0 +1,129 @@
+"""OSC in: skeleton frames from OSC messages (python-osc parses the packets).
+
+Address scheme, prefix ``/hapmotion`` (settable; docs/live.md has the full description):
+
+* ``/hapmotion/skeleton [seq:int, t:float,] x0 y0 z0 ... x31 y31 z31`` - one message, all 32 canonical joints in
+  Azure Kinect order, metres, +Y up (96 floats, optionally preceded by a sequence number and a sender time);
+* ``/hapmotion/joint/<JOINT_NAME> [seq:int, t:float,] x y z`` - one joint; a frame is made of the joint messages
+  that precede ``/hapmotion/frame [seq:int, t:float]``, or of those inside one OSC bundle, or (when the joint
+  messages carry a seq) of those that share a seq.
+"""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+from pythonosc.osc_bundle import OscBundle
+from pythonosc.osc_packet import OscPacket
+
+from ...joints import N_JOINTS
+from ..frames import SkeletonFrame, joint_index
+from ..hygiene import Faults, is_number, seq_value, time_value
+from .osc_address import OSC_PREFIX, normalize_prefix
+
+
+class OscSkeletonDecoder:
+    """Turns OSC datagrams into :class:`SkeletonFrame` s (address scheme above).
+
+    Stateful only for per-joint messages, which are gathered into a pending frame until it is closed. The pending
+    frame holds at most 32 joints, so a sender that never closes its frames cannot grow memory.
+    """
+
+    def __init__(self, faults: Faults, prefix: str = OSC_PREFIX):
+        self.faults = faults
+        prefix = normalize_prefix(prefix)
+        self.addr_skeleton = prefix + "/skeleton"
+        self.addr_frame = prefix + "/frame"
+        self.addr_joint = prefix + "/joint/"
+        self._pending: Optional[np.ndarray] = None
+        self._pending_seq: Optional[int] = None
+        self._pending_t: Optional[float] = None
+
+    def feed(self, dgram: bytes, received: float) -> list[SkeletonFrame]:
+        """Decode one datagram; return the frames it completes (usually zero or one)."""
+        try:
+            messages = [tm.message for tm in OscPacket(dgram).messages]
+        except Exception as exc:  # python-osc raises several types on garbage; all mean "not OSC"
+            self.faults.add("malformed", f"not an OSC packet ({exc.__class__.__name__})")
+            return []
+        if not messages:  # python-osc skips unreadable bundle elements; a bundle with nothing readable is bad
+            self.faults.add("malformed", "an OSC bundle without a readable message")
+            return []
+        out: list[SkeletonFrame] = []
+        joints_seen = False
+        for msg in messages:
+            try:
+                address, params = msg.address, msg.params
+            except Exception as exc:
+                self.faults.add("malformed", f"unreadable OSC message ({exc.__class__.__name__})")
+                continue
+            if address == self.addr_skeleton:
+                frame = self._skeleton(params, received)
+                if frame is not None:
+                    out.append(frame)
+            elif address.startswith(self.addr_joint):
+                joints_seen = True
+                self._joint(address[len(self.addr_joint):], params, received, out)
+            elif address == self.addr_frame:
+                self._close(params, received, out)
+            else:
+                self.faults.add("unknown_address", f"OSC address {address!r}, expected {self.addr_skeleton}, "
+                                                   f"{self.addr_joint}<JOINT> or {self.addr_frame}")
+        # A bundle of joint messages is one frame even without a closing /frame message.
+        if joints_seen and self._pending is not None and OscBundle.dgram_is_bundle(dgram):
+            self._close([], received, out)
+        return out
+
+    def _skeleton(self, params: list, received: float) -> Optional[SkeletonFrame]:
+        n = len(params)
+        if n not in (3 * N_JOINTS, 3 * N_JOINTS + 2):
+            self.faults.add("wrong_joint_count", f"{self.addr_skeleton} with {n} arguments, expected "
+                                                 f"{3 * N_JOINTS} coordinates (32 joints), optionally after seq and t")
+            return None
+        if not all(is_number(v) for v in params):
+            self.faults.add("malformed", f"{self.addr_skeleton} with a non-numeric argument")
+            return None
+        seq = t = None
+        if n == 3 * N_JOINTS + 2:
+            seq, t = seq_value(params[0]), time_value(params[1])
+            params = params[2:]
+        pos = np.array(params, dtype=np.float64).reshape(N_JOINTS, 3)
+        return SkeletonFrame(pos, seq, t, received)
+
+    def _joint(self, name: str, params: list, received: float, out: list[SkeletonFrame]) -> None:
+        try:
+            j = joint_index(name)
+        except KeyError:
+            self.faults.add("unknown_joint", f"joint name {name!r}, expected a canonical name such as HAND_LEFT")
+            return
+        if len(params) not in (3, 5) or not all(is_number(v) for v in params):
+            self.faults.add("malformed", f"{self.addr_joint}{name} needs x y z (or seq t x y z) numbers, "
+                                         f"found {len(params)} arguments")
+            return
+        seq = t = None
+        if len(params) == 5:
+            seq, t = seq_value(params[0]), time_value(params[1])
+            params = params[2:]
+            if self._pending is not None and seq is not None and self._pending_seq is not None \
+                    and seq != self._pending_seq:
+                self._close([], received, out)  # a new seq closes the previous frame
+        if self._pending is None:
+            self._pending = np.full((N_JOINTS, 3), np.nan)
+        if seq is not None:
+            self._pending_seq = seq
+        if t is not None:
+            self._pending_t = t
+        self._pending[j] = params
+
+    def _close(self, params: list, received: float, out: list[SkeletonFrame]) -> None:
+        if params:
+            if len(params) != 2 or not all(is_number(v) for v in params):
+                self.faults.add("malformed", f"{self.addr_frame} takes seq and t, found {len(params)} arguments")
+            else:
+                self._pending_seq, self._pending_t = seq_value(params[0]), time_value(params[1])
+        if self._pending is not None:
+            out.append(SkeletonFrame(self._pending, self._pending_seq, self._pending_t, received))
+        self._pending = None
+        self._pending_seq = None
+        self._pending_t = None

@@ -1,0 +1,142 @@
+"""OSC in: skeleton frames from OSC messages and bundles; bad datagrams are counted faults. No sockets."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import pytest
+from hypothesis import example, given, settings
+from hypothesis import strategies as st
+from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
+from pythonosc.osc_message_builder import OscMessageBuilder
+from pythonosc.osc_packet import OscPacket
+
+from hapmotion.joints import JOINT_INDEX
+from hapmotion.live.hygiene import Faults
+from hapmotion.live.wire.osc_in import OscSkeletonDecoder
+
+HL = JOINT_INDEX["HAND_LEFT"]
+
+
+def osc(address: str, *args, types: str | None = None) -> bytes:
+    mb = OscMessageBuilder(address)
+    for k, a in enumerate(args):
+        mb.add_arg(a, types[k] if types else None)
+    return mb.build().dgram
+
+
+def bundle(*dgrams_: bytes) -> bytes:
+    bb = OscBundleBuilder(IMMEDIATELY)
+    for d in dgrams_:
+        bb.add_content(OscPacket(d).messages[0].message)
+    return bb.build().dgram
+
+
+def skeleton_args(k: float = 0.0) -> list[float]:
+    return (np.arange(96, dtype=np.float64) / 100.0 + k).tolist()
+
+
+@pytest.fixture
+def faults():
+    return Faults("test", logging.getLogger("hapmotion.test"))
+
+
+def test_osc_skeleton_message_with_and_without_seq(faults):
+    dec = OscSkeletonDecoder(faults)
+    [f] = dec.feed(osc("/hapmotion/skeleton", 7, 0.5, *skeleton_args()), received=1.0)
+    assert (f.seq, f.t, f.received) == (7, 0.5, 1.0)
+    assert f.positions.shape == (32, 3)
+    # float32 on the wire: joint 5 is (0.15, 0.16, 0.17)
+    np.testing.assert_allclose(f.positions[5], [0.15, 0.16, 0.17], rtol=1e-6)
+    [g] = dec.feed(osc("/hapmotion/skeleton", *skeleton_args()), received=2.0)
+    assert g.seq is None and g.t is None
+    assert not faults.counts
+
+
+def test_osc_per_joint_messages_closed_by_frame_message(faults):
+    dec = OscSkeletonDecoder(faults)
+    assert dec.feed(osc("/hapmotion/joint/HAND_LEFT", 0.5, 1.5, 0.25), 1.0) == []
+    assert dec.feed(osc("/hapmotion/joint/spine_navel", 0.0, 1.1, 0.0), 1.1) == []  # any case accepted
+    [f] = dec.feed(osc("/hapmotion/frame", 3, 0.25), 1.2)
+    assert (f.seq, f.t, f.received) == (3, 0.25, 1.2)
+    np.testing.assert_allclose(f.positions[HL], [0.5, 1.5, 0.25])
+    np.testing.assert_allclose(f.positions[JOINT_INDEX["SPINE_NAVEL"]], [0.0, 1.1, 0.0], atol=1e-7)
+    assert np.isnan(f.positions[JOINT_INDEX["HEAD"]]).all()  # not sent: NaN, the renderer holds its last value
+    assert dec.feed(osc("/hapmotion/frame"), 1.3) == []  # nothing pending: no empty frame
+
+
+def test_osc_per_joint_bundle_is_one_frame(faults):
+    dec = OscSkeletonDecoder(faults)
+    b = bundle(osc("/hapmotion/joint/HAND_LEFT", 1, 0.1, 0.5, 1.5, 0.25),
+               osc("/hapmotion/joint/HAND_RIGHT", 1, 0.1, -0.5, 1.5, 0.25))
+    [f] = dec.feed(b, 1.0)
+    assert f.seq == 1 and np.isfinite(f.positions[[HL, JOINT_INDEX["HAND_RIGHT"]]]).all()
+
+
+def test_osc_per_joint_new_seq_closes_the_previous_frame(faults):
+    dec = OscSkeletonDecoder(faults)
+    assert dec.feed(osc("/hapmotion/joint/HAND_LEFT", 1, 0.1, 0.5, 1.5, 0.25), 1.0) == []
+    [f] = dec.feed(osc("/hapmotion/joint/HAND_LEFT", 2, 0.2, 0.6, 1.5, 0.25), 1.1)
+    assert f.seq == 1 and f.positions[HL, 0] == pytest.approx(0.5)
+
+
+def test_osc_other_prefix(faults):
+    dec = OscSkeletonDecoder(faults, prefix="/show/dancer1/")
+    assert len(dec.feed(osc("/show/dancer1/skeleton", *skeleton_args()), 0.0)) == 1
+    assert dec.feed(osc("/hapmotion/skeleton", *skeleton_args()), 0.0) == []
+    assert faults.counts["unknown_address"] == 1
+
+
+@pytest.mark.parametrize("dgram, kind", [
+    (osc("/hapmotion/skeleton", *skeleton_args()[:95]), "wrong_joint_count"),
+    (osc("/hapmotion/skeleton", 1, 2, 3), "wrong_joint_count"),
+    (osc("/hapmotion/skeleton", "x", 0.1, *skeleton_args()), "malformed"),
+    (osc("/hapmotion/skeleton", True, 0.1, *skeleton_args(), types="T" + "f" * 97), "malformed"),
+    (osc("/hapmotion/joint/HAND_MIDDLE", 0.1, 0.2, 0.3), "unknown_joint"),
+    (osc("/hapmotion/joint/HAND_LEFT", 0.1, 0.2), "malformed"),
+    (osc("/hapmotion/frame", 1), "malformed"),
+    (osc("/avatar/parameters/x", 1.0), "unknown_address"),
+    (b"\x00\x01garbage", "malformed"),
+    (b"", "malformed"),
+    (b"#bundle\x00" + b"\x00" * 8 + b"\x00\x00\x01\x00", "malformed"),
+])
+def test_osc_bad_messages_are_counted_and_skipped(faults, dgram, kind):
+    dec = OscSkeletonDecoder(faults)
+    assert dec.feed(dgram, 0.0) == []
+    assert faults.counts == {kind: 1}
+
+
+def test_osc_faults_logged_once_per_kind(faults, caplog):
+    dec = OscSkeletonDecoder(faults)
+    with caplog.at_level(logging.WARNING, logger="hapmotion.test"):
+        for _ in range(5):
+            dec.feed(b"garbage", 0.0)
+            dec.feed(osc("/nope", 1), 0.0)
+    assert faults.counts == {"malformed": 5, "unknown_address": 5}
+    assert len(caplog.records) == 2
+
+
+_VALID = osc("/hapmotion/skeleton", 7, 0.5, *skeleton_args())
+
+
+@st.composite
+def mutated_skeleton(draw) -> bytes:
+    """A valid /hapmotion/skeleton datagram with a few bytes overwritten (address, type tags or payload)."""
+    data = bytearray(_VALID)
+    for _ in range(draw(st.integers(1, 4))):
+        data[draw(st.integers(0, len(data) - 1))] = draw(st.integers(0, 255))
+    return bytes(data)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.one_of(st.binary(max_size=600), mutated_skeleton()))
+@example(b"#bundle\x00" + b"\x00" * 8)  # a bundle holding nothing
+@example(b"")
+def test_osc_decoder_accounts_for_every_datagram(data):
+    """Garbage never raises, and no datagram vanishes silently: each one yields a frame or a counted fault."""
+    faults = Faults("fuzz", logging.getLogger("hapmotion.fuzz"))
+    out = OscSkeletonDecoder(faults).feed(data, 0.0)
+    assert len(out) + faults.total() >= 1
+    for f in out:
+        assert f.positions.shape == (32, 3) and f.positions.dtype == np.float64

@@ -1,0 +1,121 @@
+"""Bad track files end as one-line InputErrors (exit 2) that name the file, the place and the limit; nothing large is
+allocated from a small file."""
+
+from __future__ import annotations
+
+import io
+import zipfile
+
+import numpy as np
+import pytest
+
+from hapmotion.errors import InputError
+from hapmotion.layout import load_layout
+from hapmotion.track import HapticTrack
+from hapmotion.track_files import load_track
+from hapmotion.track_files.limits import MAX_FRAMES, MAX_INT_DIGITS, MAX_NESTING, nesting_depth
+
+TRACK_HEAD = '{"format":"hapmotion-track","fps":60,'
+
+
+def _refused(path, *needles):
+    with pytest.raises(InputError) as info:
+        load_track(path)
+    msg = str(info.value)
+    assert str(path) in msg and "\n" not in msg and info.value.exit_code == 2
+    for needle in needles:
+        assert needle in msg, msg
+    return msg
+
+
+def test_csv_with_a_huge_time_span_is_refused_with_the_rate(tmp_path):
+    path = tmp_path / "span.csv"
+    path.write_text("time_s,VestFront_0\n0,1\n1e12,2\n")  # one frame per 10^12 s: rate rounds to 0
+    _refused(path, "column time_s", "frame rate")
+
+
+def test_header_only_csv_says_so_without_warnings(tmp_path, recwarn):
+    path = tmp_path / "empty.csv"
+    path.write_text("time_s,VestFront_0\n")
+    _refused(path, "at least one row")
+    assert not [w for w in recwarn if issubclass(w.category, UserWarning)]
+
+
+@pytest.mark.parametrize("ext", [".json", ".tact"])
+def test_deeply_nested_json_is_refused_before_parsing(tmp_path, ext):
+    path = tmp_path / f"deep{ext}"
+    path.write_text("[" * 200_000 + "]" * 200_000)
+    _refused(path, f"over the limit of {MAX_NESTING}")
+
+
+@pytest.mark.parametrize("ext, text", [
+    (".json", TRACK_HEAD.replace('"fps":60', '"fps":1' + "0" * 5000) + '"actuators":["VestFront_0"],"frames":[[1]]}'),
+    (".tact", '{"project":{"mediaFileDuration":1' + "0" * 5000 + ',"layout":{"type":"Tactot"},"tracks":[]}}'),
+], ids=["json", "tact"])
+def test_huge_integers_are_refused(tmp_path, ext, text):
+    path = tmp_path / f"bigint{ext}"
+    path.write_text(text)
+    _refused(path, f"over the limit of {MAX_INT_DIGITS}")
+
+
+@pytest.mark.parametrize("body, place", [
+    ('"actuators":[null],"frames":[[1]]}', "field actuators"),
+    ('"actuators":null,"frames":[[1]]}', "field actuators:"),
+    ('"actuators":["VestFront_0"],"meta":"made by hand","frames":[[1]]}', "field meta"),
+    ('"actuators":["VestFront_0"],"frames":[["1"]]}', "field frames[0]"),
+    ('"actuators":["VestFront_0"],"layout":7,"frames":[[1]]}', "field layout"),
+])
+def test_wrong_types_in_track_json(tmp_path, body, place):
+    path = tmp_path / "types.json"
+    path.write_text(TRACK_HEAD + body)
+    _refused(path, place)
+
+
+def test_corrupt_npz_is_one_line(tmp_path):
+    path = tmp_path / "bad.npz"
+    path.write_bytes(b"PK\x03\x04" + b"\x00" * 200)  # a zip signature and nothing valid
+    _refused(path, "BadZipFile")
+
+
+def test_npz_with_a_broken_deflate_stream_is_one_line(tmp_path):
+    track = HapticTrack(np.random.default_rng(0).uniform(0, 100, (50, 52)), 60.0, load_layout().actuators)
+    path = tmp_path / "z.npz"
+    track.save(path)
+    raw = bytearray(path.read_bytes())
+    # the first member's data starts after its 30-byte local header, name and extra field
+    name_len, extra_len = int.from_bytes(raw[26:28], "little"), int.from_bytes(raw[28:30], "little")
+    start = 30 + name_len + extra_len
+    raw[start + 10:start + 60] = bytes(range(50))
+    path.write_bytes(bytes(raw))
+    _refused(path, "expected a hapmotion track NPZ")
+
+
+def test_npz_declaring_a_huge_shape_is_refused_before_allocating(tmp_path):
+    buf = io.BytesIO()
+    np.lib.format.write_array_header_1_0(buf, {"descr": "<f8", "fortran_order": False, "shape": (10**9, 52)})
+    buf.write(b"\x00" * 64)
+    path = tmp_path / "huge.npz"
+    with zipfile.ZipFile(path, "w") as zf:
+        zf.writestr("intensities.npy", buf.getvalue())
+        zf.writestr("actuators.npy", b"")
+    _refused(path, "declares shape (1000000000, 52)")
+
+
+def test_tact_declaring_a_day_long_pattern_is_refused(tmp_path):
+    """A 10 KB .tact that declares 86,000 s (fps 2000 x 86,000 s in the old format) asks for 4.3 million ticks."""
+    path = tmp_path / "bomb.tact"
+    path.write_text('{"project":{"mediaFileDuration":86000,"hapmotion":{"fps":2000},"layout":{"type":"Tactot"},'
+                    '"tracks":[{"effects":[{"startTime":0,"offsetTime":86000000,"modes":{"VestFront":{"mode":'
+                    '"DOT_MODE","dotMode":{"feedback":[{"startTime":0,"endTime":86000000,"pointList":'
+                    '[{"index":1,"intensity":1}]}]}}}}]}]}}' + " " * 10_000)
+    _refused(path, f"over the limit of {MAX_FRAMES:,}")
+
+
+@pytest.mark.parametrize("text, depth", [
+    ("", 0), ("[]", 1), ('{"a": [1, {"b": 2}]}', 3), ('"[[[["', 0),
+    (r'["\"[[", []]', 2),  # an escaped quote does not end the string
+    (r'["\\", [[]]]', 3),  # an escaped backslash does not escape the quote after it
+])
+@pytest.mark.parametrize("chunk", [1, 2, 3, 1 << 22])
+def test_nesting_depth_by_hand(text, depth, chunk):
+    assert nesting_depth(text, chunk=chunk) == depth
