@@ -1,7 +1,7 @@
 """Would a wearer feel the performance? Every felt-by-default target, measured, printed beside its target.
 
 Self-contained on purpose: only the public API (``hapmotion.load_motion``, ``hapmotion.render``,
-``hapmotion.load_layout``, ``hapmotion.audio``) and numpy/soundfile, with each measure defined here as the target
+``hapmotion.load_layout``, ``hapmotion.show.combine``) and numpy/soundfile, with each measure defined here as the target
 states it, so the figures do not depend on the code they judge.
 
 Clips: every recording in the motion folder (BVH, AIST++ pkl) and seeded synthetic gestures (one- and two-hand
@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import argparse
 import glob
-import inspect
 import os
 import pickle
 import sys
@@ -45,7 +44,7 @@ import numpy as np
 import soundfile as sf
 
 import hapmotion
-import hapmotion.audio as haudio
+import hapmotion.show as hshow
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SHARED = os.path.normpath(os.path.join(HERE, "..", "..", "shared", "data"))
@@ -401,11 +400,8 @@ def render(motion, method: str, preset: str | None):
 
 
 def combine_default(track, song: str, mode: str, preset: str | None):
-    """``hapmotion.audio.combine`` with its defaults, plus the preset's mix rule when the API takes one."""
-    kwargs = {}
-    if preset is not None and "preset" in inspect.signature(haudio.combine).parameters:
-        kwargs["preset"] = preset
-    return haudio.combine(track, song, mode=mode, length="motion", **kwargs)
+    """``hapmotion.show.combine`` with its defaults (the motion track's preset picks its music pattern and mix)."""
+    return hshow.combine(track, song, mode=mode, length="motion")
 
 
 def evaluate(preset: str | None, clips: list[Clip], song_list, layout, verbose: bool) -> dict:
