@@ -33,6 +33,7 @@ Run::
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import glob
 import os
 import pickle
@@ -44,6 +45,7 @@ import numpy as np
 import soundfile as sf
 
 import hapmotion
+import hapmotion.audio
 import hapmotion.show as hshow
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -396,12 +398,30 @@ def songs(folder: str, audio_dir: str, seed: int) -> list[tuple[str, str]]:
 
 # ---------------------------------------------------------------------------------------------------- runs
 def render(motion, method: str, preset: str | None):
-    return hapmotion.render(motion, method=method) if preset is None else hapmotion.render(motion, method=method, preset=preset)
+    """Render with the default preset (``None``), a preset name, or ``NAME:field=value,...`` (a preset with some
+    parameters changed, for ablations)."""
+    if preset is None:
+        return hapmotion.render(motion, method=method)
+    name, _, changes = preset.partition(":")
+    if not changes:
+        return hapmotion.render(motion, method=method, preset=name)
+    params = hapmotion.PRESETS[name].replace(**{k: float(v) for k, v in (c.split("=") for c in changes.split(","))})
+    return hapmotion.render(motion, method=method, preset=name, params=params)
+
+
+MUSIC_OPTIONS: dict = {}
+"""Changes to the music's defaults for a run (``--spatial``, ``--mix-rule``); empty = the defaults."""
 
 
 def combine_default(track, song: str, mode: str, preset: str | None):
     """``hapmotion.show.combine`` with its defaults (the motion track's preset picks its music pattern and mix)."""
-    return hshow.combine(track, song, mode=mode, length="motion")
+    kwargs = {}
+    if "spatial" in MUSIC_OPTIONS:
+        base = hapmotion.audio.params_for_preset(track.meta.get("preset"))
+        kwargs["params"] = dataclasses.replace(base, spatial=MUSIC_OPTIONS["spatial"])
+    if "mix_rule" in MUSIC_OPTIONS:
+        kwargs["mix_rule"] = MUSIC_OPTIONS["mix_rule"]
+    return hshow.combine(track, song, mode=mode, length="motion", **kwargs)
 
 
 def evaluate(preset: str | None, clips: list[Clip], song_list, layout, verbose: bool) -> dict:
@@ -482,15 +502,22 @@ TARGETS = (
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--preset", action="append", help="preset(s) to measure (default: the renderer's default)")
+    ap.add_argument("--preset", action="append",
+                    help="preset(s) to measure (default: the renderer's default); NAME:field=value,... changes fields")
     ap.add_argument("--motion-dir", default=os.path.join(SHARED, "motion"))
     ap.add_argument("--audio-dir", default=os.path.join(SHARED, "audio"))
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--no-real", action="store_true", help="synthetic clips only")
     ap.add_argument("--no-synthetic", action="store_true", help="recordings only")
+    ap.add_argument("--spatial", help="music pattern instead of the preset's (layered, global, bands)")
+    ap.add_argument("--mix-rule", help="mix rule instead of the preset's (duck, paper, energy)")
     ap.add_argument("-v", "--verbose", action="store_true", help="per-clip figures")
     args = ap.parse_args(argv)
     presets = args.preset or [None]
+    if args.spatial:
+        MUSIC_OPTIONS["spatial"] = args.spatial
+    if args.mix_rule:
+        MUSIC_OPTIONS["mix_rule"] = args.mix_rule
     layout = hapmotion.load_layout()
     with tempfile.TemporaryDirectory() as tmp:
         clips = [] if args.no_real else real_clips(args.motion_dir)
