@@ -2,7 +2,8 @@
 
 A :class:`Show` holds every choice that turns a performance into vibration: the renderer (method, preset,
 parameter overrides, mirroring), the paper's study-2 condition (``mode``: motion, audio or both mixed), the music
-(file, offset, mix ratio and domain) and the length rule. Every entry point composes a show here and nowhere else:
+(file, offset, mix ratio and rule), the length rule and the wearer's gain and comfort limits (applied to every row
+that leaves the show, files and live alike: :mod:`hapmotion.comfort`). Every entry point composes a show here and nowhere else:
 
 * offline, :func:`render_show` turns a :class:`~hapmotion.motion.Motion` (and/or the music) into a
   :class:`~hapmotion.track.HapticTrack` (``hapmotion render``, ``demo``, ``view``, ``plot``, ``evaluate``);
