@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import hapmotion
+from hapmotion.layout import CHART_BACK
 from hapmotion.audio import AudioParams, analyze_file, analyze_signal, audio_track, kick_frames, region_weights
 from hapmotion.metrics.events import match_events
 from hapmotion.audio.analysis import AudioAnalysis
@@ -42,7 +43,7 @@ def test_audio_track_takes_its_actuators_from_the_layout_file():
 
 def test_layered_mapping_puts_rhythm_low_on_the_back_and_melody_on_its_top_row():
     w = region_weights(LAYOUT, "layered", bass_rows=2)
-    back = LAYOUT.device("VestBack")
+    back = LAYOUT.chart_device(CHART_BACK)
     rows = {r: slice(back.offset + r * back.cols, back.offset + (r + 1) * back.cols) for r in range(back.rows)}
     for r in range(back.rows):
         expected = [1.0, 0.0, 1.0] if r >= back.rows - 2 else ([0.0, 1.0, 0.0] if r == 0 else [0.0, 0.0, 0.0])
