@@ -20,6 +20,8 @@ SOURCE (one):
                              /hapmotion/joint/HAND_LEFT [seq t] x y z  +  /hapmotion/frame [seq t]
   ws://HOST:PORT             WebSocket server taking JSON text frames (default 127.0.0.1:8765):
                              {"seq": 7, "t": 0.116, "joints": {"HAND_LEFT": [x, y, z], ...}}
+  vmc://HOST:PORT            VMC protocol (VSeeFace, XR Animator, VirtualMotionCapture, SlimeVR, ...;
+                             default 127.0.0.1:39539; docs/vmc.md)
   replay:PATH                a recording (BVH, Kinect JSON, AIST++, CSV, NPZ) paced in real time (--speed, --loop;
                              the reader options --units, --up, --skip-frames, ... as for render)
 \b
@@ -41,6 +43,9 @@ SINK (one or more):
 Safety: a source silent for --stall-ms fades every actuator to zero; Ctrl-C, SIGTERM, the end of a replay or an
 error sends turn-off to every sink before exiting. A summary (frames in/out/dropped/late, p50/p99 latency) is
 printed at exit.
+\b
+Cues: --cues show.cues layers authored patterns (bHaptics .tact or tracks) onto the rows at their show times;
+with --cue-port 9002 a lighting desk or Unity fires named cues: /hapmotion/cue NAME [gain] (OSC over UDP).
 \b
 Examples:
   hapmotion live --source osc://0.0.0.0:9000 --allow-sender 192.168.1.20 --sink player --sink ws-broadcast
@@ -90,6 +95,12 @@ Examples:
               help="Network sources: only these sender addresses (or networks, 10.0.0.0/24) may send.")
 @click.option("--max-senders", type=click.IntRange(min=1), default=8, show_default=True,
               help="Network sources: senders served at once (WebSocket connections, OSC sender addresses).")
+@click.option("--cues", "cues", type=click.Path(dir_okay=False), default=None,
+              help="Cue list (text or JSON: time, pattern, gain, side, devices, name): authored patterns layered "
+                   "onto the show at their show times (docs/playback.md).")
+@click.option("--cue-port", default=None, metavar="[HOST:]PORT",
+              help="Also fire the cue list's named cues by OSC: /hapmotion/cue NAME [gain] on this UDP port "
+                   "(loopback unless HOST names an interface).")
 @click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
 @motion_options
 def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: str, mirror: Optional[bool],
@@ -97,7 +108,7 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
             mode: Optional[str], mix_ratio: str, mix_domain: str, stall_ms: float, show_stats: bool,
             stats_json: Optional[str], workspace_id: Optional[str], api_key: Optional[str],
             allow_origins: tuple[str, ...], token: Optional[str], allow_senders: tuple[str, ...], max_senders: int,
-            quiet: bool, motion_opts: dict) -> None:
+            cues: Optional[str], cue_port: Optional[str], quiet: bool, motion_opts: dict) -> None:
     from ..live import run_live
 
     _setup_logging(quiet)
@@ -110,6 +121,10 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
         exposure = engine.source.exposure()
         click.echo(f"live: listening on {engine.source.describe()}" + (f" ({exposure})" if exposure else "")
                    + f"; sinks: {names}; Ctrl-C stops", err=True)
+        trigger = getattr(engine.cues, "trigger", None)
+        if trigger is not None:
+            click.echo(f"live: cues fired on {trigger.describe()} NAME [gain] ({trigger.exposure()}); "
+                       f"names: {', '.join(engine.cues.names)}", err=True)
 
     # User mistakes (HapMotionError) and Ctrl-C before the session is up are reported by hapmotion.cli.main as one
     # line (exit 2 / 130); once the session runs, SIGINT/SIGTERM are a clean stop (exit 0).
@@ -129,7 +144,8 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
         run_live(src, list(sinks), method=method, preset=preset, mirror=mirror, fps=fps, speed=speed,
                  loop=loop, audio=audio, audio_offset=audio_offset, mode=mode, ratio=ratio, domain=mix_domain,
                  stall_ms=stall_ms, stats_interval=1.0 if show_stats else None, workspace_id=workspace_id,
-                 api_key=api_key, on_ready=ready, on_stats=lambda text: click.echo(f"live: {text}", err=True))
+                 api_key=api_key, on_ready=ready, on_stats=lambda text: click.echo(f"live: {text}", err=True),
+                 cues=cues, cue_port=cue_port)
     finally:
         # The summary is printed however the session ended (turn-off has been sent by then). Nothing here raises:
         # a session error in flight stays the one reported.

@@ -19,6 +19,7 @@ from typing import Any, Callable, Optional, Sequence, Union
 
 from ..errors import InputError, UsageError
 from ..show import Show, live_music
+from .cue_trigger import live_cues, run_with_cues
 from .engine import AudioChannel, LiveEngine
 from .devices import DeviceMap
 from .wire.player_v2 import tact_project
@@ -100,6 +101,8 @@ async def live(
     handle_signals: bool = True,
     on_ready: Optional[Callable[[LiveEngine], None]] = None,
     show: Optional[Show] = None,
+    cues: Any = None,
+    cue_port: "str | int | None" = None,
     **engine_options: Any,
 ) -> LiveStats:
     """Run a live session until the source ends or a stop signal; return its statistics.
@@ -108,8 +111,10 @@ async def live(
     How the show is rendered and mixed is ``show`` (:class:`hapmotion.show.Show`); without it one is made from
     ``method``, ``preset``, ``mirror``, ``audio``, ``audio_offset``, ``mode``, ``ratio`` and ``domain``. The mode
     defaults to ``"multimodal"`` with music and ``"motion"`` without; ``"audio"`` plays the song's channel alone
-    (no source). ``renderer`` replaces the show's ``Renderer``. Every sink is sent turn-off before this returns or
-    raises.
+    (no source). ``renderer`` replaces the show's ``Renderer``. ``cues`` (a cue list file or
+    :class:`~hapmotion.cues.CueList`) are layered onto the rows at their show times; ``cue_port`` (``PORT`` or
+    ``HOST:PORT``, loopback by default) also fires them by name by OSC (:mod:`~hapmotion.live.cue_trigger`). Every
+    sink is sent turn-off before this returns or raises.
     """
     if show is None:
         show = Show(method=method, preset=preset, mirror=mirror, mode=mode, audio=audio, audio_offset_s=audio_offset,
@@ -151,6 +156,7 @@ async def live(
     if src is None:
         assert channel is not None
         src = ClockSource(fps, channel.duration_s, loop=loop)
+    cue_layer = live_cues(cues, fps=fps, layout=layout, actuators=dmap.actuators, cue_port=cue_port)
 
     meta = {**show.describe(mode), "source": src.describe(), "audio": os.fspath(show.audio) if show.audio else None}
     if renderer is not None and getattr(renderer, "params", None) is not None:
@@ -162,8 +168,8 @@ async def live(
                  for s in sinks]
     engine = LiveEngine(renderer, sink_objs, n_actuators=dmap.n, fps=fps, rate=rate, stall_s=stall_ms / 1000.0,
                         audio=channel, mode=mode, handle_signals=handle_signals, stats_interval=stats_interval,
-                        on_ready=on_ready, source_name=src.describe(), **engine_options)
-    return await engine.run(src)
+                        on_ready=on_ready, source_name=src.describe(), cues=cue_layer, **engine_options)
+    return await run_with_cues(engine, src)
 
 
 def run_live(*args: Any, **kwargs: Any) -> LiveStats:

@@ -22,9 +22,15 @@ def v3_envelope(kind: str, payload: Any) -> str:
     return json.dumps({"type": kind, "message": message}, separators=(",", ":"))
 
 
-def v3_auth_message(workspace_id: str, api_key: str, version: str = "1") -> str:
+def v3_auth_message(workspace_id: str, api_key: str, version: int = 1) -> str:
     """``SdkRequestAuth``, the first message after the connection opens. The Player is not known to verify the
-    cipher/hash fields; like bHaptics' own SimHub plugin (``BhapticsWebsocket.cs``) they carry the workspace id."""
+    cipher/hash fields; like bHaptics' own SimHub plugin (``BhapticsWebsocket.cs``) they carry the workspace id.
+
+    ``version`` is a JSON integer, as bHaptics' own clients send it (tact-simhub ``Sdk2Message.cs``:
+    ``AuthenticationMessage.Version`` is an ``int``, default 1); a string or a bool is refused here rather than
+    sent to a Player that may reject the session for it."""
+    if not isinstance(version, int) or isinstance(version, bool):
+        raise TypeError(f"SDK2 auth version must be an int, got {version!r}")
     return v3_envelope("SdkRequestAuth", {
         "cipher": workspace_id, "applicationId": workspace_id, "nonceHashValue": workspace_id,
         "applicationIdHashValue": workspace_id, "sdkApiKey": api_key, "version": version,
