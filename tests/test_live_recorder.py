@@ -47,12 +47,12 @@ def test_sigkill_leaves_a_journal_that_is_the_take_so_far(tmp_path):
     journal = journal_path(out)
     motion = hapmotion.load_motion(BVH)
     # what the session renders for a replay: the file's rate and the performer's body measured from the file
-    renderer = hapmotion.Renderer(fps=motion.fps, body=BodyModel.from_motion(motion))
+    renderer = hapmotion.Renderer("mst", "felt", fps=motion.fps, body=BodyModel.from_motion(motion))
     expected, _ = renderer.run(motion.positions)
 
     async def scenario():
         proc = await asyncio.create_subprocess_exec(
-            *HAPMOTION, "live", "--source", f"replay:{BVH}", "--sink", f"record:{out}", "-q",
+            *HAPMOTION, "live", "--source", f"replay:{BVH}", "--sink", f"record:{out}", "--preset", "felt", "-q",
             stderr=asyncio.subprocess.DEVNULL)
         deadline = time.perf_counter() + 60
         while _journal_rows(journal) < 15:                  # half a second of the take is on disk

@@ -400,11 +400,11 @@ def recording60():
 def test_vmc_over_loopback_drives_the_renderer_like_the_recording(recording60):
     positions, fps = recording60
     sender = VmcSender(positions, fps)
-    expected, _ = hapmotion.Renderer(fps=fps).run(positions)
+    expected, _ = hapmotion.Renderer("mst", "felt", fps=fps).run(positions)
 
     async def scenario():
         tap = Tap()
-        task, engine = await start_session(VmcSource("127.0.0.1", 0), [tap], fps=fps)
+        task, engine = await start_session(VmcSource("127.0.0.1", 0), [tap], fps=fps, preset="felt")
         assert engine.source.name == f"vmc://127.0.0.1:{engine.source.port}"
         await send_vmc(engine.source.port, sender)
         await wait_for(lambda: engine.stats.rendered + engine.stats.superseded >= len(positions), 5)

@@ -21,14 +21,16 @@ from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENE
                      P_BETA, P_BOOST, P_BOOST_FULL, P_C, P_DEAD, P_FAR, P_FLOOR, P_FPS, P_IDLE_FARTHER, P_IFAR,
                      P_MAX_LEVEL, P_METHOD, P_NEAR, P_PCT, P_PHANTOM_ENERGY, P_REL_DECAY, P_RELEASE, P_SIDE_BLEND,
                      P_SILENCE, P_TOL, P_W_GAIN, P_W_MAX, P_WINDOW, S_TPX, S_TPY, S_TPZ, ST_AXES, ST_CHOICE,
-                     ST_LEVEL, ST_PREV_DP, ST_SEEN)
-from .steps.choice import active_hand, active_hands, choose_active, hand_accelerations, update_thresholds
+                     ST_LEVEL, ST_PREV_DP, ST_SEEN, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE,
+                     P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W)
+from .steps.choice import (active_hand, active_hands, choose_active, hand_accelerations, moving_only, update_speeds,
+                           update_thresholds)
 from .steps.held_joints import hold_joints
-from .steps.intensity import boosted_level, filtered_level, level_drive, normalised_distance
+from .steps.intensity import boosted_level, filtered_level, level_drive, normalised_distance, speed_reach_drive
 from .steps.numeric import dist3
 from .steps.output import write_outputs, write_silence
 from .steps.phantom import spread_on_charts
-from .steps.triangle import dynamic_point, previous_dynamic_point, salient_triangle
+from .steps.triangle import dynamic_point, previous_dynamic_point, salient_triangle, speed_weighted
 from .steps.warping import locate_on_body
 
 
@@ -89,6 +91,8 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
     acc = np.zeros(2)
     thr = np.zeros(2)
     excess = np.zeros(2)
+    speed_n = np.zeros(2)
+    by_speed = prm[P_SPEED_ON] > 0.5
     above = np.zeros(2, dtype=np.bool_)
     prev_dp = np.zeros(3)
     dp = np.zeros(3)
@@ -110,10 +114,14 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
 
         # step 3: the candidates' accelerations relative to J_T
         energy = hand_accelerations(jt, state, prm[P_FPS], acc)
+        if by_speed:  # beyond the paper: hand speed relative to J_T
+            update_speeds(state, prm[P_SPEED_ALPHA], prm[P_SPEED_START], prm[P_SPEED_FULL], speed_n)
 
         # step 4: thresholds and the active-joint choice
         update_thresholds(state, acc, window, thr)
         active_hands(acc, thr, prm[P_FLOOR], above, excess)
+        if by_speed:
+            moving_only(state, prm[P_ACTIVE_SPEED], above, excess)
         dist_l = dist3(jt[J_HAND_L], torso)
         dist_r = dist3(jt[J_HAND_R], torso)
         choice = choose_active(above[0], above[1], dist_l, dist_r, int(state[ST_CHOICE]), prm[P_IDLE_FARTHER] > 0.5)
@@ -127,6 +135,8 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         else:
             previous_dynamic_point(state, torso, prev_dp)
             j_a, j_r, w_a, w_r = salient_triangle(choice, jt, excess, prev_dp, prm[P_W_GAIN], prm[P_W_MAX])
+            if by_speed:
+                w_a, w_r = speed_weighted(choice, w_a, w_r, speed_n, prm[P_SPEED_W], prm[P_OPPOSITE_W])
             dynamic_point(jt[j_a], jt[j_r], torso, w_a, w_r, 1.0, dp)  # J_T keeps weight 1
         for k in range(3):
             state[ST_PREV_DP + k] = dp[k]
@@ -135,9 +145,13 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         # step 6: where it is felt on the torso surface
         face = locate_on_body(dp, torso, axes, dist, prm[P_NEAR], prm[P_FAR], surf, tp_body, p, hit)
 
-        # step 7: intensity from distance (Eq. 2)
-        level = filtered_level(normalised_distance(dist, prm[P_NEAR], prm[P_IFAR]), prm[P_C], state[ST_LEVEL],
-                               prm[P_ATTACK], prm[P_RELEASE])
+        # step 7: intensity from distance (Eq. 2); beyond the paper, from the faster hand's speed and the distance
+        drive = normalised_distance(dist, prm[P_NEAR], prm[P_IFAR])
+        if by_speed:
+            fastest = max(speed_n[0], speed_n[1])
+            drive = speed_reach_drive(drive, fastest, prm[P_REACH_SHARE])
+            hand_excess *= fastest  # no boost from a hand that is not moving (capture noise)
+        level = filtered_level(drive, prm[P_C], state[ST_LEVEL], prm[P_ATTACK], prm[P_RELEASE])
         state[ST_LEVEL] = level
 
         # step 8: boost and maximum level, then the phantom split on the chart the hit lands on

@@ -32,8 +32,9 @@ J_NECK = RENDER_JOINTS.index("NECK")
 # ---- parameter vector (float64): one slot per renderer parameter, flags as 0.0 / 1.0
 (P_METHOD, P_WINDOW, P_FLOOR, P_IDLE_FARTHER, P_W_GAIN, P_W_MAX, P_NEAR, P_FAR, P_SIDE_BLEND, P_C,
  P_ATTACK, P_RELEASE, P_BOOST, P_BOOST_FULL, P_MAX_LEVEL, P_PCT, P_PHANTOM_ENERGY, P_TOL, P_BETA, P_DEAD,
- P_REL_DECAY, P_FPS, P_IFAR, P_SILENCE) = range(24)
-N_PARAMS = 24
+ P_REL_DECAY, P_FPS, P_IFAR, P_SILENCE, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE, P_ACTIVE_SPEED,
+ P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W) = range(32)
+N_PARAMS = 32
 
 # ---- surface vector (float64): BodyModel.as_array(), body frame metres
 (S_A, S_B, S_YBOT, S_YTOP, S_YROW0, S_YROWN, S_YSLEEVE, S_TPX, S_TPY, S_TPZ) = range(10)
@@ -60,7 +61,8 @@ ST_HAVE = ST_GOOD + 3 * N_RENDER_JOINTS  # (N_RENDER_JOINTS,) 1.0 once the joint
 ST_HIST_COUNT = ST_HAVE + N_RENDER_JOINTS  # accelerations in the history, at most MAX_WINDOW
 ST_HIST_POS = ST_HIST_COUNT + 1  # next write position of the history ring
 ST_HIST = ST_HIST_POS + 1  # (2, MAX_WINDOW) ring of hand accelerations (left, right), m/s^2
-ST_OUT = ST_HIST + 2 * MAX_WINDOW  # (N,) last output row, percent (per-actuator release)
+ST_SPEED = ST_HIST + 2 * MAX_WINDOW  # (2,) smoothed hand speeds relative to J_T (left, right), m/s
+ST_OUT = ST_SPEED + 2  # (N,) last output row, percent (per-actuator release)
 N_STATE_BASE = ST_OUT
 
 # ---- debug columns

@@ -18,7 +18,7 @@ from ..motion import Motion
 from ..track import HapticTrack
 from . import packed
 from .kernel import render_frames
-from .params import METHODS, Params, alpha_at, get_preset
+from .params import DEFAULT_PRESET, METHODS, Params, alpha_at, get_preset
 
 _RENDER_IDX = np.array([JOINT_INDEX[n] for n in RENDER_JOINTS], dtype=np.intp)
 """Rows of the canonical 32 joints that the frame loop receives, in ``RENDER_JOINTS`` order."""
@@ -31,7 +31,7 @@ def resolve_params(preset: str | Params | None, params: Params | None = None, **
     elif isinstance(preset, Params):
         base = preset
     else:
-        base = get_preset(preset or "paper")
+        base = get_preset(preset or DEFAULT_PRESET)
     return base.replace(**overrides) if overrides else base
 
 
@@ -67,6 +67,15 @@ def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
     p[packed.P_FPS] = fps
     p[packed.P_IFAR] = params.intensity_far_m if params.intensity_far_m > 0 else params.far_m
     p[packed.P_SILENCE] = params.silence_floor
+    p[packed.P_SPEED_ON] = 1.0 if params.speed_full_mps > 0 else 0.0
+    p[packed.P_SPEED_START] = params.speed_start_mps
+    p[packed.P_SPEED_FULL] = max(params.speed_full_mps, params.speed_start_mps + 1e-6)
+    p[packed.P_REACH_SHARE] = params.reach_share
+    p[packed.P_ACTIVE_SPEED] = params.active_speed_mps
+    p[packed.P_OPPOSITE_W] = params.opposite_weight
+    p[packed.P_SPEED_ALPHA] = (1.0 - float(np.exp(-1.0 / (fps * params.speed_smoothing_s)))
+                               if params.speed_smoothing_s > 0 else 1.0)
+    p[packed.P_SPEED_W] = params.speed_weight
     return p
 
 
@@ -93,7 +102,7 @@ class Renderer:
     method:
         ``"mst"`` (motion salient triangle, the paper's method) or ``"baseline"`` (the active hand itself).
     preset:
-        Preset name (``"paper"``, ``"energy"``) or a :class:`Params`.
+        Preset name (``"felt"``, the default; ``"energy"``; ``"paper"``) or a :class:`Params`.
     mirror:
         Audience feels the performer mirrored left/right (default from the preset: True).
     fps:
@@ -109,7 +118,7 @@ class Renderer:
     def __init__(
         self,
         method: str = "mst",
-        preset: str | Params = "paper",
+        preset: str | Params = DEFAULT_PRESET,
         *,
         mirror: bool | None = None,
         fps: float = 60.0,
@@ -192,7 +201,7 @@ class Renderer:
 def render(
     motion: Motion,
     method: str = "mst",
-    preset: str | Params = "paper",
+    preset: str | Params = DEFAULT_PRESET,
     *,
     mirror: bool | None = None,
     params: Params | None = None,

@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 from ..packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_NONE, CHOICE_RIGHT, J_HAND_L, J_HAND_R, J_TORSO, MAX_WINDOW,
-                      ST_HIST, ST_HIST_COUNT, ST_HIST_POS, ST_PREV_REL, ST_PREV_VEL, ST_SEEN)
+                      ST_HIST, ST_HIST_COUNT, ST_HIST_POS, ST_PREV_REL, ST_PREV_VEL, ST_SEEN, ST_SPEED)
 from .numeric import clip
 
 
@@ -112,6 +112,33 @@ def active_hands(acc, thr, floor, above, excess):
         if acc[h] > thr[h] and acc[h] > floor:
             above[h] = True
             excess[h] = clip((acc[h] - thr[h]) / max(thr[h], 1e-9), 0.0, 1e9)
+
+
+@njit(cache=True, inline="always")
+def update_speeds(state, alpha, start, full, speed_n):
+    """Each hand's speed relative to J_T, smoothed, and its normalised speed (beyond the paper).
+
+    The speed is ``|v_t|`` of :func:`hand_accelerations` (run first this frame), smoothed by a one-pole filter
+    ``s += alpha (|v_t| - s)`` so that capture noise does not read as motion. ``speed_n`` ``(2,)`` is written:
+    ``clip((s - start) / (full - start), 0, 1)`` (m/s in, 0..1 out), 0 for a hand slower than ``start``.
+    """
+    for h in range(2):
+        v2 = 0.0
+        for k in range(3):
+            v = state[ST_PREV_VEL + 3 * h + k]
+            v2 += v * v
+        state[ST_SPEED + h] += alpha * (np.sqrt(v2) - state[ST_SPEED + h])
+        speed_n[h] = clip((state[ST_SPEED + h] - start) / max(full - start, 1e-9), 0.0, 1.0)
+
+
+@njit(cache=True, inline="always")
+def moving_only(state, min_speed, above, excess):
+    """A hand slower than ``min_speed`` (m/s, smoothed speed relative to J_T) is not active, whatever its
+    acceleration: at 120 Hz a still hand's capture noise alone exceeds the acceleration floor (beyond the paper)."""
+    for h in range(2):
+        if state[ST_SPEED + h] < min_speed:
+            above[h] = False
+            excess[h] = 0.0
 
 
 @njit(cache=True, inline="always")

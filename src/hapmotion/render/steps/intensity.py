@@ -20,6 +20,14 @@ def normalised_distance(dist, near, far):
 
 
 @njit(cache=True, inline="always")
+def speed_reach_drive(d_norm, speed_n, reach_share):
+    """Beyond the paper: the normalised drive that takes D_t's place in Eq. 2 when hand speed drives intensity,
+    ``speed_n ((1 - reach_share) + reach_share d_norm)``: 0 while the hands are still, growing with how fast the
+    faster hand moves (``speed_n``, 0..1) and, by ``reach_share``, with how far the dynamic point is from J_T."""
+    return speed_n * ((1.0 - reach_share) + reach_share * d_norm)
+
+
+@njit(cache=True, inline="always")
 def filtered_level(d_norm, c_level, prev_level, attack_alpha, release_alpha):
     """Eq. 2: ``I_t = alpha D_t C + (1 - alpha) I_{t-1}``, in levels.
 

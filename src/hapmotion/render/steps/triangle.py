@@ -60,6 +60,17 @@ def salient_triangle(choice, jt, excess, prev_dp, gain, extra_max):
 
 
 @njit(cache=True, inline="always")
+def speed_weighted(choice, w_a, w_r, speed_n, speed_weight, opposite_weight):
+    """Beyond the paper: with one active hand, its weight grows by ``speed_weight`` x its normalised speed and the
+    opposite shoulder's weight is ``opposite_weight`` (1 in the paper). Returns ``(w_A, w_R)``; two active hands
+    are left as they are (their weights are symmetric already)."""
+    if choice == CHOICE_BOTH:
+        return w_a, w_r
+    h = 0 if choice == CHOICE_LEFT else 1
+    return w_a + speed_weight * speed_n[h], opposite_weight
+
+
+@njit(cache=True, inline="always")
 def dynamic_point(va, vr, vt, w_a, w_r, w_t, out):
     """Eq. 1: ``J_C + (w_A (J_A - J_C) + w_R (J_R - J_C) + w_T (J_T - J_C)) / (w_A + w_R + w_T)``.
 
