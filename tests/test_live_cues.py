@@ -18,7 +18,7 @@ from support.live_fakes import BVH, FakePlayerV2, Tap, is_tick_max_sequence, sta
 from hapmotion.cli import main
 from hapmotion.cues import cue_layer, layer, load_cues
 from hapmotion.layout import load_layout
-from hapmotion.live.cue_layer import show_power_limit
+from hapmotion.show import show_power_limit
 from hapmotion.live.cue_trigger import decode_cue_messages, parse_cue_port
 from hapmotion.live.hygiene import Faults
 

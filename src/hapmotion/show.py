@@ -35,7 +35,7 @@ import numpy as np
 
 from .audio.analysis import analyze_file
 from .audio.mix import check_ratio, limit_power, mix, resolve_rule
-from .audio.params import MIX_DOMAINS, MIX_RULES, AudioParams, params_for_preset
+from .audio.params import DEFAULT_PARAMS, MIX_DOMAINS, MIX_RULES, AudioParams, params_for_preset
 from .audio.pattern import actuators_of, audio_track, layout_of
 from .comfort import Comfort, Limiter, limit_rows
 from .errors import UsageError
@@ -68,8 +68,9 @@ class Show:
     override of the same name). ``mode`` ``None`` picks from the inputs (:meth:`resolved_mode`). ``fps`` ``None``
     keeps the motion's rate (60 frames/s for the music alone). ``layout`` ``None`` is the default X40 + two shoulder
     sleeves. ``mix_rule`` ``None`` is the preset's (``paper`` for the paper preset, ``duck`` otherwise;
-    ``mix_domain``, the older spelling, wins when given). ``comfort`` holds the wearer's gain and limits, applied
-    to every row that leaves the show (:mod:`hapmotion.comfort`).
+    ``mix_domain``, the older spelling, wins when given). ``cues`` is a cue list (a file or a
+    :class:`~hapmotion.cues.CueList`) layered over motion and music by :func:`hapmotion.cues.layer`. ``comfort``
+    holds the wearer's gain and limits, applied to every row that leaves the show (:mod:`hapmotion.comfort`).
     """
 
     method: str = "mst"
@@ -86,6 +87,7 @@ class Show:
     fps: Optional[float] = None
     layout: Any = None
     comfort: Comfort = Comfort()
+    cues: Any = None
 
     def __post_init__(self) -> None:
         _choice(self.method, METHODS, "method")
@@ -192,12 +194,50 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
         motion_track = render_motion(show, motion, progress)
     if show.audio is None:
         assert motion_track is not None  # resolved_mode guarantees it
-        return apply_comfort(show, motion_track)
-    return apply_comfort(show, combine(
-        motion_track, show.audio, mode=mode, ratio=show.mix_ratio, offset_s=show.audio_offset_s,
-        fps=show.fps or 60.0, domain=show.mix_domain, length=show.length,
-        actuators=None if motion_track is not None else show.load_layout(), analysis=analysis,
-        mix_rule=show.mix_rule))
+        track = motion_track
+    else:
+        track = combine(motion_track, show.audio, mode=mode, ratio=show.mix_ratio, offset_s=show.audio_offset_s,
+                        fps=show.fps or 60.0, domain=show.mix_domain, length=show.length,
+                        actuators=None if motion_track is not None else show.load_layout(), analysis=analysis,
+                        mix_rule=show.mix_rule)
+    return apply_comfort(show, apply_cues(show, track))
+
+
+def show_power_limit(n_actuators: int) -> Optional[float]:
+    """The total power limit ``sum (I/100)^2`` every show's rows keep to (the output stage's: the audio
+    parameters' fraction of every actuator at full drive); cues layered on top keep to it too."""
+    return power_limit_for(DEFAULT_PARAMS.power_limit_fraction, n_actuators)
+
+
+def load_show_cues(show: Show, limits: Any = None):
+    """The show's cue list (:class:`~hapmotion.cues.CueList`), read within ``limits`` if given as a file; ``None``
+    without cues."""
+    from .cues import CueList, load_cues
+
+    if show.cues is None or isinstance(show.cues, CueList):
+        return show.cues
+    return load_cues(show.cues, limits=limits)
+
+
+def apply_cues(show: Show, track: HapticTrack) -> HapticTrack:
+    """``track`` with the show's cues layered on (:func:`hapmotion.cues.layer`, under :func:`show_power_limit`);
+    unchanged without cues. ``meta["cues"]`` names the cue list and ``meta["cue_notes"]`` what was left out."""
+    from .cues import cue_layer, layer
+
+    cue_list = load_show_cues(show)
+    if cue_list is None:
+        return track
+    layout = show.load_layout()
+    if tuple(track.actuators) != tuple(layout.actuators):
+        raise UsageError("cues need the track on the show's layout")
+    energy = cue_layer(cue_list, fps=track.fps, n_frames=track.n_frames, actuators=track.actuators,
+                       mirror_map=layout.mirror_map())
+    rows = layer(track.intensities, energy, show_power_limit(len(track.actuators)))
+    meta = dict(track.meta)
+    meta["cues"] = os.fspath(cue_list.source)
+    if cue_list.notes:
+        meta["cue_notes"] = list(cue_list.notes)
+    return dataclasses.replace(track, intensities=rows, meta=meta)
 
 
 def apply_comfort(show: Show, track: HapticTrack) -> HapticTrack:

@@ -7,6 +7,7 @@ from typing import Optional
 import click
 
 from .motion_options import cli_limits, limit_option
+from .show_options import cues_option
 
 HELP = """Play TRACK in real time to the same sinks as 'hapmotion live'.
 
@@ -48,8 +49,7 @@ Examples:
               help="bHaptics SDK2 workspace (app) id for player-v3 [env BHAPTICS_WORKSPACE_ID].")
 @click.option("--api-key", envvar="BHAPTICS_API_KEY", default=None,
               help="bHaptics SDK2 API key for player-v3 [env BHAPTICS_API_KEY].")
-@click.option("--cues", "cues", type=click.Path(dir_okay=False), default=None,
-              help="Cue list layered over the track at its show times, as for 'hapmotion live'.")
+@cues_option
 @click.option("--cue-port", default=None, metavar="[HOST:]PORT",
               help="Also fire the cue list's named cues by OSC: /hapmotion/cue NAME [gain] (loopback by default).")
 @click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")

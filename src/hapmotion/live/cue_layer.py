@@ -36,15 +36,6 @@ FIRE_WAIT_S = 0.5
 sent) is dropped rather than played late, when the performer comes back."""
 
 
-def show_power_limit(n_actuators: int) -> Optional[float]:
-    """The show's total power limit ``sum (I/100)^2`` (the output stage's: the audio parameters' fraction of every
-    actuator at full drive), which the layered rows keep to, as offline."""
-    from ..audio.params import DEFAULT_PARAMS
-    from ..show import power_limit_for
-
-    return power_limit_for(DEFAULT_PARAMS.power_limit_fraction, n_actuators)
-
-
 class LiveCues:
     """The cue layer of a live session.
 
@@ -57,11 +48,12 @@ class LiveCues:
     actuators, mirror_map:
         The session's actuator ids and its left/right mirror map (``Layout.mirror_map()``, for ``side=swap``).
     power_limit:
-        Total power limit of the layered rows (default :func:`show_power_limit`).
+        Total power limit of the layered rows (default :func:`hapmotion.show.show_power_limit`).
     """
 
     def __init__(self, cue_list: CueList, *, fps: float, actuators: Sequence[str], mirror_map: np.ndarray,
                  power_limit: Any = "show"):
+        from ..show import show_power_limit
         from ..track_files import load_track
 
         self.cue_list = cue_list

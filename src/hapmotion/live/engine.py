@@ -123,6 +123,9 @@ class LiveEngine:
     cues:
         Object with ``layer(row, t) -> row`` (:class:`~hapmotion.live.cue_layer.LiveCues`): authored cues layered
         onto each rendered row at its show time.
+    comfort:
+        Object with ``step(row) -> row`` (:class:`~hapmotion.comfort.Limiter`): the wearer's gain and comfort limits,
+        the last stage of every rendered row, as offline.
     """
 
     def __init__(self, renderer: Optional[StepRenderer], sinks: Sequence[Sink], *, n_actuators: int,
@@ -132,7 +135,7 @@ class LiveEngine:
                  handle_signals: bool = True, stats_interval: Optional[float] = None,
                  on_ready: Optional[Callable[["LiveEngine"], None]] = None,
                  on_stats: Optional[Callable[[str], None]] = None, source_name: str = "source",
-                 cues: Any = None):
+                 cues: Any = None, comfort: Any = None):
         if mode not in ("motion", "multimodal", "audio"):
             raise ValueError(f"mode must be motion, multimodal or audio, got {mode!r}")
         if mode != "motion" and audio is None:
@@ -151,6 +154,7 @@ class LiveEngine:
         self.audio = audio
         self.mode = mode
         self.cues = cues
+        self.comfort = comfort
         self.max_abs = max_abs
         self.min_gap = 1.0 / (render_cap * self.rate)
         self.stop_timeout = stop_timeout
@@ -383,6 +387,8 @@ class LiveEngine:
                 row = self.audio.mixed(row, t)
         if self.cues is not None:
             row = self.cues.layer(row, t)
+        if self.comfort is not None:
+            row = self.comfort.step(row)
         if row.shape != (self.n,):
             raise ValueError(f"the renderer returned shape {row.shape}, expected ({self.n},)")
         if not np.isfinite(row).all():

@@ -17,8 +17,10 @@ from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, Union
 
 
+from ..comfort import Comfort
 from ..errors import UsageError
 from ..limits import checked_json_text
+from ..render.params import DEFAULT_PRESET
 from ..show import Show, live_music
 from .cue_trigger import live_cues, run_with_cues
 from .engine import AudioChannel, LiveEngine
@@ -81,7 +83,7 @@ async def live(
     sinks: Sequence[Union[str, Sink]],
     *,
     method: str = "mst",
-    preset: str = "paper",
+    preset: str = DEFAULT_PRESET,
     mirror: Optional[bool] = None,
     fps: Optional[float] = None,
     speed: float = 1.0,
@@ -90,7 +92,9 @@ async def live(
     audio_offset: float = 0.0,
     mode: Optional[str] = None,
     ratio: tuple[float, float] = (2, 3),
-    domain: str = "linear",
+    domain: Optional[str] = None,
+    mix_rule: Optional[str] = None,
+    comfort: Optional[Comfort] = None,
     stall_ms: float = 250.0,
     stats_interval: Optional[float] = None,
     workspace_id: Optional[str] = None,
@@ -107,7 +111,8 @@ async def live(
 
     ``source`` and ``sinks`` are SOURCE/SINK strings (see :mod:`hapmotion.live.urls`) or ready-made objects.
     How the show is rendered and mixed is ``show`` (:class:`hapmotion.show.Show`); without it one is made from
-    ``method``, ``preset``, ``mirror``, ``audio``, ``audio_offset``, ``mode``, ``ratio`` and ``domain``. The mode
+    ``method``, ``preset``, ``mirror``, ``audio``, ``audio_offset``, ``mode``, ``ratio``, ``domain``, ``mix_rule``
+    and ``comfort`` (the wearer's gain and limits, the last stage of every row). The mode
     defaults to ``"multimodal"`` with music and ``"motion"`` without; ``"audio"`` plays the song's channel alone
     (no source). ``renderer`` replaces the show's ``Renderer``. ``cues`` (a cue list file or
     :class:`~hapmotion.cues.CueList`) are layered onto the rows at their show times; ``cue_port`` (``PORT`` or
@@ -116,7 +121,9 @@ async def live(
     """
     if show is None:
         show = Show(method=method, preset=preset, mirror=mirror, mode=mode, audio=audio, audio_offset_s=audio_offset,
-                    mix_ratio=ratio, mix_domain=domain)
+                    mix_ratio=ratio, mix_domain=domain, mix_rule=mix_rule, comfort=comfort or Comfort(), cues=cues)
+    elif cues is not None:
+        show = show.replace(cues=cues)
     mode = show.resolved_mode(has_motion=source is not None or show.mode != "audio")
     if mode == "audio" and source is not None:
         raise UsageError("--mode audio plays the song's haptic channel alone: leave out --source")
@@ -154,7 +161,8 @@ async def live(
     if src is None:
         assert channel is not None
         src = ClockSource(fps, channel.duration_s, loop=loop)
-    cue_layer = live_cues(cues, fps=fps, layout=layout, actuators=dmap.actuators, cue_port=cue_port)
+    cue_layer = live_cues(show.cues, fps=fps, layout=layout, actuators=dmap.actuators, cue_port=cue_port)
+    limiter = None if show.comfort.is_neutral else show.limiter(fps, dmap.n)
 
     meta = {**show.describe(mode), "source": src.describe(), "audio": os.fspath(show.audio) if show.audio else None}
     if renderer is not None and getattr(renderer, "params", None) is not None:
@@ -166,7 +174,8 @@ async def live(
                  for s in sinks]
     engine = LiveEngine(renderer, sink_objs, n_actuators=dmap.n, fps=fps, rate=rate, stall_s=stall_ms / 1000.0,
                         audio=channel, mode=mode, handle_signals=handle_signals, stats_interval=stats_interval,
-                        on_ready=on_ready, source_name=src.describe(), cues=cue_layer, **engine_options)
+                        on_ready=on_ready, source_name=src.describe(), cues=cue_layer, comfort=limiter,
+                        **engine_options)
     return await run_with_cues(engine, src)
 
 
