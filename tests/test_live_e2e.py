@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 from pythonosc.osc_message_builder import OscMessageBuilder
 from pythonosc.udp_client import SimpleUDPClient
-from support.live_fakes import (BVH, FakePlayerV2, FakePlayerV3, OscReceiver, Tap, free_port, real_frames,
-                               self_signed_cert, send_osc, start_session, wait_for)
+from support.live_fakes import (BVH, FakePlayerV2, FakePlayerV3, OscReceiver, Tap, free_port,
+                               is_tick_max_sequence, real_frames, self_signed_cert, send_osc, start_session,
+                               wait_for)
 from websockets.asyncio.client import connect
 
 import hapmotion
@@ -37,18 +38,6 @@ def expected(recording):
     rows, _ = hapmotion.Renderer(fps=FPS).run(recording)
     assert rows.max() > 20  # the clip moves enough to drive the vest
     return rows
-
-
-def is_ordered_subsequence(got: list, candidates: list) -> bool:
-    """Every item of ``got`` equals some candidate, in increasing candidate order (drops allowed, no reorder)."""
-    k = 0
-    for g in got:
-        while k < len(candidates) and candidates[k] != g:
-            k += 1
-        if k == len(candidates):
-            return False
-        k += 1
-    return True
 
 
 class Viewer:
@@ -111,10 +100,11 @@ def test_osc_recording_drives_every_sink(recording, expected, tmp_path):
     assert v2.errors == []
     front = [vals for _, pos, vals, _ in v2.frames if pos == "VestFront"]
     v2_sink = next(s for s in stats.sinks.values() if s.name.startswith("player ws://"))
-    assert len(front) == v2_sink.sent + 1 and v2_sink.sent >= stats.rendered // 2   # + the turn-off frame
-    assert is_ordered_subsequence(front[:-1], emitted[:, 0:20].tolist())  # the last one is the turn-off
-    assert is_ordered_subsequence([vals for _, p, vals, _ in v2.frames if p == "ForearmR"][:-1],
-                                  emitted[:, 46:52].tolist())
+    # one request per 20 ms Player tick, + the turn-off; each the max of the tick's rows
+    assert len(front) == v2_sink.extra["sends"] + 1 and v2_sink.sent >= stats.rendered // 2
+    assert is_tick_max_sequence(front[:-1], emitted[:, 0:20].tolist())  # the last one is the turn-off
+    assert is_tick_max_sequence([vals for _, p, vals, _ in v2.frames if p == "ForearmR"][:-1],
+                                emitted[:, 46:52].tolist())
     assert {pos for _, pos, _, _ in v2.frames} == {"VestFront", "VestBack", "ForearmL", "ForearmR"}
     assert all(dur == 40 for *_, dur in v2.frames)
     assert v2.turn_off_all and v2.turn_off_all[-1] >= v2.frames[-1][0]
@@ -124,7 +114,7 @@ def test_osc_recording_drives_every_sink(recording, expected, tmp_path):
     assert v3.errors == [] and v3.auths[0]["applicationId"] == "ws-1" and v3.auths[0]["sdkApiKey"] == "key-1"
     assert "workspace_id=ws-1" in v3.queries[0] and "api_key=key-1" in v3.queries[0]
     vest = [vals for _, pos, vals, _ in v3.dots if pos == 0]
-    assert is_ordered_subsequence(vest[:-1], emitted[:, 0:40].tolist())
+    assert is_tick_max_sequence(vest[:-1], emitted[:, 0:40].tolist())
     assert vest[-1] == [0] * 40 and v3.stop_all[-1] >= v3.dots[-1][0]
     assert len(set(v3.request_ids)) == len(v3.request_ids)
 
@@ -199,8 +189,9 @@ def test_websocket_source_with_bad_messages(recording, expected):
     assert stats.frames_in == 60 + 3 and stats.rendered + stats.superseded == 60  # + NaN-only, late, absurd-only
     assert player.errors == [] and player.turn_off_all
     front = [vals for _, pos, vals, _ in player.frames if pos == "VestFront"]
-    assert is_ordered_subsequence(front[:-1], [r[0:20] for r in tap.all_rows_int()])
-    assert len(front) >= stats.rendered
+    assert is_tick_max_sequence(front[:-1], [r[0:20] for r in tap.all_rows_int()])
+    player_sink = next(s for s in stats.sinks.values() if s.name.startswith("player"))
+    assert player_sink.sent >= stats.rendered and len(front) == player_sink.extra["sends"] + 1  # paced, + turn-off
 
 
 # ----------------------------------------------------------------------------------------------- OSC faults, flood

@@ -45,3 +45,32 @@ def test_fake_v3_rejects_wrong_array_lengths(tmp_path):
     p._check_dot({"requestId": 3, "position": 2, "motorValues": [0] * 6, "durationMillis": 40, "deviceIndex": -1})
     assert p.errors == ["position 0: 20 values", "position 1: values out of 0..100 ints"]
     assert len(p.dots) == 2
+
+
+def test_fake_player_that_stops_reading_swallows_frames_silently():
+    """What makes a hung Player hard to notice: after it stops reading, sends still succeed (the kernels' buffers
+    take them) and only a ping shows that nobody reads."""
+    import asyncio
+
+    from websockets.asyncio.client import connect
+
+    async def scenario():
+        player = await FakePlayerV2(stop_reading_after=5).start()
+        async with connect(f"ws://127.0.0.1:{player.port}/v2/feedbacks", compression=None) as ws:
+            frame = json.dumps({"Submit": [{"Type": "frame", "Key": "k", "Frame": {
+                "position": "VestFront", "durationMillis": 40,
+                "dotPoints": [{"index": i, "intensity": 50} for i in range(20)]}}]})
+            for _ in range(5):
+                await ws.send(frame)
+            await asyncio.sleep(0.2)
+            for _ in range(300):                                  # about 300 KB more: all accepted at once
+                await asyncio.wait_for(ws.send(frame), 1.0)
+            pong = await ws.ping()
+            with pytest.raises(asyncio.TimeoutError):
+                await asyncio.wait_for(pong, 1.0)
+            ws.transport.abort()
+        await player.stop()
+        return player
+
+    player = asyncio.run(asyncio.wait_for(scenario(), 20))
+    assert player.hung and player.requests == 5 and len(player.frames) == 5 and player.errors == []

@@ -91,10 +91,10 @@ def test_v3_messages_by_hand():
     assert len(vest) == 40 and vest[3] == 10 and vest[39] == 20 and sum(vest) == 30
     assert left == [30, 0, 0, 0, 0, 0] and right == [0, 0, 0, 0, 0, 40]
     assert all(p["deviceIndex"] == -1 and p["durationMillis"] == 40 for p in payloads)
-    auth = json.loads(v3_auth_message("ws1", "key1", "2"))
+    auth = json.loads(v3_auth_message("ws1", "key1", 2))
     assert auth["type"] == "SdkRequestAuth"
     a = json.loads(auth["message"])
-    assert a["applicationId"] == "ws1" and a["sdkApiKey"] == "key1" and a["version"] == "2"
+    assert a["applicationId"] == "ws1" and a["sdkApiKey"] == "key1" and a["version"] == 2
     assert json.loads(v3_stop_all())["type"] == "SdkStopAll"
 
 

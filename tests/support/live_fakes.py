@@ -2,7 +2,8 @@
 from hapmotion's own encoders, plus the tests that show the fakes catch bad messages.
 
 * :class:`FakePlayerV2` - a bHaptics Player SDK1 endpoint ``/v2/feedbacks``: checks every request, keeps per-key
-  state, answers each request with a status object;
+  state, answers each request with a status object; optionally closes connections (a restart) or hangs (stops
+  reading, keeping its connections open);
 * :class:`FakePlayerV3` - the SDK2 ``/v3/feedback`` endpoint over TLS with a self-signed certificate made here;
 * :func:`self_signed_cert` - with the ``cryptography`` package when importable, else the ``openssl`` CLI;
 * :class:`OscReceiver` - a UDP socket collecting OSC packets (parsed with python-osc);
@@ -64,7 +65,8 @@ class _Server:
     _server: Any = None
 
     async def start(self):
-        self._server = await serve(self._handler, "127.0.0.1", self.port, ssl=self.ssl_context, compression=None)
+        self._server = await serve(self._handler, "127.0.0.1", self.port, ssl=self.ssl_context, compression=None,
+                                   close_timeout=0.5)
         self.port = self._server.sockets[0].getsockname()[1]
         return self
 
@@ -78,9 +80,14 @@ class _Server:
 class FakePlayerV2(_Server):
     """SDK1 Player. ``errors`` lists every rule a message broke (tests assert it stays empty)."""
 
-    def __init__(self, port: int = 0, close_after: Optional[int] = None):
+    def __init__(self, port: int = 0, close_after: Optional[int] = None, stop_reading_after: Optional[int] = None):
         self.port = port
         self.close_after = close_after  # close each connection after this many requests (a Player restart)
+        # after this many requests in all, the Player hangs: it keeps every connection (and accepts new ones) but
+        # never reads again, so its kernel buffers fill up unseen and pings go unanswered
+        self.stop_reading_after = stop_reading_after
+        self.stopped_reading_at: Optional[float] = None
+        self.requests = 0
         self.errors: list[str] = []
         self.connections: list[dict[str, Any]] = []
         self.frames: list[tuple[float, str, list[int], int]] = []  # (time, position, 20/6 values, duration)
@@ -91,13 +98,27 @@ class FakePlayerV2(_Server):
     def url(self) -> str:
         return f"player://127.0.0.1:{self.port}"
 
+    @property
+    def hung(self) -> bool:
+        return self.stopped_reading_at is not None
+
+    async def _hang(self, ws) -> None:
+        """Keep the connection open and never read from it again (nor answer pings)."""
+        if self.stopped_reading_at is None:
+            self.stopped_reading_at = time.perf_counter()
+        ws.transport.pause_reading()
+        await ws.wait_closed()
+
     async def _handler(self, ws) -> None:
         conn = {"path": ws.request.path, "requests": 0, "registered": []}
         self.connections.append(conn)
         if not ws.request.path.startswith("/v2/feedbacks"):
             self.errors.append(f"path {ws.request.path}")
+        if self.hung:
+            await self._hang(ws)
         async for text in ws:
             conn["requests"] += 1
+            self.requests += 1
             self.check(text, conn)
             status = {"RegisteredKeys": self.registered, "ActiveKeys": sorted(self.state),
                       "ConnectedDeviceCount": 3, "ConnectedPositions": ["Vest", "ForearmL", "ForearmR"],
@@ -109,6 +130,8 @@ class FakePlayerV2(_Server):
             if self.close_after and conn["requests"] >= self.close_after:
                 await ws.close()
                 return
+            if self.hung or (self.stop_reading_after and self.requests >= self.stop_reading_after):
+                await self._hang(ws)
 
     def _status(self, position: str) -> list[int]:
         for key, values in self.state.items():
@@ -245,10 +268,8 @@ class FakePlayerV3(_Server):
                 first = False
                 if kind not in ("SdkRequestAuth", "SdkRequestAuthInit"):
                     self.errors.append(f"first message {kind!r}, expected auth")
-                elif not isinstance(payload, dict) or not {"applicationId", "sdkApiKey"} <= set(payload):
-                    self.errors.append("auth payload")
                 else:
-                    self.auths.append(payload)
+                    self.check_auth(payload)
                 try:
                     await ws.send(json.dumps({"Type": "ServerReady", "Message": None}))
                     await ws.send(json.dumps({"Type": "ServerDevices", "Message": json.dumps([
@@ -264,6 +285,17 @@ class FakePlayerV3(_Server):
                 self._check_dot(payload)
             else:
                 self.errors.append(f"type {kind!r}")
+
+    def check_auth(self, payload: Any) -> None:
+        """``SdkRequestAuth`` payload: the five fields, and ``version`` (when present) a JSON integer, as
+        bHaptics' own SimHub plugin sends it (``Sdk2Message.cs``: ``int Version = 1``)."""
+        if not isinstance(payload, dict) or not {"applicationId", "sdkApiKey"} <= set(payload):
+            self.errors.append("auth payload")
+            return
+        if "version" in payload and not _is_int(payload["version"]):
+            self.errors.append(f"auth version {payload['version']!r}, expected an integer")
+            return
+        self.auths.append(payload)
 
     def _check_dot(self, p: Any) -> None:
         if not isinstance(p, dict):
@@ -378,3 +410,41 @@ async def send_osc(port: int, frames: np.ndarray, start_seq: int = 0, interval: 
     for k, pos in enumerate(frames):
         client.send_message("/hapmotion/skeleton", [start_seq + k, (start_seq + k) * interval] + pos.ravel().tolist())
         await asyncio.sleep(max(0.0, t0 + (k + 1) * interval - time.perf_counter()))
+
+
+def is_tick_max_sequence(sent: list, emitted: list) -> bool:
+    """Whether the rows a Player received are the engine's rows resampled to the Player's tick
+    (hapmotion.live.sinks.pacing): each sent row is the element-wise max of a run of consecutive emitted rows,
+    the runs in order, each starting at the row still playing when the previous send went (or the next one).
+    Rows are compared as the Player's integer percents (rounding commutes with max)."""
+    import functools
+
+    em = [np.asarray(r) for r in emitted]
+
+    @functools.lru_cache(maxsize=None)
+    def fits(j: int, k: int) -> bool:  # sent[j:] matches from emitted row k on (k-1 still playing)
+        if j == len(sent):
+            return True
+        target = np.asarray(sent[j])
+        for a in (k - 1, k):
+            if a < 0:
+                continue
+            acc = em[a].copy() if a < len(em) else None
+            b = a
+            while acc is not None and (acc <= target).all():
+                if (acc == target).all() and fits(j + 1, b + 1):
+                    return True
+                b += 1
+                if b >= len(em):
+                    break
+                acc = np.maximum(acc, em[b])
+        return False
+
+    import sys
+
+    limit = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(limit, 4 * len(sent) + 100))
+    try:
+        return fits(0, 0)
+    finally:
+        sys.setrecursionlimit(limit)

@@ -6,7 +6,8 @@ Safety rules (issue 4, docs/live.md):
   last frame arrived; then the renderer and the frame order are reset, so a performer who comes back starts fresh;
 * a frame counts as fresh (renders, holds off the fade) only if it carries at least one joint the renderer uses
   (``hapmotion.render.kernel.KERNEL_JOINTS``); others are counted as ``empty`` and skipped;
-* SIGINT, SIGTERM, the source ending or failing, and an exception anywhere in the loop all end in
+* SIGINT, SIGTERM, SIGHUP, SIGQUIT (:data:`STOP_SIGNALS`), the source ending or failing, and an exception
+  anywhere in the loop all end in
   :meth:`_turn_off`, which sends turn-off to every sink (each under its own time limit, all at once) before
   anything else happens;
 * sinks are fed through one-frame slots and run in their own tasks, so a slow or dead sink cannot hold up the
@@ -32,6 +33,12 @@ from .sources import Source
 from .stats import LiveStats
 
 log = logging.getLogger("hapmotion.live")
+
+STOP_SIGNALS: tuple[int, ...] = tuple(
+    getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT") if hasattr(signal, name))
+"""Every signal that would end the process: each ends the session like Ctrl-C (turn-off to every sink, the
+recording finished). SIGHUP comes with a closed terminal or ssh session, SIGQUIT with Ctrl-\\; left to their
+default action they would kill the process with the motors still playing and the take unfinished."""
 
 
 class StepRenderer(Protocol):
@@ -108,7 +115,7 @@ class LiveEngine:
     stop_timeout:
         Seconds each sink gets to send its turn-off at stop.
     handle_signals:
-        Install SIGINT/SIGTERM handlers (main thread only) that stop the session cleanly.
+        Install handlers for :data:`STOP_SIGNALS` (main thread only) that stop the session cleanly.
     on_ready:
         Called with the engine once the source listens (the CLI prints the addresses).
     stats_interval, on_stats:
@@ -289,7 +296,7 @@ class LiveEngine:
         if not self.handle_signals or threading.current_thread() is not threading.main_thread():
             return []
         installed = []
-        for sig in (signal.SIGINT, signal.SIGTERM):
+        for sig in STOP_SIGNALS:
             try:
                 loop.add_signal_handler(sig, self.request_stop, signal.Signals(sig).name)
                 installed.append(sig)
@@ -308,6 +315,7 @@ class LiveEngine:
 
         async def off(s: Sink) -> None:
             if not started and not s.bounded_shutdown:
+                await s.abandon()  # the recorder removes its empty journal and writes nothing
                 return
             try:
                 if not s.bounded_shutdown:  # the recorder writes its file: it gets the time it needs

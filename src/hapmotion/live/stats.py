@@ -9,8 +9,11 @@ Definitions used in the summary (docs/live.md repeats them):
 * **out**: frames rendered and handed to the sinks; ``in = out + late + superseded + empty`` (+ one frame waiting
   at stop);
 * **latency**: per sink, from the moment the source read the frame's bytes to the moment the sink handed the
-  encoded frame to its transport (socket write), ``time.perf_counter`` seconds; **slow**: frames whose latency
-  exceeded one frame interval (they reached the sink after the next frame was due).
+  encoded frame to its transport (socket write), ``time.perf_counter`` seconds, less the time a Player sink held
+  the frame on purpose to wait for the Player's 20 ms tick (reported apart as **held**); **slow**: frames whose
+  latency exceeded one frame interval (they reached the sink after the next frame was due);
+* **not delivered**: frames written to a device that never confirmed reading them (it stopped reading, or the
+  connection was lost before it answered).
 """
 
 from __future__ import annotations
@@ -66,28 +69,45 @@ class SinkStats:
 
     name: str
     sent: int = 0
+    undelivered: int = 0
     skipped: int = 0
     errors: int = 0
     timeouts: int = 0
     connects: int = 0
     slow: int = 0
     latency: LatencyLog = field(default_factory=LatencyLog)
+    held: LatencyLog = field(default_factory=lambda: LatencyLog(20_000))
+    """Seconds frames were deliberately held back for the device's tick (the Player sinks), kept out of
+    ``latency`` so that figure stays hapmotion's own processing time."""
     extra: dict[str, int] = field(default_factory=dict)
     """Sink-specific counters (the broadcast sink's ``clients``, ``client_skips``, ``clients_dropped``)."""
 
-    def record(self, received: Optional[float], now: float, interval: float) -> None:
-        """Count one sent frame; ``received`` None for frames not from the source (fade/turn-off)."""
+    def record(self, received: Optional[float], now: float, interval: float, held: Optional[float] = None) -> None:
+        """Count one sent frame; ``received`` None for frames not from the source (fade/turn-off). ``held``:
+        seconds the sink deliberately waited for the device's tick before sending it (not counted as latency)."""
         self.sent += 1
+        if held is not None:
+            self.held.add(held)
         if received is not None:
-            lat = now - received
+            lat = now - received - (held or 0.0)
             self.latency.add(lat)
             if lat > interval:
                 self.slow += 1
 
+    def lost(self, frames: int) -> None:
+        """``frames`` counted as sent were never confirmed by the device (its connection was then lost or it
+        stopped reading): they move from ``sent`` to ``undelivered``."""
+        frames = min(frames, self.sent)
+        self.sent -= frames
+        self.undelivered += frames
+
     def as_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "sent": self.sent, "skipped": self.skipped, "errors": self.errors,
-                "timeouts": self.timeouts, "connects": self.connects, "slow": self.slow,
-                "latency_ms": self.latency.percentiles(), **self.extra}
+        out = {"name": self.name, "sent": self.sent, "undelivered": self.undelivered, "skipped": self.skipped,
+               "errors": self.errors, "timeouts": self.timeouts, "connects": self.connects, "slow": self.slow,
+               "latency_ms": self.latency.percentiles(), **self.extra}
+        if self.held.count:
+            out["held_ms"] = self.held.percentiles()
+        return out
 
 
 @dataclass
@@ -138,10 +158,12 @@ class LiveStats:
             lines.append("  faults: " + ", ".join(f"{k} {v}" for k, v in sorted(self.faults.counts.items())))
         interval_ms = 1e3 / self.fps
         for s in self.sinks.values():
+            held = s.held.percentiles()
             lines.append(
-                f"  {s.name}: {s.sent} sent, {s.skipped} skipped, {s.errors} errors, {s.timeouts} timeouts, "
-                f"{s.connects} connects; latency {_fmt(s.latency.percentiles())}, "
+                f"  {s.name}: {s.sent} sent, {s.undelivered} not delivered, {s.skipped} skipped, {s.errors} errors, "
+                f"{s.timeouts} timeouts, {s.connects} connects; latency {_fmt(s.latency.percentiles())}, "
                 f"{s.slow} over {interval_ms:.1f} ms"
+                + (f"; held for the device's tick p50 {held['p50']:.1f} ms max {held['max']:.1f} ms" if held else "")
                 + "".join(f", {k.replace('_', ' ')} {v}" for k, v in s.extra.items()))
         return lines
 

@@ -1,6 +1,7 @@
 """Live sinks: where rendered rows go (bHaptics Player SDK1/SDK2, OSC, WebSocket broadcast, recorder)."""
 
-from .base import Sink, WebSocketClientSink
+from .base import Sink
+from .ws_client import WebSocketClientSink
 from .broadcast import BroadcastSink
 from .osc_out import OscOutSink
 from .player_v2 import PlayerV2Sink

@@ -2,7 +2,8 @@
 
 Each rendered row becomes one request with a ``Submit`` ``frame`` per device (VestFront, VestBack, ForearmL,
 ForearmR), one Key per device so the panels play together and each new frame replaces the previous one under its
-key. ``durationMillis`` is a little longer than the send interval, so the Player keeps playing between frames and
+key. At most one request per 20 ms Player tick, carrying the max of the rows of that tick
+(:mod:`~hapmotion.live.sinks.pacing`). ``durationMillis`` is a little longer than the send interval, so the Player keeps playing between frames and
 stops on its own shortly after the stream stops. Stop sends zero frames and ``turnOffAll``.
 """
 
@@ -14,16 +15,20 @@ from urllib.parse import urlencode
 
 from ..devices import DeviceMap
 from ..frames import OutFrame
+from ..wire.player_json import PLAYER_TICK_MS
 from ..wire.player_v2 import parse_v2_status, v2_frame_message, v2_register_message, v2_turn_off_all
-from .base import WebSocketClientSink
+from .ws_client import WebSocketClientSink
 
 import numpy as np
 
 
+PLAYER_TICK_S = PLAYER_TICK_MS / 1000.0
+
+
 def default_duration_ms(fps: float) -> int:
-    """Hold time of a streamed frame: two send intervals, and at least 40 ms (two 20 ms Player ticks, docs §4.5)
-    so a frame is never shorter than what the Player can show; 40 ms at 60 fps."""
-    return max(40, int(math.ceil(2000.0 / fps)))
+    """Hold time of a streamed frame: two send intervals (the sinks send at most once per Player tick, so the
+    interval is the longer of a frame and a tick): 40 ms, two 20 ms ticks, at 50 fps and above; 2 frames below."""
+    return max(2 * PLAYER_TICK_MS, int(math.ceil(2000.0 / fps)))
 
 
 class PlayerV2Sink(WebSocketClientSink):
@@ -51,6 +56,7 @@ class PlayerV2Sink(WebSocketClientSink):
                  fps: float = 60.0, name: Optional[str] = None, **kwargs: Any):
         query = {k: v for k, v in (("app_id", app_id), ("app_name", app_name)) if v}
         url = f"ws://{_host(host)}:{port}{path}" + (f"?{urlencode(query)}" if query else "")
+        kwargs.setdefault("tick_s", PLAYER_TICK_S)
         super().__init__(name or f"player {url}", url, fps=fps, **kwargs)
         self.dmap = dmap
         self.duration_ms = int(duration_ms) if duration_ms else default_duration_ms(fps)

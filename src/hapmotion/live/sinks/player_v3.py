@@ -2,7 +2,8 @@
 
 TLS with the Player's self-signed certificate (no verification, as every SDK2 client does), ``SdkRequestAuth``
 first on every connection, then per row ``SdkPlayDotMode`` for position 0 (the 40-value X40 array: front 0..19,
-back 20..39) and positions 1/2 (ForearmL/ForearmR, 6 values). Stop sends zero rows and ``SdkStopAll``.
+back 20..39) and positions 1/2 (ForearmL/ForearmR, 6 values), at most once per 20 ms Player tick (the max of the
+tick's rows). Stop sends zero rows and ``SdkStopAll``.
 """
 
 from __future__ import annotations
@@ -13,11 +14,12 @@ from urllib.parse import urlencode
 
 import numpy as np
 
+from ...errors import UsageError
 from ..devices import DeviceMap
 from ..frames import OutFrame
 from ..wire.player_v3 import parse_v3_message, v3_auth_message, v3_dot_messages, v3_stop_all
-from .base import WebSocketClientSink
-from .player_v2 import _host, default_duration_ms
+from .ws_client import WebSocketClientSink
+from .player_v2 import PLAYER_TICK_S, _host, default_duration_ms
 
 
 def insecure_tls_context() -> ssl.SSLContext:
@@ -38,19 +40,23 @@ class PlayerV3Sink(WebSocketClientSink):
     workspace_id, api_key:
         The bHaptics Developer Portal workspace ("app id") and API key; sent in the URL query and the auth message.
     version:
-        App version string sent in the query and the auth message.
+        Version sent in the URL query and, as a JSON integer (as bHaptics' own clients send it), in the auth
+        message: an ``int`` or a string of digits (the SINK option ``version=``); anything else is a
+        :class:`~hapmotion.errors.UsageError`.
     host, port, path, duration_ms:
         As for :class:`~hapmotion.live.sinks.player_v2.PlayerV2Sink` (default ``127.0.0.1:15882/v3/feedback``).
     """
 
     def __init__(self, dmap: DeviceMap, *, workspace_id: str = "hapmotion", api_key: str = "",
-                 version: str = "1", host: str = "127.0.0.1", port: int = 15882, path: str = "/v3/feedback",
+                 version: "int | str" = 1, host: str = "127.0.0.1", port: int = 15882, path: str = "/v3/feedback",
                  duration_ms: Optional[int] = None, fps: float = 60.0, name: Optional[str] = None,
                  tls: bool = True, **kwargs: Any):
+        version = _version_number(version)
         query = urlencode({"workspace_id": workspace_id, "api_key": api_key, "version": version})
         scheme = "wss" if tls else "ws"
         url = f"{scheme}://{_host(host)}:{port}{path}?{query}"
         shown = f"{scheme}://{_host(host)}:{port}{path}"  # the api key stays out of logs
+        kwargs.setdefault("tick_s", PLAYER_TICK_S)
         super().__init__(name or f"player-v3 {shown}", url, fps=fps, ssl=insecure_tls_context() if tls else None,
                          **kwargs)
         self.dmap = dmap
@@ -79,3 +85,14 @@ class PlayerV3Sink(WebSocketClientSink):
         parsed = parse_v3_message(message)
         if parsed is not None:
             self.server_messages[parsed[0]] = parsed[1]
+
+
+def _version_number(version: "int | str") -> int:
+    """The SDK2 auth ``version`` as the integer bHaptics' clients send (tact-simhub ``Sdk2Message.cs``)."""
+    if isinstance(version, int) and not isinstance(version, bool) and version >= 0:
+        return version
+    text = str(version).strip()
+    if text.isascii() and text.isdigit() and len(text) <= 9:
+        return int(text)
+    raise UsageError(f"player-v3: version={version}: expected a whole number (the SDK2 auth message carries the "
+                     "version as an integer, as bHaptics' own clients send it)")

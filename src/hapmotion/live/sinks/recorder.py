@@ -1,17 +1,27 @@
-"""Recorder: the session's output written as a HapticTrack when the stream stops (``record:PATH``).
+"""Recorder: the whole session written to disk as it plays, finished into the requested track at stop
+(``record:PATH``).
 
 Rows are kept on a fixed time grid at the session frame rate (sample and hold: grid row k holds the last frame sent
 at or before k / fps seconds after the first one), so the file plays back in real time whatever the arrival
-jitter, stalls and drops were (a replay at ``--speed`` s is recorded at its own pace: wall time x s). The last row is all zeros (the turn-off). The file is written by
-``hapmotion.track_files.save_track`` (extension picks .csv .json .npz .tact; atomic), off the event loop. The path is
-checked before the show (not a folder, its folder writable); if saving still fails at stop, the error is logged as
-``recording not saved: ...`` and kept in :attr:`RecorderSink.error` (the CLI then exits non-zero).
+jitter, stalls and drops were (a replay at ``--speed`` s is recorded at its own pace: wall time x s). The grid
+runs on the clock, not on the frames: a stalled source is recorded as the fade and then silence, up to the stop,
+so the take covers the whole session. The last row is all zeros (the turn-off).
+
+Crash safety: every ``flush_s`` (0.1 s) the rows that can no longer change are appended to a journal beside the
+target, ``PATH.journal.csv`` (:mod:`.journal`: a CSV track, readable as it is after a crash or SIGKILL). At stop
+the take is written in the requested format by ``hapmotion.track_files.save_track`` (extension picks .csv .json
+.npz .tact; atomic: a temporary file renamed into place), off the event loop, and only then is the journal
+removed. A session refuses to start while an earlier take's journal is still there, so an unfinished take is
+never overwritten. The path is checked before the show (not a folder, its folder writable); if saving still fails
+at stop, ``recording not saved: ...`` is logged (naming the journal that keeps the take) and kept in
+:attr:`RecorderSink.error` (the CLI then exits non-zero).
 """
 
 from __future__ import annotations
 
 import asyncio
 import os
+import time
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
@@ -23,18 +33,20 @@ from ...track_files import save_track
 from ...filesafety import check_writable
 from ..frames import OutFrame
 from .base import Sink, log
+from .journal import TrackJournal, format_rows, journal_path
 
 FORMATS = (".csv", ".json", ".npz", ".tact")
 _CHUNK = 4096  # rows per storage block: memory grows in steps of 4096 x N float32 (about 0.85 MB for 52)
 
 
 class RecorderSink(Sink):
-    """Records every frame and saves the track at stop.
+    """Records every frame to a journal as the show goes and writes the track at stop.
 
     Parameters
     ----------
     path:
-        Output file; its extension must be one of :data:`FORMATS`, its folder must exist and be writable.
+        Output file; its extension must be one of :data:`FORMATS`, its folder must exist and be writable, and no
+        journal of an unfinished earlier take may be beside it.
     actuators, layout:
         Column ids and layout name of the track.
     meta:
@@ -42,35 +54,57 @@ class RecorderSink(Sink):
     time_scale:
         Track seconds per wall-clock second: a replay at ``--speed 2`` passes 2, so the file holds the show at its
         own pace (and lines up with the recording and the music) rather than the rehearsal's.
+    flush_s:
+        Seconds between journal writes: after a crash, at most about this much of the take is missing.
     """
 
     bounded_shutdown = False
 
     def __init__(self, path: "str | os.PathLike[str]", actuators: Sequence[str], layout: str = "x40_shoulders", *,
                  fps: float = 60.0, meta: Optional[dict[str, Any]] = None, name: Optional[str] = None,
-                 time_scale: float = 1.0, **kwargs: Any):
+                 time_scale: float = 1.0, flush_s: float = 0.1, **kwargs: Any):
         self.path = Path(path)
         super().__init__(name or f"record {self.path}", fps=fps, **kwargs)
         if self.path.suffix.lower() not in FORMATS:
             raise UsageError(f"record:{path}: unknown extension {self.path.suffix!r}, expected one of "
                              + ", ".join(FORMATS))
         check_writable(self.path, f"record:{path}")
+        self.journal_path = journal_path(self.path)
+        self._check_no_journal()
         self.actuators = tuple(actuators)
         self.layout = layout
         self.meta = dict(meta or {})
         self.time_scale = float(time_scale)
+        self.flush_s = float(flush_s)
         self._blocks: list[np.ndarray] = []
-        self._n = 0  # rows written
+        self._n = 0  # rows on the grid so far
+        self._committed = 0  # rows handed to the journal (they can no longer change)
         self._t0: Optional[float] = None
         self._last = np.zeros(len(self.actuators), dtype=np.float32)
+        self._journal: Optional[TrackJournal] = None
         self.saved: Optional[Path] = None
         self.error: Optional[str] = None  # why the file could not be written at stop
 
+    def _check_no_journal(self) -> None:
+        if self.journal_path.exists():
+            raise UsageError(
+                f"record:{self.path}: {self.journal_path} holds the take of a session that did not stop cleanly; "
+                f"keep it (it is a CSV track; hapmotion.live.sinks.journal.recover_journal writes it as "
+                f"{self.path.suffix}) or delete it, then start again")
+
+    async def start(self) -> None:
+        self._check_no_journal()
+        try:
+            self._journal = TrackJournal(self.journal_path, self.actuators)
+        except OSError as exc:
+            raise UsageError(f"record:{self.path}: cannot create the journal {self.journal_path} "
+                             f"({exc.strerror or exc})") from None
+
     def offer(self, frame: OutFrame) -> None:
-        """Recording is memory-only until stop, so it is done right here (no task, no I/O)."""
+        """Put the frame on the grid right here (memory only, no I/O: the journal is written by :meth:`run`)."""
         if self._t0 is None:
             self._t0 = frame.created
-        k = int(round((frame.created - self._t0) * self.time_scale * self.fps))
+        k = self._slot_at(frame.created)
         if k >= self._n:
             self._fill(self._n, k, self._last)  # hold the previous row over a gap
             self._fill(k, k + 1, frame.row)
@@ -78,6 +112,10 @@ class RecorderSink(Sink):
             self._fill(self._n - 1, self._n, frame.row)  # two frames in one grid slot: the newer wins
         self._last = np.asarray(frame.row, dtype=np.float32)
         self.stats.record(frame.received, frame.created, self.interval)
+
+    def _slot_at(self, when: float) -> int:
+        assert self._t0 is not None
+        return int(round((when - self._t0) * self.time_scale * self.fps))
 
     def _fill(self, start: int, stop: int, row: np.ndarray) -> None:
         while len(self._blocks) * _CHUNK < stop:
@@ -88,27 +126,68 @@ class RecorderSink(Sink):
             self._blocks[b][i:i + n] = row
         self._n = max(self._n, stop)
 
+    def _rows(self, start: int, stop: int) -> np.ndarray:
+        """``(stop - start, N)`` float32 grid rows."""
+        if stop <= start:
+            return np.zeros((0, len(self.actuators)), dtype=np.float32)
+        b0, b1 = start // _CHUNK, (stop - 1) // _CHUNK + 1
+        block = np.concatenate(self._blocks[b0:b1]) if b1 - b0 > 1 else self._blocks[b0]
+        return block[start - b0 * _CHUNK:stop - b0 * _CHUNK]
+
     def rows(self) -> np.ndarray:
         """``(T, N)`` float64 rows recorded so far."""
-        if self._n == 0:
-            return np.zeros((0, len(self.actuators)))
-        return np.concatenate(self._blocks)[:self._n].astype(np.float64)
+        return self._rows(0, self._n).astype(np.float64)
+
+    def _advance(self, now: float, final: bool = False) -> None:
+        """Hold the last row up to ``now`` (a silent source is recorded as silence, not cut out) and journal the
+        rows no later frame can change: a frame offered after ``now`` lands in slot ``_slot_at(now)`` or later.
+        ``final``: journal every row and hold nothing more (the take has ended)."""
+        if self._t0 is None:
+            return
+        k_now = self._slot_at(now)
+        if k_now > self._n and not final:
+            self._fill(self._n, k_now, self._last)
+        upto = self._n if final else min(self._n, k_now)
+        if upto > self._committed and self._journal is not None:
+            self._journal.append(format_rows(self._committed, self._rows(self._committed, upto), self.fps))
+            self._committed = upto
+            if self._journal.error is not None:
+                self.warn_once("journal", "the journal %s could not be written (%s); the take is kept in memory "
+                               "and written at stop", self.journal_path, self._journal.error)
 
     async def run(self) -> None:
-        await asyncio.Event().wait()  # nothing to do between frames
+        while True:
+            await asyncio.sleep(self.flush_s)
+            self._advance(time.perf_counter())
+
+    async def abandon(self) -> None:
+        journal, self._journal = self._journal, None
+        if journal is not None:
+            await asyncio.to_thread(journal.close)
+            journal.remove()
 
     async def shutdown(self) -> None:
-        if self._n == 0:
+        if self._t0 is None:
+            await self.abandon()
             log.warning("%s: nothing was played, no file written", self.name)
             return
-        self._fill(self._n, self._n + 1, np.zeros(len(self.actuators)))  # the turn-off
+        self._advance(time.perf_counter())  # the silent tail up to the stop is held ...
+        self._fill(self._n, self._n + 1, np.zeros(len(self.actuators)))  # ... then the turn-off
+        self._advance(time.perf_counter(), final=True)
+        journal, self._journal = self._journal, None
+        if journal is not None:
+            await asyncio.to_thread(journal.close)
         track = HapticTrack(intensities=self.rows(), fps=self.fps, actuators=self.actuators, layout=self.layout,
                             meta={**self.meta, "live": True})
         try:
             await asyncio.to_thread(save_track, track, self.path)
         except Exception as exc:  # the show is over; say so loudly rather than lose the take silently
             self.error = str(exc) or exc.__class__.__name__
-            log.error("%s: recording not saved: %s", self.name, self.error)
+            kept = (f"; the take is kept in {journal.path} (a CSV track)"
+                    if journal is not None and journal.error is None else "")
+            log.error("%s: recording not saved: %s%s", self.name, self.error, kept)
             return
+        if journal is not None:
+            journal.remove()
         self.saved = self.path
         log.info("%s: %d rows (%.1f s) written", self.name, track.n_frames, track.duration)

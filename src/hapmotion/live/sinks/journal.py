@@ -1,0 +1,183 @@
+"""The recorder's crash-safe journal: an append-only CSV track written beside the target while the show runs.
+
+``record:show.tact`` journals to ``show.tact.journal.csv``. The journal is a CSV track in hapmotion's own schema
+(``hapmotion.track_files.csv_track``: header ``time_s,<actuator ids>``, one row per grid frame, times with 6
+decimals, intensities 0..100 with 2), so after a crash, a power cut or SIGKILL it is readable as it is, up to the
+last batch written, by ``hapmotion.load_track`` and every tool that reads CSV tracks; :func:`recover_journal`
+turns it into any track format (and also copes with a last line cut by a power loss).
+
+Why the last line is whole after SIGKILL: each batch of rows is one ``write`` system call, and Linux copies a
+write into the page cache one 4 KiB page at a time, checking for a fatal signal between pages. So a write cut by
+SIGKILL stops at a page boundary; no row here crosses one (a row that leaves too little room in its page for
+the longest possible row is widened with spaces to the boundary, which CSV readers take as blanks after a number),
+so the file always ends with a whole row.
+
+Writing happens in a thread of its own, so a slow disk never holds up the event loop; rows reach the OS (and so
+survive the process) when a batch is written, and are flushed to the disk itself (``fsync``) about once a second.
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+import threading
+import time
+from pathlib import Path
+from typing import Optional, Sequence
+
+import numpy as np
+
+from ...errors import InputError
+from ...track import HapticTrack
+
+PAGE = 4096
+"""Bytes of a page-cache page: a SIGKILL can cut a write only at a multiple of this offset."""
+
+SUFFIX = ".journal.csv"
+
+
+def journal_path(target: "str | os.PathLike[str]") -> Path:
+    """Where the journal of a recording to ``target`` goes: ``<target>.journal.csv`` beside it."""
+    p = Path(target)
+    return p.with_name(p.name + SUFFIX)
+
+
+def format_rows(first: int, rows: np.ndarray, fps: float) -> list[bytes]:
+    """CSV lines (with newline) for grid rows ``first, first + 1, ...``: time ``k / fps`` with 6 decimals,
+    intensities with 2, exactly as ``hapmotion.track_files.csv_track.write_csv`` writes them."""
+    out = []
+    for k, row in enumerate(np.asarray(rows, dtype=np.float64), start=first):
+        out.append((f"{k / fps:.6f}," + ",".join(f"{v:.2f}" for v in row.tolist()) + "\n").encode("ascii"))
+    return out
+
+
+class TrackJournal:
+    """Appends CSV lines to a new file from a writer thread; no line crosses a :data:`PAGE` boundary.
+
+    Parameters
+    ----------
+    path:
+        The journal file; created here, and it must not exist yet (an earlier session's unfinished take is never
+        overwritten).
+    actuators:
+        Column ids of the header.
+    fsync_s:
+        Seconds between ``fsync`` calls (the rows are in the OS after every batch whatever this is).
+    """
+
+    def __init__(self, path: "str | os.PathLike[str]", actuators: Sequence[str], *, fsync_s: float = 1.0):
+        self.path = Path(path)
+        self.fsync_s = float(fsync_s)
+        # the longest row: a time up to 10^7 s (17 characters) and every value "100.00", with commas and newline
+        self.max_line = 18 + 7 * len(actuators)
+        self._fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_APPEND, 0o666)
+        self._offset = 0
+        self._queue: "queue.SimpleQueue[Optional[tuple[list[bytes], int]]]" = queue.SimpleQueue()
+        self.error: Optional[OSError] = None  # the first write error; the journal stops there
+        self.rows = 0  # rows handed to the OS
+        self._thread = threading.Thread(target=self._work, name=f"journal {self.path.name}", daemon=True)
+        self._thread.start()
+        self._queue.put(([("time_s," + ",".join(actuators) + "\n").encode("ascii")], 0))
+
+    def append(self, lines: list[bytes]) -> None:
+        """Queue whole row lines to be written as one batch (never blocks)."""
+        if lines:
+            self._queue.put((lines, len(lines)))
+
+    def close(self) -> None:
+        """Write what is queued, flush it to the disk, close the file (blocks: call it from a thread)."""
+        self._queue.put(None)
+        self._thread.join()
+        os.close(self._fd)
+
+    def remove(self) -> None:
+        try:
+            self.path.unlink()
+        except OSError:
+            pass
+
+    # ------------------------------------------------------------------ writer thread
+    def _work(self) -> None:
+        last_sync = time.monotonic()
+        while True:
+            item = self._queue.get()
+            if item is None:
+                break
+            if self.error is not None:
+                continue
+            lines, rows = item
+            try:
+                self._write(self._pack(lines))
+                self.rows += rows
+                if time.monotonic() - last_sync >= self.fsync_s:
+                    os.fsync(self._fd)
+                    last_sync = time.monotonic()
+            except OSError as exc:  # disk full, file system gone: keep the rest of the show going
+                self.error = exc
+        if self.error is None:
+            try:
+                os.fsync(self._fd)
+            except OSError as exc:
+                self.error = exc
+
+    def _pack(self, lines: list[bytes]) -> bytes:
+        """Join lines so that none crosses a page boundary: a line after which less than :attr:`max_line` bytes
+        of the page are left is widened with spaces up to the boundary, so the next line (whatever batch it comes
+        in) starts on a fresh page."""
+        parts: list[bytes] = []
+        offset = self._offset
+        for line in lines:
+            offset += len(line)
+            room = -offset % PAGE
+            if 0 < room < self.max_line:
+                line = line[:-1] + b" " * room + b"\n"
+                offset += room
+            parts.append(line)
+        return b"".join(parts)
+
+    def _write(self, data: bytes) -> None:
+        view = memoryview(data)
+        while view:
+            n = os.write(self._fd, view)
+            self._offset += n
+            view = view[n:]
+
+
+def recover_journal(journal: "str | os.PathLike[str]", out: "str | os.PathLike[str] | None" = None,
+                    *, layout: str = "x40_shoulders") -> HapticTrack:
+    """Read a journal left by a session that did not stop cleanly (every whole row; a last row cut short by a
+    power loss is left out) and, given ``out``, write it as a track (any extension ``save_track`` knows; atomic).
+
+    ``InputError`` when the file is not a journal (no ``time_s`` header or no whole row)."""
+    path = Path(journal)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise InputError(path, None, f"cannot read the journal ({exc.strerror or exc})") from None
+    lines = data.split(b"\n")
+    header = lines[0].decode("ascii", "replace").strip().split(",")
+    if len(header) < 2 or header[0] != "time_s":
+        raise InputError(path, "line 1", "expected a recording journal (a CSV track header time_s,<actuators>)")
+    rows = []
+    for number, line in enumerate(lines[1:-1], start=2):  # lines[-1] follows the last newline: cut or empty
+        fields = line.split(b",")
+        try:
+            values = [float(f) for f in fields]
+        except ValueError:
+            raise InputError(path, f"line {number}", "expected numbers separated by commas") from None
+        if len(values) != len(header):
+            raise InputError(path, f"line {number}", f"expected {len(header)} values, found {len(values)}")
+        rows.append(values)
+    if not rows:
+        raise InputError(path, None, "expected at least one whole row, found none")
+    table = np.asarray(rows, dtype=np.float64)
+    times = table[:, 0]
+    span = float(times[-1] - times[0])
+    fps = round((len(times) - 1) / span, 4) if len(times) > 1 and span > 0 else 60.0
+    track = HapticTrack(intensities=np.clip(np.nan_to_num(table[:, 1:]), 0.0, 100.0), fps=fps,
+                        actuators=tuple(header[1:]), layout=layout, meta={"live": True, "recovered_from": str(path)})
+    if out is not None:
+        from ...track_files import save_track
+
+        save_track(track, out)
+    return track

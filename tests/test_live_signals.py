@@ -1,0 +1,76 @@
+"""Every terminating signal ends ``hapmotion live`` like Ctrl-C: a real subprocess streaming to a fake Player and a
+recorder gets SIGHUP (a closed terminal or ssh session) or SIGQUIT (Ctrl-\\), and still sends the turn-off and
+finishes the recording, also when its terminal (stderr) is already gone."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import re
+import signal
+import sys
+import time
+
+import pytest
+from support.live_fakes import FakePlayerV2, real_frames, send_osc, wait_for
+
+from hapmotion.live.engine import STOP_SIGNALS
+from hapmotion.track_files import load_track
+
+HAPMOTION = [sys.executable, "-c", "import sys; from hapmotion.cli import main; sys.exit(main(sys.argv[1:]))"]
+DEVICES = (("VestFront", 20), ("VestBack", 20), ("ForearmL", 6), ("ForearmR", 6))
+
+
+def test_every_terminating_signal_is_handled():
+    names = {signal.Signals(s).name for s in STOP_SIGNALS}
+    assert {"SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT"} <= names
+
+
+async def _session_until_signal(sig: int, out, close_terminal: bool):
+    """Run ``hapmotion live`` (OSC in, fake Player and recorder out), stream a real recording, send ``sig``."""
+    frames, _ = real_frames()
+    player = await FakePlayerV2().start()
+    proc = await asyncio.create_subprocess_exec(
+        *HAPMOTION, "live", "--source", "osc://127.0.0.1:0", "--sink", player.url(), "--sink", f"record:{out}",
+        stderr=asyncio.subprocess.PIPE, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    port, lines = None, []
+    deadline = time.perf_counter() + 60
+    while port is None:
+        line = (await asyncio.wait_for(proc.stderr.readline(), deadline - time.perf_counter())).decode()
+        assert line, "".join(lines)
+        lines.append(line)
+        m = re.search(r"listening on osc://127\.0\.0\.1:(\d+)", line)
+        port = int(m.group(1)) if m else None
+    sender = asyncio.create_task(send_osc(port, frames[:900]))
+    await wait_for(lambda: len(player.frames) >= 4 * 30, 15)
+    rest = b""
+    if close_terminal:
+        # The terminal went away first: every later write to stderr fails (EPIPE), as after an ssh drop.
+        proc._transport.get_pipe_transport(2).close()
+        await asyncio.sleep(0.05)
+    sent_at = time.perf_counter()
+    proc.send_signal(sig)
+    if not close_terminal:
+        rest = await asyncio.wait_for(proc.stderr.read(), 20)
+    code = await asyncio.wait_for(proc.wait(), 20)
+    sender.cancel()
+    await player.stop()
+    return code, "".join(lines) + rest.decode(), player, sent_at
+
+
+@pytest.mark.parametrize("sig, close_terminal", [(signal.SIGHUP, False), (signal.SIGQUIT, False),
+                                                 (signal.SIGHUP, True)],
+                         ids=["SIGHUP", "SIGQUIT", "SIGHUP-terminal-gone"])
+def test_hangup_and_quit_end_the_session_like_ctrl_c(sig, close_terminal, tmp_path):
+    out = tmp_path / "take.npz"
+    code, err, player, sent_at = asyncio.run(asyncio.wait_for(_session_until_signal(sig, out, close_terminal), 120))
+    assert code >= 0, f"killed by signal {-code}: {err}"   # it ended by itself, not by the signal's default action
+    assert player.errors == []
+    assert player.turn_off_all and player.turn_off_all[-1] - sent_at < 2.0
+    assert all(player.last_values(p) == [0] * n for p, n in DEVICES)
+    track = load_track(out)                                  # the recording was finished into the asked format
+    assert track.n_frames >= 30 and track.intensities.max() > 0 and track.intensities[-1].max() == 0
+    assert not list(tmp_path.glob("*.journal*")) and not list(tmp_path.glob(".*.part"))
+    if not close_terminal:
+        assert code == 0, err
+        assert f"stopped: {sig.name}" in err and "Traceback" not in err
