@@ -343,6 +343,9 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(), ha
     if not sinks:
         raise UsageError("at least one --sink is required")
     parsed = [parse_sink(s) if isinstance(s, str) else s for s in sinks]
+    from ..layout import load_layout
+
+    SeatStage(seat, load_layout())  # a zone this seat's vest does not have is a usage error before connecting
     try:
         nc = await connect(server, name=f"hapmotion seat {show}",
                            on_state=lambda state: log.info("seat: NATS %s", state))

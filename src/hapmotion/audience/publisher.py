@@ -117,6 +117,7 @@ class NatsPublisherSink(Sink):
         self.cues = 0
         self._subjects = {k: subject(description.show, k) for k in ("frame", "cue", "end")}
         self._republish: Optional[asyncio.Task] = None
+        self._closing = False
 
     async def start(self) -> None:
         try:
@@ -131,6 +132,8 @@ class NatsPublisherSink(Sink):
                  self._subjects["frame"])
 
     def _on_state(self, state: str) -> None:
+        if self._closing:
+            return
         if state == "reconnected" and self.kv is not None:
             # the server may have restarted and lost its in-memory bucket: store the description again
             self._republish = asyncio.ensure_future(self._store_again())
@@ -173,6 +176,7 @@ class NatsPublisherSink(Sink):
     async def shutdown(self) -> None:
         if self.nc is None:
             return
+        self._closing = True
         try:
             if self.nc.is_connected:
                 await self.nc.publish(self._subjects["end"], encode_event(epoch=self.description.epoch,
