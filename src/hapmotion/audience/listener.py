@@ -129,6 +129,9 @@ class AudienceSource(Source):
         self._last_fetch = -1e9
         self._n_music = len(desc.actuators)
         self.published_at: OrderedDict[float, float] = OrderedDict()  # media time -> publisher wall time
+        # submit time (perf_counter, the OutFrame's ``received``) -> publisher wall time: frame age at the device
+        # when both machines' clocks agree (the benchmark, on one machine)
+        self.wall_of_submit: OrderedDict[float, float] = OrderedDict()
         self.cues: list[tuple[dict, float]] = []
 
     def describe(self) -> str:
@@ -173,6 +176,9 @@ class AudienceSource(Source):
         if self.music is not None:
             self.music.put(wf.media_t, wf.music)
         positions = wf.skeleton if self.mode != "audio" else np.zeros((0, 3))
+        self.wall_of_submit[now] = wf.wall_t
+        if len(self.wall_of_submit) > 256:
+            self.wall_of_submit.popitem(last=False)
         self.engine.submit(SkeletonFrame(positions, None, None, now, show_t=wf.media_t))
 
     # ------------------------------------------------------------------ NATS callbacks
