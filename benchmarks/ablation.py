@@ -1,8 +1,9 @@
 """Which knob of the ``energy`` preset does what: score renderer variants on recordings and the sweep bench.
 
-Each variant is the ``paper`` preset with some parameters changed; every variant is rendered with both methods on
-every recording and scored (:func:`hapmotion.metrics.scorecard.score_track`), and the table shows the mean over
-recordings and methods (median for the lags), so one line per knob setting answers "what did this change do". The numbers quoted in
+Each variant is the ``paper`` preset with some parameters changed (a :class:`hapmotion.show.Show` with overrides);
+every variant is rendered with both methods on every recording and scored
+(:func:`hapmotion.metrics.scorecard.score_track`), and the table shows the mean over recordings and methods (median
+for the lags), so one line per knob setting answers "what did this change do". The numbers quoted in
 docs/metrics.md come from::
 
     python benchmarks/ablation.py ../shared/data/motion/*.bvh ../shared/data/motion/*.pkl
@@ -17,11 +18,12 @@ from typing import Any, Sequence
 import numpy as np
 
 from hapmotion.render.params import PRESETS, Params
-from hapmotion.metrics.scorecard import COLUMNS, PERCENT_KEYS, score_track
+from hapmotion.metrics.scorecard import COLUMNS, PERCENT_KEYS, motion_facts, score_track
 from hapmotion.metrics.sweep import run_bench
+from hapmotion.show import Show, parse_param_overrides, render_motion
 
-SHOWN = ("reach_r", "reach_lag_ms", "locus_cm", "locus_skin_cm", "constancy_db", "sparc", "toggles_s", "hf_power",
-         "dead_zone", "skin_rms")
+SHOWN = ("felt_moving", "speed_rho", "reach_rho", "reach_lag_ms", "lateral", "locus_cm", "locus_skin_cm",
+         "constancy_db", "sparc", "toggles_s", "hf_power", "dead_zone", "skin_rms")
 
 PAPER = PRESETS["paper"]
 
@@ -52,15 +54,15 @@ def score_variants(motions: dict[str, Any], variants: dict[str, dict[str, Any]],
     """Mean of every metric over recordings and methods, per variant; the median for the lags, which are only as
     steady as the correlation behind them (a weakly coupled or periodic recording can put its peak anywhere in the
     +-1 s window). ``None`` values are left out."""
-    from hapmotion.render import render
-
+    facts = {name: motion_facts(motion) for name, motion in motions.items()}
     out: dict[str, dict[str, float]] = {}
     for name, changes in variants.items():
         params = PAPER.replace(**changes)
         acc: dict[str, list[float]] = {c.key: [] for c in COLUMNS}
-        for motion in motions.values():
+        for clip, motion in motions.items():
             for method in methods:
-                s = score_track(render(motion, method=method, params=params), motion)
+                track = render_motion(Show(method=method, preset="paper", overrides=changes), motion)
+                s = score_track(track, motion, facts=facts[clip])
                 for k, v in s.items():
                     if v is not None and k in acc:
                         acc[k].append(v)
@@ -90,8 +92,6 @@ def markdown(results: dict[str, dict[str, float]]) -> str:
 
 
 def _parse(spec: str) -> tuple[str, dict[str, Any]]:
-    from hapmotion.show import parse_param_overrides
-
     return spec, parse_param_overrides(tuple(spec.split(",")))
 
 

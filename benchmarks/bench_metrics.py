@@ -1,5 +1,5 @@
-"""Evaluation speed (issue 6): ``hapmotion evaluate`` on every bundled clip x 2 methods x 2 presets, with figures and
-the sweep bench, printed beside the one-minute target; plus the cost of scoring one track.
+"""Evaluation speed: ``hapmotion evaluate`` on every bundled clip x 2 methods x every preset, with figures and the
+sweep bench, printed beside the one-minute target; plus the cost of scoring one track.
 
 Run: python benchmarks/bench_metrics.py [MOTION_DIR]      (default ../shared/data/motion)
 
@@ -14,6 +14,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from hapmotion.render.params import PRESETS
 
 ROOT = Path(__file__).resolve().parents[1]
 MOTION_EXT = (".bvh", ".json", ".pkl", ".csv", ".npz")
@@ -35,11 +37,12 @@ def main() -> None:
         wall = time.perf_counter() - t0
         if done.returncode != 0:
             sys.exit(f"evaluate failed ({done.returncode}): {done.stderr.strip()}")
-        rows.append((f"hapmotion evaluate, {len(files)} clips x 2 methods x 2 presets, figures + bench (new process)",
+        rows.append((f"hapmotion evaluate, {len(files)} clips x 2 methods x {len(PRESETS)} presets, figures + bench "
+                     "(new process)",
                      f"{wall:.1f} s", "< 60 s"))
 
     # in-process breakdown (warm: compiled kernels, imported matplotlib)
-    from hapmotion.metrics.report import evaluate
+    from hapmotion.metrics.evaluation import evaluate
     from hapmotion.metrics.scorecard import score_track
     from hapmotion.motion_files import load_motion
     from hapmotion.render import render

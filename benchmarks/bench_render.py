@@ -1,4 +1,4 @@
-"""Renderer speed: batch frames per second and Renderer.step latency, each printed beside its target (issue 2).
+"""Renderer speed: batch frames per second and Renderer.step latency, each printed beside its target.
 
 Run: python benchmarks/bench_render.py
 """
@@ -35,7 +35,7 @@ def main() -> None:
     motion = one_hour_motion()
     hapmotion.render(motion.slice(0, 100))  # compile outside the timing
     rows = []
-    for method, preset in (("mst", "paper"), ("baseline", "paper"), ("mst", "energy")):
+    for method, preset in (("mst", "paper"), ("baseline", "paper"), ("mst", "energy"), ("mst", "felt")):
         times = []
         for _ in range(3):
             t0 = time.perf_counter()

@@ -1,4 +1,5 @@
-"""Mixing audio and motion: the paper's 2:3 weighted sum, the energy-domain option, clipping, the power limit."""
+"""Mixing audio and motion: the duck rule (default), the paper's 2:3 weighted sum, the energy-domain option, clipping,
+the power limit."""
 
 from __future__ import annotations
 
@@ -8,14 +9,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from hapmotion.audio import limit_power, mix, parse_mix_ratio
+import hapmotion
+from hapmotion.audio import AudioParams, limit_power, mix, parse_mix_ratio, resolve_rule
 from hapmotion.errors import UsageError
 
 
 def test_linear_mix_is_the_papers_weighted_sum():
     motion = np.array([0.0, 50.0, 100.0, 30.0])
     audio = np.array([100.0, 50.0, 0.0, 80.0])
-    np.testing.assert_allclose(mix(motion, audio), [40.0, 50.0, 60.0, 0.4 * 80 + 0.6 * 30])
+    np.testing.assert_allclose(mix(motion, audio, rule="paper"), [40.0, 50.0, 60.0, 0.4 * 80 + 0.6 * 30])
+    np.testing.assert_array_equal(mix(motion, audio, domain="linear"), mix(motion, audio, rule="paper"))
 
 
 def test_energy_mix_adds_powers():
@@ -24,19 +27,72 @@ def test_energy_mix_adds_powers():
     expected = np.sqrt(0.4 * audio ** 2 + 0.6 * motion ** 2)
     np.testing.assert_allclose(mix(motion, audio, domain="energy"), expected)
     # never below the weighted sum (power mean >= arithmetic mean)
-    assert np.all(mix(motion, audio, domain="energy") >= mix(motion, audio) - 1e-12)
+    assert np.all(mix(motion, audio, domain="energy") >= mix(motion, audio, rule="paper") - 1e-12)
 
 
 def test_ratio_is_audio_to_motion():
     motion, audio = np.array([100.0]), np.array([0.0])
-    assert mix(motion, audio, ratio=(1, 0))[0] == 0.0        # audio only
-    assert mix(motion, audio, ratio=(0, 1))[0] == 100.0      # motion only
-    assert mix(motion, audio, ratio=(1, 3))[0] == 75.0
+    assert mix(motion, audio, ratio=(1, 0), rule="paper")[0] == 0.0        # audio only
+    assert mix(motion, audio, ratio=(0, 1), rule="paper")[0] == 100.0      # motion only
+    assert mix(motion, audio, ratio=(1, 3), rule="paper")[0] == 75.0
 
 
 def test_inputs_are_clipped_and_cleaned():
-    out = mix(np.array([150.0, np.nan, -20.0]), np.array([150.0, 50.0, np.inf]))
+    out = mix(np.array([150.0, np.nan, -20.0]), np.array([150.0, 50.0, np.inf]), rule="paper")
     np.testing.assert_allclose(out, [100.0, 20.0, 0.0])
+
+
+def test_duck_is_the_default_and_worked_by_hand():
+    motion = np.array([0.0, 80.0, 0.0])
+    audio = np.array([60.0, 60.0, 10.0])
+    # bed above the 20 % start compressed by the audio share 0.4: 20 + 0.4 * 40 = 36; 10 is under the start, kept.
+    # motion power 0.64 >= 0.3: the whole bed ducked by 0.5; without positions only motor 1 is under the motion,
+    # ducked by another 0.5; then powers add with the motion whole.
+    expected = [18.0, np.hypot(80.0, 9.0), 5.0]
+    np.testing.assert_allclose(mix(motion, audio), expected)
+    np.testing.assert_allclose(mix(motion, audio, rule="duck"), expected)
+    # no motion: the bed alone, compressed but not ducked
+    np.testing.assert_allclose(mix(np.zeros(3), audio), [36.0, 36.0, 10.0])
+    # motion only (ratio 0:1): the music is gone; audio only (1:0) with no motion: the music as it is
+    np.testing.assert_allclose(mix(motion, audio, ratio=(0, 1)), motion)
+    np.testing.assert_allclose(mix(np.zeros(3), audio, ratio=(1, 0)), audio)
+
+
+def test_duck_gives_way_near_the_motion_on_the_layout():
+    layout = hapmotion.load_layout()
+    pos = layout.positions()
+    n = layout.n_actuators
+    motion = np.zeros(n)
+    src = layout.actuators.index("VestFront_5")
+    motion[src] = 70.0
+    audio = np.full(n, 40.0)
+    out = mix(motion, audio, positions=pos, params=AudioParams(duck_motion_depth=0.0))
+    bed = out.copy()
+    bed[src] = np.nan
+    d = np.linalg.norm(pos - pos[src], axis=1)
+    near = (d > 0) & (d < 0.09)
+    far = d > 0.3
+    assert near.any() and far.any()
+    # far motors keep the compressed bed (20 + 0.4 * 20 = 28); neighbours are ducked, the closer the more
+    np.testing.assert_allclose(bed[far], 28.0, atol=0.05)             # Gaussian tails: under 0.2 %
+    assert np.all(bed[near] < 28.0) and np.all(bed[near] > 14.0 - 1e-9)
+    assert out[src] == pytest.approx(np.hypot(70.0, 14.0))
+    # per frame and whole arrays agree
+    rows = np.vstack([motion, np.zeros(n), motion * 0.5])
+    audio_rows = np.vstack([audio, audio, audio * 0.3])
+    whole = mix(rows, audio_rows, positions=pos)
+    for t in range(3):
+        np.testing.assert_allclose(whole[t], mix(rows[t], audio_rows[t], positions=pos))
+
+
+def test_rule_names_and_the_older_domain_spelling():
+    assert resolve_rule() == "duck" and resolve_rule(domain="linear") == "paper"
+    assert resolve_rule(domain="energy") == "energy" and resolve_rule("paper", "linear") == "paper"
+    assert resolve_rule(params=AudioParams(mix_rule="energy")) == "energy"
+    with pytest.raises(UsageError, match="disagree"):
+        resolve_rule("duck", "linear")
+    with pytest.raises(UsageError, match="mix rule"):
+        mix(np.zeros(3), np.zeros(3), rule="loudest")
 
 
 def test_mix_works_per_frame_and_on_whole_tracks():
@@ -64,9 +120,9 @@ def test_power_limit_scales_a_frame_uniformly():
 @given(arrays(np.float64, (5, 8), elements=st.floats(-50, 200)),
        arrays(np.float64, (5, 8), elements=st.floats(-50, 200)),
        st.tuples(st.floats(0, 10), st.floats(0, 10)).filter(lambda r: r[0] + r[1] > 0.01),
-       st.sampled_from(["linear", "energy"]), st.floats(0.1, 8))
-def test_mix_output_is_always_in_range_and_under_the_limit(m, a, ratio, domain, limit):
-    out = mix(m, a, ratio=ratio, domain=domain, power_limit=limit)
+       st.sampled_from(["paper", "energy", "duck"]), st.floats(0.1, 8))
+def test_mix_output_is_always_in_range_and_under_the_limit(m, a, ratio, rule, limit):
+    out = mix(m, a, ratio=ratio, rule=rule, power_limit=limit)
     assert out.shape == m.shape and np.isfinite(out).all()
     assert out.min() >= 0.0 and out.max() <= 100.0
     assert np.all(np.sum((out / 100.0) ** 2, axis=1) <= limit * (1 + 1e-9))

@@ -7,8 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hapmotion.audio import (DEFAULT_ACTUATORS, AudioParams, analyze_file, analyze_signal, audio_track,
-                             kick_frames, region_weights)
+import hapmotion
+from hapmotion.layout import CHART_BACK
+from hapmotion.audio import AudioParams, analyze_file, analyze_signal, audio_track, kick_frames, region_weights
 from hapmotion.metrics.events import match_events
 from hapmotion.audio.analysis import AudioAnalysis
 from hapmotion.audio.pattern import device_of
@@ -29,15 +30,39 @@ def _analysis(envelope, onsets=(), fps=60.0, mid=None, params=None) -> AudioAnal
                          onset_envelope=np.zeros(1), params=params or AudioParams())
 
 
-def test_default_layout_has_52_actuators_in_csv_order():
-    assert len(DEFAULT_ACTUATORS) == 52
-    assert DEFAULT_ACTUATORS[0] == "VestFront_0" and DEFAULT_ACTUATORS[20] == "VestBack_0"
-    assert DEFAULT_ACTUATORS[40] == "ForearmL_0" and DEFAULT_ACTUATORS[-1] == "ForearmR_5"
+LAYOUT = hapmotion.load_layout()
+IDS = LAYOUT.actuators
+GLOBAL = AudioParams(spatial="global")
+BASS = IDS.index("VestBack_16")                              # bottom row of the back: the layered bass and kicks
+
+
+def test_audio_track_takes_its_actuators_from_the_layout_file():
+    tr = audio_track(_analysis([0.5] * 4))
+    assert tr.actuators == IDS and tr.layout == LAYOUT.name and tr.intensities.shape == (4, LAYOUT.n_actuators)
+
+
+def test_layered_mapping_puts_rhythm_low_on_the_back_and_melody_on_its_top_row():
+    w = region_weights(LAYOUT, "layered", bass_rows=2)
+    back = LAYOUT.chart_device(CHART_BACK)
+    rows = {r: slice(back.offset + r * back.cols, back.offset + (r + 1) * back.cols) for r in range(back.rows)}
+    for r in range(back.rows):
+        expected = [1.0, 0.0, 1.0] if r >= back.rows - 2 else ([0.0, 1.0, 0.0] if r == 0 else [0.0, 0.0, 0.0])
+        np.testing.assert_array_equal(w[rows[r]], np.tile(expected, (back.cols, 1)))
+    others = np.ones(LAYOUT.n_actuators, dtype=bool)
+    others[back.offset:back.offset + back.size] = False
+    assert not w[others].any()                               # front, sides and shoulders are left to the motion
+    # the bass rows sit lower than every other back motor, on the layout's own geometry
+    y = LAYOUT.positions()[:, 1]
+    assert y[w[:, 0] > 0].max() < y[rows[0]].min()
+    # ids of the default layout mean the default layout; ids of another layout fall back to the names
+    np.testing.assert_array_equal(region_weights(IDS, "layered"), w)
+    assert region_weights(["VestFront_0", "ForearmL_0"], "layered").tolist() == [[1, 0, 1], [0, 1, 0]]
+    assert region_weights(LAYOUT, "layered", bass_rows=5)[rows[0], 0].tolist() == [1.0] * back.cols
 
 
 def test_continuous_level_is_lifted_out_of_the_dead_zone():
     p = AudioParams()                                        # min 20, max 60, off below 0.05
-    tr = audio_track(_analysis([0.0, 0.04, 0.05, 0.5, 1.0]))
+    tr = audio_track(_analysis([0.0, 0.04, 0.05, 0.5, 1.0], params=GLOBAL))
     expected = [0.0, 0.0, 20 + 40 * 0.05, 20 + 40 * 0.5, 60.0]
     np.testing.assert_allclose(tr.intensities[:, 0], expected)
     assert np.all(tr.intensities == tr.intensities[:, :1])   # global: every actuator the same
@@ -56,7 +81,7 @@ def test_kick_lasts_ceil_30_ms_in_frames(fps, frames):
 def test_kick_is_full_drive_and_ducks_the_continuous_part():
     env = np.full(60, 1.0)
     tr = audio_track(_analysis(env, onsets=[0.5]))           # onset in frame 30
-    col = tr.intensities[:, 0]
+    col = tr.intensities[:, BASS]
     assert col[30] == 100.0 and col[31] == 100.0             # 2 frames = 33 ms at 60 fps
     # after the kick the 50 % duck ramps back over 50 ms (3 frames): depth 0.5 * (1 - k/4) for k = 1, 2, 3
     np.testing.assert_allclose(col[32:35], [60 * (1 - 0.375), 60 * (1 - 0.25), 60 * (1 - 0.125)])
@@ -78,7 +103,7 @@ def test_kicks_outside_the_track_are_clipped():
 
 
 def test_bands_mapping_puts_bass_and_kicks_on_the_vest_and_mid_on_the_arms():
-    w = region_weights(DEFAULT_ACTUATORS, "bands")
+    w = region_weights(IDS, "bands")
     assert w.shape == (52, 3)
     np.testing.assert_array_equal(w[:40], np.tile([1.0, 0.0, 1.0], (40, 1)))
     np.testing.assert_array_equal(w[40:], np.tile([0.0, 1.0, 0.0], (12, 1)))
@@ -108,7 +133,7 @@ def test_bad_actuator_ids_and_mapping_names():
     with pytest.raises(UsageError, match="<Device>_<index>"):
         device_of("VestFront")
     with pytest.raises(UsageError, match="spatial"):
-        region_weights(DEFAULT_ACTUATORS, "everywhere")
+        region_weights(IDS, "everywhere")
 
 
 def test_silence_renders_all_zero():
@@ -131,15 +156,18 @@ def test_bundled_music_pattern(name):
     tr = audio_track(an)
     rows = tr.intensities
     assert rows.shape == (an.n_frames, 52)
-    on = rows[:, 0] > 0
+    on = rows[:, BASS] > 0
     # playing music is felt all the time, above the assumed dead zone, and kicks are the only full-drive frames
-    assert on.mean() > 0.95 and rows[on, 0].min() >= 20.0 * 0.5 - 1e-9        # ducked minimum 10
+    assert on.mean() > 0.95 and rows[on, BASS].min() >= 20.0 * 0.5 - 1e-9        # ducked minimum 10
     kick = tr.debug["audio_kick"].astype(bool)
-    assert np.all(rows[kick, 0] == 100.0) and rows[~kick, 0].max() <= 60.0
+    assert np.all(rows[kick, BASS] == 100.0) and rows[~kick, BASS].max() <= 60.0
     # every onset got its kick, no kick is invented
     starts = np.flatnonzero(np.diff(np.r_[0, tr.debug["audio_kick"]]) > 0) / tr.fps
     agreement = match_events(starts, an.onset_times, 0.05)
     assert agreement.precision == 1.0 and agreement.recall == 1.0
+    # layered: nothing on the front panel or the shoulders, the bass rows busiest
+    assert not rows[:, :20].any() and not rows[:, 40:].any()
+    assert rows[:, BASS].mean() > rows[:, IDS.index("VestBack_0")].mean() > 0
 
 
 def test_clipped_music_works_and_stays_bounded():
@@ -156,4 +184,4 @@ def test_clipped_music_works_and_stays_bounded():
     assert np.isfinite(rows).all() and rows.max() <= 100.0
     # the reference is the file's own 95th percentile: clipping squashes the dynamics, it does not pin the motors
     assert rows[~kick].max() <= AudioParams().max_level and np.median(an.envelope) < 0.95
-    assert (rows[:, 0] > 0).mean() > 0.95
+    assert (rows[:, BASS] > 0).mean() > 0.95

@@ -136,11 +136,14 @@ def test_decorator_gathers_options_for_other_commands():
     out = json.loads(r.output)
     assert out["flag"] is True and out["input"] == "x.bvh"
     assert out["opts"] == {"units": None, "scale": None, "skip_frames": None, "body_id": None, "fps_in": 30.0,
-                           "up": "z"}
+                           "up": "z", "joint_map": None, "limits": None}
     assert tuple(out["opts"]) == MOTION_OPTION_NAMES
     helps = run("probe", "--help").output
-    for opt in ("--units", "--scale", "--skip-frames", "--body-id", "--fps-in", "--up", "--flag"):
+    for opt in ("--units", "--scale", "--skip-frames", "--body-id", "--fps-in", "--up", "--joint-map", "--limit",
+                "--flag"):
         assert opt in helps
+    assert json.loads(run("probe", "x.bvh", "--limit", "frames=9", "--limit", "depth=3").output)["opts"]["limits"] == \
+        ["frames=9", "depth=3"]
     r = run("probe", "x.bvh", "--skip-frames", "-1")
     assert r.exit_code == 2 and "--skip-frames" in r.output
 
@@ -150,3 +153,52 @@ def test_read_motion_maps_fps_in():
     assert m.fps == 10.0
     with pytest.raises(UsageError):
         read_motion(str(MOTION / "dataset-1_punch_normal_001.bvh"), body_id=1)
+
+
+def test_info_says_which_up_axis_and_why(tmp_path):
+    from support.motion_files import bvh_to_z_up
+
+    path = tmp_path / "zup.bvh"
+    path.write_text(bvh_to_z_up((MOTION / "dataset-1_punch_normal_001.bvh").read_text()))
+    r = run("info", path)
+    assert r.exit_code == 0, r.output
+    row = next(ln for ln in r.output.splitlines() if ln.startswith("up axis"))
+    assert "+Z (detected: head above the pelvis along +Z in 100% of frames, a foot the lowest joint in" in row
+    r = run("info", path, "--up", "z", "--json")
+    assert json.loads(r.output)["up_axis"] == "+Z (option)"
+
+
+def test_joint_map_and_limit_options(tmp_path):
+    from support.motion_files import SCHEMES, synthetic_bvh
+
+    path = tmp_path / "odd.bvh"
+    path.write_text(synthetic_bvh(SCHEMES["CMU"], rename={"LeftHand": "lmanus", "RightHand": "rmanus"}))
+    r = run("info", path)
+    assert r.exit_code == 2 and "--joint-map" in r.stderr and r.stderr.count("\n") == 1
+    jm = tmp_path / "map.toml"
+    jm.write_text('lmanus = "HAND_LEFT"\nrmanus = "HAND_RIGHT"\n')
+    r = run("info", path, "--joint-map", jm, "--json")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.output)["joints_found"]["HAND_LEFT"] == "lmanus"
+    r = run("info", path, "--joint-map", jm, "--limit", "frames=10")
+    assert r.exit_code == 2 and "expected at most 10 frames (limit frames; raise it with --limit frames=N), found 60" \
+        in r.stderr
+    assert run("info", path, "--joint-map", jm, "--limit", "frames=60").exit_code == 0
+    r = run("info", path, "--limit", "frame=60")
+    assert r.exit_code == 2 and "--limit expects NAME=NUMBER" in r.stderr
+
+
+def test_weak_up_axis_warning_reaches_stderr(tmp_path):
+    """Every command reading motion prints the reader's warnings (here through ``info``): one line each."""
+    from support.motion_files import SCHEMES, synthetic_bvh
+
+    text = synthetic_bvh(SCHEMES["CMU"], frames=60)
+    head, motion = text.split("MOTION\n")
+    rows = motion.strip().split("\n")
+    body = [" ".join(r.split()[:4] + ["-90.0"] + r.split()[5:]) if k < 30 else r for k, r in enumerate(rows[2:])]
+    path = tmp_path / "lying.bvh"
+    path.write_text(head + "MOTION\n" + "\n".join(rows[:2] + body) + "\n")
+    r = run("info", path)
+    assert r.exit_code == 0
+    assert r.stderr.startswith(f"warning: {path}: weak evidence for the up axis (") and r.stderr.count("\n") == 1
+    assert "--up" in r.stderr

@@ -353,7 +353,7 @@ def test_never_reading_client_does_not_block_the_others(recording):
         stuck.transport.pause_reading()
         viewer = Viewer(sink.bound_port)
         vtask = asyncio.create_task(viewer.run())
-        await wait_for(lambda: len(sink._clients) == 2, 3)
+        await wait_for(lambda: sink.stats.extra["clients"] == 2, 5)
         await send_osc(engine.source.port, recording)
         await wait_for(lambda: engine.stats.rendered + engine.stats.superseded >= len(recording), 5)
         await wait_for(lambda: len(viewer.frames()) >= engine.stats.rendered, 5)
@@ -398,7 +398,7 @@ SONG = BVH.parents[1] / "audio" / "vibe_ace.ogg"
 
 
 def test_multimodal_replay_mixes_the_song_at_show_time():
-    from hapmotion.audio import analyze_file, audio_track, mix
+    from hapmotion.audio import PAPER_PARAMS, analyze_file, audio_track, mix
     from hapmotion.body.model import BodyModel
 
     motion = hapmotion.load_motion(BVH).slice(0, 40)
@@ -415,12 +415,14 @@ def test_multimodal_replay_mixes_the_song_at_show_time():
 
     async def scenario():
         tap = Tap()
-        task, engine = await start_session(ReplaySource(motion), [tap], audio=SONG, renderer=renderer)
+        task, engine = await start_session(ReplaySource(motion), [tap], audio=SONG, renderer=renderer,
+                                           preset="paper", domain="linear")
         stats = await task
         return stats, tap
 
     stats, tap = asyncio.run(asyncio.wait_for(scenario(), 20))
-    audio_rows = audio_track(analyze_file(SONG, fps=motion.fps)).intensities
+    # the paper preset's music: the whole-suit pattern, mixed as the paper's 2:3 weighted sum
+    audio_rows = audio_track(analyze_file(SONG, fps=motion.fps, params=PAPER_PARAMS)).intensities
     frames = [f for f in tap.frames if f.kind == "frame"]
     motion_rows = renderer.rows[1:]                          # the first step is the engine's warm-up
     assert len(frames) == len(motion_rows) == stats.rendered >= 20 and motion.fps == 30.0
@@ -429,7 +431,7 @@ def test_multimodal_replay_mixes_the_song_at_show_time():
     for f, m in zip(frames, motion_rows):
         k = round(f.t * motion.fps)                          # show time = the recording's time
         # the same output stage as offline rendering: power limit 0.75 x N (audio.params.power_limit_fraction)
-        np.testing.assert_allclose(f.row, mix(m, audio_rows[k], ratio=(2, 3), power_limit=0.75 * 52))
+        np.testing.assert_allclose(f.row, mix(m, audio_rows[k], ratio=(2, 3), power_limit=0.75 * 52, rule="paper"))
     assert max(audio_rows[:40].max(axis=1)) > 10
 
 
@@ -445,7 +447,8 @@ def test_audio_only_mode_plays_the_song_on_the_clock_then_stops(tmp_path):
     soundfile.write(song, 0.8 * np.sin(2 * np.pi * 60 * t) * (np.sin(2 * np.pi * 4 * t) > 0), sr)
 
     async def scenario():
-        task, engine = await start_session(None, ["ws-broadcast://127.0.0.1:0"], audio=song, mode="audio")
+        task, engine = await start_session(None, ["ws-broadcast://127.0.0.1:0"], audio=song, mode="audio",
+                                           preset="felt")
         viewer = Viewer(engine.sinks[0].bound_port)
         vtask = asyncio.create_task(viewer.run())
         stats = await task

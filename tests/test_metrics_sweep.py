@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hapmotion.body.model import BodyModel
-from hapmotion.metrics import metrics as M
+from hapmotion.metrics import coupling
 from hapmotion.metrics import sweep
 from hapmotion.render import PRESETS, render
 
@@ -114,5 +114,5 @@ def test_sweep_metric_on_a_rotated_performer_is_the_same():
     turned = new_motion(case.motion.positions @ rot.T + [2.0, 0.0, -1.0], case.motion.fps, source="turned")
     a = render(case.motion, method="baseline", preset="paper", body=case.body)
     b = render(turned, method="baseline", preset="paper", body=case.body)
-    np.testing.assert_allclose(M.energy(a.intensities), M.energy(b.intensities), atol=1e-6)
+    np.testing.assert_allclose(coupling.energy(a.intensities), coupling.energy(b.intensities), atol=1e-6)
     np.testing.assert_allclose(a.debug["hit_body"], b.debug["hit_body"], atol=1e-9)

@@ -311,13 +311,16 @@ def test_missing_joints_are_derived_and_flagged(tmp_path):
     assert np.all(m.confidence[:, JOINT_INDEX["NECK"]] == 0.5)
 
 
-def test_unmatched_joints_error_lists_the_file_joints(tmp_path):
+def test_unmatched_joints_error_names_the_candidates(tmp_path):
+    """The missing joints, their likely stand-ins (the joint below the elbow, the joint above it) and how to map
+    them; not the whole skeleton."""
     path = renamed_punch(tmp_path, {"Hand_L": "Paw_L", "UpperArm_R": "Humerus_X", "Shoulder_R": "Clav_X"})
     with pytest.raises(InputError) as err:
         hapmotion.load_motion(path)
     msg = str(err.value)
     assert str(path) in msg and "joints HAND_LEFT, SHOULDER_RIGHT" in msg
-    assert "Paw_L" in msg and "Humerus_X" in msg and "LowerArm_L" in msg
+    assert "HAND_LEFT (closest: 'Paw_L'" in msg and "SHOULDER_RIGHT (closest: 'Humerus_X'" in msg
+    assert "--joint-map" in msg and "Toes_R" not in msg  # no list of every joint
     assert "\n" not in msg
 
 
@@ -404,7 +407,7 @@ def test_exact_float_parsing_and_crlf(tmp_path):
 
 
 def test_fps_snapping():
-    from hapmotion.motion_files._common import snap_rate
+    from hapmotion.motion_files.options import snap_rate
 
     assert snap_rate(1 / 0.0083333, 5e-4) == 120.0
     assert snap_rate(1 / 0.0333333, 5e-4) == 30.0

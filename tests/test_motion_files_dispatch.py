@@ -75,3 +75,23 @@ def test_describe_rows():
     assert rows["gaps filled"] == "none"
     s = summary(m)
     assert s["joints_derived"]["NECK"] == "mid(SHOULDER_LEFT, SHOULDER_RIGHT)" and s["frames"] == 700
+
+
+def test_one_options_object_for_every_reader():
+    """A ReaderOptions value gives what the same keywords give; keywords override its fields; bad values fail
+    before the file is read, whichever way they come."""
+    from hapmotion.motion_files import ReaderOptions
+
+    bvh = MOTION / "dataset-1_punch_normal_001.bvh"
+    opts = ReaderOptions(units="mm", fps=60.0, skip_frames=10)
+    a, b = hapmotion.load_motion(bvh, opts), hapmotion.load_motion(bvh, units="mm", fps=60.0, skip_frames=10)
+    assert np.array_equal(a.positions, b.positions, equal_nan=True) and a.fps == b.fps == 60.0 and a.n_frames == 214
+    assert hapmotion.load_motion(bvh, opts, fps=30.0).fps == 30.0
+    with pytest.raises(UsageError, match="unknown up axis 'w'"):
+        hapmotion.load_motion(bvh, ReaderOptions(up="w"))
+    with pytest.raises(UsageError, match="unknown limit 'frame'"):
+        hapmotion.load_motion(bvh, limits={"frame": 10})
+    with pytest.raises(UsageError, match="option body_id does not apply to hapmotion CSV"):
+        hapmotion.load_motion(MOTION / "x.csv", ReaderOptions(body_id=3))
+    aist = hapmotion.load_motion(MOTION / "gBR_sBM_cAll_d04_mBR0_ch03.pkl", ReaderOptions(units="m", fps=30.0))
+    assert aist.fps == 30.0 and aist.meta["units"].startswith("m (x1 -> m) (option)")

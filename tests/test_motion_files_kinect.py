@@ -182,6 +182,9 @@ def test_integer_beyond_float_range_names_the_coordinate(tmp_path, clip):
     path = write(tmp_path, doc)
     text = path.read_text()
     assert text.count("987654.125") == 1
-    path.write_text(text.replace("987654.125", "1" + "0" * 400))  # json.loads gives a Python int; float() overflows
+    path.write_text(text.replace("987654.125", "1" + "0" * 400))  # beyond the float range
+    line = text[:text.index("987654.125")].count("\n") + 1
+    assert_input_error(path, f"line {line}", "expected at most 100 digits in a number (limit number_digits")
     assert_input_error(path, "field frames[0].bodies[0].joint_positions[0][0]",
-                       "expected a number (x in mm), found an integer too large for a float")
+                       "expected a number (x in mm), found a number beyond the float range",
+                       limits={"number_digits": 1000})

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import hapmotion
 from hapmotion.errors import InputError, UsageError
-from hapmotion.motion_files._common import MAX_FPS, MIN_FPS
+from hapmotion.motion_files.options import MAX_FPS, MIN_FPS
 from support.data import MOTION
 from support.motion_files import assert_input_error
 from support.motion_files import kinect_document
@@ -21,8 +22,14 @@ AIST = MOTION / "gBR_sBM_cAll_d04_mBR0_ch03.pkl"
 BAD_RATES = [1e-300, 1e300, math.nan, math.inf, -math.inf, 0.0, -30.0, 0.49, 2000.5, True]
 
 
-def test_limits():
-    assert (MIN_FPS, MAX_FPS) == (0.5, 2000.0)
+def test_rate_bounds_are_the_ones_enforced_and_documented():
+    """The bounds are inclusive, the nearest floats outside them are refused, and docs/formats.md states them."""
+    for inside, outside in ((MIN_FPS, np.nextafter(MIN_FPS, 0)), (MAX_FPS, np.nextafter(MAX_FPS, np.inf))):
+        assert hapmotion.load_motion(PUNCH, fps=inside).fps == inside
+        with pytest.raises(UsageError, match="fps must be a frame rate between"):
+            hapmotion.load_motion(PUNCH, fps=float(outside))
+    docs = (Path(__file__).resolve().parents[1] / "docs" / "formats.md").read_text()
+    assert f"{MIN_FPS:g}–{MAX_FPS:g} fps" in docs
 
 
 @pytest.mark.parametrize("fps", BAD_RATES, ids=repr)

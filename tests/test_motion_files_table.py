@@ -253,7 +253,7 @@ def test_npz_object_array_and_garbage_refused(tmp_path):
     a = good_arrays()
     a["joints"] = np.array(list(a["joints"]), dtype=object)
     path = npz(tmp_path, **a)
-    with pytest.raises(InputError, match=r"t\.npz: expected plain numeric/text arrays"):
+    with pytest.raises(InputError, match=r"t\.npz: field joints: expected plain numeric/text arrays, found objects"):
         hapmotion.load_motion(path)
     bad = tmp_path / "bad.npz"
     bad.write_bytes(b"PK\x03\x04 broken")

@@ -10,6 +10,7 @@ from support.synthetic import motion_from_frames, rotation, transform, waving
 
 import hapmotion
 from hapmotion.body.model import BodyModel
+from hapmotion.layout import load_layout
 
 FRAMES = waving(n=240, hand="HAND_LEFT")
 
@@ -80,6 +81,23 @@ def test_step_holds_missing_joints_and_never_emits_nan():
     assert np.isfinite(held).all()
 
 
+LAYOUT = load_layout()
+PLACES = [(d.name, r, c) for d in LAYOUT.devices for r in range(d.rows) for c in range(d.cols)]
+"""(device, row, column) of each output column."""
+
+
+def assert_split_stays_in_one_cell(row: np.ndarray) -> None:
+    """The actuators lit in one output row lie within one grid cell (2 x 2 actuators) of each device they use, and
+    the devices are the vest panels or a single sleeve."""
+    lit = [PLACES[i] for i in np.flatnonzero(row)]
+    devices = {d for d, _, _ in lit}
+    assert devices <= {"VestFront", "VestBack"} or len(devices) == 1, devices
+    for dev in devices:
+        rows = [r for d, r, _ in lit if d == dev]
+        cols = [c for d, _, c in lit if d == dev]
+        assert max(rows) - min(rows) <= 1 and max(cols) - min(cols) <= 1, (dev, rows, cols)
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     st.integers(min_value=1, max_value=40),
@@ -92,12 +110,23 @@ def test_any_motion_gives_finite_intensities_within_the_level_ceiling(n, fps, se
     rng = np.random.default_rng(seed)
     base = waving(n=n, fps=fps)
     noisy = base + rng.normal(0, rng.uniform(0, 0.5), base.shape)
-    track = hapmotion.render(motion_from_frames(noisy, fps), method=method, preset=preset)
+    motion = motion_from_frames(noisy, fps)
+    track = hapmotion.render(motion, method=method, preset=preset)
     x = track.intensities
-    assert np.isfinite(x).all()
-    assert x.min() >= 0.0
-    assert x.max() <= 100.0
+    # the frame loop's own output, before HapticTrack checks and clips it: already finite and within 0..100
+    out, debug = hapmotion.Renderer(method, preset, fps=fps, body=BodyModel.from_motion(motion)).run(motion.positions)
+    assert np.isfinite(out).all()
+    assert out.min() >= 0.0 and out.max() <= 100.0
+    assert np.array_equal(out, x)
     if preset == "paper":  # paper: at most level 8 = 80 % on any actuator
         assert x.max() <= 80.0 + 1e-9
+        level = debug["level"]
+        assert level.max() <= 8.0
+        # the paper's split gives no actuator more than the level's own drive (10 % per level), and a frame is
+        # silent exactly when its level is 0
+        assert (out <= 10.0 * level[:, None] + 1e-9).all()
+        assert np.array_equal(out.sum(axis=1) > 0, level > 0)
+        for row in out:
+            assert_split_stays_in_one_cell(row)
     for v in track.debug.values():
         assert np.isfinite(np.asarray(v, dtype=float)).all()

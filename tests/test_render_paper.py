@@ -14,11 +14,16 @@ import hapmotion
 from hapmotion.body.model import BodyModel
 from hapmotion.joints import JOINT_INDEX
 from hapmotion.layout import load_layout
-from hapmotion.render import kernel as K
+from hapmotion.render.steps.phantom import split_energy, split_paper
 from hapmotion.render.params import alpha_at
 
 LAYOUT = load_layout()
 IDS = LAYOUT.actuators
+
+
+def render_paper(motion, **options):
+    """The ``paper`` preset, named: these tests check the paper's own numbers, not the default preset's."""
+    return hapmotion.render(motion, preset="paper", **options)
 
 
 def col(name: str) -> int:
@@ -44,7 +49,7 @@ def test_dynamic_point_eq1_with_unit_weights():
     The left hand is farther from J_T, so it is the active joint; J_R is the opposite (right) shoulder.
     """
     hand = (0.89, 1.45, 0.0)
-    track = hapmotion.render(still(pose(HAND_LEFT=hand), n=5))
+    track = render_paper(still(pose(HAND_LEFT=hand), n=5))
     expected = (np.array(hand) + np.array([-0.19, 1.45, 0.0]) + np.array([0.0, 1.10, 0.0])) / 3
     np.testing.assert_allclose(track.debug["dynamic_point"], np.repeat(expected[None], 5, 0), atol=1e-12)
     assert (track.debug["active"] == [1, 0]).all()
@@ -53,7 +58,7 @@ def test_dynamic_point_eq1_with_unit_weights():
 def test_intensity_filter_eq2_by_hand():
     """I_t = alpha D_t C + (1 - alpha) I_{t-1} with alpha 0.5, C 6, I_0 = 0; D = (d - 0.13) / (1.85 - 0.13)."""
     hand = (0.89, 1.45, 0.0)
-    track = hapmotion.render(still(pose(HAND_LEFT=hand), n=8))
+    track = render_paper(still(pose(HAND_LEFT=hand), n=8))
     dp = (np.array(hand) + np.array([-0.19, 1.45, 0.0]) + np.array([0.0, 1.10, 0.0])) / 3
     d = np.linalg.norm(dp - np.array([0.0, 1.10, 0.0]))
     big_d = (d - 0.13) / (1.85 - 0.13)
@@ -72,7 +77,7 @@ def test_alpha_keeps_the_time_constant_at_other_rates():
 def test_on_the_body_under_13_cm_gives_no_distance_intensity():
     """Hands hanging at the hips: the centroid is within 13 cm of J_T, so D = 0 and the vest stays silent."""
     p = pose(HAND_LEFT=(0.05, 1.08, 0.10), HAND_RIGHT=(-0.05, 1.08, 0.10))
-    track = hapmotion.render(still(p, n=10))
+    track = render_paper(still(p, n=10))
     assert (track.debug["distance"] < 0.13).all()
     assert track.intensities.max() == 0.0
 
@@ -80,12 +85,12 @@ def test_on_the_body_under_13_cm_gives_no_distance_intensity():
 def test_out_of_range_projection_caps_distance_at_185_cm():
     """Baseline with a hand 3 m away: D is clipped to 1 and the level tends to C = 6 (60 %)."""
     far = pose(HAND_LEFT=(0.19, 1.45, 3.0))
-    track = hapmotion.render(still(far, n=200), method="baseline")
+    track = render_paper(still(far, n=200), method="baseline")
     assert track.debug["level"][-1] == pytest.approx(6.0, abs=1e-9)
     # the point is pulled back to 1.85 m before locating: same hit as a hand at 1.85 m in the same direction
     d = np.linalg.norm(np.array([0.19, 1.45, 3.0]) - np.array([0.0, 1.10, 0.0]))
     near = np.array([0.0, 1.10, 0.0]) + (np.array([0.19, 1.45, 3.0]) - np.array([0.0, 1.10, 0.0])) * 1.85 / d
-    track2 = hapmotion.render(still(pose(HAND_LEFT=tuple(near)), n=200), method="baseline")
+    track2 = render_paper(still(pose(HAND_LEFT=tuple(near)), n=200), method="baseline")
     np.testing.assert_allclose(track.debug["hit_point"][-1], track2.debug["hit_point"][-1], atol=1e-9)
 
 
@@ -94,7 +99,7 @@ def test_acceleration_boost_adds_up_to_two_levels_and_stops_at_eight():
     far above 1 and the full 2-level boost applies; with the level near 6 the total is capped at 8."""
     frames = np.repeat(pose(HAND_LEFT=(0.19, 1.45, 3.0))[None], 300, axis=0)
     frames[250:, JOINT_INDEX["HAND_LEFT"], 0] += 0.05  # a 5 cm step: a huge acceleration for one frame
-    track = hapmotion.render(motion_from_frames(frames), method="baseline")
+    track = render_paper(motion_from_frames(frames), method="baseline")
     lv = track.debug["level"]
     assert lv[249] == pytest.approx(6.0, abs=1e-6)
     assert lv[250] == pytest.approx(8.0, abs=1e-9)  # 6 + 2 = 8 = max_level
@@ -104,13 +109,13 @@ def test_acceleration_boost_adds_up_to_two_levels_and_stops_at_eight():
 
 def test_phantom_split_paper_1d_and_2d():
     raw = np.zeros(20)
-    K._split_paper(1.25, 2.0, 4, 5, 50.0, 0.05, 0, raw)  # on row 2, a = 0.25 from col 1 to col 2
+    split_paper(1.25, 2.0, 4, 5, 50.0, 0.05, 0, raw)  # on row 2, a = 0.25 from col 1 to col 2
     expect = np.zeros(20)
     expect[2 * 4 + 1] = 50 * 0.75
     expect[2 * 4 + 2] = 50 * 0.25
     np.testing.assert_allclose(raw, expect)
     raw[:] = 0
-    K._split_paper(1.3, 2.2, 4, 5, 40.0, 0.05, 0, raw)  # 2D: main (1, 2) x 0.5, neighbours K a, diagonal mean
+    split_paper(1.3, 2.2, 4, 5, 40.0, 0.05, 0, raw)  # 2D: main (1, 2) x 0.5, neighbours K a, diagonal mean
     expect[:] = 0
     expect[2 * 4 + 1] = 20.0
     expect[2 * 4 + 2] = 40 * 0.3
@@ -124,7 +129,7 @@ def test_phantom_split_energy_preserves_energy_and_centroid():
     for _ in range(50):
         cu, cv = rng.uniform(0, 3), rng.uniform(0, 4)
         raw = np.zeros(20)
-        K._split_energy(cu, cv, 4, 5, 30.0, 0, raw)
+        split_energy(cu, cv, 4, 5, 30.0, 0, raw)
         assert (raw ** 2).sum() == pytest.approx(900.0)
         cols = np.arange(20) % 4
         rows = np.arange(20) // 4
@@ -135,7 +140,7 @@ def test_phantom_split_energy_preserves_energy_and_centroid():
 
 def test_linear_split_loses_3_db_at_the_midpoint():
     raw = np.zeros(20)
-    K._split_paper(1.5, 0.0, 4, 5, 1.0, 0.05, 0, raw)
+    split_paper(1.5, 0.0, 4, 5, 1.0, 0.05, 0, raw)
     assert 10 * np.log10((raw ** 2).sum()) == pytest.approx(-3.0103, abs=1e-3)
 
 
@@ -144,7 +149,7 @@ def test_hand_to_the_side_lands_on_the_mirrored_edge(mirror):
     """Left hand out to the side at shoulder height: DP (-0.233, 0.233, 0) in body coordinates; the ray towards
     TP hits the left side of the torso (x = -a) at mid-height, z = 0: both panels' left column (wearer's left
     without mirroring, right with it), rows 0-1, front and back equally."""
-    track = hapmotion.render(still(pose(HAND_LEFT=(0.89, 1.45, 0.0)), n=60), mirror=mirror)
+    track = render_paper(still(pose(HAND_LEFT=(0.89, 1.45, 0.0)), n=60), mirror=mirror)
     row = track.intensities[-1]
     edge = 3 if mirror else 0
     other = 0 if mirror else 3
@@ -158,7 +163,7 @@ def test_hand_to_the_side_lands_on_the_mirrored_edge(mirror):
 
 @pytest.mark.parametrize("z, panel, silent", [(0.7, "VestFront", "VestBack"), (-0.7, "VestBack", "VestFront")])
 def test_hand_in_front_or_behind(z, panel, silent):
-    track = hapmotion.render(still(pose(HAND_LEFT=(0.1, 1.3, z)), n=60))
+    track = render_paper(still(pose(HAND_LEFT=(0.1, 1.3, z)), n=60))
     row = track.intensities[-1]
     assert device_sum(row, panel) > 0
     assert device_sum(row, silent) == 0
@@ -168,7 +173,7 @@ def test_hand_in_front_or_behind(z, panel, silent):
 
 
 def test_hand_overhead_hits_the_top_row_centre():
-    track = hapmotion.render(still(pose(HAND_LEFT=(0.19, 2.2, 0.0)), n=60))
+    track = render_paper(still(pose(HAND_LEFT=(0.19, 2.2, 0.0)), n=60))
     row = track.intensities[-1]
     lit = {IDS[i] for i in np.flatnonzero(row)}
     assert lit == {"VestFront_1", "VestFront_2", "VestBack_1", "VestBack_2"}
@@ -176,7 +181,7 @@ def test_hand_overhead_hits_the_top_row_centre():
 
 @pytest.mark.parametrize("mirror, sleeve", [(True, "ForearmR"), (False, "ForearmL")])
 def test_hand_high_to_the_side_reaches_the_shoulder_sleeve(mirror, sleeve):
-    track = hapmotion.render(still(pose(HAND_LEFT=(0.8, 1.9, 0.0)), n=60), mirror=mirror)
+    track = render_paper(still(pose(HAND_LEFT=(0.8, 1.9, 0.0)), n=60), mirror=mirror)
     row = track.intensities[-1]
     assert device_sum(row, sleeve) > 0
     assert device_sum(row, "VestFront") == device_sum(row, "VestBack") == 0
@@ -194,7 +199,7 @@ def test_two_active_hands_give_the_extra_weight_to_the_hand_farther_from_the_dyn
     frames = np.repeat(pose(HAND_LEFT=(0.6, 1.4, 0.2), HAND_RIGHT=(-0.4, 1.3, 0.2))[None], 30, axis=0)
     frames[20:, JOINT_INDEX["HAND_LEFT"], 0] += 0.04
     frames[20:, JOINT_INDEX["HAND_RIGHT"], 0] -= 0.02
-    track = hapmotion.render(motion_from_frames(frames))
+    track = render_paper(motion_from_frames(frames))
     assert (track.debug["active"][19] == [1, 0]).all()
     assert (track.debug["active"][20] == [1, 1]).all()
     hl, hr, jt = frames[20, JOINT_INDEX["HAND_LEFT"]], frames[20, JOINT_INDEX["HAND_RIGHT"]], frames[20, 1]
@@ -204,7 +209,7 @@ def test_two_active_hands_give_the_extra_weight_to_the_hand_farther_from_the_dyn
 
 def test_baseline_uses_the_active_hand_itself():
     hand = (0.89, 1.45, 0.0)
-    track = hapmotion.render(still(pose(HAND_LEFT=hand), n=5), method="baseline")
+    track = render_paper(still(pose(HAND_LEFT=hand), n=5), method="baseline")
     np.testing.assert_allclose(track.debug["dynamic_point"], np.repeat(np.array([hand]), 5, 0), atol=1e-12)
     d = np.linalg.norm(np.array(hand) - np.array([0.0, 1.10, 0.0]))
     np.testing.assert_allclose(track.debug["distance"], d)
@@ -215,7 +220,7 @@ def test_direct_mapping_under_13_cm_lands_on_the_nearest_surface_point():
     (0.02, 1.20, 0.067), 12.2 cm from J_T. In body coordinates (x = -X) it is (-0.02, 0.10, 0.067); scaled radially
     onto the ellipse x^2/0.19^2 + z^2/0.114^2 = 1 (y kept: it is between the caps) it lands on the front panel."""
     p = pose(HAND_LEFT=(0.25, 1.05, 0.20), HAND_RIGHT=(-0.05, 1.05, 0.05))
-    track = hapmotion.render(still(p, n=3))
+    track = render_paper(still(p, n=3))
     dp = (np.array([0.25, 1.05, 0.20]) + np.array([-0.19, 1.45, 0.0]) + np.array([0.0, 1.10, 0.0])) / 3
     np.testing.assert_allclose(track.debug["dynamic_point"][-1], dp, atol=1e-12)
     assert track.debug["distance"][-1] < 0.13

@@ -84,7 +84,7 @@ def test_live_music_goes_through_the_offline_output_stage(monkeypatch):
     monkeypatch.setattr(show_module, "output_stage", spy)
     limit = show_module.power_limit_for(hapmotion.audio.DEFAULT_PARAMS.power_limit_fraction, n)
     solo = live_music(Show(audio=SONG), "audio", fps=60.0, layout=layout, actuators=layout.actuators)
-    assert calls[0] == {"mode": "audio", "ratio": (2, 3), "domain": "linear", "power_limit": limit}
+    assert calls[0] == {"mode": "audio", "ratio": (2, 3), "power_limit": limit, "rule": "duck"}
     offline = combine(None, SONG, mode="audio", fps=60.0, actuators=layout)
     np.testing.assert_array_equal(solo.rows, offline.intensities)
 
@@ -94,6 +94,9 @@ def test_live_music_goes_through_the_offline_output_stage(monkeypatch):
     calls.clear()
     motion_row = np.linspace(0, 100, n)
     got = channel.mixed(motion_row, 2.0)
-    assert calls == [{"mode": "multimodal", "ratio": (1, 1), "domain": "energy", "power_limit": limit}]
-    np.testing.assert_array_equal(got, real_stage(motion_row, channel.row(2.0), mode="multimodal", ratio=(1, 1),
-                                                  domain="energy", power_limit=limit))
+    assert len(calls) == 1
+    kw = calls[0]
+    assert {k: kw[k] for k in ("mode", "ratio", "power_limit", "rule")} == {
+        "mode": "multimodal", "ratio": (1, 1), "power_limit": limit, "rule": "energy"}
+    np.testing.assert_array_equal(kw["positions"], layout.positions())
+    np.testing.assert_array_equal(got, real_stage(motion_row, channel.row(2.0), **kw))

@@ -10,7 +10,7 @@ import pytest
 import soundfile as sf
 
 import hapmotion
-from hapmotion.audio import DEFAULT_ACTUATORS, analyze_file, audio_track, mix
+from hapmotion.audio import PAPER_PARAMS, analyze_file, audio_track, mix
 from hapmotion.show import combine
 from support.audio_synth import drum_hit, place_hits
 from hapmotion.errors import InputError, UsageError
@@ -26,7 +26,7 @@ def _motion_track(n_frames=120, fps=60.0, level=50.0) -> HapticTrack:
     rows[:, 5] = level                                            # one motor on VestFront
     debug = {"dynamic_point": np.tile([0.1, 1.2, 0.3], (n_frames, 1)), "active": np.ones((n_frames, 2), np.int8),
              "chart": np.zeros(n_frames, np.int8), "level": np.full(n_frames, 5.0)}
-    return HapticTrack(rows, fps, DEFAULT_ACTUATORS, meta={"method": "mst", "preset": "paper"}, debug=debug)
+    return HapticTrack(rows, fps, hapmotion.load_layout().actuators, meta={"method": "mst", "preset": "paper"}, debug=debug)
 
 
 @pytest.fixture(scope="module")
@@ -42,10 +42,12 @@ def clicks_wav(tmp_path_factory):
 def test_multimodal_is_the_mix_of_the_two_channels(clicks_wav):
     motion = _motion_track(240)                                    # 4 s of motion, longer than the 3 s audio
     out = combine(motion, clicks_wav, mode="multimodal")
-    audio = audio_track(analyze_file(clicks_wav, fps=60.0)).intensities
-    expected = mix(motion.intensities, np.vstack([audio, np.zeros((240 - audio.shape[0], 52))]), power_limit=39.0)
+    # a paper-preset motion track gets the paper's audio: the whole-suit pattern and the 2:3 weighted sum
+    audio = audio_track(analyze_file(clicks_wav, fps=60.0, params=PAPER_PARAMS)).intensities
+    expected = mix(motion.intensities, np.vstack([audio, np.zeros((240 - audio.shape[0], 52))]), power_limit=39.0,
+                   rule="paper")
     np.testing.assert_allclose(out.intensities, expected)
-    assert out.intensities.shape == (240, 52) and out.fps == 60.0 and out.actuators == DEFAULT_ACTUATORS
+    assert out.intensities.shape == (240, 52) and out.fps == 60.0 and out.actuators == hapmotion.load_layout().actuators
 
 
 def test_motion_mode_is_the_motion_track(clicks_wav):
@@ -57,15 +59,18 @@ def test_motion_mode_is_the_motion_track(clicks_wav):
 
 
 def test_audio_mode_without_motion_uses_fps_and_the_default_actuators(clicks_wav):
-    out = combine(None, clicks_wav, mode="audio", fps=30.0)
-    assert out.fps == 30.0 and out.n_frames == 90 and out.actuators == DEFAULT_ACTUATORS
+    out = combine(None, clicks_wav, mode="audio", fps=30.0, params=PAPER_PARAMS)
+    assert out.fps == 30.0 and out.n_frames == 90 and out.actuators == hapmotion.load_layout().actuators
     assert out.layout == "x40_shoulders"
     kicks = np.flatnonzero(out.debug["audio_kick"])
     assert kicks.tolist() == [14, 29, 44, 59, 74]                   # 1 frame (33 ms) per kick at 30 fps, onsets
     # a kick on all 52 motors is power 52: the default limit (0.75 of the suit at full drive) scales it to 87
     assert out.intensities[kicks].max() == pytest.approx(100 * np.sqrt(0.75))
-    full = combine(None, clicks_wav, mode="audio", fps=30.0, power_limit_fraction=None)
+    full = combine(None, clicks_wav, mode="audio", fps=30.0, power_limit_fraction=None, params=PAPER_PARAMS)
     assert full.intensities[kicks].max() == 100.0
+    # the default layered pattern kicks 8 motors (power 8): under the limit, at full drive
+    layered = combine(None, clicks_wav, mode="audio", fps=30.0)
+    assert layered.intensities[kicks].max() == 100.0 and (layered.intensities[kicks[0]] == 100.0).sum() == 8
 
 
 def test_audio_mode_on_a_custom_layout(clicks_wav):
@@ -83,7 +88,7 @@ def test_energy_domain_and_ratio_are_passed_on(clicks_wav):
     motion = _motion_track(180)
     lin = combine(motion, clicks_wav, ratio=(1, 1), power_limit_fraction=None)
     eng = combine(motion, clicks_wav, ratio=(1, 1), domain="energy", power_limit_fraction=None)
-    audio_only = combine(None, clicks_wav, mode="audio", power_limit_fraction=None).intensities
+    audio_only = combine(None, clicks_wav, mode="audio", power_limit_fraction=None, params=PAPER_PARAMS).intensities
     np.testing.assert_allclose(lin.intensities, 0.5 * audio_only + 0.5 * motion.intensities)
     np.testing.assert_allclose(eng.intensities, np.sqrt(0.5 * audio_only ** 2 + 0.5 * motion.intensities ** 2))
 
@@ -98,13 +103,13 @@ def test_length_longer_and_motion(clicks_wav):
     assert cut.n_frames == 60
     np.testing.assert_allclose(cut.intensities, longer.intensities[:60])
     # the motion is silent after its end: only audio (at 0.4 of its level) from frame 60 on
-    audio = combine(None, clicks_wav, mode="audio", power_limit_fraction=None).intensities
+    audio = combine(None, clicks_wav, mode="audio", power_limit_fraction=None, params=PAPER_PARAMS).intensities
     np.testing.assert_allclose(longer.intensities[60:, 5], np.minimum(0.4 * audio[60:, 5], 100), atol=1e-9)
 
 
 def test_offset_delays_the_music_on_the_track(clicks_wav):
     motion = _motion_track(300)
-    base = combine(None, clicks_wav, mode="audio")
+    base = combine(None, clicks_wav, mode="audio", params=PAPER_PARAMS)
     late = combine(motion, clicks_wav, mode="audio", offset_s=1.0)
     assert late.n_frames == 300 and late.meta["frames_audio"] == 240
     np.testing.assert_allclose(late.intensities[60:240], base.intensities[0:180], atol=1e-9)
@@ -163,10 +168,11 @@ def test_bad_audio_file_is_an_input_error(tmp_path):
 def test_rendered_motion_with_the_bundled_music_in_multimodal_mode():
     """The demo's combination: a rendered dance (here a synthetic wave of the hand) with "Vibe Ace"."""
     motion = motion_from_frames(waving(n=600, fps=60.0), fps=60.0)
-    motion_track = hapmotion.render(motion)
+    motion_track = hapmotion.render(motion, preset="paper")
     out = combine(motion_track, SONG, mode="multimodal", length="motion")
     assert out.n_frames == motion_track.n_frames and out.actuators == motion_track.actuators
-    audio = combine(None, SONG, mode="audio", power_limit_fraction=None).intensities[:600]
+    assert out.meta["mix_rule"] == "paper"
+    audio = combine(None, SONG, mode="audio", power_limit_fraction=None, params=PAPER_PARAMS).intensities[:600]
     expected = np.clip(0.4 * audio + 0.6 * motion_track.intensities, 0, 100)
     power = np.sum((expected / 100) ** 2, axis=1, keepdims=True)
     expected *= np.sqrt(np.minimum(1.0, 39.0 / power))
@@ -192,7 +198,7 @@ def test_bundled_music_audio_only_track(name):
 def test_combine_reuses_a_given_analysis(monkeypatch):
     """Several conditions of one song: pass the analysis and the song is not analysed again; same numbers."""
     song = AUDIO / "vibe_ace.ogg"
-    motion = HapticTrack(np.full((120, 52), 30.0), 60.0, DEFAULT_ACTUATORS)
+    motion = HapticTrack(np.full((120, 52), 30.0), 60.0, hapmotion.load_layout().actuators)
     fresh = combine(motion, song, mode="multimodal", fps=60.0, length="motion")
     an = analyze_file(song, fps=60.0)
 

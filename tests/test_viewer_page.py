@@ -189,7 +189,7 @@ def test_view_command_with_music_mixes_and_embeds_it(tmp_path, capsys):
                         "--credit", "Vibe Ace, Kevin MacLeod, CC BY 3.0"], capsys)
     assert code == 0, err
     data, blobs = read_page(out)
-    assert [t["key"] for t in data["tracks"]] == ["mst-paper", "mst-paper-multimodal"]
+    assert [t["key"] for t in data["tracks"]] == ["mst-felt", "mst-felt-multimodal"]     # the default preset
     audio = data["audio"]
     assert audio["mime"] == "audio/ogg" and audio["name"] == "vibe_ace.ogg"
     assert blobs[audio["data"]["id"]].tobytes() == SONG.read_bytes()      # the file itself, byte for byte

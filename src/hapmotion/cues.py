@@ -27,7 +27,6 @@ a motor already running, and no combination can pass the show's limits.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import dataclass, field
@@ -38,6 +37,7 @@ import numpy as np
 
 from .audio.mix import limit_power
 from .errors import InputError
+from .limits import DEFAULT_LIMITS, InputLimits, LimitsArg, as_limits, loads_json
 from .track import HapticTrack, parse_actuator_id
 
 MAX_CUE_FILE_BYTES = 4 << 20
@@ -69,6 +69,7 @@ class CueList:
     cues: list[Cue]
     source: Path
     notes: list[str] = field(default_factory=list)
+    limits: InputLimits = DEFAULT_LIMITS  # the pattern files are read within these
 
     def by_name(self, name: str) -> Optional[Cue]:
         """The first cue called ``name`` (live shows fire cues by name), else ``None``."""
@@ -136,12 +137,8 @@ def _parse_text(source: Path, text: str) -> list[Cue]:
     return cues
 
 
-def _parse_json(source: Path, text: str) -> list[Cue]:
-    try:
-        doc = json.loads(text)
-    except (ValueError, RecursionError) as exc:  # RecursionError: absurdly deep nesting
-        where = f"line {exc.lineno}" if isinstance(exc, json.JSONDecodeError) else None
-        raise InputError(source, where, "expected a JSON cue list") from None
+def _parse_json(source: Path, text: str, limits: InputLimits) -> list[Cue]:
+    doc = loads_json(source, text, limits, "JSON cue list")
     items = doc.get("cues") if isinstance(doc, dict) else doc
     if not isinstance(items, list):
         raise InputError(source, "cues", "expected a list of cues (or {\"cues\": [...]})")
@@ -153,12 +150,14 @@ def _parse_json(source: Path, text: str) -> list[Cue]:
     return cues
 
 
-def load_cues(path: "str | os.PathLike[str]") -> CueList:
+def load_cues(path: "str | os.PathLike[str]", limits: LimitsArg = None) -> CueList:
     """Read a cue list (``.json``, else the text form); cues come back in time order.
 
     Raises :class:`InputError` naming the file and the line (text) or the cue (JSON) for anything unusable,
-    including a pattern file that does not exist.
+    including a pattern file that does not exist. ``limits`` (see :func:`hapmotion.limits.as_limits`) bound the
+    JSON form and the pattern files the cues play.
     """
+    limits = as_limits(limits)
     source = Path(path)
     try:
         size = source.stat().st_size
@@ -175,13 +174,13 @@ def load_cues(path: "str | os.PathLike[str]") -> CueList:
     except OSError as exc:
         raise InputError(source, None, f"cannot read it ({exc.strerror})") from None
     looks_json = source.suffix.lower() == ".json" or text.lstrip().startswith(("{", "["))
-    cues = _parse_json(source, text) if looks_json else _parse_text(source, text)
+    cues = _parse_json(source, text, limits) if looks_json else _parse_text(source, text)
     if len(cues) > MAX_CUES:
         raise InputError(source, None, f"expected at most {MAX_CUES} cues, found {len(cues)}")
     for cue in cues:
         if not cue.pattern.is_file():
             raise InputError(source, cue.place, f"expected a pattern file at {cue.pattern}, found none")
-    return CueList(sorted(cues, key=lambda c: c.time_s), source)
+    return CueList(sorted(cues, key=lambda c: c.time_s), source, limits=limits)
 
 
 def pattern_rows(pattern: HapticTrack, *, fps: float, actuators: Sequence[str], mirror_map: np.ndarray,
@@ -222,7 +221,7 @@ def cue_layer(cue_list: CueList, *, fps: float, n_frames: int, actuators: Sequen
     loaded: dict[Path, HapticTrack] = {}
     for cue in cue_list.cues:
         if cue.pattern not in loaded:
-            loaded[cue.pattern] = load_track(cue.pattern)
+            loaded[cue.pattern] = load_track(cue.pattern, cue_list.limits)
         rows = pattern_rows(loaded[cue.pattern], fps=fps, actuators=actuators, mirror_map=mirror_map, cue=cue,
                             notes=cue_list.notes)
         start = int(round(cue.time_s * fps))

@@ -25,12 +25,14 @@ PARENTS: tuple[int, ...] = (
 
 N_JOINTS = len(JOINTS)
 
-# Joints the renderer reads. J_T is SPINE_NAVEL (paper, Section 4); the body frame needs the shoulders, the
-# pelvis and the neck; SPINE_CHEST is used by the surface model when present.
+# Joints the renderer reads: the hands are the candidate active joints and SHOULDER_* the opposite vertex of the
+# motion salient triangle; J_T is SPINE_NAVEL (paper, Section 4); the body frame needs the shoulders, the pelvis and
+# the neck.
 RENDER_JOINTS: tuple[str, ...] = (
     "HAND_LEFT", "HAND_RIGHT", "SHOULDER_LEFT", "SHOULDER_RIGHT", "SPINE_NAVEL", "PELVIS", "NECK",
 )
-"""Joints every motion must provide (read or derived) before it can be rendered."""
+"""Joints every motion must provide (read or derived) before it can be rendered, in the order the compiled renderer
+receives them (``hapmotion.render.packed`` derives its joint indices from this tuple)."""
 
 # Skeleton edges worth drawing (parent, child), for viewers and plots.
 BONES: tuple[tuple[int, int], ...] = tuple((p, c) for c, p in enumerate(PARENTS) if p >= 0)

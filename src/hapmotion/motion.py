@@ -174,7 +174,9 @@ def new_motion(
     missing = motion.missing_render_joints()
     if missing:
         names = meta.get("source_joints_available")
-        hint = f" (the file has: {', '.join(names)})" if names else ""
+        shown = ", ".join(str(n)[:30] for n in names[:12]) if names else ""
+        more = f" and {len(names) - 12} more" if names and len(names) > 12 else ""
+        hint = f" (the file has: {shown}{more})" if names else ""
         raise InputError(
             source,
             "joints " + ", ".join(missing),

@@ -2,7 +2,8 @@
 
 A :class:`Show` holds every choice that turns a performance into vibration: the renderer (method, preset,
 parameter overrides, mirroring), the paper's study-2 condition (``mode``: motion, audio or both mixed), the music
-(file, offset, mix ratio and domain) and the length rule. Every entry point composes a show here and nowhere else:
+(file, offset, mix ratio and rule), the length rule and the wearer's gain and comfort limits (applied to every row
+that leaves the show, files and live alike: :mod:`hapmotion.comfort`). Every entry point composes a show here and nowhere else:
 
 * offline, :func:`render_show` turns a :class:`~hapmotion.motion.Motion` (and/or the music) into a
   :class:`~hapmotion.track.HapticTrack` (``hapmotion render``, ``demo``, ``view``, ``plot``, ``evaluate``);
@@ -33,12 +34,13 @@ from typing import Any, Callable, Mapping, Optional, Sequence
 import numpy as np
 
 from .audio.analysis import analyze_file
-from .audio.mix import check_ratio, limit_power, mix
-from .audio.params import DEFAULT_PARAMS, MIX_DOMAINS, AudioParams
-from .audio.pattern import actuators_of, audio_track
+from .audio.mix import check_ratio, limit_power, mix, resolve_rule
+from .audio.params import DEFAULT_PARAMS, MIX_DOMAINS, MIX_RULES, AudioParams, params_for_preset
+from .audio.pattern import actuators_of, audio_track, layout_of
+from .comfort import Comfort, Limiter, limit_rows
 from .errors import UsageError
 from .motion import Motion
-from .render.params import METHODS, PRESETS, Params
+from .render.params import DEFAULT_PRESET, METHODS, PRESETS, Params
 from .track import HapticTrack
 
 MODES = ("multimodal", "motion", "audio")
@@ -65,21 +67,27 @@ class Show:
     ``overrides`` are :class:`~hapmotion.render.Params` fields set on top of ``preset`` (``mirror`` wins over an
     override of the same name). ``mode`` ``None`` picks from the inputs (:meth:`resolved_mode`). ``fps`` ``None``
     keeps the motion's rate (60 frames/s for the music alone). ``layout`` ``None`` is the default X40 + two shoulder
-    sleeves.
+    sleeves. ``mix_rule`` ``None`` is the preset's (``paper`` for the paper preset, ``duck`` otherwise;
+    ``mix_domain``, the older spelling, wins when given). ``cues`` is a cue list (a file or a
+    :class:`~hapmotion.cues.CueList`) layered over motion and music by :func:`hapmotion.cues.layer`. ``comfort``
+    holds the wearer's gain and limits, applied to every row that leaves the show (:mod:`hapmotion.comfort`).
     """
 
     method: str = "mst"
-    preset: str = "paper"
+    preset: str = DEFAULT_PRESET
     overrides: Mapping[str, Any] = field(default_factory=dict)
     mirror: Optional[bool] = None
     mode: Optional[str] = None
     audio: Optional[Path] = None
     audio_offset_s: float = 0.0
     mix_ratio: tuple[float, float] = (2.0, 3.0)
-    mix_domain: str = "linear"
+    mix_domain: Optional[str] = None
+    mix_rule: Optional[str] = None
     length: str = "longer"
     fps: Optional[float] = None
     layout: Any = None
+    comfort: Comfort = Comfort()
+    cues: Any = None
 
     def __post_init__(self) -> None:
         _choice(self.method, METHODS, "method")
@@ -87,7 +95,12 @@ class Show:
             raise UsageError(f"unknown preset {self.preset!r}; choose one of {', '.join(PRESETS)}")
         if self.mode is not None:
             _choice(self.mode, MODES, "mode")
-        _choice(self.mix_domain, MIX_DOMAINS, "mix domain")
+        if self.mix_domain is not None:
+            _choice(self.mix_domain, MIX_DOMAINS, "mix domain")
+        if self.mix_rule is not None:
+            _choice(self.mix_rule, MIX_RULES, "mix rule")
+        if not isinstance(self.comfort, Comfort):
+            raise UsageError(f"comfort must be a hapmotion.comfort.Comfort, not {type(self.comfort).__name__}")
         _choice(self.length, LENGTH_RULES, "length rule")
         object.__setattr__(self, "mix_ratio", check_ratio(self.mix_ratio))
         try:
@@ -144,6 +157,11 @@ class Show:
 
         return Renderer(self.method, self.params(), fps=fps, body=body, layout=self.load_layout())
 
+    def limiter(self, fps: float, n_actuators: int) -> Limiter:
+        """The live form of the show's gain and comfort limits: ``limiter.step(row)`` on every row sent, so live
+        sends what :func:`render_show` writes to files."""
+        return Limiter(self.comfort, n_actuators, fps)
+
     def describe(self, mode: str) -> dict[str, Any]:
         """What a listener or viewer needs to know about how the show is rendered."""
         return {"method": self.method, "preset": self.preset, "mirror": self.params().mirror, "mode": mode}
@@ -176,10 +194,61 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
         motion_track = render_motion(show, motion, progress)
     if show.audio is None:
         assert motion_track is not None  # resolved_mode guarantees it
-        return motion_track
-    return combine(motion_track, show.audio, mode=mode, ratio=show.mix_ratio, offset_s=show.audio_offset_s,
-                   fps=show.fps or 60.0, domain=show.mix_domain, length=show.length,
-                   actuators=None if motion_track is not None else show.load_layout(), analysis=analysis)
+        track = motion_track
+    else:
+        track = combine(motion_track, show.audio, mode=mode, ratio=show.mix_ratio, offset_s=show.audio_offset_s,
+                        fps=show.fps or 60.0, domain=show.mix_domain, length=show.length,
+                        actuators=None if motion_track is not None else show.load_layout(), analysis=analysis,
+                        mix_rule=show.mix_rule)
+    return apply_comfort(show, apply_cues(show, track))
+
+
+def show_power_limit(n_actuators: int) -> Optional[float]:
+    """The total power limit ``sum (I/100)^2`` every show's rows keep to (the output stage's: the audio
+    parameters' fraction of every actuator at full drive); cues layered on top keep to it too."""
+    return power_limit_for(DEFAULT_PARAMS.power_limit_fraction, n_actuators)
+
+
+def load_show_cues(show: Show, limits: Any = None):
+    """The show's cue list (:class:`~hapmotion.cues.CueList`), read within ``limits`` if given as a file; ``None``
+    without cues."""
+    from .cues import CueList, load_cues
+
+    if show.cues is None or isinstance(show.cues, CueList):
+        return show.cues
+    return load_cues(show.cues, limits=limits)
+
+
+def apply_cues(show: Show, track: HapticTrack) -> HapticTrack:
+    """``track`` with the show's cues layered on (:func:`hapmotion.cues.layer`, under :func:`show_power_limit`);
+    unchanged without cues. ``meta["cues"]`` names the cue list and ``meta["cue_notes"]`` what was left out."""
+    from .cues import cue_layer, layer
+
+    cue_list = load_show_cues(show)
+    if cue_list is None:
+        return track
+    layout = show.load_layout()
+    if tuple(track.actuators) != tuple(layout.actuators):
+        raise UsageError("cues need the track on the show's layout")
+    energy = cue_layer(cue_list, fps=track.fps, n_frames=track.n_frames, actuators=track.actuators,
+                       mirror_map=layout.mirror_map())
+    rows = layer(track.intensities, energy, show_power_limit(len(track.actuators)))
+    meta = dict(track.meta)
+    meta["cues"] = os.fspath(cue_list.source)
+    if cue_list.notes:
+        meta["cue_notes"] = list(cue_list.notes)
+    return dataclasses.replace(track, intensities=rows, meta=meta)
+
+
+def apply_comfort(show: Show, track: HapticTrack) -> HapticTrack:
+    """``track`` with the show's gain and comfort limits applied to its rows (:func:`hapmotion.comfort.limit_rows`
+    from a fresh state); unchanged when they change nothing. ``meta["comfort"]`` records them."""
+    if show.comfort.is_neutral:
+        return track
+    rows, _ = limit_rows(track.intensities, show.comfort, track.fps)
+    meta = dict(track.meta)
+    meta["comfort"] = show.comfort.to_dict()
+    return dataclasses.replace(track, intensities=rows, meta=meta)
 
 
 def render_variants(show: Show, motion: Optional[Motion], methods: Sequence[str], presets: Sequence[str],
@@ -199,7 +268,7 @@ def render_variants(show: Show, motion: Optional[Motion], methods: Sequence[str]
     if motion is not None:
         tracks = [render_motion(show.replace(method=m, preset=s), motion, progress) for m in methods for s in presets]
     if show.audio is None:
-        return tracks
+        return [apply_comfort(show, t) for t in tracks]
     out: list[HapticTrack] = []
     for mode in modes:
         played = tracks[:1] if mode == "audio" else tracks
@@ -240,15 +309,18 @@ def power_limit_for(fraction: float | None, n_actuators: int) -> float | None:
 
 
 def output_stage(motion_rows: np.ndarray, audio_rows: np.ndarray, *, mode: str, ratio: "tuple[float, float]",
-                 domain: str, power_limit: float | None) -> np.ndarray:
+                 domain: str | None = None, power_limit: float | None, rule: str | None = None,
+                 positions: np.ndarray | None = None, params: AudioParams | None = None) -> np.ndarray:
     """What the three study-2 conditions send, from motion and audio rows ``(N,)`` or ``(T, N)`` 0..100.
 
-    ``multimodal``: the mix (:func:`hapmotion.audio.mix.mix`); ``motion`` / ``audio``: that channel alone; all
-    clipped to 0..100 and power-limited the same way. Used offline by :func:`combine` and per frame live
-    (:func:`live_music`), so both send the same numbers.
+    ``multimodal``: the mix (:func:`hapmotion.audio.mix.mix`, with ``rule``/``domain``, ``positions`` and
+    ``params`` passed on); ``motion`` / ``audio``: that channel alone; all clipped to 0..100 and power-limited the
+    same way. Used offline by :func:`combine` and per frame live (:func:`live_music`), so both send the same
+    numbers.
     """
     if mode == "multimodal":
-        return mix(motion_rows, audio_rows, ratio=ratio, domain=domain, power_limit=power_limit)
+        return mix(motion_rows, audio_rows, ratio=ratio, domain=domain, power_limit=power_limit, rule=rule,
+                   positions=positions, params=params)
     if mode not in ("motion", "audio"):
         raise UsageError(f"mode must be motion, audio or multimodal, not {mode!r}")
     return limit_power(np.clip(motion_rows if mode == "motion" else audio_rows, 0.0, 100.0), power_limit)
@@ -256,9 +328,10 @@ def output_stage(motion_rows: np.ndarray, audio_rows: np.ndarray, *, mode: str, 
 
 def combine(motion_track: HapticTrack | None, audio_path: "str | os.PathLike[str] | None",
             mode: str = "multimodal", ratio: "tuple[float, float]" = (2, 3), offset_s: float = 0.0,
-            fps: float = 60.0, domain: str = "linear", length: str = "longer",
+            fps: float = 60.0, domain: str | None = None, length: str = "longer",
             actuators: "Sequence[str] | Any | None" = None, params: AudioParams | None = None,
-            power_limit_fraction: float | None | str = "params", analysis: Any = None) -> HapticTrack:
+            power_limit_fraction: float | None | str = "params", analysis: Any = None,
+            mix_rule: str | None = None) -> HapticTrack:
     """One of the study-2 conditions from an already rendered motion track and a music file.
 
     Parameters
@@ -277,20 +350,24 @@ def combine(motion_track: HapticTrack | None, audio_path: "str | os.PathLike[str
     fps:
         Frame rate when there is no motion track.
     domain:
-        ``"linear"`` (paper) or ``"energy"`` mix, see :func:`hapmotion.audio.mix.mix`.
+        Older spelling of the mix rule: ``"linear"`` (= ``paper``) or ``"energy"``; ``None``: see ``mix_rule``.
     length:
         ``"longer"`` or ``"motion"`` (see the module docstring).
     actuators:
         Ids (or a Layout, anything with ``.actuators`` and ``.name``) when there is no motion track (default: the
         default layout's). With a motion track they must equal its actuators.
     params:
-        :class:`AudioParams` (default values if ``None``).
+        :class:`AudioParams`; ``None``: those of the motion track's preset (``params_for_preset``: the paper's
+        whole-suit pattern and 2:3 weighted sum for ``paper``, the layered pattern and the ``duck`` mix otherwise).
     power_limit_fraction:
         Total power limit as a fraction of all actuators at full drive, applied to every frame in every mode so the
         three conditions share one output stage; ``"params"`` takes ``params.power_limit_fraction``, ``None``
         disables it.
     analysis:
         The song's :class:`AudioAnalysis` when the caller already has it (same file, fps, offset and params).
+    mix_rule:
+        ``"duck"``, ``"paper"`` or ``"energy"`` (:mod:`hapmotion.audio.mix`); ``None``: ``domain`` if given, else
+        ``params.mix_rule``.
 
     Returns
     -------
@@ -299,10 +376,11 @@ def combine(motion_track: HapticTrack | None, audio_path: "str | os.PathLike[str
         limit and the analysis facts; ``debug`` holds the motion track's arrays (extended past its end) and the
         audio ones (``audio_envelope``, ``audio_kick``, ...).
     """
-    p = params or DEFAULT_PARAMS
+    preset = motion_track.meta.get("preset") if motion_track is not None else None
+    p = params or params_for_preset(preset)
     _choice(mode, MODES, "mode")
     _choice(length, LENGTH_RULES, "length rule")
-    _choice(domain, MIX_DOMAINS, "mix domain")
+    rule = resolve_rule(mix_rule, domain, p)
     ratio = check_ratio(ratio)
     try:
         offset_s = float(offset_s)
@@ -339,11 +417,15 @@ def combine(motion_track: HapticTrack | None, audio_path: "str | os.PathLike[str
 
     fraction = p.power_limit_fraction if power_limit_fraction == "params" else power_limit_fraction
     limit = power_limit_for(fraction, n)
-    rows = output_stage(motion_rows, audio_rows, mode=mode, ratio=ratio, domain=domain, power_limit=limit)
+    geometry = layout_of(actuators if motion_track is None and actuators is not None else ids)
+    positions = geometry.positions() if geometry is not None else None
+    rows = output_stage(motion_rows, audio_rows, mode=mode, ratio=ratio, power_limit=limit, rule=rule,
+                        positions=positions, params=p)
 
     meta: dict[str, Any] = dict(motion_track.meta) if motion_track is not None else {}
     meta.update({
-        "mode": mode, "mix_ratio": [ratio[0], ratio[1]], "mix_domain": domain,
+        "mode": mode, "mix_ratio": [ratio[0], ratio[1]], "mix_rule": rule,
+        "mix_domain": {"paper": "linear", "energy": "energy"}.get(rule),
         "audio_path": os.fspath(audio_path) if audio_path is not None else None, "audio_offset_s": offset_s,
         "length": length, "power_limit": limit, "frames_motion": n_motion, "frames_audio": n_audio,
     })
@@ -380,7 +462,9 @@ def live_music(show: Show, mode: str, *, fps: float, layout: Any, actuators: Seq
     """
     if show.audio is None:
         raise UsageError(f"mode {mode} needs music (--audio SONG)")
-    analysis = analyze_file(show.audio, fps=fps, offset_s=show.audio_offset_s)
+    params = params_for_preset(show.preset)
+    rule = resolve_rule(show.mix_rule, show.mix_domain, params)
+    analysis = analyze_file(show.audio, fps=fps, offset_s=show.audio_offset_s, params=params)
     track = audio_track(analysis, layout=layout)
     index = {a: i for i, a in enumerate(track.actuators)}
     missing = [a for a in actuators if a not in index]
@@ -388,12 +472,19 @@ def live_music(show: Show, mode: str, *, fps: float, layout: Any, actuators: Seq
         raise UsageError(f"--audio: the audio track has no column {missing[0]} of the session layout")
     limit = power_limit_for(analysis.params.power_limit_fraction, len(actuators))
     rows = track.intensities[:, [index[a] for a in actuators]]
-    ratio, domain = show.mix_ratio, show.mix_domain
+    ratio = show.mix_ratio
+    geometry = layout_of(layout if layout is not None else list(actuators))
+    positions = None
+    if geometry is not None:
+        index_g = {a: i for i, a in enumerate(geometry.actuators)}
+        if all(a in index_g for a in actuators):
+            positions = geometry.positions()[[index_g[a] for a in actuators]]
     if mode == "audio":
-        rows = output_stage(np.zeros_like(rows), rows, mode="audio", ratio=ratio, domain=domain, power_limit=limit)
+        rows = output_stage(np.zeros_like(rows), rows, mode="audio", ratio=ratio, power_limit=limit, rule=rule)
 
     def mix_row(motion_row: np.ndarray, audio_row: np.ndarray) -> np.ndarray:
-        return output_stage(motion_row, audio_row, mode="multimodal", ratio=ratio, domain=domain, power_limit=limit)
+        return output_stage(motion_row, audio_row, mode="multimodal", ratio=ratio, power_limit=limit, rule=rule,
+                            positions=positions, params=params)
 
     return LiveMusic(rows, fps, mix_row)
 

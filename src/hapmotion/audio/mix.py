@@ -1,8 +1,21 @@
 """Mixing the audio channel with the motion channel, per actuator and frame, and the output power limit.
 
-The HapMotion paper (study 2) mixes audio:motion = 2:3 as a weighted sum, ``I = 0.4 I_audio + 0.6 I_motion``. The
-energy-domain option adds the two as vibration powers, ``I = sqrt(0.4 I_audio^2 + 0.6 I_motion^2)`` (research doc
-3.7 step 6): it never goes below the weighted sum and keeps a motor that only one channel drives stronger.
+Three rules (``rule``), all stateless per frame so live and file rendering mix alike:
+
+- ``duck`` (default): the music is a bed that makes room for the motion. The bed keeps its start level and is
+  compressed above it by the audio share of the ratio (``s = a / (a + m)``, 0.4 at 2:3); it is ducked as a whole
+  while the performer moves (a side-chain on the motion's power) and further under the motion's locus (motors near
+  a running motion motor); then the two add as vibration powers with the motion at full strength::
+
+      bed   = floor + s (A - floor)             where A >= floor (floor = AudioParams.min_level), else A
+      bed  *= (1 - duck_motion_depth x min(1, sum (M/100)^2 / duck_reference_power))
+      bed  *= (1 - duck_locus_depth x L),   L_i = max_j exp(-d_ij^2 / 2 r^2) min(1, M_j / floor)
+      I     = sqrt(M^2 + bed^2)
+
+- ``paper``: the HapMotion paper's study-2 weighted sum, ``I = 0.4 I_audio + 0.6 I_motion`` at 2:3;
+- ``energy``: the weighted sum of vibration powers, ``I = sqrt(0.4 I_audio^2 + 0.6 I_motion^2)`` (research doc 3.7
+  step 6): never below the weighted sum, and a motor that only one channel drives keeps more of it.
+
 Ratios are written **audio:motion**, as in the paper and in ``--mix 2:3``.
 """
 
@@ -14,7 +27,9 @@ import re
 import numpy as np
 
 from ..errors import UsageError
-from .params import MIX_DOMAINS
+from .params import DEFAULT_PARAMS, MIX_DOMAINS, MIX_RULES, AudioParams
+
+_DOMAIN_RULES = {"linear": "paper", "energy": "energy"}
 
 DEFAULT_RATIO = (2.0, 3.0)
 """audio:motion weights of the paper's study 2 mix."""
@@ -61,18 +76,70 @@ def limit_power(rows: np.ndarray, limit: float | None) -> np.ndarray:
     return out * scale
 
 
+def resolve_rule(rule: str | None = None, domain: str | None = None, params: AudioParams | None = None) -> str:
+    """The mix rule from an explicit ``rule``, else the older ``domain`` spelling (``linear`` = ``paper``,
+    ``energy``), else ``params.mix_rule`` (default ``duck``). :class:`UsageError` for unknown names or a rule and a
+    domain that disagree."""
+    if domain is not None and domain not in MIX_DOMAINS:
+        raise UsageError(f"mix domain {domain!r}: expected {' or '.join(MIX_DOMAINS)}")
+    if rule is not None:
+        if rule not in MIX_RULES:
+            raise UsageError(f"mix rule {rule!r}: expected {', '.join(MIX_RULES)}")
+        if domain is not None and _DOMAIN_RULES[domain] != rule:
+            raise UsageError(f"mix rule {rule} and mix domain {domain} disagree; give only the rule")
+        return rule
+    if domain is not None:
+        return _DOMAIN_RULES[domain]
+    return (params or DEFAULT_PARAMS).mix_rule
+
+
+def locus_kernel(positions: np.ndarray | None, n: int, radius_m: float) -> np.ndarray:
+    """``(N, N)`` closeness of motors, ``exp(-d^2 / 2 r^2)`` over their ``(N, 3)`` positions (metres); the identity
+    when no positions are known (then only a motor itself counts as under the motion)."""
+    if positions is None:
+        return np.eye(n)
+    pos = np.asarray(positions, dtype=np.float64)
+    if pos.shape != (n, 3):
+        raise ValueError(f"positions {pos.shape} do not fit {n} actuators")
+    d2 = np.sum((pos[:, None, :] - pos[None, :, :]) ** 2, axis=-1)
+    return np.exp(-d2 / (2.0 * radius_m ** 2))
+
+
+def duck_mix(motion: np.ndarray, audio: np.ndarray, audio_share: float, kernel: np.ndarray,
+             params: AudioParams) -> np.ndarray:
+    """The ``duck`` rule (module docstring) on clean rows 0..100, ``(N,)`` or ``(T, N)``; ``kernel`` from
+    :func:`locus_kernel`."""
+    p = params
+    floor = p.min_level
+    bed = np.where(audio >= floor, floor + audio_share * (audio - floor), audio)
+    if audio_share <= 0.0:  # motion only
+        bed = np.zeros_like(audio)
+    power = np.sum((motion / 100.0) ** 2, axis=-1, keepdims=True)
+    bed = bed * (1.0 - p.duck_motion_depth * np.minimum(power / p.duck_reference_power, 1.0))
+    running = np.minimum(motion / floor, 1.0) if floor > 0 else (motion > 0).astype(np.float64)
+    locus = np.zeros_like(motion)
+    for j in range(motion.shape[-1]):  # max over source motors without an (T, N, N) array
+        np.maximum(locus, running[..., j:j + 1] * kernel[:, j], out=locus)
+    bed = bed * (1.0 - p.duck_locus_depth * locus)
+    return np.sqrt(motion ** 2 + bed ** 2)
+
+
 def mix(motion_rows: np.ndarray, audio_rows: np.ndarray, ratio: "tuple[float, float]" = DEFAULT_RATIO,
-        domain: str = "linear", power_limit: float | None = None) -> np.ndarray:
+        domain: str | None = None, power_limit: float | None = None, *, rule: str | None = None,
+        positions: np.ndarray | None = None, params: AudioParams | None = None) -> np.ndarray:
     """Mix motion and audio intensities of the same shape, ``(N,)`` (one frame, as live uses it) or ``(T, N)``.
 
-    ``ratio`` is ``(audio, motion)``; the weights are normalised to sum to 1. ``domain`` is ``"linear"`` (weighted
-    sum of intensities, the paper's) or ``"energy"`` (weighted sum of squared intensities, then the square root).
+    ``ratio`` is ``(audio, motion)``. ``rule`` is ``duck``, ``paper`` or ``energy`` (module docstring); ``domain``
+    is the older spelling (``linear`` = ``paper``); neither given: ``params.mix_rule`` (``duck``). ``paper`` and
+    ``energy`` normalise the weights to sum to 1; ``duck`` keeps the motion whole and uses the audio share for the
+    bed. ``positions`` ``(N, 3)`` (metres, e.g. ``Layout.positions()``) let ``duck`` find the motion's neighbours;
+    ``params`` (default :data:`DEFAULT_PARAMS`) holds its depths and the start level.
     Inputs are clipped to 0..100 first (non-finite values count as 0); the result is clipped to 0..100 and, with
     ``power_limit``, scaled per frame by :func:`limit_power`. Returns float64 of the input shape.
     """
     a_w, m_w = check_ratio(ratio)
-    if domain not in MIX_DOMAINS:
-        raise UsageError(f"mix domain {domain!r}: expected {' or '.join(MIX_DOMAINS)}")
+    p = params or DEFAULT_PARAMS
+    rule = resolve_rule(rule, domain, p)
     motion = np.clip(np.nan_to_num(np.asarray(motion_rows, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0),
                      0.0, 100.0)
     audio = np.clip(np.nan_to_num(np.asarray(audio_rows, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0),
@@ -80,8 +147,11 @@ def mix(motion_rows: np.ndarray, audio_rows: np.ndarray, ratio: "tuple[float, fl
     if motion.shape != audio.shape:
         raise ValueError(f"motion rows {motion.shape} and audio rows {audio.shape} differ in shape")
     a_w, m_w = a_w / (a_w + m_w), m_w / (a_w + m_w)
-    if domain == "linear":
+    if rule == "paper":
         out = a_w * audio + m_w * motion
-    else:
+    elif rule == "energy":
         out = np.sqrt(a_w * audio ** 2 + m_w * motion ** 2)
+    else:
+        n = motion.shape[-1] if motion.ndim else 1
+        out = duck_mix(motion, audio, a_w, locus_kernel(positions, n, p.duck_locus_radius_m), p)
     return limit_power(np.clip(out, 0.0, 100.0), power_limit)

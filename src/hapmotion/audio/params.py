@@ -17,8 +17,11 @@ from typing import Any
 
 from ..errors import UsageError
 
-SPATIAL_MAPPINGS = ("global", "bands")
+SPATIAL_MAPPINGS = ("layered", "global", "bands")
 MIX_DOMAINS = ("linear", "energy")
+MIX_RULES = ("duck", "paper", "energy")
+"""``duck``: the music bed makes room for the motion (default); ``paper``: the paper's weighted sum of
+intensities; ``energy``: weighted sum of vibration powers. See :mod:`hapmotion.audio.mix`."""
 
 
 @dataclass(frozen=True)
@@ -100,10 +103,16 @@ class AudioParams:
     50 ms)."""
 
     # --- pattern (sections 2.4-2.6 and 3.7 step 4-5) -----------------------------------------------------------
-    spatial: str = "global"
-    """``global``: every actuator gets the bass envelope and the kicks (the paper's bHaptics audio mode drives the
-    whole suit); ``bands``: bass envelope and kicks on the vest, mid-band envelope on the forearms (stems to regions,
-    Gendreau's Music2Haptic). See docs/audio.md."""
+    spatial: str = "layered"
+    """``layered`` (default): bass envelope and kicks on the lowest ``layered_bass_rows`` rows of the back panel, the
+    mid-band envelope on its top row: the music is felt as a rhythm belt on the lower back and a lighter layer at
+    the shoulder blades, and leaves the front, the sides and the shoulders to the motion (measured in docs/audio.md
+    section 3); ``global``: every actuator gets the bass envelope and the kicks (the paper's bHaptics audio mode
+    drives the whole suit); ``bands``: bass envelope and kicks on the vest, mid-band envelope on the sleeves (stems
+    to regions, Gendreau's Music2Haptic). See docs/audio.md."""
+    layered_bass_rows: int = 2
+    """``layered``: how many rows, counted up from the bottom of the back panel, carry the bass and the kicks
+    (ours: 2 of 5 rows, 8 motors; more rows drown a one-hand gesture, docs/audio.md section 3)."""
     min_level: float = 20.0
     """bHaptics intensity 0..100 of the quietest non-zero envelope: audible music never drops into the ERM dead
     zone (ours; ERMs have a start threshold, research 2.4; replace with the measured start duty)."""
@@ -129,6 +138,23 @@ class AudioParams:
     (ours; ERM spin-down 60-150 ms, research 5)."""
 
     # --- mixing (section 3.7 step 6) ---------------------------------------------------------------------------
+    mix_rule: str = "duck"
+    """Multimodal mix: ``duck`` (default; the bed gives way to the motion), ``paper`` (the paper's 2:3 weighted sum)
+    or ``energy`` (2:3 in vibration power). See docs/audio.md section 4."""
+    duck_motion_depth: float = 0.5
+    """``duck``: the whole music bed is scaled by ``1 - depth x presence`` while the performer moves, presence being
+    the motion frame's power over ``duck_reference_power`` (at most 1); a side-chain duck as radio mixes duck music
+    under a voice (ours: -6 dB, measured in docs/audio.md section 4)."""
+    duck_locus_depth: float = 0.5
+    """``duck``: the bed is further scaled by ``1 - depth x L`` on each motor, L (0..1) being how close a running
+    motion motor is (a Gaussian of ``duck_locus_radius_m``), so the music does not mask the motion where it is
+    (vibrotactile masking is strongest at and near the masked site) (ours)."""
+    duck_locus_radius_m: float = 0.08
+    """``duck``: the locus Gaussian's sigma, metres on the layout's surface (ours: about one motor pitch of the
+    X40's grid on an adult torso)."""
+    duck_reference_power: float = 0.3
+    """``duck``: motion power ``sum (I/100)^2`` at which the side-chain duck is full (ours: one motor at 55 %, or
+    a phantom spread over four)."""
     power_limit_fraction: float | None = 0.75
     """Total power limit of every output frame as a fraction of all actuators at full drive:
     ``sum((I / 100) ** 2) <= fraction * N``, the whole frame scaled down together (Google's post-processor limits
@@ -172,6 +198,15 @@ class AudioParams:
         need(self.kick_s >= 0 and self.kick_lead_s >= 0 and self.duck_tail_s >= 0, "kick_s",
              "kick_s, kick_lead_s and duck_tail_s >= 0")
         need(0 <= self.duck <= 1, "duck", "0..1")
+        need(isinstance(self.layered_bass_rows, int) and self.layered_bass_rows >= 1, "layered_bass_rows",
+             "a whole number >= 1")
+        need(self.mix_rule in MIX_RULES, "mix_rule", " or ".join(MIX_RULES))
+        for name in ("duck_motion_depth", "duck_locus_depth"):
+            need(0 <= getattr(self, name) <= 1, name, "0..1")
+        need(math.isfinite(self.duck_locus_radius_m) and self.duck_locus_radius_m > 0, "duck_locus_radius_m",
+             "a number > 0")
+        need(math.isfinite(self.duck_reference_power) and self.duck_reference_power > 0, "duck_reference_power",
+             "a number > 0")
         need(self.power_limit_fraction is None or 0 < self.power_limit_fraction <= 1, "power_limit_fraction",
              "None or 0 < fraction <= 1")
 
@@ -181,3 +216,13 @@ class AudioParams:
 
 
 DEFAULT_PARAMS = AudioParams()
+
+PAPER_PARAMS = AudioParams(spatial="global", mix_rule="paper")
+"""The paper's study-2 audio: the whole suit pulses with the music (bHaptics Player audio mode), mixed as the 2:3
+weighted sum."""
+
+
+def params_for_preset(preset: "str | None") -> AudioParams:
+    """The audio parameters that go with a motion preset: ``paper`` -> :data:`PAPER_PARAMS`, any other ->
+    :data:`DEFAULT_PARAMS`."""
+    return PAPER_PARAMS if preset == "paper" else DEFAULT_PARAMS

@@ -8,8 +8,8 @@ Per frame ``t`` and actuator ``i`` (bHaptics intensity 0..100)::
     cont[t, i] *= 1 - depth[t]            depth = duck during a kick, then ramping back to 0 over duck_tail_s
     I[t, i]    = max(cont[t, i], kick_level * w_kick[i] * kick[t])
 
-The spatial mapping (which actuator gets which signal) only looks at each id's device name, so it works on any
-layout whose ids follow ``<Device>_<index>``; see :func:`region_weights` and docs/audio.md.
+The spatial mapping (which actuator gets which signal) reads the layout's charts (``layered``) or each id's device
+name (``global``, ``bands``); see :func:`region_weights` and docs/audio.md.
 """
 
 from __future__ import annotations
@@ -20,16 +20,10 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import UsageError
+from ..layout import CHART_BACK, Layout, load_layout
 from ..track import HapticTrack, parse_actuator_id
 from .analysis import AudioAnalysis
 from .params import AudioParams
-
-DEFAULT_ACTUATORS: tuple[str, ...] = (
-    tuple(f"VestFront_{i}" for i in range(20)) + tuple(f"VestBack_{i}" for i in range(20))
-    + tuple(f"ForearmL_{i}" for i in range(6)) + tuple(f"ForearmR_{i}" for i in range(6)))
-"""The default layout's 52 ids in CSV column order (used when no motion track or layout gives them)."""
-
-DEFAULT_LAYOUT_NAME = "x40_shoulders"
 
 TORSO_PREFIX = "Vest"
 """Devices whose name starts with this are on the torso (``VestFront``, ``VestBack``)."""
@@ -43,9 +37,16 @@ def device_of(actuator: str) -> str:
     return device
 
 
-def region_weights(actuators: Sequence[str], spatial: str = "global") -> np.ndarray:
+def region_weights(layout: Any, spatial: str = "layered", bass_rows: int = 2) -> np.ndarray:
     """``(N, 3)`` weights of the bass envelope, mid envelope and kicks on each actuator.
 
+    ``layout``: a :class:`~hapmotion.layout.Layout`, or actuator ids (matched to the default layout when they are
+    its ids; otherwise only the device names are known and ``layered`` falls back to ``bands``).
+
+    ``layered``: the back panel's lowest ``bass_rows`` rows get the bass envelope and the kicks ``(1, 0, 1)``, its
+    top row the mid envelope ``(0, 1, 0)``, every other actuator nothing: rhythm low on the back (the largest, least
+    acute area, research 2.3, and where seat and backpack subwoofers put it), melody at the shoulder blades, and the
+    front, the sides and the shoulders free for the motion.
     ``global``: every actuator gets the bass envelope and the kicks, ``(1, 0, 1)``: the music is felt as one
     whole-suit pulse, as in the bHaptics Player audio mode the paper used, and it leaves the motion channel the only
     spatial information in the mix.
@@ -53,8 +54,27 @@ def region_weights(actuators: Sequence[str], spatial: str = "global") -> np.ndar
     least acute area), all other devices (forearms) the mid-band envelope ``(0, 1, 0)`` (voice and melody), the
     stems-to-regions idea of Gendreau's Music2Haptic. A layout with no torso device falls back to ``global``.
     """
-    if spatial not in ("global", "bands"):
-        raise UsageError(f"spatial mapping {spatial!r}: expected global or bands")
+    if spatial not in ("layered", "global", "bands"):
+        raise UsageError(f"spatial mapping {spatial!r}: expected layered, global or bands")
+    geometry = layout_of(layout)
+    actuators = geometry.actuators if geometry is not None else tuple(str(a) for a in layout)
+    if spatial == "layered" and geometry is not None:
+        try:
+            back = geometry.chart_device(CHART_BACK)
+        except KeyError:
+            back = None
+        if back is not None:
+            weights = np.zeros((geometry.n_actuators, 3))
+            for r in range(back.rows):
+                row = slice(back.offset + r * back.cols, back.offset + (r + 1) * back.cols)
+                if r >= back.rows - bass_rows:
+                    weights[row, 0] = 1.0
+                    weights[row, 2] = 1.0
+                elif r == 0:
+                    weights[row, 1] = 1.0
+            return weights
+    if spatial == "layered":
+        spatial = "bands"
     torso = np.array([device_of(a).startswith(TORSO_PREFIX) for a in actuators], dtype=bool)
     weights = np.zeros((torso.size, 3))
     if spatial == "global" or not torso.any():
@@ -112,21 +132,37 @@ def duck_depth(onset_times: np.ndarray, fps: float, n_frames: int, params: Audio
     return depth
 
 
-def actuators_of(layout: Any) -> tuple[tuple[str, ...], str]:
-    """Ids and layout name from ``None`` (default 52), a Layout-like object with ``.actuators``, or a list of ids."""
+def layout_of(layout: Any) -> Layout | None:
+    """The :class:`Layout` behind ``layout`` (``None``: the default layout; ids: the default layout when they are its
+    ids), or ``None`` when only ids of another layout are known."""
     if layout is None:
-        return DEFAULT_ACTUATORS, DEFAULT_LAYOUT_NAME
+        return load_layout()
+    if isinstance(layout, Layout):
+        return layout
+    ids = tuple(layout.actuators) if hasattr(layout, "actuators") else tuple(str(a) for a in layout)
+    default = load_layout()
+    return default if ids == default.actuators else None
+
+
+def actuators_of(layout: Any) -> tuple[tuple[str, ...], str]:
+    """Ids and layout name from ``None`` (the default layout), a Layout-like object with ``.actuators``, or ids."""
+    if layout is None:
+        default = load_layout()
+        return default.actuators, default.name
     if hasattr(layout, "actuators"):
-        return tuple(layout.actuators), str(getattr(layout, "name", DEFAULT_LAYOUT_NAME))
+        return tuple(layout.actuators), str(getattr(layout, "name", "custom"))
     ids = tuple(str(a) for a in layout)
-    return ids, DEFAULT_LAYOUT_NAME if ids == DEFAULT_ACTUATORS else "custom"
+    default = load_layout()
+    return ids, default.name if ids == default.actuators else "custom"
 
 
-def audio_intensities(an: AudioAnalysis, actuators: Sequence[str], params: AudioParams | None = None
+def audio_intensities(an: AudioAnalysis, layout: Any, params: AudioParams | None = None
                       ) -> tuple[np.ndarray, np.ndarray]:
-    """``(T, N)`` intensities 0..100 of the audio channel alone and the ``(T,)`` bool kick mask."""
+    """``(T, N)`` intensities 0..100 of the audio channel alone and the ``(T,)`` bool kick mask.
+
+    ``layout``: a Layout or actuator ids (see :func:`region_weights`)."""
     p = params or an.params
-    w = region_weights(actuators, p.spatial)
+    w = region_weights(layout, p.spatial, p.layered_bass_rows)
     env = np.hypot(an.envelope[:, None] * w[None, :, 0], an.mid_envelope[:, None] * w[None, :, 1])
     env = np.minimum(env, 1.0)
     cont = np.where(env >= p.off_below, p.min_level + (p.max_level - p.min_level) * env, 0.0)
@@ -139,13 +175,14 @@ def audio_intensities(an: AudioAnalysis, actuators: Sequence[str], params: Audio
 def audio_track(an: AudioAnalysis, layout: Any = None, params: AudioParams | None = None) -> HapticTrack:
     """The audio channel alone as a :class:`HapticTrack` at ``an.fps``, one row per analysis frame.
 
-    ``layout``: ``None`` (the default 52 actuators), a Layout (anything with ``.actuators`` and ``.name``) or a
+    ``layout``: ``None`` (the default layout), a Layout (or anything with ``.actuators`` and ``.name``) or a
     sequence of actuator ids. ``params`` defaults to the analysis' own. ``debug`` holds ``audio_envelope`` (T,),
     ``audio_mid_envelope`` (T,), ``audio_kick`` (T,) int8 and ``audio_waveform`` (T, 2).
     """
     p = params or an.params
     actuators, layout_name = actuators_of(layout)
-    rows, kick = audio_intensities(an, actuators, p)
+    geometry = layout_of(layout)
+    rows, kick = audio_intensities(an, geometry if geometry is not None else actuators, p)
     meta = {"source": "audio", "mode": "audio", "audio": an.summary(), "audio_params": p.to_dict()}
     debug = {"audio_envelope": an.envelope.copy(), "audio_mid_envelope": an.mid_envelope.copy(),
              "audio_kick": kick.astype(np.int8), "audio_waveform": an.waveform.copy()}

@@ -1,4 +1,4 @@
-"""The per-frame body frame (DESIGN.md section 2).
+"""The per-frame body frame (step 2 of the renderer, docs/algorithm.md).
 
 Origin J_T (the torso centre, SPINE_NAVEL); ``right`` = shoulder_right - shoulder_left; ``up`` = neck - pelvis made
 orthogonal to ``right``; ``forward`` = ``up x right``, out of the performer's chest. For a performer facing +Z with
@@ -7,7 +7,8 @@ orthogonal to ``right``; ``forward`` = ``up x right``, out of the performer's ch
 Everything the renderer decides (front/back, left/right, high/low) is decided in this frame, so a performer who
 turns around or a camera lying on its side changes nothing.
 
-The functions are compiled with numba so the renderer kernel and the vectorised helpers share one implementation.
+The functions are compiled with numba so the renderer's frame loop and the whole-recording functions below share one
+implementation.
 """
 
 from __future__ import annotations

@@ -34,14 +34,17 @@ def cli() -> None:
       hapmotion info dance.bvh                      what is in a recording
       hapmotion render dance.bvh -o dance.tact      the haptic track (.tact .csv .json .npz)
       hapmotion render dance.bvh --audio song.ogg -o show.csv   motion + music, mixed 2:3
+      hapmotion live --source replay:dance.bvh --sink player   a show to the bHaptics Player, in real time
+      hapmotion play pattern.tact --sink player     a saved track or Designer pattern on the vest
+      hapmotion check                               the Player's devices and a labelled test pattern
       hapmotion demo                                the bundled dance with bundled music
     """
 
 
 def _register() -> None:
-    from . import demo, evaluate, info, live, plot, render, view
+    from . import check, demo, evaluate, info, live, play, plot, render, view
 
-    for module in (render, info, demo, live, view, plot, evaluate):
+    for module in (render, info, demo, live, play, check, view, plot, evaluate):
         cli.add_command(module.command, module.__name__.rsplit(".", 1)[1])
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from ..show import MODES, Show, render_show
+from .show_options import preset_option
 
 EXAMPLE_MOTION = "60_12_scaled.bvh"
 """CMU Graphics Lab Motion Capture Database, subject 60 trial 12 (salsa, lead dancer), Daz-friendly BVH,
@@ -25,8 +26,7 @@ def example_path(name: str) -> Path:
 @click.option("-o", "--out-dir", type=click.Path(file_okay=False), default="out", show_default=True,
               help="Folder for the results (created if missing).")
 @click.option("--mode", type=click.Choice(MODES), default="multimodal", show_default=True)
-@click.option("--preset", default="energy", show_default=True,
-              help="energy (default here: with the paper's numbers the motion mostly sits under the music bed, see docs/metrics.md) or paper.")
+@preset_option
 def command(out_dir, mode, preset):
     """Render the bundled salsa clip (CMU mocap) with the bundled music ("Vibe Ace", Kevin MacLeod) into
     OUT_DIR/demo.tact (+ sleeve files), demo.csv, a plot demo.png and a viewer page demo.html."""

@@ -1,4 +1,5 @@
-"""``hapmotion evaluate``: objective metrics of every recording x method x preset, as tables and figures."""
+"""``hapmotion evaluate``: what a wearer would feel from every recording x method x preset, as a verdict, tables
+and figures."""
 
 from __future__ import annotations
 
@@ -8,15 +9,16 @@ from pathlib import Path
 import click
 
 from ..errors import UsageError
-from ..show import parse_param_overrides
+from ..render.params import METHODS, PRESETS
+from ..show import parse_param_overrides, split_list
 from .motion_options import motion_options, read_motion
 
 
-def _names(text: str, option: str) -> list[str]:
-    names = [n.strip() for n in text.split(",") if n.strip()]
+def _names(text: str, what: str, allowed) -> list[str]:
+    names = split_list(text, what, tuple(allowed))
     if not names:
-        raise UsageError(f"{option}: expected a comma-separated list, found {text!r}")
-    return list(dict.fromkeys(names))
+        raise UsageError(f"--{what}s: expected a comma-separated list, found {text!r}")
+    return names
 
 
 @click.command()
@@ -25,12 +27,13 @@ def _names(text: str, option: str) -> list[str]:
               help="Report folder (created): metrics.md, metrics.csv, bench.csv and PNG figures.")
 @click.option("--methods", default="mst,baseline", show_default=True,
               help="Comma-separated renderer methods to compare.")
-@click.option("--presets", default="paper,energy", show_default=True,
-              help="Comma-separated parameter presets to compare.")
+@click.option("--presets", default=None,
+              help=f"Comma-separated parameter presets to compare (default: all, {','.join(PRESETS)}).")
 @click.option("--param", "params", multiple=True, metavar="NAME=VALUE",
               help="Override a renderer parameter in every preset (repeatable); labels get a '*'.")
 @click.option("--audio", "audio_file", type=click.Path(exists=True, dir_okay=False), default=None,
-              help="Song to mix with every track (2:3): adds onset agreement (+-50 ms), mix saturation, envelope r.")
+              help="Song to mix with every track (the multimodal show): adds onset agreement, lateral accuracy "
+                   "with music, how the mix follows the music.")
 @click.option("--no-figures", is_flag=True, help="Tables only (faster).")
 @click.option("--no-bench", is_flag=True, help="Skip the synthetic sweep bench.")
 @motion_options
@@ -38,11 +41,13 @@ def command(inputs, output, methods, presets, params, audio_file, no_figures, no
     """Measure the feel: render each INPUT motion file with each method and preset and score the tracks.
 
     \b
-    Metrics (docs/metrics.md): motion-intensity coupling r and lag, locus error
-    of the energy centroid against the renderer's target (cm), intensity
-    constancy (dB), smoothness (jerk, SPARC, toggles/s, power above the motors'
-    bandwidth), saturation and dead-zone rates; with --audio, onset agreement.
-    Skin-side metrics run the commands through a first-order ERM motor model.
+    The report (docs/metrics.md) says per recording what a wearer would feel:
+    whether the vest is felt while a hand moves (a motor at 15 of 100 or more),
+    how closely it follows the hands' speed and reach, whether stillness is
+    quieter, whether a one-hand gesture lands on the mirrored side; then locus
+    error (cm), intensity constancy (dB), smoothness, saturation and commands
+    under the motors' start. Felt values run the commands through an ERM motor
+    model. With --audio: onsets as the motors render them, and the mix.
 
     \b
     Example:
@@ -50,10 +55,10 @@ def command(inputs, output, methods, presets, params, audio_file, no_figures, no
     """
     from tqdm import tqdm
 
-    from ..metrics.report import evaluate
+    from ..metrics.evaluation import evaluate
 
-    method_list = _names(methods, "--methods")
-    preset_list = _names(presets, "--presets")
+    method_list = _names(methods, "method", METHODS)
+    preset_list = _names(presets, "preset", PRESETS) if presets is not None else list(PRESETS)
     overrides = parse_param_overrides(params)
     total = len(inputs) * len(method_list) * len(preset_list)
     bar = tqdm(total=total, desc="evaluating", unit="run", disable=not sys.stderr.isatty(), file=sys.stderr,

@@ -9,6 +9,7 @@ import click
 
 from .motion_options import motion_options, read_motion
 
+
 @click.command("info")
 @click.argument("input", metavar="INPUT")
 @motion_options
@@ -17,8 +18,9 @@ def command(input: str, motion_opts: dict[str, Any], as_json: bool) -> None:
     """Show what hapmotion reads from a motion file INPUT.
 
     INPUT is a .bvh, Azure Kinect .json, AIST++ .pkl, or hapmotion .csv/.npz file. Prints the format, skeleton,
-    frames, frame rate, units and their conversion to metres, skipped frames, which joints were found (with the
-    file's names), which were derived and how, gaps filled per joint, and notes.
+    frames, frame rate, units and their conversion to metres, the up axis and how it was found (detected from the
+    motion, with the evidence, or given), skipped frames, which joints were found (with the file's names), which
+    were derived and how, gaps filled per joint, and notes (warnings such as weak up-axis evidence included).
     """
     from ..motion_files.info import describe, format_table, summary
 

@@ -9,7 +9,11 @@ from typing import Optional
 
 import click
 
+from ..comfort import Comfort
+from ..render.params import METHODS
+from ..show import MODES
 from .motion_options import CLI_SPELLING, motion_options, read_motion
+from .show_options import comfort_options, cues_option, mix_rule_option, preset_option, read_cues
 
 HELP = """Render a live skeleton stream frame by frame and drive haptic devices, recorders and viewers.
 
@@ -20,6 +24,8 @@ SOURCE (one):
                              /hapmotion/joint/HAND_LEFT [seq t] x y z  +  /hapmotion/frame [seq t]
   ws://HOST:PORT             WebSocket server taking JSON text frames (default 127.0.0.1:8765):
                              {"seq": 7, "t": 0.116, "joints": {"HAND_LEFT": [x, y, z], ...}}
+  vmc://HOST:PORT            VMC protocol (VSeeFace, XR Animator, VirtualMotionCapture, SlimeVR, ...;
+                             default 127.0.0.1:39539; docs/vmc.md)
   replay:PATH                a recording (BVH, Kinect JSON, AIST++, CSV, NPZ) paced in real time (--speed, --loop;
                              the reader options --units, --up, --skip-frames, ... as for render)
 \b
@@ -43,6 +49,9 @@ Safety: a source silent for --stall-ms fades every actuator to zero; Ctrl-C, SIG
 error sends turn-off to every sink before exiting. A summary (frames in/out/dropped/late, p50/p99 latency) is
 printed at exit.
 \b
+Cues: --cues show.cues layers authored patterns (bHaptics .tact or tracks) onto the rows at their show times;
+with --cue-port 9002 a lighting desk or Unity fires named cues: /hapmotion/cue NAME [gain] (OSC over UDP).
+\b
 Examples:
   hapmotion live --source osc://0.0.0.0:9000 --allow-sender 192.168.1.20 --sink player --sink ws-broadcast
   hapmotion live --source replay:dance.bvh --loop --audio song.ogg --sink player --sink record:show.tact
@@ -53,9 +62,9 @@ Examples:
 @click.option("--source", "source", metavar="SOURCE", help="Where the skeleton comes from (see above).")
 @click.option("--sink", "sinks", metavar="SINK", multiple=True, required=True,
               help="Where frames go; repeat for several sinks at once.")
-@click.option("--method", type=click.Choice(["mst", "baseline"]), default="mst", show_default=True,
+@click.option("--method", type=click.Choice(METHODS), default="mst", show_default=True,
               help="Motion renderer: the paper's motion salient triangle, or the active hand itself.")
-@click.option("--preset", default="paper", show_default=True, help="Renderer preset (paper, energy).")
+@preset_option
 @click.option("--mirror/--no-mirror", default=None, help="Mirror the performer left/right (default: preset's, on).")
 @click.option("--fps", type=float, default=None,
               help="Frame rate of the stream [default: 60; a replay's own rate].")
@@ -66,12 +75,11 @@ Examples:
 @click.option("--audio-offset", type=float, default=0.0, show_default=True,
               help="Seconds the music starts after show time 0 (negative: the show starts that far into the "
                    "song).")
-@click.option("--mode", type=click.Choice(["motion", "multimodal", "audio"]), default=None,
+@click.option("--mode", type=click.Choice(MODES), default=None,
               help="Channels played [default: multimodal with --audio, else motion].")
 @click.option("--mix", "mix_ratio", default="2:3", show_default=True,
               help="audio:motion weights of the multimodal mix (the paper's 2:3).")
-@click.option("--mix-domain", type=click.Choice(["linear", "energy"]), default="linear", show_default=True,
-              help="Mix intensities (linear, the paper's) or vibration energies.")
+@mix_rule_option
 @click.option("--stall-ms", type=float, default=250.0, show_default=True,
               help="A silent source has faded every actuator to zero after this many milliseconds.")
 @click.option("--stats", "show_stats", is_flag=True, help="Print frame counts and latency every second.")
@@ -91,14 +99,19 @@ Examples:
               help="Network sources: only these sender addresses (or networks, 10.0.0.0/24) may send.")
 @click.option("--max-senders", type=click.IntRange(min=1), default=8, show_default=True,
               help="Network sources: senders served at once (WebSocket connections, OSC sender addresses).")
+@cues_option
+@click.option("--cue-port", default=None, metavar="[HOST:]PORT",
+              help="Also fire the cue list's named cues by OSC: /hapmotion/cue NAME [gain] on this UDP port "
+                   "(loopback unless HOST names an interface).")
 @click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
+@comfort_options
 @motion_options
 def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: str, mirror: Optional[bool],
             fps: Optional[float], speed: float, loop: bool, audio: Optional[str], audio_offset: float,
-            mode: Optional[str], mix_ratio: str, mix_domain: str, stall_ms: float, show_stats: bool,
+            mode: Optional[str], mix_ratio: str, mix_rule: Optional[str], stall_ms: float, show_stats: bool,
             stats_json: Optional[str], workspace_id: Optional[str], api_key: Optional[str],
             allow_origins: tuple[str, ...], token: Optional[str], allow_senders: tuple[str, ...], max_senders: int,
-            quiet: bool, motion_opts: dict) -> None:
+            cues: Optional[str], cue_port: Optional[str], quiet: bool, comfort: Comfort, motion_opts: dict) -> None:
     from ..live import run_live
 
     _setup_logging(quiet)
@@ -111,6 +124,10 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
         exposure = engine.source.exposure()
         click.echo(f"live: listening on {engine.source.describe()}" + (f" ({exposure})" if exposure else "")
                    + f"; sinks: {names}; Ctrl-C stops", err=True)
+        trigger = getattr(engine.cues, "trigger", None)
+        if trigger is not None:
+            click.echo(f"live: cues fired on {trigger.describe()} NAME [gain] ({trigger.exposure()}); "
+                       f"names: {', '.join(engine.cues.names)}", err=True)
 
     # User mistakes (HapMotionError) and Ctrl-C before the session is up are reported by hapmotion.cli.main as one
     # line (exit 2 / 130); once the session runs, SIGINT/SIGTERM are a clean stop (exit 0).
@@ -123,14 +140,16 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
         from ..audio import parse_mix_ratio
 
         ratio = parse_mix_ratio(mix_ratio)
+    cue_list = read_cues(cues, motion_opts)
     src = _source(source, fps=fps, speed=speed, loop=loop, motion_opts=motion_opts,
                   allow_origins=_split(allow_origins), token=token, allow_senders=allow_senders,
                   max_senders=max_senders)
     try:
         run_live(src, list(sinks), method=method, preset=preset, mirror=mirror, fps=fps, speed=speed,
-                 loop=loop, audio=audio, audio_offset=audio_offset, mode=mode, ratio=ratio, domain=mix_domain,
+                 loop=loop, audio=audio, audio_offset=audio_offset, mode=mode, ratio=ratio, mix_rule=mix_rule,
                  stall_ms=stall_ms, stats_interval=1.0 if show_stats else None, workspace_id=workspace_id,
-                 api_key=api_key, on_ready=ready, on_stats=lambda text: click.echo(f"live: {text}", err=True))
+                 api_key=api_key, on_ready=ready, on_stats=lambda text: click.echo(f"live: {text}", err=True),
+                 cues=cue_list, cue_port=cue_port, comfort=comfort)
     finally:
         # The summary is printed however the session ended (turn-off has been sent by then). Nothing here raises:
         # a session error in flight stays the one reported.

@@ -1,22 +1,36 @@
-"""The reader options every command that reads motion shares, from one definition: :func:`motion_options` adds
-them to a click command and :func:`read_motion` reads a file with them."""
+"""The reader options every command that reads motion or tracks shares, from one definition: :func:`motion_options`
+adds them to a click command, :func:`cli_reader_options` turns what the user typed into a
+:class:`~hapmotion.motion_files.ReaderOptions`, :func:`read_motion` reads a motion file with them and
+:func:`read_track` a track file with their ``--limit`` values."""
 
 from __future__ import annotations
 
 import functools
 import os
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Iterable, Optional
 
 import click
 
+from ..limits import DEFAULT_LIMITS, InputLimits, parse_limit_assignments
 from ..motion import Motion
+from ..motion_files.options import ReaderOptions
+from ..track import HapticTrack
 
-MOTION_OPTION_NAMES = ("units", "scale", "skip_frames", "body_id", "fps_in", "up")
-"""Parameter names :func:`motion_options` adds; they arrive in the command as one dict, ``motion_opts``."""
+MOTION_OPTION_NAMES = ("units", "scale", "skip_frames", "body_id", "fps_in", "up", "joint_map", "limits")
+"""Parameter names :func:`motion_options` adds; they arrive in the command as one dict, ``motion_opts``, with
+``None`` for every option not given (``limits`` too: a tuple of ``NAME=N`` texts only when given)."""
 
 CLI_SPELLING = {"units": "--units", "scale": "--scale", "skip_frames": "--skip-frames", "body_id": "--body-id",
-                "fps": "--fps-in", "up": "--up"}
+                "fps": "--fps-in", "up": "--up", "joint_map": "--joint-map", "limits": "--limit"}
 """Reader option -> the command-line option that sets it."""
+
+UP_CHOICES = ("y", "z", "-y", "-z", "x", "-x")
+
+
+limit_option = click.option(
+    "--limit", "limits", multiple=True, metavar="NAME=N",
+    help=f"Raise a size limit of the motion and track readers: {DEFAULT_LIMITS.help_text()}. Repeatable.")
+"""The ``--limit NAME=N`` option alone, for commands that read tracks or patterns but no motion (``play``)."""
 
 
 def motion_options(f: Callable[..., Any]) -> Callable[..., Any]:
@@ -30,12 +44,15 @@ def motion_options(f: Callable[..., Any]) -> Callable[..., Any]:
         def command(input, motion_opts):
             motion = read_motion(input, **motion_opts)
 
-    Options: ``--units``, ``--scale``, ``--skip-frames``, ``--body-id``, ``--fps-in``, ``--up``.
+    Options: ``--units``, ``--scale``, ``--skip-frames``, ``--body-id``, ``--fps-in``, ``--up``, ``--joint-map``,
+    ``--limit``.
     """
 
     @functools.wraps(f)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
-        kwargs["motion_opts"] = {name: kwargs.pop(name, None) for name in MOTION_OPTION_NAMES}
+        opts = {name: kwargs.pop(name, None) for name in MOTION_OPTION_NAMES}
+        opts["limits"] = opts["limits"] or None  # click gives () when --limit is not used: "not given"
+        kwargs["motion_opts"] = opts
         return f(*args, **kwargs)
 
     # functools.wraps copied f's click params (a shared list); give the wrapper its own before adding ours.
@@ -53,26 +70,55 @@ def motion_options(f: Callable[..., Any]) -> Callable[..., Any]:
         click.option("--fps-in", type=float, default=None, metavar="FPS",
                      help="Frame rate of the input (0.5 to 2000), overriding the file's (BVH Frame Time, Kinect "
                      "timestamps, ...)."),
-        click.option("--up", type=click.Choice(["y", "z"], case_sensitive=False), default=None,
-                     help="Up axis of the input (BVH, CSV, NPZ; default y)."),
+        click.option("--up", type=click.Choice(UP_CHOICES, case_sensitive=False), default=None,
+                     help="Up axis of the input (BVH: detected from the motion by default; CSV, NPZ: y)."),
+        click.option("--joint-map", type=click.Path(dir_okay=False), default=None, metavar="MAP.toml|MAP.json",
+                     help="BVH: a file of '\"their joint\" = \"HAND_LEFT\"' lines naming joints the automatic "
+                     "matching misses."),
+        limit_option,
     ]
     for option in reversed(options):  # click lists params in decoration order, bottom first
         wrapper = option(wrapper)
     return wrapper
 
 
-def read_motion(path: "str | os.PathLike[str]", *, units: Optional[str] = None, scale: Optional[float] = None,
-                  skip_frames: Optional[int] = None, body_id: Optional[int] = None, fps_in: Optional[float] = None,
-                  up: Optional[str] = None) -> Motion:
-    """``hapmotion.load_motion`` with the CLI's option names (``fps_in`` is the reader's ``fps``).
+def cli_reader_options(*, units: Optional[str] = None, scale: Optional[float] = None,
+                       skip_frames: Optional[int] = None, body_id: Optional[int] = None,
+                       fps_in: Optional[float] = None, up: Optional[str] = None,
+                       joint_map: Optional[str] = None, limits: Optional[Iterable[str]] = None) -> ReaderOptions:
+    """The :class:`ReaderOptions` for what :func:`motion_options` gathered (``fps_in`` is the reader's ``fps``,
+    each of ``limits`` a ``NAME=N`` text). Values are checked when a file is read, in the user's spelling."""
+    return ReaderOptions(units=units, scale=scale, skip_frames=skip_frames, fps=fps_in, up=up, body_id=body_id,
+                         joint_map=joint_map, limits=cli_limits(limits))
 
-    Options left at ``None`` are not passed; one that does not apply to the format raises
-    :class:`~hapmotion.errors.UsageError`, which the CLI prints as one line.
+
+def cli_limits(limits: Optional[Iterable[str]] = None) -> InputLimits:
+    """The :class:`InputLimits` for the ``--limit NAME=N`` texts the user gave (the defaults for the others)."""
+    return DEFAULT_LIMITS.raised(parse_limit_assignments(list(limits or ())))
+
+
+def read_motion(path: "str | os.PathLike[str]", **motion_opts: Any) -> Motion:
+    """``hapmotion.load_motion`` with the options :func:`motion_options` gathered (by their CLI names).
+
+    An option that does not apply to the format, or a bad value, raises :class:`~hapmotion.errors.UsageError`
+    naming the option as the user typed it, which the CLI prints as one line. The reader's warnings (notes that
+    start with "warning", such as weak evidence for the up axis) are printed on stderr, one line each, so that
+    every command shows them, not only ``info``.
     """
     from ..motion_files import check_options, load_motion
-    from ..motion_files._common import check_fps_option
 
-    options = {"units": units, "scale": scale, "skip_frames": skip_frames, "body_id": body_id, "fps": fps_in, "up": up}
-    check_options(os.fspath(path), options, spelling=CLI_SPELLING)  # errors in the words the user typed
-    check_fps_option(fps_in, CLI_SPELLING["fps"])
-    return load_motion(path, **options)
+    options = check_options(os.fspath(path), cli_reader_options(**motion_opts), spelling=CLI_SPELLING)
+    motion = load_motion(path, options)
+    for note in motion.meta.get("notes", []):
+        if note.startswith("warning"):
+            text = note.split(":", 1)[1].strip() if note.startswith("warning:") else note
+            click.echo(f"warning: {os.fspath(path)}: {text}", err=True)
+    return motion
+
+
+def read_track(path: "str | os.PathLike[str]", **motion_opts: Any) -> HapticTrack:
+    """``hapmotion.load_track`` within the ``--limit`` values :func:`motion_options` gathered (the other reader
+    options are about motion files and do not apply to a saved track)."""
+    from ..track_files import load_track
+
+    return load_track(path, limits=cli_limits(motion_opts.get("limits")))

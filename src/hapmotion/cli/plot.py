@@ -8,7 +8,8 @@ import click
 
 from ..errors import UsageError
 from ..show import MODES
-from .motion_options import motion_options, read_motion
+from .motion_options import motion_options, read_motion, read_track
+from .show_options import comfort_options, cues_option, mix_rule_option, preset_option, read_cues
 from .render import progress_bar
 
 
@@ -17,7 +18,7 @@ from .render import progress_bar
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
               help="Figure to write: .png, .pdf or .svg (default: INPUT's name with .png).")
 @click.option("--method", default="mst", show_default=True, help="Renderer method for a motion file: mst or baseline.")
-@click.option("--preset", default="paper", show_default=True, help="Renderer preset: paper or energy.")
+@preset_option
 @click.option("--mirror/--no-mirror", default=None,
               help="Audience feels the performer mirrored (default: the preset's choice, mirrored).")
 @click.option("--audio", "audio_path", type=click.Path(dir_okay=False, path_type=Path),
@@ -34,9 +35,12 @@ from .render import progress_bar
 @click.option("--dpi", type=click.IntRange(50, 600), default=150, show_default=True, help="Resolution of a PNG.")
 @click.option("--vmax", default="auto", show_default=True, metavar="auto|NUMBER",
               help="Intensity at the top of the colour scale; auto fits weak tracks (5, 10, 20, 25, 50 or 100).")
+@mix_rule_option
+@cues_option
+@comfort_options
 @motion_options
 def command(input_path, output, method, preset, mirror, audio_path, mode, mix_ratio, audio_offset, start_s, end_s,
-            title, dpi, vmax, motion_opts):
+            title, dpi, vmax, mix_rule, cues, comfort, motion_opts):
     """Draw INPUT as a static figure: which actuators run when (grouped vest front, vest back, left and right
     shoulder), the total intensity and the motion energy.
 
@@ -66,9 +70,11 @@ def command(input_path, output, method, preset, mirror, audio_path, mode, mix_ra
     if output.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise UsageError(f"{output}: the figure format follows the extension; use .png, .pdf or .svg")
     mode = mode or ("multimodal" if audio_path else "motion")
-    show = Show(mirror=mirror, audio=audio_path, audio_offset_s=audio_offset, mix_ratio=parse_mix_ratio(mix_ratio))
+    show = Show(mirror=mirror, audio=audio_path, audio_offset_s=audio_offset, mix_ratio=parse_mix_ratio(mix_ratio),
+                mix_rule=mix_rule, cues=read_cues(cues, motion_opts), comfort=comfort)
     loaded = read_view_input(input_path, show, methods=[method], presets=[preset], modes=[mode],
-                             read_motion=lambda path: read_motion(path, **motion_opts), progress=progress_bar)
+                             read_motion=lambda path: read_motion(path, **motion_opts),
+                             read_track=lambda path: read_track(path, **motion_opts), progress=progress_bar)
     track = loaded.tracks[0]
     audio = load_audio_part(audio_path, fps=track.fps, offset_s=audio_offset) if audio_path is not None else None
     plot_track(track, output, title=title or input_path.name, audio=audio, start_s=start_s, end_s=end_s, dpi=dpi,

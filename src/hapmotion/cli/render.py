@@ -8,11 +8,11 @@ from pathlib import Path
 
 import click
 
-from ..audio.params import MIX_DOMAINS
 from ..errors import UsageError
 from ..render.params import METHODS
 from ..show import LENGTH_RULES, MODES, Show, parse_param_overrides, render_show
 from .motion_options import motion_options, read_motion
+from .show_options import comfort_options, cues_option, mix_rule_option, preset_option, read_cues
 
 
 def progress_bar(total: int, label: str):
@@ -30,8 +30,7 @@ def progress_bar(total: int, label: str):
               help="Track file to write: .tact (bHaptics Designer; sleeves go to OUT.ForearmL/R.tact), .csv, .json, .npz.")
 @click.option("--method", type=click.Choice(METHODS), default="mst", show_default=True,
               help="mst: the paper's motion salient triangle; baseline: the active hand itself.")
-@click.option("--preset", default="paper", show_default=True,
-              help="Parameter preset: paper (the paper's values) or energy (energy-preserving split, ERM-aware smoothing).")
+@preset_option
 @click.option("--param", "params", multiple=True, metavar="NAME=VALUE",
               help="Override one renderer parameter (repeatable), e.g. --param release_alpha=0.2.")
 @click.option("--no-mirror", is_flag=True, help="Feel the performer's left on the wearer's left (default: mirrored).")
@@ -46,15 +45,16 @@ def progress_bar(total: int, label: str):
               help="Which channels: motion, audio, or multimodal (both mixed). Default: multimodal with a motion file and "
                    "--audio, audio with --audio alone, else motion.")
 @click.option("--mix", "mix_ratio", default="2:3", show_default=True, help="audio:motion ratio of the multimodal mix.")
-@click.option("--mix-domain", type=click.Choice(MIX_DOMAINS), default="linear", show_default=True,
-              help="linear: the paper's weighted sum; energy: weighted sum of squared intensities.")
+@mix_rule_option
 @click.option("--audio-offset", type=float, default=0.0, show_default=True,
               help="Seconds to delay the music against the motion (negative: skip the start of the song).")
 @click.option("--length", type=click.Choice(LENGTH_RULES), default="longer", show_default=True,
               help="Track length with both inputs: as long as the longer one, or cut to the motion.")
+@cues_option
+@comfort_options
 @motion_options
 def command(motion_file, output, method, preset, params, no_mirror, fps, layout_file, audio_file, mode, mix_ratio,
-            mix_domain, audio_offset, length, motion_opts=None):
+            mix_rule, audio_offset, length, cues, comfort, motion_opts=None):
     """Render MOTION_FILE (BVH, Azure Kinect JSON, AIST++ .pkl, CSV/NPZ joints) into a haptic track.
 
     With --audio the music is rendered too and mixed with the motion (audio:motion = 2:3 by default, as in the
@@ -67,7 +67,8 @@ def command(motion_file, output, method, preset, params, no_mirror, fps, layout_
     overrides = parse_param_overrides(params)
     show = Show(method=method, preset=preset, overrides=overrides, mirror=False if no_mirror else None, mode=mode,
                 audio=audio_file, audio_offset_s=audio_offset, mix_ratio=parse_mix_ratio(mix_ratio),
-                mix_domain=mix_domain, length=length, fps=fps, layout=layout_file)
+                mix_rule=mix_rule, length=length, fps=fps, layout=layout_file, cues=read_cues(cues, motion_opts),
+                comfort=comfort)
     mode = show.resolved_mode(motion_file is not None)
     out_path = Path(output)
     motion = None

@@ -7,7 +7,8 @@ from pathlib import Path
 import click
 
 from ..errors import UsageError
-from .motion_options import motion_options, read_motion
+from .motion_options import motion_options, read_motion, read_track
+from .show_options import comfort_options, cues_option, mix_rule_option, preset_option, read_cues
 from .render import progress_bar
 
 @click.command("view")
@@ -23,7 +24,7 @@ from .render import progress_bar
                    "a switch. Default: multimodal with --audio, else motion.")
 @click.option("--mix", "mix_ratio", default="2:3", show_default=True, help="audio:motion ratio of the multimodal mix.")
 @click.option("--method", default="mst", show_default=True, help="Renderer method for a motion file: mst or baseline.")
-@click.option("--preset", default="paper", show_default=True, help="Renderer preset: paper or energy.")
+@preset_option
 @click.option("--methods", default=None, metavar="LIST",
               help="Several methods, comma-separated (e.g. mst,baseline); the page gets a switch.")
 @click.option("--presets", default=None, metavar="LIST",
@@ -35,9 +36,12 @@ from .render import progress_bar
 @click.option("--title", default=None, help="Title shown on the page (default: INPUT's file name).")
 @click.option("--credit", multiple=True, metavar="TEXT",
               help="Attribution line for the page footer (e.g. the music's title, author and licence); repeatable.")
+@mix_rule_option
+@cues_option
+@comfort_options
 @motion_options
 def command(input_path, output, audio_path, audio_offset, modes, mix_ratio, method, preset, methods, presets, mirror,
-            live_url, title, credit, motion_opts):
+            live_url, title, credit, mix_rule, cues, comfort, motion_opts):
     """Write a self-contained HTML viewer of INPUT (a motion file, or a saved track .csv/.json/.npz/.tact).
 
     The page needs no network: it holds the recording, the rendered intensities and the music. It shows the
@@ -76,9 +80,11 @@ def command(input_path, output, audio_path, audio_offset, modes, mix_ratio, meth
 
     tracks, motion, notes, source_name = [], None, [], ""
     if input_path is not None:
-        show = Show(mirror=mirror, audio=audio_path, audio_offset_s=audio_offset, mix_ratio=parse_mix_ratio(mix_ratio))
+        show = Show(mirror=mirror, audio=audio_path, audio_offset_s=audio_offset, mix_ratio=parse_mix_ratio(mix_ratio),
+                    mix_rule=mix_rule, cues=read_cues(cues, motion_opts), comfort=comfort)
         loaded = read_view_input(input_path, show, methods=method_list, presets=preset_list, modes=mode_list,
-                                 read_motion=lambda path: read_motion(path, **motion_opts), progress=progress_bar)
+                                 read_motion=lambda path: read_motion(path, **motion_opts),
+                                 read_track=lambda path: read_track(path, **motion_opts), progress=progress_bar)
         tracks, motion, notes, source_name = loaded.tracks, loaded.motion, loaded.notes, input_path.name
     audio = None
     if audio_path is not None:

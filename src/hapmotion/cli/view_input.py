@@ -27,11 +27,13 @@ class ViewInput:
 
 def read_view_input(path: "str | os.PathLike[str]", show: Show, *, methods: Sequence[str], presets: Sequence[str],
                     modes: Sequence[str], read_motion: Callable[[Path], Motion],
+                    read_track: Optional[Callable[[Path], HapticTrack]] = None,
                     progress: Optional[Callable[[int, str], tuple[Callable[[int], object], Callable[[], object]]]] = None,
                     ) -> ViewInput:
     """Read INPUT and render every (method, preset) in every mode of ``show`` (:func:`render_variants`).
 
-    ``read_motion`` reads a motion file with the command's reader options; ``progress(total_frames, label)``
+    ``read_motion`` reads a motion file with the command's reader options, ``read_track`` a saved track within
+    its limits (default: ``load_track`` with the default limits); ``progress(total_frames, label)``
     returns ``(update(n), close())`` for a progress bar over the rendering. Raises :class:`InputError` for a
     missing or unreadable file, :class:`UsageError` for options that do not apply (several methods for a saved
     track).
@@ -44,7 +46,7 @@ def read_view_input(path: "str | os.PathLike[str]", show: Show, *, methods: Sequ
     if is_track_file(p):
         if len(methods) > 1 or len(presets) > 1:
             raise UsageError(f"{p}: a saved track has one method and preset; --methods/--presets need a motion file")
-        track = load_track(p)
+        track = (read_track or load_track)(p)
         notes = [] if track.debug else ["saved track without renderer debug data: no dynamic point, no motion energy"]
         return ViewInput(render_variants(show, None, methods, presets, modes, motion_tracks=[track]), None, p, notes)
     motion = read_motion(p)

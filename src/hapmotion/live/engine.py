@@ -120,6 +120,12 @@ class LiveEngine:
         Called with the engine once the source listens (the CLI prints the addresses).
     stats_interval, on_stats:
         Every ``stats_interval`` seconds, a one-line progress report goes to ``on_stats`` (default: the log).
+    cues:
+        Object with ``layer(row, t) -> row`` (:class:`~hapmotion.live.cue_layer.LiveCues`): authored cues layered
+        onto each rendered row at its show time.
+    comfort:
+        Object with ``step(row) -> row`` (:class:`~hapmotion.comfort.Limiter`): the wearer's gain and comfort limits,
+        the last stage of every rendered row, as offline.
     """
 
     def __init__(self, renderer: Optional[StepRenderer], sinks: Sequence[Sink], *, n_actuators: int,
@@ -128,7 +134,8 @@ class LiveEngine:
                  render_cap: float = 1.5, flood_rate: Optional[float] = None, stop_timeout: float = 2.0,
                  handle_signals: bool = True, stats_interval: Optional[float] = None,
                  on_ready: Optional[Callable[["LiveEngine"], None]] = None,
-                 on_stats: Optional[Callable[[str], None]] = None, source_name: str = "source"):
+                 on_stats: Optional[Callable[[str], None]] = None, source_name: str = "source",
+                 cues: Any = None, comfort: Any = None):
         if mode not in ("motion", "multimodal", "audio"):
             raise ValueError(f"mode must be motion, multimodal or audio, got {mode!r}")
         if mode != "motion" and audio is None:
@@ -146,6 +153,8 @@ class LiveEngine:
         self.grace_s = min(1.5 / self.rate, 0.5 * self.stall_s)
         self.audio = audio
         self.mode = mode
+        self.cues = cues
+        self.comfort = comfort
         self.max_abs = max_abs
         self.min_gap = 1.0 / (render_cap * self.rate)
         self.stop_timeout = stop_timeout
@@ -156,7 +165,7 @@ class LiveEngine:
         self._required: Optional[np.ndarray] = None
         if mode != "audio":
             from ..joints import JOINT_INDEX
-            from ..render.kernel import KERNEL_JOINTS
+            from ..joints import RENDER_JOINTS as KERNEL_JOINTS
 
             self._required = np.array([JOINT_INDEX[j] for j in KERNEL_JOINTS], dtype=np.intp)
         self.faults = Faults(source_name, log)
@@ -376,6 +385,10 @@ class LiveEngine:
             if self.mode == "multimodal":
                 assert self.audio is not None
                 row = self.audio.mixed(row, t)
+        if self.cues is not None:
+            row = self.cues.layer(row, t)
+        if self.comfort is not None:
+            row = self.comfort.step(row)
         if row.shape != (self.n,):
             raise ValueError(f"the renderer returned shape {row.shape}, expected ({self.n},)")
         if not np.isfinite(row).all():

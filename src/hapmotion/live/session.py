@@ -17,8 +17,12 @@ from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, Union
 
 
-from ..errors import InputError, UsageError
+from ..comfort import Comfort
+from ..errors import UsageError
+from ..limits import checked_json_text
+from ..render.params import DEFAULT_PRESET
 from ..show import Show, live_music
+from .cue_trigger import live_cues, run_with_cues
 from .engine import AudioChannel, LiveEngine
 from .devices import DeviceMap
 from .wire.player_v2 import tact_project
@@ -41,11 +45,8 @@ def build_source(ep: Endpoint, *, fps: Optional[float], speed: float, loop: bool
 def _registrations(ep: Endpoint) -> dict[str, Any]:
     regs = {}
     for path in ep.options.get("register", []):
-        try:
-            text = Path(path).read_text(encoding="utf-8")
-        except OSError as exc:
-            raise InputError(path, None, f"cannot read the .tact file to register ({exc.strerror})") from None
-        regs[Path(path).stem] = tact_project(text, path)
+        # the same guard as the .tact reader: size, nesting, parsed size and number length before parsing
+        regs[Path(path).stem] = tact_project(checked_json_text(path, what=".tact pattern"), path)
     return regs
 
 
@@ -88,7 +89,7 @@ async def live(
     sinks: Sequence[Union[str, Sink]],
     *,
     method: str = "mst",
-    preset: str = "paper",
+    preset: str = DEFAULT_PRESET,
     mirror: Optional[bool] = None,
     fps: Optional[float] = None,
     speed: float = 1.0,
@@ -97,7 +98,9 @@ async def live(
     audio_offset: float = 0.0,
     mode: Optional[str] = None,
     ratio: tuple[float, float] = (2, 3),
-    domain: str = "linear",
+    domain: Optional[str] = None,
+    mix_rule: Optional[str] = None,
+    comfort: Optional[Comfort] = None,
     stall_ms: float = 250.0,
     stats_interval: Optional[float] = None,
     workspace_id: Optional[str] = None,
@@ -106,20 +109,27 @@ async def live(
     handle_signals: bool = True,
     on_ready: Optional[Callable[[LiveEngine], None]] = None,
     show: Optional[Show] = None,
+    cues: Any = None,
+    cue_port: "str | int | None" = None,
     **engine_options: Any,
 ) -> LiveStats:
     """Run a live session until the source ends or a stop signal; return its statistics.
 
     ``source`` and ``sinks`` are SOURCE/SINK strings (see :mod:`hapmotion.live.urls`) or ready-made objects.
     How the show is rendered and mixed is ``show`` (:class:`hapmotion.show.Show`); without it one is made from
-    ``method``, ``preset``, ``mirror``, ``audio``, ``audio_offset``, ``mode``, ``ratio`` and ``domain``. The mode
+    ``method``, ``preset``, ``mirror``, ``audio``, ``audio_offset``, ``mode``, ``ratio``, ``domain``, ``mix_rule``
+    and ``comfort`` (the wearer's gain and limits, the last stage of every row). The mode
     defaults to ``"multimodal"`` with music and ``"motion"`` without; ``"audio"`` plays the song's channel alone
-    (no source). ``renderer`` replaces the show's ``Renderer``. Every sink is sent turn-off before this returns or
-    raises.
+    (no source). ``renderer`` replaces the show's ``Renderer``. ``cues`` (a cue list file or
+    :class:`~hapmotion.cues.CueList`) are layered onto the rows at their show times; ``cue_port`` (``PORT`` or
+    ``HOST:PORT``, loopback by default) also fires them by name by OSC (:mod:`~hapmotion.live.cue_trigger`). Every
+    sink is sent turn-off before this returns or raises.
     """
     if show is None:
         show = Show(method=method, preset=preset, mirror=mirror, mode=mode, audio=audio, audio_offset_s=audio_offset,
-                    mix_ratio=ratio, mix_domain=domain)
+                    mix_ratio=ratio, mix_domain=domain, mix_rule=mix_rule, comfort=comfort or Comfort(), cues=cues)
+    elif cues is not None:
+        show = show.replace(cues=cues)
     mode = show.resolved_mode(has_motion=source is not None or show.mode != "audio")
     if mode == "audio" and source is not None:
         raise UsageError("--mode audio plays the song's haptic channel alone: leave out --source")
@@ -157,6 +167,8 @@ async def live(
     if src is None:
         assert channel is not None
         src = ClockSource(fps, channel.duration_s, loop=loop)
+    cue_layer = live_cues(show.cues, fps=fps, layout=layout, actuators=dmap.actuators, cue_port=cue_port)
+    limiter = None if show.comfort.is_neutral else show.limiter(fps, dmap.n)
 
     meta = {**show.describe(mode), "source": src.describe(), "audio": os.fspath(show.audio) if show.audio else None}
     if renderer is not None and getattr(renderer, "params", None) is not None:
@@ -170,8 +182,9 @@ async def live(
                  for s in sinks]
     engine = LiveEngine(renderer, sink_objs, n_actuators=dmap.n, fps=fps, rate=rate, stall_s=stall_ms / 1000.0,
                         audio=channel, mode=mode, handle_signals=handle_signals, stats_interval=stats_interval,
-                        on_ready=on_ready, source_name=src.describe(), **engine_options)
-    return await engine.run(src)
+                        on_ready=on_ready, source_name=src.describe(), cues=cue_layer, comfort=limiter,
+                        **engine_options)
+    return await run_with_cues(engine, src)
 
 
 def run_live(*args: Any, **kwargs: Any) -> LiveStats:

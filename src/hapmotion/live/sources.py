@@ -339,6 +339,13 @@ def network_source(ep: "Endpoint", *, allow_origins: Sequence[str] = (), token: 
     if ep.kind == "ws":
         return WsSource(ep.host, ep.port, allow_origins=allow_origins, token=token, allow_senders=allow_senders,
                         max_senders=max_senders)
+    if ep.kind == "vmc":
+        if token or allow_origins:
+            raise UsageError("--token and --allow-origin apply to ws:// sources; VMC over UDP has no handshake to "
+                             "check (use --allow-sender, and keep it on loopback unless the network is trusted)")
+        from .vmc import VmcSource  # imported here: hapmotion.live.vmc builds on this module
+
+        return VmcSource(ep.host, ep.port, allow_senders=allow_senders, max_senders=max_senders)
     raise UsageError(f"--source {ep.text!r}: not a network source")
 
 

@@ -24,18 +24,18 @@ from urllib.parse import parse_qs, urlsplit
 
 from ..errors import UsageError
 
-SOURCE_HELP = "osc://HOST:PORT[/PREFIX] | ws://HOST:PORT | replay:PATH"
+SOURCE_HELP = "osc://HOST:PORT[/PREFIX] | ws://HOST:PORT | vmc://HOST:PORT | replay:PATH"
 SINK_HELP = ("player[://HOST:PORT] | player-v3[://HOST:PORT] | osc://HOST:PORT[/PREFIX] | "
              "ws-broadcast[://HOST:PORT] | record:PATH | nats://HOST:PORT/SHOW")
 
 _DEFAULTS = {
-    "osc-in": ("127.0.0.1", 9000), "ws": ("127.0.0.1", 8765),
+    "osc-in": ("127.0.0.1", 9000), "ws": ("127.0.0.1", 8765), "vmc": ("127.0.0.1", 39539),
     "player": ("127.0.0.1", 15881), "player-v3": ("127.0.0.1", 15882),
     "osc": ("127.0.0.1", 9001), "ws-broadcast": ("127.0.0.1", 8766), "nats": ("127.0.0.1", 4222),
 }
 # Network sources: scheme -> kind (its default address is in _DEFAULTS). Sources listen on loopback unless the
 # SOURCE names another interface. A new network source kind is one line here and one in _DEFAULTS.
-_NETWORK_SOURCES = {"osc": "osc-in", "ws": "ws"}
+_NETWORK_SOURCES = {"osc": "osc-in", "ws": "ws", "vmc": "vmc"}
 _SINK_QUERY = {
     "player": {"app_id", "app_name", "duration", "key", "register"},
     "player-v3": {"workspace_id", "api_key", "version", "duration"},

@@ -1,12 +1,15 @@
-"""Measure the feel (issue 6): an ERM motor model, objective metrics of haptic tracks, a synthetic sweep bench and
-the evaluation report behind ``hapmotion evaluate``.
+"""Measure the feel: an ERM motor model, objective metrics of haptic tracks, a synthetic sweep bench and the
+evaluation behind ``hapmotion evaluate``.
 
 * :mod:`.motor` -- first-order ERM model (spin-up/spin-down time constants, start threshold, saturation).
-* :mod:`.metrics` -- pure metric functions over arrays (coupling and lag, locus error, constancy, smoothness,
-  saturation and dead-zone rates, onset agreement).
-* :mod:`.scorecard` -- every metric of one rendered track (a row of the table).
+* Metric functions over arrays, one module per question: :mod:`.coupling` (does the vibration follow the hands'
+  speed and reach, and how late), :mod:`.felt` (is it felt while the performer moves, quieter while still),
+  :mod:`.locus` (where it is: centroid error, target jumps, the side of the vest), :mod:`.constancy` (does its
+  strength hold between motors), :mod:`.smoothness` (jerk, SPARC, toggles, power above the motors' bandwidth),
+  :mod:`.limits` (saturation, commands under the motors' start), :mod:`.events` (tactile kicks, onset agreement).
+* :mod:`.scorecard` -- every metric of one rendered track (a row of the table) and the column definitions.
 * :mod:`.sweep` -- synthetic motions of a hand tracing known paths, with metric values that can be reasoned out.
-* :mod:`.report` -- renders recordings with each method and preset and writes Markdown/CSV tables and PNG figures.
+* :mod:`.evaluation` -- the evaluation run; :mod:`.tables`, :mod:`.figures` and :mod:`.verdict` its outputs.
 
 docs/metrics.md defines each metric, its units and its source.
 """

@@ -1,25 +1,28 @@
 """A first-order model of an ERM vibration motor: what the skin gets from a track of commands.
 
 Every metric can be computed on the commanded intensities (what the renderer asked for) or on this model's output
-(what the motors would deliver). The model has four ingredients, each from docs/rendering-research.md:
+(what the motors would deliver). The model has four ingredients:
 
-* **Start threshold (dead zone).** An ERM at rest does not start below a minimum drive (section 2.4: "ERMs have a
-  start threshold ... at low duty the motor stalls; once spinning it runs at lower voltage (hysteresis)"). A motor
-  at rest starts when its command reaches ``dead_zone``; a running motor keeps running down to ``stop_threshold``
-  (hysteresis, off by default because no figure for the vest's motors is published).
+* **Start threshold (dead zone).** An ERM at rest does not start below a minimum drive; once spinning it runs on at
+  a lower one (for example, a pager motor rated 3.6 V needs up to 2.8 V to start: DOOCO DEV-3408E03 data sheet). A
+  motor at rest starts when its command reaches ``dead_zone``; a running motor keeps running down to
+  ``stop_threshold`` (hysteresis, off by default because no figure for the vest's motors is published). The 10 %
+  default is an assumption to be replaced by a measurement: the vest's Bluetooth frame carries each motor as a
+  4-bit value, 16 steps (SenseShift's bHaptics vest encoding, ``lib/bhaptics/senseshift/bh/encoding.hpp``), so
+  anything under one step (6.25 %) may be lost before the motor, and the start threshold adds to that.
 * **Steady amplitude.** Above the threshold the steady vibration amplitude is ``(c / saturation) ** exponent``,
-  ``c`` the command as a fraction of full scale. The bHaptics Player's intensity-to-duty curve is closed
-  (section 6), so the default exponent is 1: the track's 0..100 scale is read as amplitude, the domain in which
-  the renderer's phantom split is defined (section 1). A raw PWM-driven ERM would be closer to 2 (force
-  ``m r w^2``, section 2.4); the exponent is there for a measured curve.
+  ``c`` the command as a fraction of full scale. The bHaptics Player's intensity-to-drive curve is not published,
+  so the default exponent is 1: the track's 0..100 scale is read as amplitude, the domain in which the renderer's
+  phantom split is defined. A raw PWM-driven ERM would be closer to 2 (the rotating-unbalance force is ``m r w^2``:
+  Precision Microdrives application bulletin AB-004); the exponent is there for a measured curve.
 * **Saturation.** Commands at or above ``saturation`` give full amplitude: the motor cannot spin faster than its
-  rated speed (section 2.4: speed sets both frequency and amplitude).
-* **First-order spin-up and spin-down** with separate time constants (section 2.5; section 5 suggests 40-90 ms
-  up and 60-150 ms down as a starting point). ``tau_rise_s = 0.060``: PMD's step test of a 5 mm ERM reaches its
-  maximum amplitude in about 180 ms; reading "maximum" as 95 % (three time constants) gives 60 ms.
-  ``tau_fall_s = 0.100``: an ERM without active braking spins down at least as slowly as it spins up (section 2.5,
-  TI's "long vibration tails" without braking), the middle of section 5's 60-150 ms range. Both are to be
-  replaced by accelerometer measurements of the vest's own motors (section 6).
+  rated speed (in an ERM, speed sets both frequency and amplitude: Precision Microdrives AB-029).
+* **First-order spin-up and spin-down** with separate time constants. ``tau_rise_s = 0.060``: Precision
+  Microdrives' step test of a 5 mm ERM reaches its maximum amplitude in about 180 ms ("new testing for the
+  precision haptic ERMs"); reading "maximum" as 95 % (three time constants) gives 60 ms. ``tau_fall_s = 0.100``:
+  an ERM without active braking spins down at least as slowly as it spins up (Texas Instruments recommends
+  braking against the "long vibration tails" of ERMs: DRV2605 data sheet, SLOS825). Both are to be replaced by
+  accelerometer measurements of the vest's own motors.
 
 Discretisation: a track row is held for ``1 / fps`` seconds (zero-order hold, as the Player plays it). Over one
 hold the output moves monotonically towards the row's steady amplitude, so the exact update is
@@ -30,12 +33,12 @@ the amplitude at the end of row ``t``'s hold; the motors start at rest.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 
-__all__ = ["MotorModel", "DEFAULT_MOTOR", "simulate", "step_times"]
+__all__ = ["MotorModel", "DEFAULT_MOTOR", "simulate", "drive", "step_times"]
 
 
 @dataclass(frozen=True)
@@ -84,12 +87,8 @@ class MotorModel:
 
     @property
     def bandwidth_hz(self) -> float:
-        """Corner frequency ``1 / (2 pi tau_rise)`` of the faster constant, Hz: envelope detail above it is lost
-        (rendering-research.md 2.5: "an effective envelope bandwidth of only a few Hz, roughly 1/(2 pi tau)")."""
+        """Corner frequency ``1 / (2 pi tau)`` of the faster time constant, Hz: envelope detail above it is lost."""
         return 1.0 / (2.0 * math.pi * min(self.tau_rise_s, self.tau_fall_s))
-
-    def to_dict(self) -> dict:
-        return asdict(self)
 
 
 DEFAULT_MOTOR = MotorModel()
@@ -153,6 +152,18 @@ def simulate(intensities: np.ndarray, fps: float, model: MotorModel = DEFAULT_MO
         running,
     )
     return amp, running
+
+
+def drive(intensities: np.ndarray, running: np.ndarray, model: MotorModel = DEFAULT_MOTOR) -> np.ndarray:
+    """What each motor is driven towards: its steady amplitude while running, 0 while stalled.
+
+    ``intensities``: ``(T, N)`` 0..100; ``running``: ``(T, N)`` bool from :func:`simulate`. Returns ``(T, N)``
+    0..1: ``min(c / saturation, 1) ** exponent`` where the motor runs, else 0. Unlike :func:`simulate`'s amplitude
+    it has no spin-up lag, so a rise in it is timed where the command changes; unlike the commands it leaves out
+    whatever falls under the start threshold.
+    """
+    c = np.clip(np.asarray(intensities, dtype=np.float64), 0.0, 100.0) / 100.0
+    return np.where(running, np.minimum(c / model.saturation, 1.0) ** model.exponent, 0.0)
 
 
 def step_times(model: MotorModel = DEFAULT_MOTOR) -> dict[str, float]:

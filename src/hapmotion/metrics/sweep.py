@@ -11,7 +11,8 @@ point TP enters the vest exactly on a chosen path over the front panel:
 * for a surface point ``q`` on the path the hand sits on the ray from TP through ``q``, at distance ``R`` from J_T;
   the torso is convex, so that ray enters it at ``q``.
 
-What the metrics must then say follows from the phantom formulas alone (rendering-research.md 1.1, 1.3):
+What the metrics must then say follows from the phantom formulas alone (the linear split of the HapMotion paper and
+the square-root energy split of Tactile Brush, Israr & Poupyrev, CHI 2011):
 
 * **row / column** sweeps cross motor to motor along a grid line: the paper's 1D rule ``K(1-a), K a`` has energy
   ``K^2 ((1-a)^2 + a^2)``, a 3.01 dB dip at every midpoint; the energy split keeps ``K^2`` (0 dB).
@@ -37,7 +38,10 @@ from ..body.model import BodyModel
 from ..joints import JOINT_INDEX, N_JOINTS
 from ..layout import Layout, load_layout
 from ..motion import Motion, new_motion
-from . import metrics as M
+from .constancy import energy_range_db
+from .coupling import energy
+from .locus import locus_errors, mean_finite
+from .smoothness import jerk_rms, toggles_per_s
 from .scorecard import aligned_commands
 
 __all__ = ["SweepCase", "CASES", "standing_pose", "sweep_case", "reasoned_energy", "reasoned_commands",
@@ -217,7 +221,8 @@ def _weights(grid: np.ndarray, phantom: str, layout: Layout, tol: float) -> np.n
             i = min(int(np.floor(cu)), cols - 2)
             j = min(int(np.floor(cv)), rows - 2)
             fu, fv = cu - i, cv - j
-            for di, dj, share in ((0, 0, (1 - fu) * (1 - fv)), (1, 0, fu * (1 - fv)), (0, 1, (1 - fu) * fv), (1, 1, fu * fv)):
+            corners = ((0, 0, (1 - fu) * (1 - fv)), (1, 0, fu * (1 - fv)), (0, 1, (1 - fu) * fv), (1, 1, fu * fv))
+            for di, dj, share in corners:
                 w[t, dev.offset + (j + dj) * cols + i + di] += np.sqrt(share)
             continue
         i0, j0 = int(np.floor(cu + 0.5)), int(np.floor(cv + 0.5))
@@ -245,9 +250,9 @@ def reasoned_commands(case: SweepCase, params, level: float, layout: Layout | No
 
     Amplitude ``K = level x percent_per_level`` goes through the Stevens mapping ``100 (K/100)^(1/beta)`` when
     ``perceptual_exponent`` is set (before the split, as :class:`hapmotion.render.Params` documents), is split by
-    the phantom formula (:func:`reasoned_energy`'s rules), then each share gets the dead-zone lift
-    ``dead_zone + (100 - dead_zone) x / 100`` with shares under ``silence_floor`` set to 0. The per-actuator release hold is
-    not modelled (it depends on the history; in these slow sweeps it only acts for a few frames beside each motor).
+    the phantom formula (:func:`reasoned_energy`'s rules), then each share gets the dead-zone lift ``dead_zone +
+    (100 - dead_zone) x / 100`` with shares under ``silence_floor`` set to 0. The per-actuator release hold is not
+    modelled (it depends on the history; in these slow sweeps it only acts for a few frames beside each motor).
     """
     layout = layout or load_layout()
     amp = level * params.percent_per_level
@@ -264,7 +269,7 @@ def reasoned_centroids(case: SweepCase, commands: np.ndarray, power: float, layo
     """``(T,)`` expected locus error (cm) of each frame: the ``power``-weighted centroid of predicted commands
     (:func:`reasoned_commands`) on the actuator positions, against the known hit point."""
     layout = layout or load_layout()
-    return M.locus_errors(commands / 100.0, layout.positions(case.body), case.hit, power)
+    return locus_errors(commands / 100.0, layout.positions(case.body), case.hit, power)
 
 
 def run_bench(
@@ -283,10 +288,11 @@ def run_bench(
 
     Returns
     -------
-    One dict per (case, preset): ``case``, ``preset``, ``phantom``, measured ``range_db`` (commanded energy range
-    over the sweep), ``range_skin_db`` (the same on the ERM model's output), ``locus_cm`` / ``locus_amp_cm`` (mean centroid errors), ``toggles_s``, ``jerk`` over the sweep, and
-    the ``reasoned_*`` values for the preset's phantom model, plus ``energy_db`` ``(T_sweep,)`` and ``position``
-    ``(T_sweep,)`` arrays for figures.
+    One dict per (case, preset): ``case``, ``preset``, ``phantom``, measured ``range_db`` (commanded
+    energy range over the sweep), ``range_skin_db`` (the same on the ERM model's output), ``locus_cm`` /
+    ``locus_amp_cm`` (mean centroid errors), ``toggles_s``, ``jerk`` over the sweep, and the ``reasoned_*`` values
+    for the preset's phantom model, plus ``energy_db`` ``(T_sweep,)`` (dB re. the sweep's maximum: 0 where the
+    energy is highest, the dips below) and ``progress`` ``(T_sweep, 2)`` (grid coordinates) for figures.
     """
     from ..render import render
     from ..render.renderer import resolve_params
@@ -302,29 +308,28 @@ def run_bench(
             track = render(case.motion, method="baseline", params=params, layout=layout, body=case.body)
             cmd = aligned_commands(track, layout)
             sw = case.sweep
-            e = M.energy(cmd)[sw]
+            e = energy(cmd)[sw]
             # the metric is checked against the known path, not against the renderer's own report of it
-            err_e = M.locus_errors(cmd, positions, case.hit, 2.0)[sw]
-            err_a = M.locus_errors(cmd, positions, case.hit, 1.0)[sw]
+            err_e = locus_errors(cmd, positions, case.hit, 2.0)[sw]
+            err_a = locus_errors(cmd, positions, case.hit, 1.0)[sw]
             skin, running = simulate(track.intensities, fps)
             # the level is the renderer's intended input; the bench premise (tested) is that it is constant
             expected = reasoned_commands(case, params, float(np.median(track.debug["level"][sw])), layout)
-            exp_e = M.energy(expected / 100.0)[sw]
+            exp_e = energy(expected / 100.0)[sw]
             rows.append({
                 "case": name,
                 "preset": label,
                 "phantom": params.phantom,
-                "range_db": M.energy_range_db(e),
-                "reasoned_range_db": M.energy_range_db(exp_e),
-                "range_skin_db": M.energy_range_db(M.energy(skin)[sw]),
-                "locus_cm": M.summary(err_e),
-                "reasoned_locus_cm": M.summary(reasoned_centroids(case, expected, 2.0, layout)[sw]),
-                "locus_amp_cm": M.summary(err_a),
-                "reasoned_locus_amp_cm": M.summary(reasoned_centroids(case, expected, 1.0, layout)[sw]),
-                "toggles_s": M.toggles_per_s(running[sw], fps),
-                "jerk": M.jerk_rms(cmd[sw], fps),
-                "energy_db": 10 * np.log10(np.maximum(e, 1e-12) / max(float(np.median(e)), 1e-12)),
-                "position": np.linspace(0.0, 1.0, int(sw.sum())),
+                "range_db": energy_range_db(e),
+                "reasoned_range_db": energy_range_db(exp_e),
+                "range_skin_db": energy_range_db(energy(skin)[sw]),
+                "locus_cm": mean_finite(err_e),
+                "reasoned_locus_cm": mean_finite(reasoned_centroids(case, expected, 2.0, layout)[sw]),
+                "locus_amp_cm": mean_finite(err_a),
+                "reasoned_locus_amp_cm": mean_finite(reasoned_centroids(case, expected, 1.0, layout)[sw]),
+                "toggles_s": toggles_per_s(running[sw], fps),
+                "jerk": jerk_rms(cmd[sw], fps),
+                "energy_db": 10 * np.log10(np.maximum(e, 1e-12) / max(float(e.max()), 1e-12)),
                 "progress": case.grid[sw],
             })
     return rows

@@ -6,7 +6,7 @@ rebuilds plain numpy arrays, dicts and lists; anything else is refused with an :
 
 Joint mapping (COCO-17 index -> canonical): wrists 9/10 -> WRIST_* and HAND_* (COCO has no hand point; BVH readers
 use the wrist for HAND_* too), shoulders 5/6, elbows 7/8, hips 11/12, knees 13/14, ankles 15/16, nose 0, eyes 1/2,
-ears 3/4. Derived (``readers._common.derive_missing``): PELVIS = mid hips, NECK = mid shoulders, SPINE_NAVEL and
+ears 3/4. Derived (:func:`hapmotion.motion_files.derived_joints.derive_missing`): PELVIS = mid hips, NECK = mid shoulders, SPINE_NAVEL and
 SPINE_CHEST on PELVIS -> NECK at 0.38 and 0.60, HEAD = mid ears (nose where an ear is missing). Frames with NaN
 keypoints (some AIST++ sequences have them) are gaps.
 """
@@ -16,20 +16,17 @@ from __future__ import annotations
 import io
 import os
 import pickle
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 
 from ..errors import InputError
 from ..joints import JOINT_INDEX, N_JOINTS
 from ..motion import Motion, new_motion
-from ._common import (
-    check_fps_option,
-    check_skip_option,
-    derive_missing,
-    read_bytes,
-    units_or_default,
-)
+from .derived_joints import derive_missing
+from ..limits import DEFAULT_LIMITS, InputLimits, check_frames, read_bytes
+from .options import ReaderOptions, skip_count
+from .units import units_or_default
 
 COCO17: tuple[str, ...] = (
     "nose", "left_eye", "right_eye", "left_ear", "right_ear", "left_shoulder", "right_shoulder", "left_elbow",
@@ -48,12 +45,17 @@ COCO17_TO_CANONICAL: dict[str, tuple[str, ...]] = {
     "left_ankle": ("ANKLE_LEFT",), "right_ankle": ("ANKLE_RIGHT",),
 }
 
-AIST_FPS = 60.0  # AIST++ annotations are 60 fps exactly (AIST++ site, factsfigures; SOURCES.md)
+AIST_FPS = 60.0  # AIST++ annotations are 60 fps exactly (repository google/aistplusplus_dataset, factsfigures.html)
 KEYS = ("keypoints3d_optim", "keypoints3d")
 
 
 class _ArrayUnpickler(pickle.Unpickler):
-    """Unpickler that rebuilds numpy arrays and nothing else (no arbitrary classes or functions)."""
+    """Unpickler that rebuilds numpy arrays of numbers and nothing else (no arbitrary classes or functions).
+
+    An array's data is stored inside the pickle, so no array may hold more bytes than the file: numpy's
+    ``_reconstruct(ndarray, shape, dtype)`` would otherwise allocate whatever shape a 60-byte file names (a
+    ``(3000000, 17, 3)`` float64 array is 1.2 GB) before anything could be checked.
+    """
 
     _ALLOWED = {
         ("numpy.core.multiarray", "_reconstruct"), ("numpy._core.multiarray", "_reconstruct"),
@@ -61,27 +63,75 @@ class _ArrayUnpickler(pickle.Unpickler):
         ("numpy", "ndarray"), ("numpy", "dtype"), ("collections", "OrderedDict"),
     }
 
+    def __init__(self, data: bytes):
+        super().__init__(io.BytesIO(data))
+        self.budget = len(data)
+
     def find_class(self, module: str, name: str) -> Any:
         if (module, name) not in self._ALLOWED:
             raise pickle.UnpicklingError(f"refusing to load '{module}.{name}' (only numpy arrays are accepted)")
         if module.startswith("numpy.core"):  # pickles written by numpy 1.x
             module = "numpy._core" + module[len("numpy.core"):]
-        return super().find_class(module, name)
+        found = super().find_class(module, name)
+        if name == "_reconstruct":
+            return self._reconstruct(found)
+        if name == "dtype":
+            return _numeric_dtype
+        return found
+
+    def _reconstruct(self, real: Any) -> Any:
+        def checked(subtype: Any, shape: Any, dtype: Any) -> Any:
+            size = _declared_bytes(shape, dtype)
+            if size > self.budget:
+                raise pickle.UnpicklingError(f"an array of shape {tuple(shape)[:4]} declares {size:.3g} bytes, more "
+                                             f"than the {self.budget}-byte file holds")
+            return real(subtype, shape, dtype)
+
+        return checked
 
 
-def load_pickle(path: str) -> Any:
-    """Unpickle ``path`` allowing only numpy arrays inside builtin containers; :class:`InputError` otherwise."""
-    raw = read_bytes(path)
+def _numeric_dtype(*args: Any, **kwargs: Any) -> np.dtype:
+    """``numpy.dtype`` limited to numbers and text: an object array would unpickle arbitrary objects."""
+    dt = np.dtype(*args, **kwargs)
+    if dt.kind not in "biufcSU" or dt.hasobject:
+        raise pickle.UnpicklingError(f"refusing an array of dtype {dt} (only numbers are accepted)")
+    return dt
+
+
+def _declared_bytes(shape: Any, dtype: Any) -> float:
+    """Bytes an array of ``shape`` and ``dtype`` needs (a float: a forged shape may overflow 64-bit integers)."""
     try:
-        return _ArrayUnpickler(io.BytesIO(raw)).load()
+        dims = [int(d) for d in (shape if isinstance(shape, (tuple, list)) else (shape,))]
+        item = np.dtype(dtype.decode("latin-1") if isinstance(dtype, bytes) else dtype).itemsize
+    except (TypeError, ValueError):
+        raise pickle.UnpicklingError(f"an array with shape {shape!r}") from None
+    if any(d < 0 for d in dims):
+        raise pickle.UnpicklingError(f"an array with a negative dimension {tuple(dims)[:4]}")
+    total = float(item)
+    for d in dims:
+        total *= d
+    return total
+
+
+def load_pickle(path: str, limits: InputLimits = DEFAULT_LIMITS) -> Any:
+    """Unpickle ``path`` allowing only numpy arrays inside builtin containers; :class:`InputError` otherwise."""
+    raw = read_bytes(path, limits)
+    try:
+        return _ArrayUnpickler(raw).load()
+    except RecursionError:
+        raise InputError(path, None, "expected an AIST++ keypoints pickle, found data nested too deeply") from None
+    except MemoryError:
+        raise InputError(path, None, "expected an AIST++ keypoints pickle, found data that declares more memory "
+                         "than is available") from None
     except Exception as err:  # any failure of untrusted bytes is the file's fault, never a crash
-        reason = str(err).splitlines()[0] if str(err) else type(err).__name__
+        reason = " ".join(str(err).split())[:160] if str(err) else type(err).__name__
         raise InputError(path, None, f"expected an AIST++ keypoints pickle (a dict of numpy arrays), found data "
                          f"that cannot be loaded ({reason})") from None
 
 
-def keypoints_from(path: str, doc: Any) -> tuple[np.ndarray, str]:
-    """The ``(N, 17, 3)`` keypoint array and the key it came from."""
+def keypoints_from(path: str, doc: Any, limits: InputLimits = DEFAULT_LIMITS,
+                   fps: float = 60.0) -> tuple[np.ndarray, str]:
+    """The ``(N, 17, 3)`` keypoint array and the key it came from (its frames checked against ``limits``)."""
     if not isinstance(doc, dict):
         raise InputError(path, "field (top level)", f"expected a dict with {' or '.join(KEYS)}, found "
                          f"{type(doc).__name__}")
@@ -98,31 +148,26 @@ def keypoints_from(path: str, doc: Any) -> tuple[np.ndarray, str]:
         raise InputError(path, f"field {key}", f"expected shape (frames, 17, 3) (COCO-17), found {arr.shape}")
     if arr.shape[0] == 0:
         raise InputError(path, f"field {key}", "expected at least one frame, found 0")
+    check_frames(path, f"field {key}", arr.shape[0], fps, limits)
     if np.isinf(arr).any():
         f = int(np.argwhere(np.isinf(arr))[0][0])
         raise InputError(path, f"field {key}, frame {f}", "expected finite keypoints (or NaN for missing), found inf")
     return np.asarray(arr, dtype=np.float64), key
 
 
-def read_aist(
-    path: str | os.PathLike[str],
-    *,
-    units: Optional[str] = None,
-    scale: Optional[float] = None,
-    skip_frames: Optional[int] = None,
-    fps: Optional[float] = None,
-) -> Motion:
+def read_aist(path: str | os.PathLike[str], options: ReaderOptions = ReaderOptions()) -> Motion:
     """Read an AIST++ ``keypoints3d`` pickle into a :class:`~hapmotion.motion.Motion`.
 
-    Defaults: centimetres, 60 fps; ``units``/``scale`` and ``fps`` override them, ``skip_frames`` drops leading
-    frames. NaN keypoints are gaps.
+    Defaults: centimetres, 60 fps; the ``units``/``scale`` and ``fps`` options override them, ``skip_frames``
+    drops leading frames. NaN keypoints are gaps.
     """
     path = os.fspath(path)
-    check_fps_option(fps)
-    kp, key = keypoints_from(path, load_pickle(path))
-    metres, unit_text = units_or_default(units, scale, (0.01, "cm (x0.01 -> m)"))
+    fps = options.fps
+    kp, key = keypoints_from(path, load_pickle(path, options.limits), options.limits,
+                             fps if fps is not None else AIST_FPS)
+    metres, unit_text = units_or_default(options.units, options.scale, (0.01, "cm (x0.01 -> m)"))
     notes: list[str] = [f"keypoints from '{key}'"]
-    skip = check_skip_option(skip_frames, kp.shape[0], path)
+    skip = skip_count(options.skip_frames, kp.shape[0], path)
     if skip:
         kp = kp[skip:]
         notes.append(f"skipped the first {skip} frames (option skip_frames)")
@@ -143,6 +188,7 @@ def read_aist(
         "skeleton": "COCO-17 keypoints",
         "units": unit_text,
         "metres_per_unit": metres,
+        "up_axis": "+Y (fixed by the format)",
         "source_joints": source,
         "derived_from": derived_from,
         "skipped_frames": skip or 0,

@@ -1,6 +1,6 @@
 """BVH reader: parse the HIERARCHY and MOTION blocks, run forward kinematics, map joints to the canonical set.
 
-BVH conventions followed here (``shared/data/motion/SOURCES.md``, "Common conventions"):
+BVH conventions followed here (the Biovision format as the CMU, Daz and Bandai Namco exports write it):
 
 - A joint's rotation channels are in degrees and are applied in the order listed, as intrinsic rotations:
   ``Zrotation Yrotation Xrotation`` means ``R = Rz @ Ry @ Rx``.
@@ -16,6 +16,8 @@ Units are detected from the skeleton and checked against a plausible standing he
 
 from __future__ import annotations
 
+import difflib
+import io
 import math
 import os
 import re
@@ -28,19 +30,12 @@ from ..errors import InputError
 from ..joints import JOINT_INDEX, JOINTS, N_JOINTS
 from ..motion import Motion, new_motion
 from . import skeletons
-from ._common import (
-    FPS_RANGE,
-    UNITS,
-    apply_up_axis,
-    check_fps_option,
-    check_skip_option,
-    derive_missing,
-    fps_in_range,
-    missing_needed,
-    read_bytes,
-    resolve_scale,
-    snap_rate,
-)
+from .derived_joints import derive_missing, missing_needed
+from .joint_map import MAP_EXAMPLE, load_joint_map
+from ..limits import DEFAULT_LIMITS, InputLimits, check_frames, over_limit, read_bytes
+from .options import FPS_RANGE, ReaderOptions, fps_in_range, skip_count, snap_rate
+from .units import UNITS, resolve_scale
+from .up_axis import apply_up_axis, detect_up_axis
 
 _AXES = "XYZ"
 _CHANNELS = frozenset(f"{a}{kind}" for a in _AXES for kind in ("position", "rotation"))
@@ -102,30 +97,28 @@ class BvhFile:
 # ------------------------------------------------------------------------------------------------------ parsing
 
 
-def _tokens(text: str, first_line: int = 1):
-    """Yield (token, line number) over whitespace-separated tokens."""
-    for k, line in enumerate(text.splitlines()):
+def _tokens(text: str):
+    """Yield (token, line number) over whitespace-separated tokens, lazily (a forged hierarchy may be long)."""
+    for k, line in enumerate(io.StringIO(text), start=1):
         for tok in line.split():
-            yield tok, first_line + k
+            yield tok, k
 
 
 class _Tokens:
     def __init__(self, path: str, text: str):
         self.path = path
-        self.items = list(_tokens(text))
-        self.pos = 0
+        self._it = _tokens(text)
+        self._next: tuple[str, int] = next(self._it, ("", 1))
+        self._line = 1
 
     def peek(self) -> tuple[str, int]:
-        if self.pos >= len(self.items):
-            last = self.items[-1][1] if self.items else 1
-            return "", last
-        return self.items[self.pos]
+        return self._next
 
     def next(self, what: str) -> tuple[str, int]:
-        tok, line = self.peek()
+        tok, line = self._next
         if not tok:
             raise InputError(self.path, f"line {line}", f"expected {what}, found the end of the hierarchy")
-        self.pos += 1
+        self._next = next(self._it, ("", line))
         return tok, line
 
     def expect(self, word: str) -> int:
@@ -145,7 +138,9 @@ class _Tokens:
         return value
 
 
-def _parse_hierarchy(path: str, text: str) -> list[BvhJoint]:
+def _parse_hierarchy(path: str, text: str, limits: InputLimits = DEFAULT_LIMITS) -> list[BvhJoint]:
+    """The joints of a HIERARCHY block in file order (parents first). Iterative, so nesting depth costs no
+    recursion; the joint count and the depth are checked against ``limits`` as the joints are read."""
     toks = _Tokens(path, text)
     toks.expect("HIERARCHY")
     joints: list[BvhJoint] = []
@@ -155,42 +150,30 @@ def _parse_hierarchy(path: str, text: str) -> list[BvhJoint]:
         toks.expect("OFFSET")
         return np.array([toks.number("an OFFSET number") for _ in range(3)])
 
-    def body(name: str, parent: int, line: int) -> None:
+    def open_joint(name: str, parent: int, line: int, depth: int) -> int:
+        """Read ``{ OFFSET [CHANNELS]`` of a joint; returns its index."""
         nonlocal n_channels
+        over_limit(path, f"line {line}", "joints in the hierarchy", len(joints) + 1, limits, "joints")
+        over_limit(path, f"line {line}", "levels of joint nesting", depth, limits, "depth")
         toks.expect("{")
         joint = BvhJoint(name=name, parent=parent, offset=offset(), line=line, first_channel=n_channels)
-        index = len(joints)
         joints.append(joint)
-        tok, cline = toks.peek()
+        tok, _ = toks.peek()
         if tok.upper() == "CHANNELS":
             toks.next("CHANNELS")
             count_tok, count_line = toks.next("a channel count")
-            if not (count_tok.isascii() and count_tok.isdigit()):
-                raise InputError(path, f"line {count_line}", f"expected a channel count, found '{count_tok}'")
+            if not (count_tok.isascii() and count_tok.isdigit()) or len(count_tok) > 2:
+                raise InputError(path, f"line {count_line}", f"expected a channel count (0 to 99), found "
+                                 f"'{count_tok[:40]}'")
             for _ in range(int(count_tok)):
                 ch, chline = toks.next("a channel name")
                 key = ch[0].upper() + ch[1:].lower() if ch else ch
                 if key not in _CHANNELS:
                     raise InputError(path, f"line {chline}",
-                                     f"expected a channel name (Xposition ... Zrotation), found '{ch}'")
+                                     f"expected a channel name (Xposition ... Zrotation), found '{ch[:40]}'")
                 joint.channels.append(key)
             n_channels += len(joint.channels)
-        while True:
-            tok, kline = toks.next("JOINT, End Site or '}'")
-            word = tok.upper()
-            if word == "}":
-                return
-            if word == "JOINT":
-                child, _ = toks.next("a joint name")
-                body(child, index, kline)
-            elif word == "END":
-                toks.expect("Site")
-                toks.expect("{")
-                joints.append(BvhJoint(name=f"{name}_End", parent=index, offset=offset(), line=kline,
-                                       first_channel=n_channels, end_site=True))
-                toks.expect("}")
-            else:
-                raise InputError(path, f"line {kline}", f"expected JOINT, End Site or '}}', found '{tok}'")
+        return len(joints) - 1
 
     while True:
         tok, line = toks.peek()
@@ -198,17 +181,36 @@ def _parse_hierarchy(path: str, text: str) -> list[BvhJoint]:
             break
         toks.next("ROOT")
         name, _ = toks.next("a joint name")
-        body(name, -1, line)
+        stack = [open_joint(name, -1, line, 1)]  # the open joints, innermost last
+        while stack:
+            tok, kline = toks.next("JOINT, End Site or '}'")
+            word = tok.upper()
+            if word == "}":
+                stack.pop()
+            elif word == "JOINT":
+                child, _ = toks.next("a joint name")
+                stack.append(open_joint(child, stack[-1], kline, len(stack) + 1))
+            elif word == "END":
+                toks.expect("Site")
+                toks.expect("{")
+                parent = stack[-1]
+                over_limit(path, f"line {kline}", "joints in the hierarchy", len(joints) + 1, limits, "joints")
+                joints.append(BvhJoint(name=f"{joints[parent].name}_End", parent=parent, offset=offset(),
+                                       line=kline, first_channel=n_channels, end_site=True))
+                toks.expect("}")
+            else:
+                raise InputError(path, f"line {kline}", f"expected JOINT, End Site or '}}', found '{tok[:40]}'")
     tok, line = toks.peek()
     if not joints:
-        raise InputError(path, f"line {line}", f"expected ROOT, found '{tok or 'the end of the hierarchy'}'")
+        raise InputError(path, f"line {line}", f"expected ROOT, found '{tok[:40] or 'the end of the hierarchy'}'")
     if tok:
-        raise InputError(path, f"line {line}", f"expected ROOT or MOTION, found '{tok}'")
-    names = [j.name for j in joints]
-    dup = sorted({n for n in names if names.count(n) > 1})
-    if dup:
-        raise InputError(path, f"line {joints[names.index(dup[0])].line}", f"expected unique joint names, found "
-                         f"'{dup[0]}' more than once")
+        raise InputError(path, f"line {line}", f"expected ROOT or MOTION, found '{tok[:40]}'")
+    seen: dict[str, int] = {}
+    for j in joints:
+        if j.name in seen:
+            raise InputError(path, f"line {j.line}", f"expected unique joint names, found '{j.name[:60]}' more "
+                             "than once")
+        seen[j.name] = j.line
     return joints
 
 
@@ -217,18 +219,21 @@ _FRAMES = re.compile(r"^\s*Frames\s*:\s*(\S+)\s*$", re.I)
 _FRAME_TIME = re.compile(r"^\s*Frame\s+Time\s*:\s*(\S+)\s*$", re.I)
 
 
-def parse_bvh(path: str | os.PathLike[str]) -> BvhFile:
-    """Parse a BVH file into its hierarchy and its ``(T, C)`` channel values. Raises :class:`InputError`."""
+def parse_bvh(path: str | os.PathLike[str], limits: InputLimits = DEFAULT_LIMITS) -> BvhFile:
+    """Parse a BVH file into its hierarchy and its ``(T, C)`` channel values. Raises :class:`InputError`.
+
+    Sizes are checked before anything is allocated: the file size, the joint count and nesting depth, and the
+    ``Frames:`` count against ``limits`` and against what the file's bytes can hold."""
     from ._floats import BAD_TOKEN, EXTRA_ROWS, OK, TRUNCATED, WRONG_COUNT, parse_table
 
     path = os.fspath(path)
-    raw = read_bytes(path)
+    raw = read_bytes(path, limits)
     m = _MOTION.search(raw)
     if m is None:
         n_lines = raw.count(b"\n") + 1
         raise InputError(path, f"line {n_lines}", "expected a MOTION line after the HIERARCHY, found none")
     header = raw[: m.start()].decode("utf-8", "replace")
-    joints = _parse_hierarchy(path, header)
+    joints = _parse_hierarchy(path, header, limits)
     n_channels = sum(len(j.channels) for j in joints)
     motion_line = header.count("\n") + 1  # 1-based line of "MOTION"
 
@@ -251,7 +256,10 @@ def parse_bvh(path: str | os.PathLike[str]) -> BvhFile:
     (frames_text, frames_line), (time_text, time_line) = lines
     fm = _FRAMES.match(frames_text)
     if fm is None or not (fm.group(1).isascii() and fm.group(1).isdigit()):
-        raise InputError(path, f"line {frames_line}", f"expected 'Frames: <count>', found '{frames_text.strip()}'")
+        raise InputError(path, f"line {frames_line}", f"expected 'Frames: <count>', found '{frames_text.strip()[:60]}'")
+    if len(fm.group(1)) > 12:
+        raise InputError(path, f"line {frames_line}", f"expected 'Frames: <count>', found a {len(fm.group(1))}-digit "
+                         "count")
     n_frames = int(fm.group(1))
     if n_frames == 0:
         raise InputError(path, f"line {frames_line}", "expected at least one frame, found 'Frames: 0'")
@@ -263,11 +271,12 @@ def parse_bvh(path: str | os.PathLike[str]) -> BvhFile:
         if n_frames > most:
             raise InputError(path, f"line {frames_line}", f"Frames: says {n_frames} but the file holds at most "
                              f"{most} frames: truncated?")
+    check_frames(path, f"line {frames_line}", n_frames, None, limits)
     tm = _FRAME_TIME.match(time_text)
     frame_time = _float_or_none(tm.group(1)) if tm else None
     if frame_time is None or not (frame_time > 0 and math.isfinite(frame_time)):
         raise InputError(path, f"line {time_line}",
-                         f"expected 'Frame Time: <seconds>' with a positive number, found '{time_text.strip()}'")
+                         f"expected 'Frame Time: <seconds>' with a positive number, found '{time_text.strip()[:60]}'")
     first_data_line = time_line + 1
     buf = np.frombuffer(raw, dtype=np.uint8, offset=min(data_start, len(raw)))
     values, status, row, line, found, token = parse_table(buf, n_frames, n_channels)
@@ -399,56 +408,122 @@ def forward_kinematics(bvh: BvhFile, wanted: list[int], channels: Optional[np.nd
 
 # ----------------------------------------------------------------------------------------------------- reading
 
-_NEEDED_HINT = "hands, shoulders, pelvis, a spine joint and a neck (or joints to derive them from)"
+_NEEDED_HINT = "hands, shoulders and a pelvis (or hips)"
 
 
-def map_joints(bvh: BvhFile) -> tuple[Optional[skeletons.Skeleton], dict[str, str]]:
-    """(known skeleton or None, canonical name -> BVH joint name)."""
+def rest_positions(bvh: BvhFile) -> np.ndarray:
+    """``(K, 3)`` rest-pose position of every joint (summed OFFSETs, no rotation), in file units."""
+    rest = np.zeros((len(bvh.joints), 3))
+    for k, j in enumerate(bvh.joints):  # parents come first
+        rest[k] = j.offset + (rest[j.parent] if j.parent >= 0 else 0.0)
+    return rest
+
+
+def map_joints(bvh: BvhFile, user_map: Optional[dict[str, str]] = None,
+               map_source: str = "joint map") -> tuple[Optional[skeletons.Skeleton], dict[str, str]]:
+    """(known skeleton or None, canonical name -> BVH joint name).
+
+    A known skeleton (by its signature names) uses its exact map; any other is matched by names and structure
+    (:func:`skeletons.match_generic`). ``user_map`` (their name -> canonical) wins over both; each of its names
+    must be a joint of the file.
+    """
     names = [j.name for j in bvh.joints]
     skel = skeletons.identify(names)
     if skel is not None:
-        return skel, {c: s for c, s in skel.mapping.items() if s in names}
-    return None, skeletons.match_generic(bvh.names)
+        mapping = {c: s for c, s in skel.mapping.items() if s in names}
+    else:
+        mapping = skeletons.match_generic(names, [j.parent for j in bvh.joints], rest_positions(bvh))
+    if user_map:
+        have = set(names)
+        for theirs in user_map:
+            if theirs not in have:
+                close = difflib.get_close_matches(theirs, names, n=3, cutoff=0.5)
+                hint = f" (closest: {', '.join(close)})" if close else ""
+                raise InputError(map_source, f"entry {theirs[:60]!r}", f"expected a joint of {bvh.path}, found no "
+                                 f"joint of that name{hint}")
+        claimed = set(user_map)
+        mapping = {c: s for c, s in mapping.items() if s not in claimed or c.startswith(("HAND_", "WRIST_"))}
+        for theirs, canon in user_map.items():
+            mapping[canon] = theirs
+        if skel is not None:
+            skel = None  # the map changed it: report the skeleton as the user's
+    return skel, mapping
 
 
-def read_bvh(
-    path: str | os.PathLike[str],
-    *,
-    units: Optional[str] = None,
-    scale: Optional[float] = None,
-    skip_frames: Optional[int] = None,
-    fps: Optional[float] = None,
-    up: Optional[str] = None,
-) -> Motion:
+def unmatched_message(missing: list[str], bvh: BvhFile, mapping: dict[str, str]) -> str:
+    """A short explanation for a skeleton whose needed joints were not found: the joints, the closest candidates
+    (at most three each, shortened) and how to write a joint map. Never lists the whole skeleton.
+
+    Candidates for a missing joint are first its neighbours in the file's hierarchy (the parent of the joint
+    matched as its canonical child: the shoulder is the joint above the elbow; then the children of the joint
+    matched as its nearest canonical ancestor: the hand is a joint below the elbow), then the names that look
+    most alike.
+    """
+    from ..joints import JOINT_INDEX, PARENTS
+
+    names = bvh.names
+    index = {j.name: k for k, j in enumerate(bvh.joints)}
+    parts = []
+    for canon in missing:
+        near: list[str] = []
+        c = JOINT_INDEX[canon]
+        for child in (JOINTS[k] for k, p in enumerate(PARENTS) if p == c):  # the joint above its matched child
+            if child in mapping and bvh.joints[index[mapping[child]]].parent >= 0:
+                near.append(bvh.joints[bvh.joints[index[mapping[child]]].parent].name)
+        p = PARENTS[c]
+        while p >= 0 and JOINTS[p] not in mapping:  # the nearest matched canonical ancestor (HAND -> ELBOW)
+            p = PARENTS[p]
+        if p >= 0:  # the joints below it
+            near += [j.name for j in bvh.joints if j.parent == index[mapping[JOINTS[p]]] and not j.end_site]
+        close = list(dict.fromkeys(n for n in near + skeletons.closest_names(canon, names)
+                                   if n not in mapping.values()))[:3]
+        shown = ", ".join(repr(n[:30]) for n in close)
+        parts.append(f"{canon} (closest: {shown})" if close else canon)
+    return (f"expected {_NEEDED_HINT}, found no joint for {'; '.join(parts)} among {len(names)} joints; name them "
+            f"in a joint map (--joint-map map.toml with lines like {MAP_EXAMPLE})")
+
+
+def read_bvh(path: str | os.PathLike[str], options: ReaderOptions = ReaderOptions()) -> Motion:
     """Read a BVH file into a :class:`~hapmotion.motion.Motion` (metres, +Y up, canonical joints).
 
-    Options: ``units`` ("m", "cm", "mm", "inch", "cmu") or ``scale`` (metres per file unit) override the unit
-    detection; ``skip_frames`` overrides the leading T-pose detection; ``fps`` overrides ``Frame Time``; ``up``
-    ("y" default, or "z" for Z-up files) names the file's up axis.
+    Options used (:class:`ReaderOptions`): ``units``/``scale`` override the unit detection; ``skip_frames``
+    overrides the leading T-pose detection; ``fps`` overrides ``Frame Time``; ``up`` names the file's up axis
+    (otherwise detected: :func:`~hapmotion.motion_files.up_axis.detect_up_axis`); ``joint_map`` names joints the
+    automatic matching misses; ``limits`` bounds the sizes.
     """
     path = os.fspath(path)
-    check_fps_option(fps)
-    resolve_scale(units, scale)  # bad option values fail before the file is read
-    apply_up_axis(np.zeros(3), up, path)
-    bvh = parse_bvh(path)
+    fps, up = options.fps, options.up
+    user_map = load_joint_map(options.joint_map) if options.joint_map is not None else None
+    map_source = os.fspath(options.joint_map) if isinstance(options.joint_map, (str, os.PathLike)) else "joint map"
+    bvh = parse_bvh(path, options.limits)
     file_fps = 1.0 / bvh.frame_time  # inf for a subnormal Frame Time
     if fps is None and not fps_in_range(file_fps):
         raise InputError(path, f"line {bvh.frame_time_line}", f"expected 'Frame Time: <seconds>' giving {FPS_RANGE}, "
-                         f"found '{bvh.frame_time_text}' ({file_fps:.6g} fps)")
-    skel, mapping = map_joints(bvh)
+                         f"found '{bvh.frame_time_text[:60]}' ({file_fps:.6g} fps)")
+    rate = fps if fps is not None else snap_rate(file_fps, 5e-4)  # Frame Time has ~5 digits
+    check_frames(path, f"line {bvh.frame_time_line}", bvh.n_frames, rate, options.limits)
+    skel, mapping = map_joints(bvh, user_map, map_source)
     notes: list[str] = []
 
     missing = missing_needed(mapping)
     if missing:
-        raise InputError(path, "joints " + ", ".join(missing),
-                         f"expected {_NEEDED_HINT}, found no match among the BVH joints: {', '.join(bvh.names)}")
+        raise InputError(path, "joints " + ", ".join(missing), unmatched_message(missing, bvh, mapping))
 
     canon = list(mapping)
     wanted = [bvh.index(mapping[c]) for c in canon]
     world = forward_kinematics(bvh, wanted)
-    world = apply_up_axis(world, up, path)
+    if up is None:
+        evidence = detect_up_axis(world, canon)
+        up = evidence.axis
+        up_text = f"{'+' if not up.startswith('-') else ''}{up.upper()} (detected: {evidence.reason})"
+        if evidence.weak:
+            notes.append(f"warning: weak evidence for the up axis ({evidence.reason}); taking "
+                         f"{up_text.split(' ')[0]}, give the up option (--up) if that is wrong")
+    else:
+        up_text = f"{'+' if not up.startswith('-') else ''}{up.upper()} (option)"
+    world = apply_up_axis(world, up)
 
-    skip = check_skip_option(skip_frames, world.shape[0], path)
+    skip = skip_count(options.skip_frames, world.shape[0], path)
     if skip is None:
         skip = detect_tpose(world, canon)
         if skip:
@@ -459,7 +534,7 @@ def read_bvh(
     world = world[skip:]
 
     height_units = standing_height(world, canon)
-    metres, unit_text = choose_scale(height_units, skel, units, scale, path, notes)
+    metres, unit_text = choose_scale(height_units, skel, options.units, options.scale, path, notes)
     world *= metres
 
     positions = np.full((world.shape[0], N_JOINTS, 3), np.nan)
@@ -468,10 +543,17 @@ def read_bvh(
 
     if fps is not None:
         notes.append(f"frame rate {fps:g} fps from the option (file says {file_fps:.6g})")
+    if skel is not None:
+        skeleton = skel.name
+    elif user_map:
+        skeleton = f"BVH ({len(bvh.names)} joints, {len(user_map)} named by the joint map, the rest by name)"
+    else:
+        skeleton = f"generic BVH ({len(bvh.names)} joints, matched by name and position)"
     meta = {
         "format": "BVH",
-        "skeleton": skel.name if skel else f"generic BVH ({len(bvh.names)} joints, matched by name)",
+        "skeleton": skeleton,
         "units": unit_text,
+        "up_axis": up_text,
         "metres_per_unit": metres,
         "source_joints": {c: mapping[c] for c in JOINTS if c in mapping},
         "derived_from": derived_from,
@@ -481,7 +563,6 @@ def read_bvh(
         "source_joints_available": bvh.names,
         "notes": notes,
     }
-    rate = fps if fps is not None else snap_rate(file_fps, 5e-4)  # Frame Time has ~5 digits
     return new_motion(positions, rate, source=path, derived=derived, meta=meta)
 
 

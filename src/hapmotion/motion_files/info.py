@@ -26,6 +26,7 @@ def summary(motion: Motion) -> dict[str, Any]:
         "fps": motion.fps,
         "duration_s": motion.duration,
         "units": meta.get("units", "m"),
+        "up_axis": meta.get("up_axis", "+Y (format)"),
         "frames_skipped": int(meta.get("skipped_frames", 0)),
         "joints_found": found,
         "joints_derived": derived,
@@ -42,7 +43,8 @@ def _joint_list(mapping: dict[str, str]) -> str:
 
 
 def describe(motion: Motion) -> list[tuple[str, str]]:
-    """``(label, value)`` rows: format, skeleton, path, frames, fps, duration, units and conversion, frames skipped,
+    """``(label, value)`` rows: format, skeleton, path, frames, fps, duration, units and conversion, the up axis and
+    why, frames skipped,
     joints found (with the source names), joints derived (with the rule), joints absent, gaps filled per joint,
     notes."""
     s = summary(motion)
@@ -55,6 +57,7 @@ def describe(motion: Motion) -> list[tuple[str, str]]:
         ("fps", f"{s['fps']:g}"),
         ("duration", f"{s['duration_s']:.2f} s"),
         ("units", s["units"]),
+        ("up axis", s["up_axis"]),
         ("frames skipped", str(s["frames_skipped"])),
         (f"joints found ({len(s['joints_found'])})", _joint_list(s["joints_found"])),
         (f"joints derived ({len(s['joints_derived'])})",

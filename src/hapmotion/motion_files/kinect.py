@@ -1,6 +1,6 @@
 """Azure Kinect Body Tracking JSON, as written by the SDK sample ``offline_processor``.
 
-Layout (``shared/docs/motion-formats.md`` section 2.4)::
+Layout (repository microsoft/Azure-Kinect-Samples, ``body-tracking-samples/offline_processor/main.cpp``)::
 
     {"frames": [{"bodies": [{"body_id": 1, "joint_positions": [[x, y, z] x 32], "joint_orientations": ...}],
                  "frame_id": 0, "num_bodies": 1, "timestamp_usec": 123456}, ...],
@@ -17,18 +17,17 @@ Timing: ``timestamp_usec`` is the device clock. The frame rate is 1e6 / median s
 
 from __future__ import annotations
 
-import json
 import math
 import os
-import sys
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, UsageError
+from ..errors import InputError
 from ..joints import JOINTS, N_JOINTS, canonical
 from ..motion import Motion, new_motion
-from ._common import FPS_RANGE, check_fps_option, check_skip_option, fps_in_range, read_bytes, snap_rate
+from ..limits import check_frames, load_json
+from .options import FPS_RANGE, ReaderOptions, fps_in_range, skip_count, snap_rate
 
 MM = 0.001
 MAX_GAP_FACTOR = 4
@@ -92,42 +91,34 @@ def _positions(path: str, where: str, value: Any) -> np.ndarray:
     if all(type(v) is list and len(v) == 3 for v in value) and {type(c) for v in value for c in v} <= {int, float}:
         if len(value) != N_JOINTS:
             raise InputError(path, f"field {where}", f"expected {N_JOINTS} [x, y, z] triples, found {len(value)}")
-        try:
-            return np.array(value, dtype=np.float64)
-        except OverflowError:  # a JSON integer beyond float range
-            pass
-    for k, v in enumerate(value):  # name the first entry that is not a triple of numbers
+        xyz = np.array(value, dtype=np.float64)
+        if not np.isinf(xyz).any():
+            return xyz
+    for k, v in enumerate(value):  # name the first entry that is not a triple of finite numbers (NaN = a gap)
         if not isinstance(v, list) or len(v) != 3:
             raise InputError(path, f"field {where}[{k}]", f"expected an [x, y, z] triple of numbers, found {_kind(v)}")
         for i, c in enumerate(v):
             if not _is_number(c):
                 found = _kind(c)
-            elif type(c) is int and abs(c) > sys.float_info.max:
-                found = "an integer too large for a float"
+            elif isinstance(c, float) and math.isinf(c):
+                found = "a number beyond the float range (or Infinity)"
             else:
                 continue
             raise InputError(path, f"field {where}[{k}][{i}]", f"expected a number ({'xyz'[i]} in mm), found {found}")
     raise InputError(path, f"field {where}", f"expected {N_JOINTS} [x, y, z] triples of numbers")
 
 
-def read_kinect_json(
-    path: str | os.PathLike[str],
-    *,
-    body_id: Optional[int] = None,
-    fps: Optional[float] = None,
-    skip_frames: Optional[int] = None,
-) -> Motion:
+def read_kinect_json(path: str | os.PathLike[str], options: ReaderOptions = ReaderOptions()) -> Motion:
     """Read an ``offline_processor`` JSON file into a :class:`~hapmotion.motion.Motion`.
 
-    ``body_id`` picks the body (default: the first id seen; the ids found are listed in ``meta["notes"]``).
-    ``fps`` sets the frame rate and takes the frames in file order, one per frame (timestamps are then not needed).
-    ``skip_frames`` drops leading frames. Frames where the body is missing are gaps that ``new_motion`` fills.
+    Options used: ``body_id`` picks the body (default: the first id seen; the ids found are listed in
+    ``meta["notes"]``). ``fps`` sets the frame rate and takes the frames in file order, one per frame (timestamps
+    are then not needed). ``skip_frames`` drops leading frames. ``limits`` bounds the sizes. Frames where the body
+    is missing are gaps that ``new_motion`` fills.
     """
     path = os.fspath(path)
-    check_fps_option(fps)
-    if body_id is not None and (isinstance(body_id, bool) or not isinstance(body_id, (int, np.integer))):
-        raise UsageError(f"body_id must be a whole number, found {body_id!r}")
-    doc = _load_json(path)
+    fps, body_id, skip_frames = options.fps, options.body_id, options.skip_frames
+    doc = load_json(path, options.limits, allow_nan=True)  # a NaN joint is a gap
     if not isinstance(doc, dict):
         raise InputError(path, "field (top level)", f"expected an object with 'frames', found {_kind(doc)}")
     frames = doc.get("frames")
@@ -135,6 +126,7 @@ def read_kinect_json(
         raise InputError(path, "field frames", f"expected a list of frames, found {_kind(frames)}")
     if not frames:
         raise InputError(path, "field frames", "expected at least one frame, found 0")
+    check_frames(path, "field frames", len(frames), fps, options.limits)
     order = _joint_order(path, doc)
 
     ids_seen: list[int] = []
@@ -160,7 +152,7 @@ def read_kinect_json(
             if not isinstance(body, dict):
                 raise InputError(path, f"field {bwhere}", f"expected an object, found {_kind(body)}")
             bid = body.get("body_id")
-            if not _is_number(bid) or int(bid) != bid:
+            if not _is_number(bid) or not math.isfinite(bid) or int(bid) != bid:
                 raise InputError(path, f"field {bwhere}.body_id", f"expected a whole number, found {_kind(bid)}")
             bid = int(bid)
             if "joint_positions" not in body:
@@ -199,12 +191,13 @@ def read_kinect_json(
         else:
             rate = 30.0
             notes.append("one frame only: frame rate set to 30 fps (the Azure Kinect default)")
-        slots = np.rint((stamps - stamps[0]) * rate / 1e6).astype(np.int64)
-        if len(steps) and slots[-1] + 1 > MAX_GAP_FACTOR * len(frames):
+        slot_of = np.rint((stamps - stamps[0]) * rate / 1e6)  # floats: a forged clock would overflow int64
+        if len(steps) and not slot_of[-1] + 1 <= MAX_GAP_FACTOR * len(frames):
             k = int(np.argmax(steps)) + 1
             raise InputError(path, f"field frames[{k}].timestamp_usec", f"expected steps of about "
                              f"{1e6 / rate:.0f} us, found a jump of {steps[k - 1] / 1e6:.3g} s (several recordings "
                              "in one file?); give the frame rate as an option to take the frames in order")
+        slots = slot_of.astype(np.int64)
         fps_text = f"{rate:g} fps from timestamp_usec (median step {np.median(steps) if len(steps) else 0:.0f} us)"
     else:
         rate = float(fps)
@@ -234,7 +227,8 @@ def read_kinect_json(
     if n_missing:
         notes.append(f"body {chosen} missing in {n_missing} of {n_slots} frames (filled)")
 
-    skip = check_skip_option(skip_frames, n_slots, path)
+    check_frames(path, "field frames[*].timestamp_usec", n_slots, rate, options.limits)
+    skip = skip_count(skip_frames, n_slots, path)
     if skip:
         positions = positions[skip:]
         notes.append(f"skipped the first {skip} frames (option skip_frames)")
@@ -244,6 +238,7 @@ def read_kinect_json(
         "skeleton": "Azure Kinect (32 joints)",
         "units": "mm (x0.001 -> m); camera axes (+Y down, +Z forward) rotated 180 deg about X to +Y up",
         "metres_per_unit": MM,
+        "up_axis": "-Y (the depth camera's frame, fixed by the format; rotated 180 deg about X)",
         "source_joints": {name: name for name in JOINTS},
         "derived_from": {},
         "skipped_frames": skip or 0,
@@ -257,12 +252,3 @@ def read_kinect_json(
                          "found none")
     return new_motion(positions, rate, source=path, meta=meta)
 
-
-def _load_json(path: str) -> Any:
-    raw = read_bytes(path)
-    try:
-        return json.loads(raw)
-    except json.JSONDecodeError as err:
-        raise InputError(path, f"line {err.lineno} column {err.colno}", f"expected valid JSON ({err.msg})") from None
-    except UnicodeDecodeError:
-        raise InputError(path, None, "expected UTF-8 JSON text, found binary data") from None

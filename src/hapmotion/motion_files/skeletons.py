@@ -1,7 +1,8 @@
 """Which BVH joint is which canonical (Azure Kinect) joint.
 
-Three skeletons are known exactly (the ones in ``shared/data/motion``, see its ``SOURCES.md``); any other BVH is
-matched by name with common synonyms (:func:`match_generic`).
+Three skeletons are known exactly (the CMU MotionBuilder-friendly and Daz-friendly BVH conversions by B. Hahne
+(cgspeed), and the Bandai Namco Research Motion Dataset); any other BVH is matched by name with common synonyms and
+by its structure (:func:`match_generic`); a user joint map (:mod:`hapmotion.motion_files.joint_map`) names the rest.
 
 Conventions shared by every map:
 
@@ -10,8 +11,8 @@ Conventions shared by every map:
   is ``HAND_*``; using the same point for every skeleton keeps renders comparable across formats.
 - ``SHOULDER_*`` is the humerus head (CMU ``LeftArm``, Daz ``lShldr``, Bandai ``UpperArm_L``); the joints named
   "shoulder"/"collar" in those files are clavicles (``CLAVICLE_*``).
-- Finger joints are not mapped: the CMU conversions carry no finger data (SOURCES.md) and the renderer does not
-  use them.
+- Finger joints are not mapped: the CMU conversions carry no finger data (CMU did not capture fingers) and the
+  renderer does not use them.
 - A name ending in ``_End`` is the End Site of that joint (see :mod:`hapmotion.motion_files.bvh`).
 """
 
@@ -19,7 +20,9 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Iterable, Optional
+from typing import Iterable, Optional, Sequence
+
+import numpy as np
 
 # ---------------------------------------------------------------------------------------------- known skeletons
 
@@ -49,14 +52,14 @@ class Skeleton:
 
 
 # CMU units: the CMU FAQ gives metres = value * (1.0 / 0.45) * 2.54 / 100 = 0.056444 (mocap.cs.cmu.edu FAQ, quoted
-# in shared/data/motion/SOURCES.md).
+# in the cgspeed conversions' notes).
 CMU_METRES_PER_UNIT = (1.0 / 0.45) * 2.54 / 100.0
 
 CMU_MB = Skeleton(
     name="CMU MotionBuilder-friendly BVH (31 joints)",
     mapping={
         "PELVIS": "Hips", "SPINE_NAVEL": "Spine", "SPINE_CHEST": "Spine1",
-        # Neck sits at the thorax in these files; Neck1 is the real neck (SOURCES.md).
+        # Neck sits at the thorax in these files; Neck1 is the real neck (checked by forward kinematics).
         "NECK": "Neck1", "HEAD": "Head",
         **_sided({
             "CLAVICLE_LEFT": "LeftShoulder", "SHOULDER_LEFT": "LeftArm", "ELBOW_LEFT": "LeftForeArm",
@@ -101,7 +104,7 @@ BANDAI = Skeleton(
     },
     signature=frozenset({"joint_Root", "Hips", "Spine", "Chest", "Neck", "Head", "Shoulder_L", "UpperArm_L",
                          "LowerArm_L", "Hand_L", "Hand_R", "UpperLeg_L", "Toes_L"}),
-    metres_per_unit=0.01,  # centimetres (dataset README; SOURCES.md)
+    metres_per_unit=0.01,  # centimetres (dataset README, BandaiNamcoResearchInc/Bandai-Namco-Research-Motiondataset)
     unit_name="cm",
 )
 
@@ -118,6 +121,19 @@ def identify(names: Iterable[str]) -> Optional[Skeleton]:
 
 
 # ---------------------------------------------------------------------------------------------- generic matching
+#
+# Naming schemes this matches with no joint map (checked by tests/test_motion_files_skeletons.py on a synthetic
+# skeleton named each way, and on the real files for CMU, Daz and Bandai):
+#   CMU / Mixamo      LeftArm, LeftForeArm, LeftHand, LeftUpLeg, LeftLeg, Spine, Spine1, ("mixamorig:" prefix)
+#   Unity / VRM       LeftUpperArm, LeftLowerArm, LeftHand, LeftUpperLeg, Chest, UpperChest (also leftUpperArm)
+#   MakeHuman         clavicle.L, upperarm01.L, lowerarm01.L, wrist.L, upperleg01.L, spine05, neck01
+#   MocapNET / Daz    lcollar, lshoulder, lelbow, lhand, lhip, lknee, lfoot, abdomen, chest (l/r glued on)
+#   Blender           upper_arm.L, forearm.L, hand.L, thigh.L, shin.L, foot.L, spine.001
+#   Rokoko            LeftShoulder, LeftArm, LeftForeArm, LeftThigh, LeftShin, LeftToe, Spine1..Spine4
+#   Perfume / Xsens   RightCollar, RightShoulder, RightElbow, RightWrist, RightHip, RightKnee, Chest..Chest4
+# The spine joints between the pelvis and the neck are assigned by where they sit on that chain (see
+# :func:`assign_spine`), not by name: "Chest" is the lowest spine joint in the Perfume files but the upper one
+# in Unity's.
 
 # Words that mark a side, after splitting a name into lower-case words.
 _LEFT_WORDS = {"left", "l", "lt"}
@@ -147,16 +163,24 @@ _CENTRE: dict[str, tuple[str, ...]] = {
     "HEAD": ("head",),
     "NOSE": ("nose",),
 }
+_SIDED_BASES = frozenset(b for bases in _SIDED.values() for b in bases) | {"shoulder", "collar"}
 
 _NAMESPACE = re.compile(r"^.*[:|]")  # "mixamorig:Hips", "Character1|Hips"
 _WORD = re.compile(r"[A-Z]+(?=[A-Z][a-z])|[A-Z]?[a-z]+|[A-Z]+|\d+")
+_GLUED_SIDE = (("left", "LEFT"), ("right", "RIGHT"), ("l", "LEFT"), ("r", "RIGHT"))
 
 
 def split_name(name: str) -> tuple[Optional[str], str]:
     """Split a joint name into (side, base): ``"LeftUpLeg" -> ("LEFT", "upleg")``, ``"Hand_L" -> ("LEFT", "hand")``,
-    ``"mixamorig:Spine1" -> (None, "spine1")``, ``"l_wrist" -> ("LEFT", "wrist")``."""
+    ``"mixamorig:Spine1" -> (None, "spine1")``, ``"neck01" -> (None, "neck1")``, ``"l_wrist" -> ("LEFT", "wrist")``, ``"rhand" -> ("RIGHT",
+    "hand")``, ``"upper_arm.L" -> ("LEFT", "upperarm")``.
+
+    A side glued to a lower-case word ("rhand", "lshoulder", "lefteye") is split off only when the rest is a limb
+    word we know, so "leg" and "lowerarm" stay whole.
+    """
     bare = _NAMESPACE.sub("", name.strip())
-    words = [w.lower() for w in _WORD.findall(bare)]
+    # "01" and "001" count as "1" (MakeHuman neck01, Blender spine.001)
+    words = [str(int(w)) if w.isdigit() else w.lower() for w in _WORD.findall(bare)]
     side = None
     kept = []
     for w in words:
@@ -166,11 +190,35 @@ def split_name(name: str) -> tuple[Optional[str], str]:
             side = "RIGHT"
         else:
             kept.append(w)
+    if side is None and kept:
+        for prefix, which in _GLUED_SIDE:
+            rest = kept[0][len(prefix):]
+            if kept[0].startswith(prefix) and rest.rstrip("0123456789") in _SIDED_BASES:
+                side = which
+                kept[0] = rest
+                break
     return side, "".join(kept)
 
 
-def match_generic(names: Iterable[str]) -> dict[str, str]:
-    """Canonical name -> BVH joint name for a skeleton we do not know, by name synonyms (case-insensitive).
+def _keys(name: str) -> list[tuple[Optional[str], str]]:
+    """Lookup keys of a joint name: (side, base), then for a numbered limb word (side, the word without its number):
+    MakeHuman's "upperarm01.L" is also found as "upperarm"."""
+    side, base = split_name(name)
+    keys = [(side, base)]
+    stripped = base.rstrip("0123456789")
+    if stripped != base and stripped in _SIDED_BASES:
+        keys.append((side, stripped))
+    return keys
+
+
+def match_generic(names: Iterable[str], parents: Optional[Sequence[int]] = None,
+                  rest: Optional[np.ndarray] = None) -> dict[str, str]:
+    """Canonical name -> joint name for a skeleton we do not know, by name synonyms (case-insensitive) and, when
+    the hierarchy is given, by structure.
+
+    ``names`` are the joints in file order; ``parents`` (index into ``names``, -1 for a root) and ``rest``
+    ((K, 3) rest-pose positions, e.g. summed BVH OFFSETs) let the pelvis be found as the joint where the legs meet
+    when no joint is called hips/pelvis, and the spine joints be placed by position (:func:`assign_spine`).
 
     When a side has both a "shoulder" and an "arm"/"upperarm" joint (Mixamo, CMU style), "shoulder" is the clavicle;
     a lone "shoulder" is the humerus head. Joints not found are simply absent from the result.
@@ -178,8 +226,8 @@ def match_generic(names: Iterable[str]) -> dict[str, str]:
     names = list(names)
     by_key: dict[tuple[Optional[str], str], str] = {}
     for n in names:
-        key = split_name(n)
-        by_key.setdefault(key, n)  # first occurrence (closest to the root in file order) wins
+        for key in _keys(n):
+            by_key.setdefault(key, n)  # first occurrence (closest to the root in file order) wins
     out: dict[str, str] = {}
     used: set[str] = set()
 
@@ -201,4 +249,97 @@ def match_generic(names: Iterable[str]) -> dict[str, str]:
             if stem == "SHOULDER" and has_arm:
                 bases = tuple(b for b in bases if b != "shoulder")
             take(f"{stem}_{side}", side, bases)
+    if parents is not None:
+        _structure(out, names, list(parents), rest)
     return out
+
+
+def _ancestors(i: int, parents: list[int]) -> list[int]:
+    """``i`` and its ancestors, nearest first."""
+    chain = []
+    seen = set()
+    while i >= 0 and i not in seen:
+        seen.add(i)
+        chain.append(i)
+        i = parents[i]
+    return chain
+
+
+def _structure(out: dict[str, str], names: list[str], parents: list[int], rest: Optional[np.ndarray]) -> None:
+    """Refine a by-name match in place with the hierarchy: the pelvis where the legs meet (when none is named),
+    and the spine joints by position."""
+    index = {n: k for k, n in enumerate(names)}
+    if "PELVIS" not in out and "HIP_LEFT" in out and "HIP_RIGHT" in out:
+        left = _ancestors(index[out["HIP_LEFT"]], parents)[1:]
+        right = set(_ancestors(index[out["HIP_RIGHT"]], parents)[1:])
+        meet = next((k for k in left if k in right), None)
+        if meet is not None:
+            out["PELVIS"] = names[meet]
+    if rest is None or "PELVIS" not in out or "NECK" not in out:
+        return
+    above_neck = _ancestors(index[out["NECK"]], parents)
+    pelvis = index[out["PELVIS"]]
+    if pelvis not in above_neck:
+        return
+    chain = above_neck[1:above_neck.index(pelvis)][::-1]  # spine joints from the pelvis up, neck and pelvis excluded
+    placed = assign_spine(rest[pelvis], rest[index[out["NECK"]]], {names[k]: rest[k] for k in chain})
+    for canon in ("SPINE_NAVEL", "SPINE_CHEST"):
+        out.pop(canon, None)
+        if canon in placed:
+            out[canon] = placed[canon]
+
+
+SPINE_TOLERANCE = 0.2
+"""Largest distance (as a fraction of pelvis-to-neck) between a spine joint and the navel or chest point for it to
+stand for that point; farther, the point is derived on the pelvis-neck line instead."""
+
+
+def assign_spine(pelvis: np.ndarray, neck: np.ndarray, chain: dict[str, np.ndarray]) -> dict[str, str]:
+    """SPINE_NAVEL and SPINE_CHEST among the spine joints ``chain`` (name -> rest position, pelvis to neck), by
+    where each sits along pelvis -> neck.
+
+    A joint's place is its rest position projected on the pelvis-to-neck segment (0 = pelvis, 1 = neck). Each of
+    the navel (0.38) and the chest (0.60) point takes the nearest joint within :data:`SPINE_TOLERANCE`; one joint
+    serves one point only (the nearer one); a point with no joint near enough is left out (and derived later).
+    """
+    from .derived_joints import CHEST_FRACTION, NAVEL_FRACTION
+
+    axis = np.asarray(neck, dtype=float) - np.asarray(pelvis, dtype=float)
+    length2 = float(axis @ axis)
+    if not chain or not (length2 > 0 and np.isfinite(length2)):
+        return {}
+    where = {n: float((np.asarray(p) - pelvis) @ axis) / length2 for n, p in chain.items()}
+    options = []
+    for canon, target in (("SPINE_NAVEL", NAVEL_FRACTION), ("SPINE_CHEST", CHEST_FRACTION)):
+        for n, f in where.items():
+            if abs(f - target) <= SPINE_TOLERANCE:
+                options.append((abs(f - target), canon, n))
+    out: dict[str, str] = {}
+    for _, canon, n in sorted(options):
+        if canon not in out and n not in out.values():
+            out[canon] = n
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- when nothing fits
+
+_SIDE_WORD = {"LEFT": "left", "RIGHT": "right"}
+
+
+def closest_names(canon: str, names: Iterable[str], n: int = 3) -> list[str]:
+    """Up to ``n`` joint names that look most like the canonical joint ``canon`` (for an error message)."""
+    import difflib
+
+    stem, _, side = canon.rpartition("_") if canon.endswith(("_LEFT", "_RIGHT")) else (canon, "", "")
+    bases = _SIDED.get(stem) or _CENTRE.get(canon) or (canon.lower(),)
+    wanted = [(_SIDE_WORD.get(side, "") + b) for b in bases]
+    scored = []
+    for name in names:
+        s, base = split_name(name)
+        flat = _SIDE_WORD.get(s or "", "") + base
+        score = max(difflib.SequenceMatcher(None, flat, w).ratio() for w in wanted)
+        if side and s and s != side:
+            score -= 0.5  # the other side's joint is no candidate
+        scored.append((score, name))
+    scored.sort(key=lambda t: -t[0])
+    return [name for score, name in scored[:n] if score >= 0.5]

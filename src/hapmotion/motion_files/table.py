@@ -19,27 +19,21 @@ import math
 import os
 import re
 import zipfile
+import zlib
 from typing import Any, Optional
 
 import numpy as np
+import numpy.lib.format as npy_format
 
 from ..errors import InputError, UsageError
 from ..joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS, canonical
 from ..motion import Motion, new_motion
 from ..filesafety import atomic_path
-from ._common import (
-    FPS_RANGE,
-    MAX_FPS,
-    MIN_FPS,
-    STEP_RANGE,
-    apply_up_axis,
-    check_fps_option,
-    check_skip_option,
-    derive_missing,
-    fps_in_range,
-    read_bytes,
-    units_or_default,
-)
+from .derived_joints import derive_missing
+from ..limits import InputLimits, check_frames, over_limit, read_bytes
+from .options import FPS_RANGE, MAX_FPS, MIN_FPS, STEP_RANGE, ReaderOptions, skip_count, fps_in_range
+from .units import units_or_default
+from .up_axis import apply_up_axis
 
 UNIFORM_TOLERANCE = 0.01
 """Largest relative deviation of a ``time_s`` step from the median step."""
@@ -58,25 +52,24 @@ def _assemble(
     fps: float,
     *,
     fmt: str,
-    units: Optional[str],
-    scale: Optional[float],
-    up: Optional[str],
-    skip_frames: Optional[int],
+    options: ReaderOptions,
     derived_in: Optional[np.ndarray] = None,
     notes: Optional[list[str]] = None,
 ) -> Motion:
     """Common tail of both table readers. ``xyz`` is ``(T, J, 3)`` in file units, ``names`` canonical."""
     notes = list(notes or [])
-    metres, unit_text = units_or_default(units, scale, (1.0, "m"))
-    skip = check_skip_option(skip_frames, xyz.shape[0], path)
+    check_frames(path, None, xyz.shape[0], fps, options.limits)
+    metres, unit_text = units_or_default(options.units, options.scale, (1.0, "m"))
+    skip = skip_count(options.skip_frames, xyz.shape[0], path)
     if skip:
         xyz = xyz[skip:]
         conf = conf[skip:] if conf is not None else None
         notes.append(f"skipped the first {skip} frames (option skip_frames)")
     cols = [JOINT_INDEX[n] for n in names]
     positions = np.full((xyz.shape[0], N_JOINTS, 3), np.nan)
-    positions[:, cols] = apply_up_axis(xyz * metres, up, path)
-    if up is not None and str(up).strip().lower().lstrip("+") != "y":
+    up = options.up or "y"
+    positions[:, cols] = apply_up_axis(xyz * metres, up)
+    if up != "y":
         notes.append(f"up axis {up} rotated to +Y")
     valid = np.isfinite(positions).all(axis=2)
     confidence = None
@@ -112,6 +105,7 @@ def _assemble(
         "source_joints": {n: n for n in JOINTS if n in names},
         "derived_from": derived_from,
         "skipped_frames": skip or 0,
+        "up_axis": f"{'+' if not up.startswith('-') else ''}{up.upper()} ({'option' if options.up else 'format'})",
         "source_joints_available": list(names),
         "notes": notes,
     }
@@ -212,20 +206,12 @@ def _csv_values(path: str, lines: list[str], first_line: int, header: list[str])
     return np.array(rows, dtype=np.float64).reshape(len(rows), width), numbers
 
 
-def read_csv(
-    path: str | os.PathLike[str],
-    *,
-    units: Optional[str] = None,
-    scale: Optional[float] = None,
-    skip_frames: Optional[int] = None,
-    fps: Optional[float] = None,
-    up: Optional[str] = None,
-) -> Motion:
+def read_csv(path: str | os.PathLike[str], options: ReaderOptions = ReaderOptions()) -> Motion:
     """Read a hapmotion CSV motion table (see the module docstring and docs/formats.md)."""
     path = os.fspath(path)
-    check_fps_option(fps)
+    fps = options.fps
     try:
-        text = read_bytes(path).decode("utf-8-sig")
+        text = read_bytes(path, options.limits).decode("utf-8-sig")
     except UnicodeDecodeError:
         raise InputError(path, None, "expected UTF-8 text, found binary data") from None
     lines = text.splitlines()
@@ -260,8 +246,7 @@ def read_csv(
             r, j = bad[0]
             raise InputError(path, f"line {line_numbers[r]}", f"expected {names[j]}_conf between 0 and 1, found "
                              f"{conf[r, j]:g}")
-    return _assemble(path, names, xyz, conf, rate, fmt="hapmotion CSV", units=units, scale=scale, up=up,
-                     skip_frames=skip_frames, notes=notes)
+    return _assemble(path, names, xyz, conf, rate, fmt="hapmotion CSV", options=options, notes=notes)
 
 
 def _rate_from_times(path: str, t: np.ndarray, line_numbers: list[int]) -> float:
@@ -294,27 +279,12 @@ def _rate_from_times(path: str, t: np.ndarray, line_numbers: list[int]) -> float
 # ---------------------------------------------------------------------------------------------------------- NPZ
 
 
-def read_npz(
-    path: str | os.PathLike[str],
-    *,
-    units: Optional[str] = None,
-    scale: Optional[float] = None,
-    skip_frames: Optional[int] = None,
-    fps: Optional[float] = None,
-    up: Optional[str] = None,
-) -> Motion:
+def read_npz(path: str | os.PathLike[str], options: ReaderOptions = ReaderOptions()) -> Motion:
     """Read a hapmotion NPZ motion table (arrays ``positions``, ``joints``, ``fps``; optional ``confidence``,
     ``derived``)."""
     path = os.fspath(path)
-    check_fps_option(fps)
-    raw = read_bytes(path)
-    try:
-        with np.load(io.BytesIO(raw), allow_pickle=False) as z:
-            arrays = {k: z[k] for k in z.files}
-    except (zipfile.BadZipFile, EOFError, OSError) as err:
-        raise InputError(path, None, f"expected an .npz archive, found data that is not one ({err})") from None
-    except ValueError as err:
-        raise InputError(path, None, f"expected plain numeric/text arrays, found {err}") from None
+    fps = options.fps
+    arrays = _npz_arrays(path, read_bytes(path, options.limits), options.limits)
 
     def need(key: str) -> np.ndarray:
         if key not in arrays:
@@ -369,8 +339,59 @@ def read_npz(
         if derived.dtype != bool or derived.shape != (pos.shape[1],):
             raise InputError(path, "field derived", f"expected {pos.shape[1]} booleans, found {derived.dtype} "
                              f"{derived.shape}")
-    return _assemble(path, names, pos.astype(np.float64), conf, rate, fmt="hapmotion NPZ", units=units,
-                     scale=scale, up=up, skip_frames=skip_frames, derived_in=derived, notes=notes)
+    return _assemble(path, names, pos.astype(np.float64), conf, rate, fmt="hapmotion NPZ", options=options,
+                     derived_in=derived, notes=notes)
+
+
+NPZ_ARRAYS = ("positions", "joints", "fps", "confidence", "derived")
+"""Arrays a motion NPZ may hold; others are not read."""
+
+
+def _npz_arrays(path: str, raw: bytes, limits: InputLimits) -> dict[str, np.ndarray]:
+    """The known arrays of an NPZ archive, each checked before it is decompressed.
+
+    Every member's ``.npy`` header is read first and its declared size compared with the limits (frames x 32
+    joints x 3 float64 for the largest array) and with the size the archive states for the member: a forged
+    header, or a few hundred kB of deflated zeros declaring gigabytes, is refused before any allocation.
+    """
+    most = limits.frames * 32 * 3 * 8 + 4096  # the largest array a motion table within the limits can need
+    out: dict[str, np.ndarray] = {}
+    try:
+        with zipfile.ZipFile(io.BytesIO(raw)) as z:
+            for info in z.infolist():
+                name = info.filename[:-4] if info.filename.endswith(".npy") else info.filename
+                if name not in NPZ_ARRAYS or name in out:
+                    continue
+                where = f"field {name}"
+                with z.open(info) as f:  # the header only: a few hundred bytes decompressed
+                    version = npy_format.read_magic(f)
+                    read_header = (npy_format.read_array_header_1_0 if version == (1, 0)
+                                   else npy_format.read_array_header_2_0)
+                    shape, _, dtype = read_header(f, max_header_size=10000)
+                if dtype.hasobject:
+                    raise InputError(path, where, "expected plain numeric/text arrays, found objects")
+                if len(shape) >= 1 and name in ("positions", "confidence"):
+                    over_limit(path, where, "frames", shape[0], limits, "frames")
+                declared = float(dtype.itemsize) * float(np.prod([float(d) for d in shape]))
+                if declared > info.file_size:
+                    raise InputError(path, where, f"expected an array that fits its archive member, found a shape "
+                                     f"{shape} of {declared:.3g} bytes in a member of {info.file_size} bytes")
+                if declared > most:
+                    raise InputError(path, where, f"expected at most {most / 1e6:.0f} MB for an array (limit "
+                                     f"frames={limits.frames}; raise it with --limit frames=N), found "
+                                     f"{declared / 1e6:.0f} MB")
+                with z.open(info) as f:
+                    out[name] = npy_format.read_array(f, allow_pickle=False)
+                    f.read(1)  # reaching the end makes zipfile check the CRC: a changed byte is an error
+    except InputError:
+        raise
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, OSError, zlib.error, NotImplementedError) as err:
+        reason = " ".join(str(err).split())[:160]
+        raise InputError(path, None, f"expected an .npz archive, found data that is not one ({reason})") from None
+    except (ValueError, TypeError, SyntaxError, KeyError, MemoryError, OverflowError) as err:
+        reason = " ".join(str(err).split())[:160] or type(err).__name__
+        raise InputError(path, None, f"expected plain numeric/text arrays, found {reason}") from None
+    return out
 
 
 # ------------------------------------------------------------------------------------------------------ writing

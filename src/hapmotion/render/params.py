@@ -32,7 +32,9 @@ _RANGES = (
     ("side_blend", 0.0, 1.0), ("base_level", 0.0, 10.0), ("boost_levels", 0.0, 10.0), ("boost_full_ratio", 1e-3, 1e3),
     ("max_level", 0.0, 10.0), ("percent_per_level", 0.0, 100.0), ("phantom_1d_tolerance", 0.0, 0.5),
     ("perceptual_exponent", 0.0, 5.0), ("dead_zone", 0.0, 99.0), ("silence_floor", 0.0, 50.0),
-    ("actuator_release_s", 0.0, 10.0),
+    ("actuator_release_s", 0.0, 10.0), ("speed_start_mps", 0.0, 10.0), ("speed_full_mps", 0.0, 20.0),
+    ("reach_share", 0.0, 1.0), ("active_speed_mps", 0.0, 10.0), ("opposite_weight", 0.0, 10.0),
+    ("speed_smoothing_s", 0.0, 1.0), ("speed_weight", 0.0, 100.0),
 )
 """Accepted range of each numeric parameter (beyond these the renderer's numbers stop meaning anything)."""
 
@@ -109,6 +111,24 @@ class Params:
     """Per-actuator release time constant, seconds: outputs rise at once and decay no faster than this
     (smooths location jumps for slow ERMs); 0 = off."""
 
+    # --- beyond the paper: hand speed (0 = off, the paper's distance-only intensity) ---------------------------
+    speed_full_mps: float = 0.0
+    """m/s. Hand speed relative to J_T that gives the full level; 0 = off (intensity from distance alone, paper).
+    When on, Eq. 2's D_t is replaced by ``speed_n ((1 - reach_share) + reach_share D_t)`` with
+    ``speed_n = clip((v - speed_start_mps) / (speed_full_mps - speed_start_mps), 0, 1)`` of the faster hand."""
+    speed_start_mps: float = 0.1
+    """m/s. Below this smoothed hand speed the speed term is 0 (capture noise, breathing, sway)."""
+    reach_share: float = 0.5
+    """Share of the level that follows the reach (D_t) rather than the speed alone, 0..1."""
+    active_speed_mps: float = 0.2
+    """m/s. With the speed term on, a hand slower than this is never the active joint, whatever its acceleration."""
+    opposite_weight: float = 1.0
+    """With the speed term on: the opposite shoulder's weight in Eq. 1 for one active hand (paper: 1)."""
+    speed_weight: float = 0.0
+    """With the speed term on: extra weight of the one active hand per unit of normalised speed."""
+    speed_smoothing_s: float = 0.05
+    """s. Time constant of the one-pole filter on the hand speeds (0 = none)."""
+
     def __post_init__(self) -> None:
         if self.idle_choice not in IDLE_CHOICES:
             raise UsageError(f"idle_choice must be one of {', '.join(IDLE_CHOICES)}, not {self.idle_choice!r}")
@@ -120,6 +140,8 @@ class Params:
                 raise UsageError(f"{name} must be in (0, 1], not {v}")
         if self.intensity_far_m and self.intensity_far_m <= self.near_m:
             raise UsageError(f"intensity_far_m must be 0 or more than near_m, not {self.intensity_far_m}")
+        if self.speed_full_mps and self.speed_full_mps <= self.speed_start_mps:
+            raise UsageError(f"speed_full_mps must be 0 or more than speed_start_mps, not {self.speed_full_mps}")
         if not 0.0 <= self.near_m < self.far_m:
             raise UsageError(f"need 0 <= near_m < far_m, got {self.near_m} and {self.far_m}")
         for f in fields(self):
@@ -153,9 +175,30 @@ PRESETS: dict[str, Params] = {
         intensity_far_m=0.5,
         perceptual_exponent=0.8,
     ),
+    "felt": Params(
+        phantom="energy",
+        attack_alpha=0.6,
+        release_alpha=0.3,
+        intensity_far_m=0.5,
+        base_level=10.0,
+        max_level=10.0,
+        dead_zone=20.0,
+        actuator_release_s=0.08,
+        speed_full_mps=1.2,
+        speed_start_mps=0.1,
+        reach_share=0.4,
+        active_speed_mps=0.2,
+        opposite_weight=0.5,
+        speed_weight=1.0,
+    ),
 }
 """Named parameter sets. ``paper``: the paper's values. ``energy``: energy-preserving phantom split, asymmetric
-attack/release smoothing, ERM-aware output mapping (see docs/metrics.md for the evidence)."""
+attack/release smoothing, ERM-aware output mapping (see docs/metrics.md for the evidence). ``felt`` (the default):
+the ``energy`` pipeline calibrated for ERM vests, intensity from hand speed and reach, motors lifted over their
+start (docs/algorithm.md, "The felt preset", gives every value with its reason and measured figure)."""
+
+DEFAULT_PRESET = "felt"
+"""The preset used when none is named (render, live, view, demo and the API)."""
 
 
 def get_preset(name: str) -> Params:

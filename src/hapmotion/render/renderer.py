@@ -1,7 +1,7 @@
 """Renderer (sans-I/O, one frame at a time) and ``render`` (a whole recording at once).
 
-Both drive the same compiled frame loop (:mod:`hapmotion.render.kernel`), so ``render(motion)`` equals stepping a
-``Renderer`` through the frames, number for number.
+Both drive the same compiled frame loop (:func:`hapmotion.render.kernel.render_frames`), so ``render(motion)`` equals
+stepping a ``Renderer`` through the frames, number for number.
 """
 
 from __future__ import annotations
@@ -12,14 +12,16 @@ import numpy as np
 
 from ..body.model import BodyModel
 from ..errors import UsageError
-from ..joints import JOINT_INDEX
+from ..joints import JOINT_INDEX, RENDER_JOINTS
 from ..layout import Layout, load_layout
 from ..motion import Motion
 from ..track import HapticTrack
-from . import kernel as K
-from .params import METHODS, Params, alpha_at, get_preset
+from . import packed
+from .kernel import render_frames
+from .params import DEFAULT_PRESET, METHODS, Params, alpha_at, get_preset
 
-_KERNEL_IDX = np.array([JOINT_INDEX[n] for n in K.KERNEL_JOINTS], dtype=np.intp)
+_RENDER_IDX = np.array([JOINT_INDEX[n] for n in RENDER_JOINTS], dtype=np.intp)
+"""Rows of the canonical 32 joints that the frame loop receives, in ``RENDER_JOINTS`` order."""
 
 
 def resolve_params(preset: str | Params | None, params: Params | None = None, **overrides: Any) -> Params:
@@ -29,56 +31,66 @@ def resolve_params(preset: str | Params | None, params: Params | None = None, **
     elif isinstance(preset, Params):
         base = preset
     else:
-        base = get_preset(preset or "paper")
+        base = get_preset(preset or DEFAULT_PRESET)
     return base.replace(**overrides) if overrides else base
 
 
 def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
-    """The kernel's parameter vector for a method at a frame rate."""
+    """The frame loop's parameter vector ``(N_PARAMS,)`` for a method at a frame rate (``packed.P_*`` slots)."""
     if method not in METHODS:
         raise UsageError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if not (np.isfinite(fps) and fps > 0):
         raise UsageError(f"fps must be a positive number, not {fps}")
-    p = np.zeros(K.N_PARAMS)
-    p[K.P_METHOD] = 1.0 if method == "baseline" else 0.0
-    p[K.P_WINDOW] = min(K.MAX_WINDOW, max(1, int(round(params.threshold_window_s * fps))))
-    p[K.P_FLOOR] = params.accel_floor
-    p[K.P_IDLE_FARTHER] = 1.0 if params.idle_choice == "farther" else 0.0
-    p[K.P_W_GAIN] = params.weight_gain
-    p[K.P_W_MAX] = params.weight_extra_max
-    p[K.P_NEAR] = params.near_m
-    p[K.P_FAR] = params.far_m
-    p[K.P_SIDE_BLEND] = params.side_blend
-    p[K.P_C] = params.base_level
-    p[K.P_ATTACK] = alpha_at(params.attack_alpha, fps)
-    p[K.P_RELEASE] = alpha_at(params.release_alpha, fps)
-    p[K.P_BOOST] = params.boost_levels
-    p[K.P_BOOST_FULL] = max(params.boost_full_ratio, 1e-9)
-    p[K.P_MAX_LEVEL] = params.max_level
-    p[K.P_PCT] = params.percent_per_level
-    p[K.P_PHANTOM_ENERGY] = 1.0 if params.phantom == "energy" else 0.0
-    p[K.P_TOL] = params.phantom_1d_tolerance
-    p[K.P_BETA] = params.perceptual_exponent
-    p[K.P_DEAD] = params.dead_zone
-    p[K.P_REL_DECAY] = float(np.exp(-1.0 / (fps * params.actuator_release_s))) if params.actuator_release_s > 0 else 0.0
-    p[K.P_FPS] = fps
-    p[K.P_IFAR] = params.intensity_far_m if params.intensity_far_m > 0 else params.far_m
-    p[K.P_SILENCE] = params.silence_floor
+    p = np.zeros(packed.N_PARAMS)
+    p[packed.P_METHOD] = 1.0 if method == "baseline" else 0.0
+    p[packed.P_WINDOW] = min(packed.MAX_WINDOW, max(1, int(round(params.threshold_window_s * fps))))
+    p[packed.P_FLOOR] = params.accel_floor
+    p[packed.P_IDLE_FARTHER] = 1.0 if params.idle_choice == "farther" else 0.0
+    p[packed.P_W_GAIN] = params.weight_gain
+    p[packed.P_W_MAX] = params.weight_extra_max
+    p[packed.P_NEAR] = params.near_m
+    p[packed.P_FAR] = params.far_m
+    p[packed.P_SIDE_BLEND] = params.side_blend
+    p[packed.P_C] = params.base_level
+    p[packed.P_ATTACK] = alpha_at(params.attack_alpha, fps)
+    p[packed.P_RELEASE] = alpha_at(params.release_alpha, fps)
+    p[packed.P_BOOST] = params.boost_levels
+    p[packed.P_BOOST_FULL] = max(params.boost_full_ratio, 1e-9)
+    p[packed.P_MAX_LEVEL] = params.max_level
+    p[packed.P_PCT] = params.percent_per_level
+    p[packed.P_PHANTOM_ENERGY] = 1.0 if params.phantom == "energy" else 0.0
+    p[packed.P_TOL] = params.phantom_1d_tolerance
+    p[packed.P_BETA] = params.perceptual_exponent
+    p[packed.P_DEAD] = params.dead_zone
+    release_s = params.actuator_release_s
+    p[packed.P_REL_DECAY] = float(np.exp(-1.0 / (fps * release_s))) if release_s > 0 else 0.0
+    p[packed.P_FPS] = fps
+    p[packed.P_IFAR] = params.intensity_far_m if params.intensity_far_m > 0 else params.far_m
+    p[packed.P_SILENCE] = params.silence_floor
+    p[packed.P_SPEED_ON] = 1.0 if params.speed_full_mps > 0 else 0.0
+    p[packed.P_SPEED_START] = params.speed_start_mps
+    p[packed.P_SPEED_FULL] = max(params.speed_full_mps, params.speed_start_mps + 1e-6)
+    p[packed.P_REACH_SHARE] = params.reach_share
+    p[packed.P_ACTIVE_SPEED] = params.active_speed_mps
+    p[packed.P_OPPOSITE_W] = params.opposite_weight
+    p[packed.P_SPEED_ALPHA] = (1.0 - float(np.exp(-1.0 / (fps * params.speed_smoothing_s)))
+                               if params.speed_smoothing_s > 0 else 1.0)
+    p[packed.P_SPEED_W] = params.speed_weight
     return p
 
 
 def _debug_dict(dbg_f: np.ndarray, dbg_i: np.ndarray) -> dict[str, np.ndarray]:
     return {
-        "dynamic_point": dbg_f[..., K.D_DP:K.D_DP + 3],
-        "hit_point": dbg_f[..., K.D_HIT:K.D_HIT + 3],
-        "hit_body": dbg_f[..., K.D_HIT_BODY:K.D_HIT_BODY + 3],
-        "target_point": dbg_f[..., K.D_TP:K.D_TP + 3],
-        "level": dbg_f[..., K.D_LEVEL],
-        "uv": dbg_f[..., K.D_U:K.D_V + 1],
-        "distance": dbg_f[..., K.D_DIST],
-        "motion_energy": dbg_f[..., K.D_ENERGY],
-        "active": dbg_i[..., K.DI_ACTIVE_L:K.DI_ACTIVE_R + 1],
-        "chart": dbg_i[..., K.DI_CHART],
+        "dynamic_point": dbg_f[..., packed.D_DP:packed.D_DP + 3],
+        "hit_point": dbg_f[..., packed.D_HIT:packed.D_HIT + 3],
+        "hit_body": dbg_f[..., packed.D_HIT_BODY:packed.D_HIT_BODY + 3],
+        "target_point": dbg_f[..., packed.D_TP:packed.D_TP + 3],
+        "level": dbg_f[..., packed.D_LEVEL],
+        "uv": dbg_f[..., packed.D_U:packed.D_V + 1],
+        "distance": dbg_f[..., packed.D_DIST],
+        "motion_energy": dbg_f[..., packed.D_ENERGY],
+        "active": dbg_i[..., packed.DI_ACTIVE_L:packed.DI_ACTIVE_R + 1],
+        "chart": dbg_i[..., packed.DI_CHART],
     }
 
 
@@ -90,7 +102,7 @@ class Renderer:
     method:
         ``"mst"`` (motion salient triangle, the paper's method) or ``"baseline"`` (the active hand itself).
     preset:
-        Preset name (``"paper"``, ``"energy"``) or a :class:`Params`.
+        Preset name (``"felt"``, the default; ``"energy"``; ``"paper"``) or a :class:`Params`.
     mirror:
         Audience feels the performer mirrored left/right (default from the preset: True).
     fps:
@@ -106,7 +118,7 @@ class Renderer:
     def __init__(
         self,
         method: str = "mst",
-        preset: str | Params = "paper",
+        preset: str | Params = DEFAULT_PRESET,
         *,
         mirror: bool | None = None,
         fps: float = 60.0,
@@ -126,11 +138,11 @@ class Renderer:
         self._charts = self.layout.chart_table()
         n = self.layout.n_actuators
         self._mirror = self.layout.mirror_map() if self.params.mirror else np.arange(n)
-        self._state = K.new_state(n)
+        self._state = packed.new_state(n)
         self._out = np.zeros((1, n))
-        self._dbg_f = np.zeros((1, K.N_DEBUG_F))
-        self._dbg_i = np.zeros((1, K.N_DEBUG_I), dtype=np.int8)
-        self._frame = np.zeros((1, len(K.KERNEL_JOINTS), 3))
+        self._dbg_f = np.zeros((1, packed.N_DEBUG_F))
+        self._dbg_i = np.zeros((1, packed.N_DEBUG_I), dtype=np.int8)
+        self._frame = np.zeros((1, packed.N_RENDER_JOINTS, 3))
 
     @property
     def actuators(self) -> tuple[str, ...]:
@@ -138,7 +150,7 @@ class Renderer:
 
     def reset(self) -> None:
         """Forget all history: the next frame is rendered as a first frame."""
-        self._state = K.new_state(self.layout.n_actuators)
+        self._state = packed.new_state(self.layout.n_actuators)
 
     def turn_off_row(self) -> np.ndarray:
         """``(N,)`` zeros: what sinks get when the stream stops."""
@@ -159,8 +171,8 @@ class Renderer:
         f = np.asarray(frame, dtype=np.float64)
         if f.shape != (32, 3):
             raise ValueError(f"frame must be (32, 3), got {f.shape}")
-        self._frame[0] = f[_KERNEL_IDX]
-        K.render_frames(self._frame, self._prm, self._surf, self._charts, self._mirror, self._state,
+        self._frame[0] = f[_RENDER_IDX]
+        render_frames(self._frame, self._prm, self._surf, self._charts, self._mirror, self._state,
                         self._out, self._dbg_f, self._dbg_i)
         return self._out[0].copy()
 
@@ -177,19 +189,19 @@ class Renderer:
         pos = np.asarray(positions, dtype=np.float64)
         if pos.ndim != 3 or pos.shape[1:] != (32, 3):
             raise ValueError(f"positions must be (T, 32, 3), got {pos.shape}")
-        joints = np.ascontiguousarray(pos[:, _KERNEL_IDX, :])
+        joints = np.ascontiguousarray(pos[:, _RENDER_IDX, :])
         n = joints.shape[0]
         out = np.zeros((n, self.layout.n_actuators))
-        dbg_f = np.zeros((n, K.N_DEBUG_F))
-        dbg_i = np.zeros((n, K.N_DEBUG_I), dtype=np.int8)
-        K.render_frames(joints, self._prm, self._surf, self._charts, self._mirror, self._state, out, dbg_f, dbg_i)
+        dbg_f = np.zeros((n, packed.N_DEBUG_F))
+        dbg_i = np.zeros((n, packed.N_DEBUG_I), dtype=np.int8)
+        render_frames(joints, self._prm, self._surf, self._charts, self._mirror, self._state, out, dbg_f, dbg_i)
         return out, _debug_dict(dbg_f, dbg_i)
 
 
 def render(
     motion: Motion,
     method: str = "mst",
-    preset: str | Params = "paper",
+    preset: str | Params = DEFAULT_PRESET,
     *,
     mirror: bool | None = None,
     params: Params | None = None,

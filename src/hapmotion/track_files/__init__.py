@@ -1,8 +1,9 @@
 """Track files: ``save_track`` / ``load_track`` by extension (.csv, .json, .npz, .tact).
 
 Every writer goes through :func:`atomic_path`, so an output file appears whole or not at all. Every reader keeps to
-the limits of :mod:`.limits` (file size, frames, duration, JSON nesting and integer length, declared array sizes)
-and refuses bad input with a one-line :class:`~hapmotion.errors.InputError`.
+the limits of :mod:`hapmotion.limits` (file size, frames, duration, values, JSON nesting, parsed size and number
+length, declared array sizes), raised with ``load_track(path, limits={...})``, and refuses bad input with a
+one-line :class:`~hapmotion.errors.InputError` naming the limit.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from pathlib import Path
 from ..errors import InputError, UsageError
 from ..track import HapticTrack
 from ..filesafety import atomic_path
+from ..limits import LimitsArg, as_limits
 from .csv_track import read_csv, write_csv
 from .json_track import read_json, write_json
 from .npz_track import read_npz, write_npz
@@ -38,15 +40,19 @@ def save_track(track: HapticTrack, path: "str | os.PathLike[str]") -> None:
     WRITERS[_ext(path, WRITERS)](track, Path(path))
 
 
-def load_track(path: "str | os.PathLike[str]") -> HapticTrack:
+def load_track(path: "str | os.PathLike[str]", limits: LimitsArg = None) -> HapticTrack:
     """Read any track or pattern: ours (.csv, .json, .npz, .tact) or a bHaptics Designer / Player ``.tact``.
 
     CSV, JSON and NPZ tracks come back at their own frame rate; a ``.tact`` pattern comes back as the Player plays
     it, on its 20 ms tick (50 fps), with one column per motor of each bHaptics position the pattern covers (see
-    :mod:`.tact`). Use :meth:`HapticTrack.resample` for another rate. Bad files raise a one-line InputError.
+    :mod:`.tact`). Use :meth:`HapticTrack.resample` for another rate. ``limits``: an
+    :class:`~hapmotion.limits.InputLimits`, or a mapping of limits to raise (``{"frames": 2_000_000}``); ``None``
+    for the defaults. Bad files raise a one-line InputError (naming the limit a file exceeds), bad limits a
+    UsageError.
     """
     ext = _ext(path, READERS)
+    checked = as_limits(limits)
     p = Path(path)
     if not p.is_file():
         raise InputError(p, None, "expected a track file, found nothing there")
-    return READERS[ext](p)
+    return READERS[ext](p, checked)

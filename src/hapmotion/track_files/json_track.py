@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import InputError
 from ..filesafety import atomic_path
 from ..track import HapticTrack
-from .limits import check_frames, load_json
+from ..limits import DEFAULT_LIMITS, InputLimits, check_frames, check_track_rate, load_json
 
 
 def _jsonable(obj):
@@ -62,8 +62,8 @@ def _ids(path: Path, value, place: str) -> tuple[str, ...]:
     return tuple(value)
 
 
-def read_json(path: Path) -> HapticTrack:
-    doc = load_json(path, "JSON track")
+def read_json(path: Path, limits: InputLimits = DEFAULT_LIMITS) -> HapticTrack:
+    doc = load_json(path, limits, "JSON track")
     if not isinstance(doc, dict) or doc.get("format") != "hapmotion-track":
         raise InputError(path, "field format", "expected \"hapmotion-track\"")
     actuators = _ids(path, doc.get("actuators"), "field actuators")
@@ -84,7 +84,8 @@ def read_json(path: Path) -> HapticTrack:
     rows = doc.get("frames")
     if not isinstance(rows, list) or not rows:
         raise InputError(path, "field frames", "expected a non-empty list of rows")
-    check_frames(path, "field frames", len(rows), len(actuators), fps)
+    check_track_rate(path, "field fps", fps)
+    check_frames(path, "field frames", len(rows), fps, limits, columns=len(actuators), of="track")
     width = len(actuators)
     for k, row in enumerate(rows):
         if not isinstance(row, list) or len(row) != width:

@@ -19,10 +19,7 @@ from ..errors import InputError
 from ..filesafety import atomic_path
 from ..track import HapticTrack
 from .json_track import _check_values, _jsonable
-from .limits import MAX_CELLS, MAX_FILE_BYTES, MAX_FPS, check_frames
-
-MAX_INFLATED_BYTES = 8 * MAX_CELLS
-"""Largest uncompressed NPZ content accepted (all members together, bytes)."""
+from ..limits import DEFAULT_LIMITS, InputLimits, check_file_size, check_frames, check_track_rate
 
 
 def write_npz(track: HapticTrack, path: Path) -> None:
@@ -49,31 +46,33 @@ def _header(fh) -> tuple[tuple[int, ...], np.dtype]:
     return shape, dtype
 
 
-def _check_declared(path: Path) -> None:
-    """InputError unless every member's declared size and array shape fit the limits (nothing is inflated)."""
-    size = path.stat().st_size
-    if size > MAX_FILE_BYTES:
-        raise InputError(path, None, f"is {size:,} bytes, over the limit of {MAX_FILE_BYTES:,} for an NPZ track")
+def _check_declared(path: Path, limits: InputLimits) -> None:
+    """InputError unless every member's declared size and array shape fit the limits (nothing is inflated).
+
+    The debug arrays are a few values per frame or per cell, so all members together may hold at most
+    ``limits.cells`` float64 values (8 bytes each) beside the intensities' own cells."""
+    check_file_size(path, limits)
+    most = 2 * 8 * limits.cells  # bytes: the intensities and as much again of debug arrays
     with zipfile.ZipFile(path) as zf:
         infos = zf.infolist()
         total = sum(i.file_size for i in infos)
-        if total > MAX_INFLATED_BYTES:
-            raise InputError(path, None, f"declares {total:,} uncompressed bytes, over the limit of "
-                             f"{MAX_INFLATED_BYTES:,}")
+        if total > most:
+            raise InputError(path, None, f"declares {total:,} uncompressed bytes, over {most:,} (2 x 8 bytes x limit "
+                             f"cells; raise it with --limit cells=N)")
         for info in infos:
             with zf.open(info) as fh:
                 shape, dtype = _header(fh)
             cells = int(np.prod(shape, dtype=np.float64)) if shape else 1
-            if cells * max(1, dtype.itemsize) > MAX_INFLATED_BYTES:
-                raise InputError(path, f"array {info.filename[:-4]}", f"declares shape {shape}, over the limit of "
-                                 f"{MAX_INFLATED_BYTES:,} bytes")
+            if cells * max(1, dtype.itemsize) > most:
+                raise InputError(path, f"array {info.filename[:-4]}", f"declares shape {shape}, over {most:,} bytes "
+                                 f"(2 x 8 bytes x limit cells; raise it with --limit cells=N)")
             if info.filename == "intensities.npy" and len(shape) == 2:
-                check_frames(path, "array intensities", shape[0], shape[1], MAX_FPS)  # rows and cells only
+                check_frames(path, "array intensities", shape[0], None, limits, columns=shape[1], of="track")
 
 
-def read_npz(path: Path) -> HapticTrack:
+def read_npz(path: Path, limits: InputLimits = DEFAULT_LIMITS) -> HapticTrack:
     try:
-        _check_declared(path)
+        _check_declared(path, limits)
         with np.load(path, allow_pickle=False) as z:
             intensities = z["intensities"]
             actuators = tuple(str(a) for a in z["actuators"])
@@ -92,5 +91,6 @@ def read_npz(path: Path) -> HapticTrack:
     if intensities.ndim != 2 or intensities.shape[1] != len(actuators) or intensities.shape[0] == 0:
         raise InputError(path, "array intensities", f"expected (T, {len(actuators)}), found {intensities.shape}")
     _check_values(path, intensities, fps, "array intensities", "array fps")
-    check_frames(path, "array fps", intensities.shape[0], intensities.shape[1], fps)
+    check_track_rate(path, "array fps", fps)
+    check_frames(path, "array fps", intensities.shape[0], fps, limits, columns=intensities.shape[1], of="track")
     return HapticTrack(intensities=intensities, fps=fps, actuators=actuators, layout=layout, meta=meta, debug=debug)

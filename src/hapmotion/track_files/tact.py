@@ -34,7 +34,7 @@ from ..errors import InputError, UsageError
 from ..filesafety import atomic_path
 from ..layout import bhaptics_devices, load_layout, position_order, type_for_position
 from ..track import HapticTrack
-from .limits import check_frames, load_json
+from ..limits import DEFAULT_LIMITS, InputLimits, check_frames, load_json
 from .tact_project import parse_project
 from .tact_render import TICK_MS, render
 
@@ -118,11 +118,11 @@ def write_tact(track: HapticTrack, path: Path) -> None:
 
 
 # ------------------------------------------------------------------------------------------------------ reading
-def _read_one(path: Path) -> tuple[str, dict[str, np.ndarray]]:
-    type_name, layout, effects, end_ms = parse_project(path, load_json(path, ".tact pattern"))
+def _read_one(path: Path, limits: InputLimits) -> tuple[str, dict[str, np.ndarray]]:
+    type_name, layout, effects, end_ms = parse_project(path, load_json(path, limits, ".tact pattern"))
     n_ticks = int(end_ms // TICK_MS) + 1
-    check_frames(path, "field project.mediaFileDuration / effects", n_ticks, sum(p.shape[0] for p in layout.values()),
-                 TICK_FPS)
+    check_frames(path, "field project.mediaFileDuration / effects", n_ticks, TICK_FPS, limits,
+                 columns=sum(p.shape[0] for p in layout.values()), of="pattern")
     cols = render(effects, layout, n_ticks)
     if n_ticks > 1 and (n_ticks - 1) * TICK_MS == end_ms and not any(r[-1].any() for r in cols.values()):
         # the end falls on a tick and nothing plays there (dot frames end exclusive): the track stops before it
@@ -130,13 +130,13 @@ def _read_one(path: Path) -> tuple[str, dict[str, np.ndarray]]:
     return type_name, cols
 
 
-def read_tact(path: Path) -> HapticTrack:
+def read_tact(path: Path, limits: InputLimits = DEFAULT_LIMITS) -> HapticTrack:
     """Render a ``.tact`` pattern (and its ``NAME.<position>.tact`` siblings) on the Player's 20 ms tick."""
     siblings = [f for f in tact_paths(path, list(position_order())) if f != path and f.is_file()]
     files = [path] + siblings
     types, columns = [], {}
     for f in files:
-        type_name, cols = _read_one(f)
+        type_name, cols = _read_one(f, limits)
         types.append(type_name)
         for pos, rows in cols.items():
             have = columns.get(pos)

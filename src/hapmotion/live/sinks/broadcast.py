@@ -5,27 +5,35 @@ every client's transport without waiting. A client whose unsent data exceeds ``c
 too slowly or not at all) skips frames until it catches up; one stuck for ``slow_client_s`` is disconnected. The
 kernel send buffer of each client socket is capped (``sndbuf``) so a stuck client is noticed in about a second
 instead of after megabytes of stale frames.
+
+Viewers never cost the other sinks anything: the server, its handshakes, the writes to every viewer, skipping and
+dropping the slow ones all happen in a process of its own (:mod:`.broadcast_server`, at a lower CPU priority).
+The session encodes each frame once and writes it to that process's pipe without waiting; if the pipe backs up
+(the server process cannot keep up), frames are skipped, counted. Skipped frames and dropped viewers are counted;
+each kind of trouble is logged once, never a line per viewer.
 """
 
 from __future__ import annotations
 
 import asyncio
-import socket
-import time
+import json
+import sys
+from pathlib import Path
 from typing import Any, Optional, Sequence
-
-from websockets.asyncio.connection import broadcast
-from websockets.asyncio.server import Server, ServerConnection, serve
-from websockets.exceptions import ConnectionClosed
 
 from ...errors import UsageError
 from ..frames import OutFrame
-from ..wire.broadcast import broadcast_frame, broadcast_hello, broadcast_stop
-from .base import Sink, log, with_timeout
+from ..wire.broadcast import broadcast_frame, broadcast_hello
+from .base import Sink, log
+from .broadcast_server import frame_record, record
+
+SERVER = Path(__file__).with_name("broadcast_server.py")
+# Run by path, without the script's folder on sys.path (its module names must not shadow the standard library).
+_LAUNCH = "import runpy, sys; sys.argv = [sys.argv[1]] + sys.argv[2:]; runpy.run_path(sys.argv[0], run_name='__main__')"
 
 
 class BroadcastSink(Sink):
-    """Serves ``ws://host:port`` and pushes every frame to every connected client.
+    """Serves ``ws://host:port`` (from a server process of its own) and pushes every frame to every client.
 
     Parameters
     ----------
@@ -37,99 +45,160 @@ class BroadcastSink(Sink):
         A client skipping frames for this long is disconnected.
     sndbuf:
         ``SO_SNDBUF`` of each client socket, bytes (None: the system default).
+    pipe_limit:
+        Bytes waiting in the pipe to the server process beyond which frames are skipped.
     """
 
     def __init__(self, actuators: Sequence[str], layout: str = "x40_shoulders", *, host: str = "127.0.0.1",
                  port: int = 8766, fps: float = 60.0, client_buffer: int = 65536, slow_client_s: float = 5.0,
                  sndbuf: Optional[int] = 65536, name: Optional[str] = None,
-                 render_info: Optional[dict[str, Any]] = None, **kwargs: Any):
+                 render_info: Optional[dict[str, Any]] = None, pipe_limit: int = 65536, **kwargs: Any):
         super().__init__(name or f"ws-broadcast ws://{host}:{port}", fps=fps, **kwargs)
         self.host, self.port = host, port
         self.hello = broadcast_hello(fps, actuators, layout, render_info)
         self.client_buffer = client_buffer
         self.slow_client_s = slow_client_s
         self.sndbuf = sndbuf
-        self._server: Optional[Server] = None
-        self._clients: dict[ServerConnection, Optional[float]] = {}  # client -> time it started lagging
+        self.pipe_limit = pipe_limit
+        self.bound: Optional[int] = None
+        self._proc: Optional[asyncio.subprocess.Process] = None
+        self._reports: Optional[asyncio.Task] = None
+        self._errors: Optional[asyncio.Task] = None
+        self._last_error = ""  # the server process's last line on stderr (a crash)
+        self._ended = False  # the server process is gone
+        self._stopping = False
         self.stats.extra.update(clients=0, client_skips=0, clients_dropped=0)
 
     @property
     def bound_port(self) -> int:
-        assert self._server is not None
-        return self._server.sockets[0].getsockname()[1]
+        assert self.bound is not None
+        return self.bound
 
     def describe(self) -> str:
-        return f"ws-broadcast ws://{self.host}:{self.bound_port}" if self._server else self.name
+        return f"ws-broadcast ws://{self.host}:{self.bound}" if self.bound is not None else self.name
 
     async def start(self) -> None:
+        self._proc = await asyncio.create_subprocess_exec(
+            sys.executable, "-c", _LAUNCH, str(SERVER), self.host, str(self.port), str(self.client_buffer),
+            str(self.slow_client_s), str(self.sndbuf or 0),
+            stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE)
+        assert self._proc.stdout is not None and self._proc.stdin is not None
         try:
-            self._server = await serve(self._handler, self.host, self.port, compression=None, max_size=2 ** 16,
-                                       max_queue=4, close_timeout=1.0, ping_interval=20, ping_timeout=20)
-        except OSError as exc:
-            raise UsageError(f"{self.name}: cannot listen on {self.host}:{self.port} ({exc.strerror or exc})") \
-                from None
+            first = json.loads(await asyncio.wait_for(self._proc.stdout.readline(), 30) or b"{}")
+        except (asyncio.TimeoutError, ValueError):
+            first = {}
+        if "port" not in first:
+            why = first.get("error") or await self._why_ended()
+            await self._reap()
+            raise UsageError(f"{self.name}: cannot listen on {self.host}:{self.port} ({why})")
+        self.bound = int(first["port"])
+        self._proc.stdin.write(record(b"H", self.hello.encode()))
         if self.port == 0:
             self.name = self.stats.name = self.describe()
+        self._reports = asyncio.create_task(self._read_reports())
+        self._errors = asyncio.create_task(self._read_errors())
 
-    async def _handler(self, conn: ServerConnection) -> None:
-        sock = conn.transport.get_extra_info("socket")
-        if sock is not None:
+    def offer(self, frame: OutFrame) -> None:
+        """Encode the frame once and hand it to the server process; never waits."""
+        proc = self._proc
+        if proc is None or self._ended or proc.stdin is None:
+            return
+        transport = proc.stdin.transport
+        if transport.is_closing():
+            return
+        if transport.get_write_buffer_size() > self.pipe_limit:
+            self.stats.skipped += 1
+            self.warn_once("pipe", "the viewer server falls behind; frames are skipped for the viewers")
+            return
+        transport.write(frame_record(frame.received,
+                                     broadcast_frame(frame.seq, frame.t, frame.row, frame.skeleton, frame.debug)))
+
+    async def run(self) -> None:
+        await asyncio.Event().wait()  # the work happens in the server process
+
+    async def _read_reports(self) -> None:
+        """Take in the server's counters and latency samples; say once if it ends too early."""
+        assert self._proc is not None and self._proc.stdout is not None
+        while True:
+            line = await self._proc.stdout.readline()
+            if not line:
+                break
             try:
-                sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                if self.sndbuf:
-                    sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, self.sndbuf)
-            except OSError:
-                pass
-        try:
-            await with_timeout(conn.send(self.hello), self.send_timeout)
-        except (asyncio.TimeoutError, ConnectionClosed):
-            return
-        self._clients[conn] = None
-        self.stats.extra["clients"] += 1
-        try:
-            async for _ in conn:  # viewers have nothing to say; read so their messages do not pile up
-                pass
-        except ConnectionClosed:
-            pass
-        finally:
-            self._clients.pop(conn, None)
-
-    def _ready_clients(self, now: float) -> list[ServerConnection]:
-        ready = []
-        for conn, lag_since in list(self._clients.items()):
-            if conn.transport.get_write_buffer_size() <= self.client_buffer:
-                if lag_since is not None:
-                    self._clients[conn] = None
-                ready.append(conn)
+                rep = json.loads(line)
+            except ValueError:
                 continue
-            self.stats.extra["client_skips"] += 1
-            if lag_since is None:
-                self._clients[conn] = now
-                self.warn_once("slow", "a client reads too slowly; it skips frames (others are not affected)")
-            elif now - lag_since > self.slow_client_s:
-                self.stats.extra["clients_dropped"] += 1
-                log.warning("%s: disconnecting a client that has not read for %.1f s", self.name, now - lag_since)
-                self._clients.pop(conn, None)
-                conn.transport.abort()
-        return ready
+            self._take(rep)
+        self._ended = True
+        if not self._stopping:
+            self.warn_once("ended", "the viewer server ended during the show (%s); viewers get nothing more",
+                           self._last_error or "no message")
 
-    async def deliver(self, frame: OutFrame) -> None:
-        if not self._clients:
-            return
-        msg = broadcast_frame(frame.seq, frame.t, frame.row, frame.skeleton, frame.debug)
-        broadcast(self._ready_clients(time.perf_counter()), msg)
-        self.sent(frame)
+    async def _read_errors(self) -> None:
+        """Keep the pipe from filling up; remember the last line (shown if the server dies)."""
+        assert self._proc is not None and self._proc.stderr is not None
+        while True:
+            line = await self._proc.stderr.readline()
+            if not line:
+                return
+            if line.strip():
+                self._last_error = line.decode(errors="replace").strip()
+
+    def _take(self, rep: dict) -> None:
+        extra = self.stats.extra
+        if rep.get("client_skips", 0) > extra["client_skips"]:
+            self.warn_once("slow", "a viewer reads too slowly; it skips frames (others are not affected)")
+        if rep.get("clients_dropped", 0) > extra["clients_dropped"]:
+            self.warn_once("dropped", "disconnecting viewers that have not read for %.1f s (counted as clients "
+                                      "dropped)", self.slow_client_s)
+        for key in ("clients", "client_skips", "clients_dropped"):
+            extra[key] = int(rep.get(key, extra[key]))
+        for lat in rep.get("latency", ()):
+            self.stats.latency.add(float(lat))
+            if lat > self.interval:
+                self.stats.slow += 1
+        self.stats.sent = int(rep.get("sent", self.stats.sent))
 
     async def shutdown(self) -> None:
-        if self._server is None:
+        proc = self._proc
+        if proc is None:
             return
-        broadcast(self._ready_clients(time.perf_counter()), broadcast_stop())
-        self._server.close(close_connections=True)
+        self._stopping = True
+        if proc.stdin is not None and not proc.stdin.transport.is_closing():
+            proc.stdin.write(record(b"S"))
+            proc.stdin.close()
         try:
-            await with_timeout(self._server.wait_closed(), 1.5)
+            if self._reports is not None:
+                await asyncio.wait_for(asyncio.shield(self._reports), 1.8)
+            await asyncio.wait_for(proc.wait(), 0.2)
         except asyncio.TimeoutError:
-            for conn in list(self._clients):
-                conn.transport.abort()
+            log.warning("%s: the viewer server did not stop in time; ended", self.name)
+        await self._reap()
+        dropped = self.stats.extra["clients_dropped"]
+        if dropped:
+            log.info("%s: %d slow viewers were disconnected during the show", self.name, dropped)
+
+    async def _why_ended(self) -> str:
+        assert self._proc is not None and self._proc.stderr is not None
+        try:
+            err = await asyncio.wait_for(self._proc.stderr.read(), 2)
+        except asyncio.TimeoutError:
+            err = b""
+        lines = [ln for ln in err.decode(errors="replace").splitlines() if ln.strip()]
+        return lines[-1] if lines else "the viewer server did not start"
+
+    async def _reap(self) -> None:
+        proc, self._proc = self._proc, None
+        if proc is None:
+            return
+        for task in (self._reports, self._errors):
+            if task is not None:
+                task.cancel()
+        if proc.returncode is None:
+            proc.kill()
+            await proc.wait()
+        if proc.returncode not in (0, None, -9):
+            log.warning("%s: the viewer server ended with code %s %s", self.name, proc.returncode,
+                        self._last_error)
 
     @property
     def client_skips(self) -> int:

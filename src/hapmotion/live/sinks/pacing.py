@@ -30,8 +30,8 @@ class Batch:
     row:
         ``(N,)`` the element-wise max of the rows playing during the tick.
     frames:
-        The frames merged into it, each with the seconds it was held back to wait for the tick (0 when it could go
-        at once): ``[(frame, held_s), ...]``. Empty for a send that only settles the current row after a peak.
+        The frames merged into it, each with the seconds it was held back to wait for the tick, from when it was
+        offered until the send was taken (0 when it could go at once): ``[(frame, held_s), ...]``. Empty for a send that only settles the current row after a peak.
     """
 
     row: np.ndarray
@@ -87,7 +87,9 @@ class TickPacer:
         assert self._acc is not None and self._current is not None
         due = self.due()
         row = self._acc
-        frames = [(f, max(0.0, due - offered)) for f, offered in self._frames]
+        # A frame that came before the tick waited for it until now (the timer's own wake-up delay included);
+        # one that came after the tick was due went at once.
+        frames = [(f, now - offered if offered < due else 0.0) for f, offered in self._frames]
         self._frames = []
         self._acc = self._current.copy()
         self._sent = row

@@ -1,4 +1,4 @@
-"""bHaptics Player, SDK1 API: ``ws://127.0.0.1:15881/v2/feedbacks`` (docs/bhaptics-protocol.md §2).
+"""bHaptics Player, SDK1 API: ``ws://127.0.0.1:15881/v2/feedbacks`` (the messages in :mod:`..wire.player_v2`).
 
 Each rendered row becomes one request with a ``Submit`` ``frame`` per device (VestFront, VestBack, ForearmL,
 ForearmR), one Key per device so the panels play together and each new frame replaces the previous one under its
@@ -41,13 +41,14 @@ class PlayerV2Sink(WebSocketClientSink):
     host, port, path:
         Player address (default ``127.0.0.1:15881/v2/feedbacks``).
     app_id, app_name:
-        Optional query parameters some SDK1 clients send (docs §2.1).
+        Optional query parameters some SDK1 clients send (bHaptics' tact-js v1 ``PlayerSocket.ts``).
     duration_ms:
         ``durationMillis`` of each frame (default :func:`default_duration_ms`).
     key_prefix:
         Keys are ``<prefix>_<Device>``.
     registrations:
-        Key -> ``.tact`` project to ``Register`` on every (re)connection (registrations are per connection, §2.1).
+        Key -> ``.tact`` project to ``Register`` on every (re)connection (the Player keeps registrations per
+        connection; bHaptics' C# ``WebSocketSender.cs`` re-sends them too).
     """
 
     def __init__(self, dmap: DeviceMap, *, host: str = "127.0.0.1", port: int = 15881, path: str = "/v2/feedbacks",

@@ -1,4 +1,4 @@
-"""bHaptics Player, SDK2 API: ``wss://127.0.0.1:15882/v3/feedback`` (docs/bhaptics-protocol.md §3).
+"""bHaptics Player, SDK2 API: ``wss://127.0.0.1:15882/v3/feedback`` (the messages in :mod:`..wire.player_v3`).
 
 TLS with the Player's self-signed certificate (no verification, as every SDK2 client does), ``SdkRequestAuth``
 first on every connection, then per row ``SdkPlayDotMode`` for position 0 (the 40-value X40 array: front 0..19,
@@ -23,7 +23,7 @@ from .player_v2 import PLAYER_TICK_S, _host, default_duration_ms
 
 
 def insecure_tls_context() -> ssl.SSLContext:
-    """Client TLS context that accepts the Player's self-signed certificate (docs §3.1: clients skip validation).
+    """Client TLS context that accepts the Player's self-signed certificate (bHaptics' SimHub plugin, ``BhapticsWebsocket.cs``, accepts any certificate too).
     Only for the local Player: it authenticates nobody."""
     ctx = ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)
     ctx.check_hostname = False

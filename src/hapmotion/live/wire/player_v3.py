@@ -1,6 +1,8 @@
-"""bHaptics Player SDK2 (``/v3/feedback``): ``SdkRequestAuth``, ``SdkPlayDotMode``, ``SdkStopAll`` and the
-Player's replies (docs/bhaptics-protocol.md §3). Which SDK2 position and array slot each device fills comes from
-the layout file (:class:`~hapmotion.live.devices.DeviceMap`), the one place that says so."""
+"""bHaptics Player SDK2 (``wss://127.0.0.1:15882/v3/feedback``): ``SdkRequestAuth``, ``SdkPlayDotMode``,
+``SdkStopAll`` and the Player's replies, as bHaptics' own SimHub plugin speaks them without any bHaptics binary
+(GitHub ``bhaptics/tact-simhub`` ``bHapticsSimHub/BhapticsWebsocket.cs``, ``bHapticsSimHub/Model/Sdk2Message.cs``).
+Which SDK2 position and array slot each device fills comes from the layout file
+(:class:`~hapmotion.live.devices.DeviceMap`), the one place that says so."""
 
 from __future__ import annotations
 
@@ -14,14 +16,15 @@ from .player_json import get_ci, json_object, to_int_percent
 
 
 def v3_envelope(kind: str, payload: Any) -> str:
-    """SDK2 envelope with the lower-case keys and JSON-string payload that native SDKs send (docs §3.1)."""
+    """SDK2 envelope with the lower-case keys and JSON-string payload that native SDKs send (the key strings in
+    bHaptics' ``bhaptics_library.dll``)."""
     message = payload if isinstance(payload, str) else json.dumps(payload, separators=(",", ":"))
     return json.dumps({"type": kind, "message": message}, separators=(",", ":"))
 
 
 def v3_auth_message(workspace_id: str, api_key: str, version: int = 1) -> str:
     """``SdkRequestAuth``, the first message after the connection opens. The Player is not known to verify the
-    cipher/hash fields; like bHaptics' own SimHub plugin (docs §3.1) they carry the workspace id.
+    cipher/hash fields; like bHaptics' own SimHub plugin (``BhapticsWebsocket.cs``) they carry the workspace id.
 
     ``version`` is a JSON integer, as bHaptics' own clients send it (tact-simhub ``Sdk2Message.cs``:
     ``AuthenticationMessage.Version`` is an ``int``, default 1); a string or a bool is refused here rather than

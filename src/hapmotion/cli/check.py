@@ -1,0 +1,74 @@
+"""``hapmotion check``: connect to the bHaptics Player, report its devices, play a labelled test pattern
+(docs/playback.md)."""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Optional
+
+import click
+
+HELP = """Check the haptic set-up before a show: connect to the bHaptics Player, report the devices it says are
+connected, then play a short labelled test pattern so the wearer can confirm where each motor is.
+
+\b
+For each device of the layout (vest front, vest back, left and right shoulder sleeve): all its motors, then the
+wearer's left and right column (edge), then the top and bottom row (front and back edge on a shoulder). Each
+step's label is printed as it plays; the check ends with turn-off.
+\b
+Examples:
+  hapmotion check --sink player
+  hapmotion check --sink player-v3 --workspace-id APP --api-key KEY --step-ms 800
+"""
+
+
+@click.command("check", help=HELP)
+@click.option("--sink", "sinks", metavar="SINK", multiple=True, default=("player",), show_default=True,
+              help="The Player (player, player-v3; any live SINK also gets the pattern); repeatable.")
+@click.option("--step-ms", type=click.IntRange(min=100, max=5000), default=500, show_default=True,
+              help="How long each step plays.")
+@click.option("--gap-ms", type=click.IntRange(min=0, max=5000), default=250, show_default=True,
+              help="Silence between steps.")
+@click.option("--intensity", type=click.FloatRange(min=1.0, max=100.0), default=60.0, show_default=True,
+              help="Intensity of the test pattern, 0..100.")
+@click.option("--layout", "layout_file", type=click.Path(dir_okay=False, exists=True), default=None,
+              help="Session device layout JSON (default: X40 + two shoulder Tactosy).")
+@click.option("--no-pattern", is_flag=True, help="Only report the Player's devices.")
+@click.option("--workspace-id", envvar="BHAPTICS_WORKSPACE_ID", default=None,
+              help="bHaptics SDK2 workspace (app) id for player-v3 [env BHAPTICS_WORKSPACE_ID].")
+@click.option("--api-key", envvar="BHAPTICS_API_KEY", default=None,
+              help="bHaptics SDK2 API key for player-v3 [env BHAPTICS_API_KEY].")
+def command(sinks: tuple[str, ...], step_ms: int, gap_ms: int, intensity: float, layout_file: Optional[str],
+            no_pattern: bool, workspace_id: Optional[str], api_key: Optional[str]) -> None:
+    from ..live.devices import DeviceMap
+    from ..live.player_check import CHECK_FPS, pattern_steps, pattern_track, probe_player
+    from ..live.playback import run_play
+    from ..live.session import build_sink
+    from ..live.urls import parse_sink
+    from ..show import Show
+    from .live import _setup_logging
+
+    _setup_logging(quiet=True)  # the check prints its own lines; the session's warnings still show
+    layout = Show(layout=layout_file).load_layout()
+    dmap = DeviceMap.from_layout(layout)
+    objs = [build_sink(parse_sink(s), dmap=dmap, layout_name=layout.name, fps=CHECK_FPS, workspace_id=workspace_id,
+                       api_key=api_key, meta={"mode": "check"}) for s in sinks]
+    reports = [r for r in (asyncio.run(probe_player(s, layout)) for s in objs) if r is not None]
+    for report in reports:
+        for line in report.lines():
+            click.echo(f"check: {line}")
+    unreachable = [r for r in reports if not r.reachable]
+    if unreachable and len(unreachable) == len(objs):
+        raise click.exceptions.Exit(1)  # nothing to play to
+    if no_pattern:
+        return
+    steps = pattern_steps(layout)
+    track, marks = pattern_track(layout, steps, step_s=step_ms / 1000.0, gap_s=gap_ms / 1000.0,
+                                 intensity=intensity)
+    click.echo(f"check: test pattern, {len(steps)} steps of {step_ms} ms (Ctrl-C stops):")
+    count = iter(range(1, len(steps) + 1))
+    run_play(track, objs, layout=layout, on_mark=lambda label: click.echo(f"check: {next(count):2d}. {label}"),
+             marks=marks)
+    click.echo("check: done, every motor turned off")
+    if unreachable:
+        raise click.exceptions.Exit(1)

@@ -1,0 +1,94 @@
+"""``hapmotion play``: a saved track or a bHaptics pattern played in real time to a vest (docs/playback.md)."""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import click
+
+from .motion_options import cli_limits, limit_option
+from .show_options import cues_option
+
+HELP = """Play TRACK in real time to the same sinks as 'hapmotion live'.
+
+TRACK is any track or pattern 'hapmotion.load_track' reads: a rendered track (.csv .json .npz .tact) or a
+bHaptics Designer pattern (.tact, played on the Player's 20 ms tick). Its columns go to the motors with the same
+ids in the session layout (X40 + two shoulder sleeves by default); devices the layout lacks are left out and
+noted once.
+
+\b
+SINK (one or more), as for 'hapmotion live':
+  player[://HOST:PORT]       bHaptics Player SDK1 (default ws://127.0.0.1:15881/v2/feedbacks)
+  player-v3[://HOST:PORT]    bHaptics Player SDK2 (wss://127.0.0.1:15882/v3/feedback; --workspace-id, --api-key)
+  osc://HOST:PORT[/PREFIX]   OSC out
+  ws-broadcast[://HOST:PORT] WebSocket broadcast to viewers
+  record:PATH                the session as a track at stop
+\b
+Safety: the end of the track, Ctrl-C, SIGTERM, SIGHUP and errors all send turn-off to every sink before
+exiting.
+\b
+Examples:
+  hapmotion play Heartbeat.tact --sink player
+  hapmotion play show.csv --sink player --sink ws-broadcast --loop --speed 0.5
+"""
+
+
+@click.command("play", help=HELP)
+@click.argument("track", type=click.Path(dir_okay=False))
+@click.option("--sink", "sinks", metavar="SINK", multiple=True, required=True,
+              help="Where rows go; repeat for several sinks at once.")
+@click.option("--loop", is_flag=True, help="Start the track again at its end (until Ctrl-C).")
+@click.option("--speed", type=float, default=1.0, show_default=True,
+              help="Playback speed factor (2 = twice as fast), above 0 and at most 10.")
+@click.option("--layout", "layout_file", type=click.Path(dir_okay=False, exists=True), default=None,
+              help="Session device layout JSON (default: X40 + two shoulder Tactosy).")
+@click.option("--stats", "show_stats", is_flag=True, help="Print frame counts and latency every second.")
+@click.option("--stats-json", type=click.Path(dir_okay=False), default=None,
+              help="Also write the final summary as JSON to this file.")
+@click.option("--workspace-id", envvar="BHAPTICS_WORKSPACE_ID", default=None,
+              help="bHaptics SDK2 workspace (app) id for player-v3 [env BHAPTICS_WORKSPACE_ID].")
+@click.option("--api-key", envvar="BHAPTICS_API_KEY", default=None,
+              help="bHaptics SDK2 API key for player-v3 [env BHAPTICS_API_KEY].")
+@cues_option
+@click.option("--cue-port", default=None, metavar="[HOST:]PORT",
+              help="Also fire the cue list's named cues by OSC: /hapmotion/cue NAME [gain] (loopback by default).")
+@click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
+@limit_option
+def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, layout_file: Optional[str],
+            show_stats: bool, stats_json: Optional[str], workspace_id: Optional[str], api_key: Optional[str],
+            cues: Optional[str], cue_port: Optional[str], quiet: bool, limits: tuple[str, ...]) -> None:
+    from ..live.playback import run_play
+    from .live import _finish, _setup_logging
+
+    _setup_logging(quiet)
+    input_limits = cli_limits(limits)
+    cue_list = None
+    if cues is not None:
+        from ..cues import load_cues
+
+        cue_list = load_cues(cues, limits=input_limits)
+    if stats_json:
+        from ..filesafety import check_writable
+
+        check_writable(stats_json, "--stats-json")
+    started = []
+
+    def ready(engine) -> None:
+        started.append(engine)
+        names = ", ".join(s.describe() for s in engine.sinks)
+        click.echo(f"play: {engine.source.describe()} ({engine.source.n} rows at {engine.source.fps:g}/s"
+                   f"{', looped' if loop else ''}) to {names}; Ctrl-C stops", err=True)
+        trigger = getattr(engine.cues, "trigger", None)
+        if trigger is not None:
+            click.echo(f"play: cues fired on {trigger.describe()} NAME [gain] ({trigger.exposure()}); "
+                       f"names: {', '.join(engine.cues.names)}", err=True)
+
+    try:
+        run_play(track, list(sinks), speed=speed, loop=loop, layout=layout_file, workspace_id=workspace_id,
+                 api_key=api_key, on_ready=ready, stats_interval=1.0 if show_stats else None,
+                 on_stats=lambda text: click.echo(f"play: {text}", err=True), cues=cue_list, cue_port=cue_port,
+                 limits=input_limits)
+    finally:
+        lost = _finish(started[0] if started else None, stats_json)
+    if lost:
+        raise click.exceptions.Exit(1)

@@ -1,0 +1,214 @@
+"""Playing a stored track or pattern in real time through the live engine (``hapmotion play``, ``check``).
+
+Nothing here is a second loop: a :class:`TrackSource` ticks at the track's rate (times ``speed``) and stamps each
+tick with its show time, and the engine reads the stored row of that time from a stored-row channel (the engine's
+``"audio"`` mode, whose channel is any ``(T, N)`` rows read at the show time) in place of the renderer. So playback
+gets everything live mode has: the same sinks (Player SDK1/SDK2, OSC, broadcast, recorder), the Player's 20 ms
+pacing, reconnection, the stall watchdog, and turn-off on every exit (end of the track, SIGINT, SIGTERM, SIGHUP,
+SIGQUIT, an error).
+
+The track's columns are matched to the session layout by actuator id (``VestFront_5`` -> ``VestFront_5``), the way
+cues are (:func:`hapmotion.cues.pattern_rows`); devices the layout lacks (a head or an old-sleeve pattern on the
+vest layout) are left out and noted once.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+import os
+import time
+from pathlib import Path
+from typing import Any, Callable, Mapping, Optional, Sequence, Union
+
+import numpy as np
+
+from ..errors import InputError, UsageError
+from ..track import HapticTrack, parse_actuator_id
+from .cue_trigger import live_cues, run_with_cues
+from .devices import DeviceMap
+from .engine import AudioChannel, LiveEngine
+from .frames import SkeletonFrame
+from .sinks import Sink
+from .sources import Source
+from .stats import LiveStats
+from .urls import parse_sink
+
+log = logging.getLogger("hapmotion.live")
+
+MIN_PLAY_FPS = 10.0
+"""Tracks slower than this are played with each row repeated a whole number of times (exact), so the stall
+watchdog's grace and the Player's hold time stay short."""
+MAX_PLAY_FPS = 250.0
+"""Tracks faster than this are resampled down to it (peaks kept): five rows per 20 ms Player tick, more than any
+sink can use."""
+MAX_SPEED = 10.0
+
+
+def play_rate(fps: float) -> float:
+    """The rate a track of ``fps`` rows per second is played at: its own within [:data:`MIN_PLAY_FPS`,
+    :data:`MAX_PLAY_FPS`], a whole multiple of it below, :data:`MAX_PLAY_FPS` above."""
+    if fps < MIN_PLAY_FPS:
+        return fps * math.ceil(MIN_PLAY_FPS / fps)
+    return min(fps, MAX_PLAY_FPS)
+
+
+def layout_rows(track: HapticTrack, actuators: Sequence[str], name: str = "track") -> np.ndarray:
+    """The track's rows ``(T, N)`` 0..100 in the session's actuator order, matched by actuator id (columns of the
+    session that the track lacks are 0). Devices of the track the session lacks are logged once; a track of which
+    nothing maps is an :class:`~hapmotion.errors.InputError`."""
+    from ..cues import Cue, pattern_rows
+
+    index = {a: i for i, a in enumerate(actuators)}
+    present = sorted({parse_actuator_id(a)[0] for a in track.actuators if a in index})
+    if not present:
+        devices = sorted({parse_actuator_id(a)[0] for a in track.actuators})
+        session = sorted({parse_actuator_id(a)[0] for a in actuators})
+        raise InputError(name, None, f"expected a track for {', '.join(session)}; it holds only "
+                                     f"{', '.join(devices) or 'no columns'}, which the session layout lacks")
+    notes: list[str] = []
+    rows = pattern_rows(track, fps=track.fps, actuators=actuators, mirror_map=np.arange(len(actuators)),
+                        cue=Cue(0.0, Path(name), place="played"), notes=notes)
+    for note in notes:
+        log.warning("%s", note)
+    return rows
+
+
+class TrackSource(Source):
+    """A tick per stored row, paced in real time: row ``i`` is due ``i / (fps * speed)`` seconds after the start
+    and carries show time ``i / fps``. Late wake-ups skip the overdue rows (counted as superseded, never played in
+    a burst); the last row is always played and held for one row's time before the source ends. With ``loop`` the
+    track starts again (show time from 0).
+
+    ``marks`` maps row indices to labels: ``on_mark(label)`` is called as that row is handed to the engine (the
+    test pattern of ``hapmotion check`` prints each step as it plays).
+    """
+
+    def __init__(self, n_rows: int, fps: float, *, speed: float = 1.0, loop: bool = False, name: str = "track",
+                 marks: Optional[Mapping[int, str]] = None, on_mark: Optional[Callable[[str], None]] = None):
+        if not (math.isfinite(speed) and 0 < speed <= MAX_SPEED):
+            raise UsageError(f"--speed must be a number above 0 and at most {MAX_SPEED:g}, got {speed}")
+        if n_rows < 1:
+            raise UsageError(f"{name}: the track has no rows to play")
+        self.n, self.fps, self.speed, self.loop = int(n_rows), float(fps), float(speed), loop
+        self.name = f"play:{name}"
+        self.marks = dict(marks or {})
+        self.on_mark = on_mark
+        self.cycles = 0
+
+    @property
+    def rate(self) -> float:
+        """Rows per second of wall-clock time."""
+        return self.fps * self.speed
+
+    async def run(self) -> None:
+        period = 1.0 / self.rate
+        start = time.perf_counter()
+        last, base_seq = -1, 0
+        while True:
+            i = int((time.perf_counter() - start) * self.rate)
+            if i >= self.n and last < self.n - 1:
+                i = self.n - 1  # woke late at the end: the last row is still played
+            elif i >= self.n:
+                if not self.loop:
+                    return
+                self.cycles += 1
+                start += self.n * period
+                base_seq += self.n
+                last -= self.n
+                continue
+            if i > last:
+                if i > last + 1:
+                    self.engine.note_skipped(i - last - 1)
+                    for k in range(last + 1, i):  # a skipped row's step label is still shown
+                        self._mark(k)
+                self._mark(i)
+                now = time.perf_counter()
+                t = i / self.fps
+                self.engine.submit(SkeletonFrame(np.zeros((0, 3)), base_seq + i, t, now, show_t=t))
+                last = i
+            await asyncio.sleep(max(0.0, start + (last + 1) * period - time.perf_counter()))
+
+    def _mark(self, i: int) -> None:
+        label = self.marks.get(i)
+        if label is not None and self.on_mark is not None:
+            self.on_mark(label)
+
+
+def _passthrough(show_row: np.ndarray, stored_row: np.ndarray) -> np.ndarray:
+    return stored_row
+
+
+async def play(
+    track: Union[str, "os.PathLike[str]", HapticTrack],
+    sinks: Sequence[Union[str, Sink]],
+    *,
+    speed: float = 1.0,
+    loop: bool = False,
+    layout: Any = None,
+    workspace_id: Optional[str] = None,
+    api_key: Optional[str] = None,
+    handle_signals: bool = True,
+    on_ready: Optional[Callable[[LiveEngine], None]] = None,
+    stats_interval: Optional[float] = None,
+    on_stats: Optional[Callable[[str], None]] = None,
+    marks: Optional[Mapping[int, str]] = None,
+    on_mark: Optional[Callable[[str], None]] = None,
+    cues: Any = None,
+    limits: Any = None,
+    cue_port: "str | int | None" = None,
+    **engine_options: Any,
+) -> LiveStats:
+    """Play ``track`` (a path :func:`hapmotion.load_track` reads, or a :class:`HapticTrack`) in real time to
+    ``sinks`` (SINK strings as for ``hapmotion live``, or :class:`Sink` objects); return the session statistics.
+
+    ``layout`` is the session layout (a :class:`~hapmotion.layout.Layout`, a layout file, or None for the default
+    X40 + shoulder sleeves). ``cues`` and ``cue_port`` layer a cue list over the track and fire its named cues by
+    OSC, as in :func:`hapmotion.live.live`. ``limits`` (:class:`~hapmotion.limits.InputLimits` or a mapping of
+    raised limits) bound the track file read. Every sink is sent turn-off before this returns or raises.
+    """
+    from ..show import Show
+    from .session import build_sink
+
+    if not sinks:
+        raise UsageError("at least one --sink is required")
+    if isinstance(track, HapticTrack):
+        name = str(track.meta.get("source") or track.meta.get("path") or "track")
+    else:
+        from ..track_files import load_track
+
+        name = os.fspath(track)
+        track = load_track(track, limits=limits)
+    session_layout = Show(layout=layout).load_layout()
+    fps = play_rate(track.fps)
+    if fps != track.fps:
+        log.info("%s: %g rows/s played at %g rows/s (%s)", name, track.fps, fps,
+                 "each row repeated" if fps > track.fps else "resampled, peaks kept")
+        track = track.resample(fps)
+    dmap = DeviceMap.from_layout(session_layout)
+    rows = layout_rows(track, dmap.actuators, name)
+    cue_layer = live_cues(cues, fps=fps, layout=session_layout, actuators=dmap.actuators, cue_port=cue_port)
+    source = TrackSource(rows.shape[0], fps, speed=speed, loop=loop, name=name, marks=marks, on_mark=on_mark)
+    channel = AudioChannel(rows, fps, _passthrough)
+    meta = {"mode": "playback", "source": source.describe(), "track": name, "fps": fps}
+    sink_objs = [s if isinstance(s, Sink) else
+                 build_sink(parse_sink(s), dmap=dmap, layout_name=session_layout.name, fps=fps,
+                            workspace_id=workspace_id, api_key=api_key, meta=meta, time_scale=speed)
+                 for s in sinks]
+    # The source is this process's own clock: the stall watchdog only has to see through a late wake-up, so its
+    # time covers three rows whatever the rate.
+    engine_options.setdefault("stall_s", max(0.25, 3.0 / source.rate))
+    engine = LiveEngine(None, sink_objs, n_actuators=dmap.n, fps=fps, rate=source.rate, audio=channel,
+                        mode="audio", handle_signals=handle_signals, stats_interval=stats_interval,
+                        on_ready=on_ready, on_stats=on_stats, source_name=source.describe(), cues=cue_layer,
+                        **engine_options)
+    return await run_with_cues(engine, source)
+
+
+def run_play(*args: Any, **kwargs: Any) -> LiveStats:
+    """Blocking :func:`play` (its own event loop); SIGINT/SIGTERM/SIGHUP stop it cleanly with turn-off."""
+    return asyncio.run(play(*args, **kwargs))
+
+
+__all__ = ["MAX_PLAY_FPS", "MIN_PLAY_FPS", "TrackSource", "layout_rows", "play", "play_rate", "run_play"]

@@ -1,0 +1,205 @@
+"""``hapmotion check``: is the Player there, which devices does it have, and are the motors where we think?
+
+Two parts:
+
+* :func:`probe_player` opens one connection to a bHaptics Player sink's address, sends what the sink sends first
+  (SDK2: the auth) plus a turn-off request, and reads the Player's answer for a moment:
+
+  - SDK1 (``/v2/feedbacks``) answers every request with a status object whose ``ConnectedPositions`` lists the
+    connected devices by position name (``Vest`` for the whole X40, ``ForearmL``, ``ForearmR``, ``Head``,
+    ``HandL`` ...) and ``ConnectedDeviceCount`` counts them (bHaptics' Python client reads exactly these two keys,
+    github.com/bhaptics/tact-python ``bhaptics/better_haptic_player.py``; the community C# client bHapticsLib
+    ``IsDeviceConnected`` looks a ``VestFront``/``VestBack`` query up as ``Vest``);
+  - SDK2 (``/v3/feedback``) sends ``ServerDevices`` after the auth: a list of ``{position, deviceName, connected,
+    battery, ...}`` (SDK2 position 0 the vest, 1/2 the left/right sleeve, as in the layout's ``sdk2_position``).
+
+* :func:`pattern_steps` and :func:`pattern_track` make the labelled test pattern from the layout's geometry alone
+  (``Layout.positions``: x to the wearer's right, y up, z forward): for each device, all its motors, then its
+  wearer's-left and wearer's-right column, then its top and bottom row (a shoulder sleeve, flat on the shoulder:
+  its front and back edge). It is played like any track (:func:`hapmotion.live.playback.play`), each step's label
+  printed as its first row goes out, and ends with the usual turn-off.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from dataclasses import dataclass, field
+from typing import Any, Optional, Sequence
+
+import numpy as np
+from websockets.asyncio.client import connect
+
+from ..layout import CHART_BACK, CHART_FRONT, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, Layout
+from ..track import HapticTrack
+from .sinks import PlayerV2Sink, PlayerV3Sink, Sink
+from .wire.player_json import PLAYER_TICK_MS, get_ci
+
+CHECK_FPS = 1000.0 / PLAYER_TICK_MS
+"""The test pattern is made on the Player's tick (50 rows per second)."""
+
+_DEVICE_WORDS = {CHART_FRONT: "vest front", CHART_BACK: "vest back", CHART_SHOULDER_LEFT: "left shoulder sleeve",
+                 CHART_SHOULDER_RIGHT: "right shoulder sleeve"}
+_TOLERANCE_M = 0.01
+"""Motors within 1 cm of a device's extreme coordinate belong to that edge's column or row."""
+
+
+@dataclass(frozen=True)
+class PatternStep:
+    """One step of the test pattern: ``columns`` of the session row (its actuators) play together."""
+
+    label: str
+    device: str
+    columns: tuple[int, ...]
+
+
+def pattern_steps(layout: Layout) -> list[PatternStep]:
+    """The test pattern's steps for ``layout``, in playing order (see the module docstring)."""
+    positions = layout.positions()
+    steps = []
+    for d in layout.devices:
+        cols = np.arange(d.offset, d.offset + d.size)
+        p = positions[cols]
+        name = f"{_DEVICE_WORDS.get(d.chart, d.name)} ({d.name})" if d.chart in _DEVICE_WORDS else d.name
+        steps.append(PatternStep(f"{name}, all motors", d.name, tuple(int(c) for c in cols)))
+        shoulder = d.chart in (CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT)
+
+        def edge(axis: int, high: bool) -> tuple[int, ...]:
+            values = p[:, axis]
+            target = values.max() if high else values.min()
+            return tuple(int(c) for c in cols[np.abs(values - target) <= _TOLERANCE_M])
+
+        def spread(axis: int) -> bool:
+            return float(np.ptp(p[:, axis])) > _TOLERANCE_M
+
+        if spread(0):
+            for high, side in ((False, "left"), (True, "right")):
+                where = ""
+                if shoulder:  # on a shoulder the wearer's left/right edges are the neck and arm ends
+                    outer = abs(p[:, 0].max() if high else p[:, 0].min()) > abs(p[:, 0].mean())
+                    where = " (over the arm)" if outer else " (nearer the neck)"
+                what = "edge" if shoulder else "column"
+                steps.append(PatternStep(f"{name}, wearer's {side} {what}{where}", d.name, edge(0, high)))
+        if spread(1):
+            steps += [PatternStep(f"{name}, top row", d.name, edge(1, True)),
+                      PatternStep(f"{name}, bottom row", d.name, edge(1, False))]
+        elif spread(2):
+            what = "edge" if shoulder else "row"
+            steps += [PatternStep(f"{name}, front {what}", d.name, edge(2, True)),
+                      PatternStep(f"{name}, back {what}", d.name, edge(2, False))]
+    return steps
+
+
+def pattern_track(layout: Layout, steps: Sequence[PatternStep], *, step_s: float = 0.5, gap_s: float = 0.25,
+               intensity: float = 60.0, lead_s: float = 0.2) -> tuple[HapticTrack, dict[int, str]]:
+    """The test pattern as a track at :data:`CHECK_FPS` (``lead_s`` of silence, then each step ``step_s`` on at
+    ``intensity`` 0..100 and ``gap_s`` off) and the row where each step starts -> its label."""
+    on, off, lead = (max(1, int(round(s * CHECK_FPS))) for s in (step_s, gap_s, lead_s))
+    rows = np.zeros((lead + len(steps) * (on + off), layout.n_actuators))
+    marks = {}
+    for k, step in enumerate(steps):
+        start = lead + k * (on + off)
+        rows[start:start + on, list(step.columns)] = intensity
+        marks[start] = step.label
+    track = HapticTrack(rows, CHECK_FPS, layout.actuators, layout.name, meta={"source": "test pattern"})
+    return track, marks
+
+
+@dataclass
+class PlayerReport:
+    """What a Player said about its devices.
+
+    ``connected`` are the device names it reported as connected (SDK1 position names, or SDK2 device names);
+    ``layout_devices`` maps each device of the session layout to True/False (None: the Player said nothing).
+    """
+
+    sink: str
+    reachable: bool
+    error: str = ""
+    answered: bool = False
+    connected: list[str] = field(default_factory=list)
+    layout_devices: dict[str, Optional[bool]] = field(default_factory=dict)
+    details: list[str] = field(default_factory=list)
+
+    def lines(self) -> list[str]:
+        if not self.reachable:
+            return [f"{self.sink}: cannot connect ({self.error}); is the bHaptics Player running?"]
+        if not self.answered:
+            return [f"{self.sink}: connected, but the Player did not report its devices in time; the test pattern "
+                    "plays anyway"]
+        out = [f"{self.sink}: {len(self.connected)} device(s) connected: {', '.join(self.connected) or 'none'}"]
+        out += [f"  {d}" for d in self.details]
+        for device, ok in self.layout_devices.items():
+            out.append(f"  {device}: " + ("connected" if ok else "NOT connected: its steps will not be felt"))
+        return out
+
+
+def _v2_report(report: PlayerReport, status: dict, layout: Layout) -> None:
+    positions = status.get("ConnectedPositions")
+    if not isinstance(positions, list):
+        return
+    report.answered = True
+    report.connected = [str(p) for p in positions]
+    count = status.get("ConnectedDeviceCount")
+    if isinstance(count, int) and not isinstance(count, bool):
+        report.details.append(f"ConnectedDeviceCount {count}")
+    names = set(report.connected)
+    for d in layout.devices:
+        # the Player reports the X40 (both panels) as one position, "Vest"
+        report.layout_devices[d.name] = d.name in names or (d.name in ("VestFront", "VestBack") and "Vest" in names)
+
+
+def _v3_report(report: PlayerReport, devices: Any, layout: Layout) -> None:
+    if not isinstance(devices, list):
+        return
+    report.answered = True
+    by_position: dict[int, bool] = {}
+    for item in devices:
+        if not isinstance(item, dict):
+            continue
+        name, pos = get_ci(item, "deviceName"), get_ci(item, "position")
+        ok = get_ci(item, "connected") is True
+        battery = get_ci(item, "battery")
+        if ok:
+            report.connected.append(str(name))
+        report.details.append(f"{name}: SDK2 position {pos}, {'connected' if ok else 'not connected'}"
+                              + (f", battery {battery} %" if isinstance(battery, int) else ""))
+        if isinstance(pos, int):
+            by_position[pos] = by_position.get(pos, False) or ok
+    for d in layout.devices:
+        report.layout_devices[d.name] = by_position.get(d.sdk2_position, False)
+
+
+async def probe_player(sink: Sink, layout: Layout, timeout: float = 2.0) -> Optional[PlayerReport]:
+    """Ask the Player behind ``sink`` which devices it has (None for sinks that are not a Player)."""
+    if not isinstance(sink, (PlayerV2Sink, PlayerV3Sink)):
+        return None
+    report = PlayerReport(sink.name, reachable=False)
+    kwargs: dict[str, Any] = dict(open_timeout=timeout, close_timeout=0.5, compression=None, ping_interval=None)
+    if sink.ssl is not None:
+        kwargs["ssl"] = sink.ssl
+    try:
+        ws = await connect(sink.url, **kwargs)
+    except Exception as exc:  # refused, TLS, HTTP, timeout: the Player is not there
+        report.error = str(exc) or exc.__class__.__name__
+        return report
+    report.reachable = True
+    try:
+        for message in sink.hello_messages() + sink.off_messages():
+            await ws.send(message)
+        loop = asyncio.get_running_loop()
+        end = loop.time() + timeout
+        while not report.answered and loop.time() < end:
+            try:
+                message = await asyncio.wait_for(ws.recv(), end - loop.time())
+            except asyncio.TimeoutError:
+                break
+            sink.on_message(message)
+            if isinstance(sink, PlayerV2Sink) and sink.status is not None:
+                _v2_report(report, sink.status, layout)
+            elif isinstance(sink, PlayerV3Sink) and "ServerDevices" in sink.server_messages:
+                _v3_report(report, sink.server_messages["ServerDevices"], layout)
+    except Exception as exc:  # the connection dropped while asking: report what is known
+        report.error = str(exc) or exc.__class__.__name__
+    finally:
+        await ws.close()
+    return report

@@ -1,0 +1,174 @@
+"""Steps 3 and 4: the candidate active joints (the hands), their accelerations, thresholds and the choice.
+
+Paper (Section 4): a hand is active when its acceleration exceeds a threshold equal to the mean acceleration over
+the previous three frames (at 60 Hz). Two active hands make the triangle (left hand, right hand, J_T), one makes
+(J_A, opposite shoulder, J_T); with none, the last choice is kept. Our readings (accelerations relative to J_T,
+the floor, the relative excess) are in docs/algorithm.md.
+
+Hands are indexed 0 = left, 1 = right in the ``(2,)`` arrays below.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_NONE, CHOICE_RIGHT, J_HAND_L, J_HAND_R, J_TORSO, MAX_WINDOW,
+                      ST_HIST, ST_HIST_COUNT, ST_HIST_POS, ST_PREV_REL, ST_PREV_VEL, ST_SEEN, ST_SPEED)
+from .numeric import clip
+
+
+@njit(cache=True, inline="always")
+def hand_accelerations(jt, state, fps, acc):
+    """Step 3: each hand's acceleration relative to J_T, and the motion energy.
+
+    The second finite difference of the hand position relative to J_T: ``v_t = (r_t - r_{t-1}) fps``,
+    ``a_t = |v_t - v_{t-1}| fps``. It is 0 on the first frame (no velocity yet) and the second (no previous
+    velocity). The state's previous relative positions and velocities are updated.
+
+    Parameters
+    ----------
+    jt:
+        ``(N_RENDER_JOINTS, 3)`` this frame's joints, world metres.
+    state:
+        Renderer state vector (reads ``ST_SEEN``, updates ``ST_PREV_REL``, ``ST_PREV_VEL``).
+    fps:
+        Frame rate, Hz.
+    acc:
+        ``(2,)`` written: acceleration magnitudes, m/s^2.
+
+    Returns
+    -------
+    Motion energy, J/kg: half the squared speed of both hands relative to J_T (reported in the debug output).
+    """
+    seen = state[ST_SEEN]
+    energy = 0.0
+    for h in range(2):
+        joint = J_HAND_L if h == 0 else J_HAND_R
+        acc[h] = 0.0
+        for k in range(3):
+            rel = jt[joint, k] - jt[J_TORSO, k]
+            vel = (rel - state[ST_PREV_REL + 3 * h + k]) * fps if seen >= 1.0 else 0.0
+            dv = (vel - state[ST_PREV_VEL + 3 * h + k]) * fps if seen >= 2.0 else 0.0
+            acc[h] += dv * dv
+            energy += 0.5 * vel * vel
+            state[ST_PREV_REL + 3 * h + k] = rel
+            state[ST_PREV_VEL + 3 * h + k] = vel
+        acc[h] = np.sqrt(acc[h])
+    return energy
+
+
+@njit(cache=True, inline="always")
+def update_thresholds(state, acc, window, thr):
+    """Step 4: each hand's threshold, then this frame's accelerations join the history.
+
+    The threshold is the mean acceleration over the previous ``window`` frames (fewer while the history is shorter;
+    ``inf`` before it has any, so no hand is active then). Accelerations are measurable from the third frame on;
+    earlier ones do not enter the history.
+
+    Parameters
+    ----------
+    state:
+        Renderer state vector (history ring ``ST_HIST``, read and updated).
+    acc:
+        ``(2,)`` this frame's accelerations, m/s^2.
+    window:
+        Frames in the threshold window (1..MAX_WINDOW).
+    thr:
+        ``(2,)`` written: thresholds, m/s^2.
+    """
+    n_hist = int(state[ST_HIST_COUNT])
+    thr[0] = np.inf
+    thr[1] = np.inf
+    if n_hist > 0:
+        m = n_hist if n_hist < window else window
+        for h in range(2):
+            s = 0.0
+            for q in range(m):
+                pos = (int(state[ST_HIST_POS]) - 1 - q) % MAX_WINDOW
+                s += state[ST_HIST + h * MAX_WINDOW + pos]
+            thr[h] = s / m
+    if state[ST_SEEN] >= 2.0:
+        pos = int(state[ST_HIST_POS])
+        for h in range(2):
+            state[ST_HIST + h * MAX_WINDOW + pos] = acc[h]
+        state[ST_HIST_POS] = (pos + 1) % MAX_WINDOW
+        state[ST_HIST_COUNT] = n_hist + 1 if n_hist + 1 < MAX_WINDOW else MAX_WINDOW
+
+
+@njit(cache=True, inline="always")
+def active_hands(acc, thr, floor, above, excess):
+    """Step 4: which hands are active, and by how much.
+
+    A hand is active when its acceleration exceeds both its threshold and ``floor`` (m/s^2). Its relative excess
+    ``(a - thr) / thr`` (dimensionless, >= 0; 0 for an inactive hand) drives the weights (step 5) and the boost
+    (step 8).
+
+    ``acc``, ``thr``: ``(2,)`` m/s^2. ``above`` ``(2,)`` bool and ``excess`` ``(2,)`` are written.
+    """
+    for h in range(2):
+        above[h] = False
+        excess[h] = 0.0
+        if acc[h] > thr[h] and acc[h] > floor:
+            above[h] = True
+            excess[h] = clip((acc[h] - thr[h]) / max(thr[h], 1e-9), 0.0, 1e9)
+
+
+@njit(cache=True, inline="always")
+def update_speeds(state, alpha, start, full, speed_n):
+    """Each hand's speed relative to J_T, smoothed, and its normalised speed (beyond the paper).
+
+    The speed is ``|v_t|`` of :func:`hand_accelerations` (run first this frame), smoothed by a one-pole filter
+    ``s += alpha (|v_t| - s)`` so that capture noise does not read as motion. ``speed_n`` ``(2,)`` is written:
+    ``clip((s - start) / (full - start), 0, 1)`` (m/s in, 0..1 out), 0 for a hand slower than ``start``.
+    """
+    for h in range(2):
+        v2 = 0.0
+        for k in range(3):
+            v = state[ST_PREV_VEL + 3 * h + k]
+            v2 += v * v
+        state[ST_SPEED + h] += alpha * (np.sqrt(v2) - state[ST_SPEED + h])
+        speed_n[h] = clip((state[ST_SPEED + h] - start) / max(full - start, 1e-9), 0.0, 1.0)
+
+
+@njit(cache=True, inline="always")
+def moving_only(state, min_speed, above, excess):
+    """A hand slower than ``min_speed`` (m/s, smoothed speed relative to J_T) is not active, whatever its
+    acceleration: at 120 Hz a still hand's capture noise alone exceeds the acceleration floor (beyond the paper)."""
+    for h in range(2):
+        if state[ST_SPEED + h] < min_speed:
+            above[h] = False
+            excess[h] = 0.0
+
+
+@njit(cache=True, inline="always")
+def choose_active(above_left, above_right, dist_left, dist_right, last, idle_farther):
+    """Step 4: the active-joint choice (``CHOICE_LEFT``, ``CHOICE_RIGHT`` or ``CHOICE_BOTH``).
+
+    Both hands active: both; one: that one. Neither: the ``last`` choice (paper), unless there is none yet or
+    ``idle_farther`` is set; then the hand farther from J_T (``dist_*``, m; the left hand on a tie).
+    """
+    if above_left and above_right:
+        return CHOICE_BOTH
+    if above_left:
+        return CHOICE_LEFT
+    if above_right:
+        return CHOICE_RIGHT
+    if last != CHOICE_NONE and not idle_farther:
+        return last
+    return CHOICE_LEFT if dist_left >= dist_right else CHOICE_RIGHT
+
+
+@njit(cache=True, inline="always")
+def active_hand(choice, dist_left, dist_right, excess):
+    """The one hand that stands for the choice, and the excess that drives the boost.
+
+    With both hands active: the hand farther from J_T (``dist_*``, m) and the larger excess. Returns
+    ``(joint row, excess)``; the hand is the baseline's dynamic point.
+    """
+    if choice == CHOICE_BOTH:
+        hand = J_HAND_L if dist_left >= dist_right else J_HAND_R
+        return hand, max(excess[0], excess[1])
+    if choice == CHOICE_LEFT:
+        return J_HAND_L, excess[0]
+    return J_HAND_R, excess[1]

@@ -1,0 +1,47 @@
+"""Step 1, joints in: each joint the renderer needs, held at its last finite value.
+
+Live sources may send frames with some joints missing (NaN). A missing joint keeps the position it had when last
+received, so the frame renders as if that joint had not moved; until every joint has been received once, frames
+render silence.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..packed import N_RENDER_JOINTS, ST_GOOD, ST_HAVE
+
+
+@njit(cache=True, inline="always")
+def hold_joints(frame, state, jt):
+    """This frame's joints with missing ones held.
+
+    Parameters
+    ----------
+    frame:
+        ``(N_RENDER_JOINTS, 3)`` world metres in ``RENDER_JOINTS`` order; NaN (or inf) where not received.
+    state:
+        Renderer state vector; its last finite positions and seen flags are updated.
+    jt:
+        ``(N_RENDER_JOINTS, 3)`` written: the joints to render, world metres.
+
+    Returns
+    -------
+    True once every joint has been received at least once (before that ``jt`` holds zeros for unseen joints).
+    """
+    have_all = True
+    for j in range(N_RENDER_JOINTS):
+        x = frame[j, 0]
+        y = frame[j, 1]
+        z = frame[j, 2]
+        if np.isfinite(x) and np.isfinite(y) and np.isfinite(z):
+            state[ST_GOOD + 3 * j] = x
+            state[ST_GOOD + 3 * j + 1] = y
+            state[ST_GOOD + 3 * j + 2] = z
+            state[ST_HAVE + j] = 1.0
+        if state[ST_HAVE + j] < 0.5:
+            have_all = False
+        for k in range(3):
+            jt[j, k] = state[ST_GOOD + 3 * j + k]
+    return have_all

@@ -1,0 +1,82 @@
+"""Step 5: the motion salient triangle, its weights and the dynamic point (Eq. 1).
+
+Paper (Section 4): weights start at 1; an active hand gets extra weight; with two active hands the extra goes to
+the hand farther from the dynamic point. Eq. 1:
+``MST_DP = J_C + (w_A (J_A - J_C) + w_R (J_R - J_C) + w_T (J_T - J_C)) / (w_A + w_R + w_T)``, J_C the centroid.
+Our reading of the extra weight (relative excess over the threshold, capped) is in docs/algorithm.md.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+from ..packed import CHOICE_BOTH, CHOICE_LEFT, J_HAND_L, J_HAND_R, J_SHOULDER_L, J_SHOULDER_R, ST_PREV_DP, ST_SEEN
+from .numeric import dist3
+
+
+@njit(cache=True, inline="always")
+def previous_dynamic_point(state, torso, out):
+    """The last frame's dynamic point (``(3,)`` world m, written into ``out``); J_T (``torso``) on the first frame."""
+    seen = state[ST_SEEN]
+    for k in range(3):
+        out[k] = state[ST_PREV_DP + k] if seen >= 1.0 else torso[k]
+
+
+@njit(cache=True, inline="always")
+def active_weight(excess, gain, extra_max):
+    """Weight of an active vertex: ``1 + gain * min(excess, extra_max)`` (1 when ``excess`` is 0)."""
+    return 1.0 + gain * min(excess, extra_max)
+
+
+@njit(cache=True, inline="always")
+def salient_triangle(choice, jt, excess, prev_dp, gain, extra_max):
+    """The triangle's two moving vertices and their weights (J_T is the third vertex, weight 1).
+
+    Parameters
+    ----------
+    choice:
+        ``CHOICE_LEFT``, ``CHOICE_RIGHT`` or ``CHOICE_BOTH`` (step 4).
+    jt:
+        ``(N_RENDER_JOINTS, 3)`` joints, world metres.
+    excess:
+        ``(2,)`` relative excess of the left and right hand over their thresholds (step 4).
+    prev_dp:
+        ``(3,)`` the last frame's dynamic point, world m (decides which of two active hands gets the extra weight).
+    gain, extra_max:
+        Extra weight per unit of excess and its cap.
+
+    Returns
+    -------
+    ``(row of J_A, row of J_R, w_A, w_R)``: one active hand gives (that hand, opposite shoulder); two give
+    (left hand, right hand), the extra weight on the hand farther from ``prev_dp``.
+    """
+    if choice == CHOICE_BOTH:
+        if dist3(jt[J_HAND_L], prev_dp) >= dist3(jt[J_HAND_R], prev_dp):
+            return J_HAND_L, J_HAND_R, active_weight(excess[0], gain, extra_max), 1.0
+        return J_HAND_L, J_HAND_R, 1.0, active_weight(excess[1], gain, extra_max)
+    if choice == CHOICE_LEFT:
+        return J_HAND_L, J_SHOULDER_R, active_weight(excess[0], gain, extra_max), 1.0
+    return J_HAND_R, J_SHOULDER_L, active_weight(excess[1], gain, extra_max), 1.0
+
+
+@njit(cache=True, inline="always")
+def speed_weighted(choice, w_a, w_r, speed_n, speed_weight, opposite_weight):
+    """Beyond the paper: with one active hand, its weight grows by ``speed_weight`` x its normalised speed and the
+    opposite shoulder's weight is ``opposite_weight`` (1 in the paper). Returns ``(w_A, w_R)``; two active hands
+    are left as they are (their weights are symmetric already)."""
+    if choice == CHOICE_BOTH:
+        return w_a, w_r
+    h = 0 if choice == CHOICE_LEFT else 1
+    return w_a + speed_weight * speed_n[h], opposite_weight
+
+
+@njit(cache=True, inline="always")
+def dynamic_point(va, vr, vt, w_a, w_r, w_t, out):
+    """Eq. 1: ``J_C + (w_A (J_A - J_C) + w_R (J_R - J_C) + w_T (J_T - J_C)) / (w_A + w_R + w_T)``.
+
+    ``va``, ``vr``, ``vt``: ``(3,)`` vertices J_A, J_R, J_T (any unit); the result (the weighted mean of the three
+    vertices) is written into ``out`` ``(3,)``.
+    """
+    for k in range(3):
+        jc = (va[k] + vr[k] + vt[k]) / 3.0
+        out[k] = jc + (w_a * (va[k] - jc) + w_r * (vr[k] - jc) + w_t * (vt[k] - jc)) / (w_a + w_r + w_t)
