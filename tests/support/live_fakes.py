@@ -116,6 +116,7 @@ class FakePlayerV2(_Server):
             self.errors.append(f"path {ws.request.path}")
         if self.hung:
             await self._hang(ws)
+            return
         async for text in ws:
             conn["requests"] += 1
             self.requests += 1
@@ -132,6 +133,7 @@ class FakePlayerV2(_Server):
                 return
             if self.hung or (self.stop_reading_after and self.requests >= self.stop_reading_after):
                 await self._hang(ws)
+                return
 
     def _status(self, position: str) -> list[int]:
         for key, values in self.state.items():

@@ -7,7 +7,7 @@ kernel send buffer of each client socket is capped (``sndbuf``) so a stuck clien
 instead of after megabytes of stale frames.
 
 Viewers never cost the other sinks anything: the server, its handshakes, the writes to every viewer, skipping and
-dropping the slow ones all happen in a process of its own (:mod:`.broadcast_server`, at a lower CPU priority).
+dropping the slow ones all happen in a process of its own (:mod:`.broadcast_server`).
 The session encodes each frame once and writes it to that process's pipe without waiting; if the pipe backs up
 (the server process cannot keep up), frames are skipped, counted. Skipped frames and dropped viewers are counted;
 each kind of trouble is logged once, never a line per viewer.

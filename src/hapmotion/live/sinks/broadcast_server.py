@@ -3,8 +3,7 @@
 Why a process: serving viewers is Python work (handshakes, a write per viewer per frame, skipping and dropping
 the slow ones). In the session's process it would share the interpreter lock and the event loop with the Player
 sinks, and a thousand viewers that never read did cost the Players tens of milliseconds. Here it costs the session
-one pipe write per frame. The process runs at a lower CPU priority (nice +5), so on a busy machine the session
-wins the CPU.
+one pipe write per frame; the operating system spreads the two processes over the cores.
 
 This file is run by path (``python broadcast_server.py HOST PORT CLIENT_BUFFER SLOW_S SNDBUF``) and imports
 nothing from hapmotion, so it starts in a fraction of a second.
@@ -23,7 +22,6 @@ from __future__ import annotations
 import asyncio
 import json
 import math
-import os
 import signal
 import socket
 import struct
@@ -177,10 +175,6 @@ def frame_record(received: Optional[float], message: str) -> bytes:
 
 
 if __name__ == "__main__":
-    try:
-        os.nice(5)
-    except (AttributeError, OSError):
-        pass
     # Ctrl-C, a closed terminal etc. reach the whole process group: the session decides when this server stops
     # (the stop record, or the end of its pipe if the session dies).
     for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT"):
