@@ -20,7 +20,7 @@ from hapmotion.audience.wire import encode_frame, subject
 from hapmotion.body.model import BodyModel
 from hapmotion.live import ReplaySource
 from hapmotion.live.sinks import Sink
-from hapmotion.show import Show, output_stage
+from hapmotion.show import Show
 
 SONG = BVH.parents[1] / "audio" / "vibe_ace.ogg"
 
@@ -67,18 +67,25 @@ class DelayedReplay(ReplaySource):
 
 def reference_rows(motion, seat: Seat, mode: str, ks) -> np.ndarray:
     """Frames ``ks`` of the recording (in that order, the frames a seat rendered) rendered here with the seat's
-    settings, from the numbers on the wire (float32 skeleton and music), through the show's output stage and the
-    seat's stage: with every frame from the first on, the rendering of the recording itself."""
-    from hapmotion.audio import analyze_file, audio_track
+    settings, from the numbers on the wire (float32 skeleton and music), through the venue's own live mix
+    (``live_music``), the seat's comfort stage and zones: with every frame from the first on, the rendering of the
+    recording itself."""
     from hapmotion.audience.seat import SeatStage
+    from hapmotion.comfort import Limiter
+    from hapmotion.show import live_music
 
-    show = Show(method=seat.method or "mst", preset=seat.preset or "paper", mirror=seat.mirror)
+    show = Show(method=seat.method or "mst", preset=seat.preset or Show().preset, mirror=seat.mirror)
+    layout = show.load_layout()
     wire = motion.positions.astype(np.float32).astype(np.float64)
     rows, _ = show.renderer(motion.fps, body=BodyModel.from_motion(motion)).run(wire[ks])
     if mode == "multimodal":
-        audio = audio_track(analyze_file(SONG, fps=motion.fps)).intensities.astype(np.float32).astype(np.float64)
-        rows = output_stage(rows, audio[ks], mode="multimodal", ratio=(2, 3), domain="linear", power_limit=0.75 * 52)
-    stage = SeatStage(seat, show.load_layout())
+        music = live_music(Show(audio=SONG), "multimodal", fps=motion.fps, layout=layout, actuators=layout.actuators)
+        audio = music.rows.astype(np.float32).astype(np.float64)
+        rows = np.array([music.mix_row(r, audio[k]) for r, k in zip(rows, ks)])
+    rows = np.clip(rows, 0.0, 100.0)
+    if not seat.comfort().is_neutral:
+        rows = Limiter(seat.comfort(), len(layout.actuators), motion.fps).run(rows)
+    stage = SeatStage(seat, layout)
     return np.array([stage(r) for r in rows])
 
 
@@ -139,7 +146,9 @@ def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_se
         ks = [round(f.t * motion.fps) for _, f in got]
         # in order, each once; on loopback every frame (a frame the busy machine made stale is dropped, not played
         # late: the seat's rendering is then that of the frames it played)
-        assert ks == sorted(set(ks)) and len(ks) >= 0.9 * motion.n_frames and ks[-1] == motion.n_frames - 1, name
+        # (frames the venue skipped itself, a replay waking late, are not published)
+        assert ks == sorted(set(ks)) and len(ks) >= 0.9 * stats.rendered >= 0.5 * motion.n_frames, name
+        assert ks[-1] == motion.n_frames - 1, name
         rows = np.array([f.row for _, f in got])
         np.testing.assert_allclose(rows, reference_rows(motion, seat, mode, ks), rtol=0, atol=1e-9, err_msg=name)
         if seat.zones_off:

@@ -103,18 +103,20 @@ def test_description_round_trip_and_checks():
         parse_description(b"\xff not json", "concert")
 
 
-def test_seat_stage_zones_gain_and_ceiling():
+def test_seat_stage_zones_and_comfort():
     layout = load_layout()
     row = np.full(len(layout.actuators), 80.0)
-    stage = SeatStage(Seat(zones_off=("VestBack", "VestFront_5"), gain=1.5, max_intensity=90.0), layout)
-    out = stage(row)
-    assert out[5] == 0 and (out[20:40] == 0).all() and out[0] == 90.0 and out[45] == 90.0
-    assert SeatStage(Seat(gain=0.5), layout)(row)[0] == 40.0
+    out = SeatStage(Seat(zones_off=("VestBack", "VestFront_5")), layout)(row)
+    assert out[5] == 0 and (out[20:40] == 0).all() and out[0] == 80.0 and out[45] == 80.0
     assert SeatStage(Seat(), layout).identity
+    comfort = Seat(gain=1.5, max_intensity=90.0).comfort()
+    assert (comfort.gain, comfort.max_level, comfort.is_neutral) == (1.5, 90.0, False) and Seat().comfort().is_neutral
     with pytest.raises(UsageError, match="zone-off 'Helmet'"):
         SeatStage(Seat(zones_off=("Helmet",)), layout)
     with pytest.raises(UsageError, match="--delay"):
         Seat(delay_s=-0.1)
+    with pytest.raises(UsageError, match="gain"):
+        Seat(gain=-1)
 
 
 def test_show_urls():

@@ -70,19 +70,26 @@ class StreamedMusic(AudioChannel):
 
     KEEP = 64  # rows waiting for the engine (it renders the newest submitted frame: a few at most)
 
-    def __init__(self, n: int, fps: float, music: dict[str, Any], mode: str):
+    def __init__(self, n: int, fps: float, music: dict[str, Any], mode: str, layout: Any):
+        from ..audio.params import params_for_preset
+        from ..audio.pattern import layout_of
         from ..show import output_stage
 
+        # the same output stage as hapmotion.show.live_music at the venue: ratio, rule, limit, preset parameters
+        # and the actuators' positions
         ratio = (float(music["mix_ratio"][0]), float(music["mix_ratio"][1]))
-        domain, limit = music["mix_domain"], music.get("power_limit")
+        rule, limit = music["mix_rule"], music.get("power_limit")
+        params = params_for_preset(music["params_preset"])
+        geometry = layout_of(layout)
+        positions = geometry.positions() if geometry is not None else None
 
         def mix(motion_row: np.ndarray, audio_row: np.ndarray) -> np.ndarray:
-            return output_stage(motion_row, audio_row, mode="multimodal", ratio=ratio, domain=domain,
-                                power_limit=limit)
+            return output_stage(motion_row, audio_row, mode="multimodal", ratio=ratio, power_limit=limit, rule=rule,
+                                positions=positions, params=params)
 
         def alone(audio_row: np.ndarray) -> np.ndarray:
-            return output_stage(np.zeros_like(audio_row), audio_row, mode="audio", ratio=ratio, domain=domain,
-                                power_limit=limit)
+            return output_stage(np.zeros_like(audio_row), audio_row, mode="audio", ratio=ratio, power_limit=limit,
+                                rule=rule)
 
         super().__init__(np.zeros((1, n)), fps, mix)
         self._alone = alone if mode == "audio" else None
@@ -313,8 +320,18 @@ def seat_parts(desc: ShowDescription, seat: Seat) -> dict[str, Any]:
         raise InputError(src, "actuators", f"the show's {len(desc.actuators)} actuators ({desc.layout}) are not "
                                            f"this seat's layout {layout.name}")
     renderer = None if mode == "audio" else show.renderer(desc.fps, body=BodyModel(**desc.body))
-    music = None if mode == "motion" else StreamedMusic(len(desc.actuators), desc.fps, desc.music or {}, mode)
-    return {"renderer": renderer, "layout": layout, "mode": mode, "music": music}
+    music = None if mode == "motion" else StreamedMusic(len(desc.actuators), desc.fps, desc.music or {}, mode,
+                                                        layout)
+    comfort = seat.comfort()
+    limiter = None if comfort.is_neutral else comfort_limiter(comfort, desc.fps, len(desc.actuators))
+    return {"renderer": renderer, "layout": layout, "mode": mode, "music": music, "comfort": limiter}
+
+
+def comfort_limiter(comfort: Any, fps: float, n: int) -> Any:
+    """The engine's last stage for the seat's gain and comfort limits (:class:`hapmotion.comfort.Limiter`)."""
+    from ..comfort import Limiter
+
+    return Limiter(comfort, n, fps)
 
 
 async def _first_description(kv: Any, show: str, skip_epoch: Optional[int] = None) -> ShowDescription:
@@ -377,7 +394,7 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(), ha
             engine = LiveEngine(parts["renderer"], sink_objs, n_actuators=dmap.n, fps=desc.fps,
                                 stall_s=desc.stall_ms / 1000.0, audio=parts["music"], mode=mode,
                                 handle_signals=handle_signals, stats_interval=stats_interval, on_stats=on_stats,
-                                on_ready=on_ready, source_name=source.describe())
+                                on_ready=on_ready, source_name=source.describe(), comfort=parts["comfort"])
             if sessions is not None:
                 sessions.append((engine, source))
             stats = await engine.run(source)

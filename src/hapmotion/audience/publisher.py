@@ -71,16 +71,20 @@ async def description_bucket(nc: Any):
 def describe_show(show_name: str, *, show: Any, mode: str, fps: float, layout: Any, body: Any,
                   stall_ms: float, mirror: bool, epoch: Optional[int] = None) -> ShowDescription:
     """The description of a live show (see :class:`~hapmotion.audience.wire.ShowDescription`)."""
-    from ..audio.params import DEFAULT_PARAMS
+    from ..audio.mix import resolve_rule
+    from ..audio.params import params_for_preset
     from ..body.model import BodyModel
     from ..show import power_limit_for
 
     body = body or BodyModel.default()
     music = None
     if mode != "motion":
-        music = {"mix_ratio": list(show.mix_ratio), "mix_domain": show.mix_domain,
-                 "power_limit": power_limit_for(DEFAULT_PARAMS.power_limit_fraction, len(layout.actuators)),
-                 "audio_offset_s": show.audio_offset_s, "audio_params": dataclasses.asdict(DEFAULT_PARAMS)}
+        # the facts hapmotion.show.live_music mixes with: the preset's audio parameters, the resolved rule
+        params = params_for_preset(show.preset)
+        music = {"mix_ratio": list(show.mix_ratio), "mix_rule": resolve_rule(show.mix_rule, show.mix_domain, params),
+                 "params_preset": show.preset,
+                 "power_limit": power_limit_for(params.power_limit_fraction, len(layout.actuators)),
+                 "audio_offset_s": show.audio_offset_s, "audio_params": dataclasses.asdict(params)}
     return ShowDescription(
         show=check_show_name(show_name), epoch=secrets.randbits(32) if epoch is None else epoch, fps=float(fps),
         layout=layout.name, actuators=tuple(layout.actuators),

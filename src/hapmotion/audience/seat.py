@@ -1,8 +1,9 @@
 """One seat's own settings and the stage that applies them to every row before it reaches the seat's vest.
 
 The renderer-side settings (method, preset, mirroring, which channels) choose how the seat's ``Renderer`` and
-mix are built; the row-side ones (zones switched off, gain, comfort ceiling) are applied by :class:`SeatSink`
-around each of the seat's sinks, so fade and turn-off rows pass through the same stage.
+mix are built; gain and comfort limits are the live engine's last stage (:class:`hapmotion.comfort.Limiter`, as
+in ``hapmotion live``); zones switched off are applied by :class:`SeatSink` around each of the seat's sinks, so
+fade and turn-off rows pass through the same stage.
 """
 
 from __future__ import annotations
@@ -26,8 +27,8 @@ class Seat:
     """How one audience member wants the show.
 
     ``method``, ``preset``, ``mirror``, ``mode`` ``None`` keep the show's. ``zones_off`` names devices
-    (``VestBack``) or single actuators (``VestFront_5``) that stay off. ``gain`` scales every intensity and
-    ``max_intensity`` caps each motor (0..100), see :func:`apply_comfort`. ``delay_s`` is how far the seat's
+    (``VestBack``) or single actuators (``VestFront_5``) that stay off. ``gain``, ``max_intensity`` (percent) and
+    ``max_duty`` are the seat's :class:`hapmotion.comfort.Comfort`. ``delay_s`` is how far the seat's
     video/audio stream runs behind the venue: each frame plays ``delay_s`` after its media time arrived live.
     """
 
@@ -38,18 +39,22 @@ class Seat:
     zones_off: tuple[str, ...] = ()
     gain: float = 1.0
     max_intensity: float = 100.0
+    max_duty: float = 1.0
     delay_s: float = 0.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.delay_s) and 0.0 <= self.delay_s <= MAX_DELAY_S):
             raise UsageError(f"--delay must be 0..{MAX_DELAY_S * 1000:g} ms, not {self.delay_s * 1000:g}")
-        if not (math.isfinite(self.gain) and 0.0 <= self.gain <= 4.0):
-            raise UsageError(f"--gain must be a number from 0 to 4, not {self.gain}")
-        if not (math.isfinite(self.max_intensity) and 0.0 <= self.max_intensity <= 100.0):
-            raise UsageError(f"--max-intensity must be 0..100, not {self.max_intensity}")
+        self.comfort()  # UsageError for a gain or limit out of range
         if self.mode is not None and self.mode not in ("motion", "audio", "multimodal"):
             raise UsageError(f"--mode {self.mode!r}: expected motion, audio or multimodal")
         object.__setattr__(self, "zones_off", tuple(self.zones_off))
+
+    def comfort(self):
+        """The seat's gain and comfort limits as a :class:`hapmotion.comfort.Comfort`."""
+        from ..comfort import Comfort
+
+        return Comfort(gain=self.gain, max_level=self.max_intensity, max_duty=self.max_duty)
 
 
 def zone_mask(zones_off: Sequence[str], actuators: Sequence[str], devices: Sequence[str]) -> np.ndarray:
@@ -67,28 +72,16 @@ def zone_mask(zones_off: Sequence[str], actuators: Sequence[str], devices: Seque
     return mask
 
 
-def apply_comfort(row: np.ndarray, seat: Seat) -> np.ndarray:
-    """The seat's gain and comfort ceiling: ``min(gain * I, max_intensity)`` per motor.
-
-    This is the one place a seat's gain and comfort limits apply to a live row; a shared gain/comfort module for
-    files and live plugs in here.
-    """
-    out = row * seat.gain if seat.gain != 1.0 else row
-    return np.minimum(out, seat.max_intensity) if seat.max_intensity < 100.0 else out
-
-
 class SeatStage:
-    """Zones off, then :func:`apply_comfort`, then clipping to 0..100; ``(N,)`` rows in the layout's order."""
+    """Zones off; ``(N,)`` rows in the layout's order."""
 
     def __init__(self, seat: Seat, layout: Any):
         self.seat = seat
         self.mask = zone_mask(seat.zones_off, layout.actuators, [d.name for d in layout.devices])
-        self.identity = seat.gain == 1.0 and seat.max_intensity >= 100.0 and bool(self.mask.all())
+        self.identity = bool(self.mask.all())
 
     def __call__(self, row: np.ndarray) -> np.ndarray:
-        if self.identity:
-            return row
-        return np.clip(apply_comfort(row * self.mask, self.seat), 0.0, 100.0)
+        return row if self.identity else row * self.mask
 
 
 class SeatSink(Sink):

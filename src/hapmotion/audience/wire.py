@@ -153,7 +153,7 @@ class ShowDescription:
 
     ``render`` holds ``method``, ``preset``, ``mirror``, ``mode`` and ``overrides``; ``body`` the performer's
     :class:`~hapmotion.body.model.BodyModel` fields; ``music`` ``None`` (no song) or ``mix_ratio``,
-    ``mix_domain``, ``power_limit`` (``sum (I/100)^2`` over all actuators, or None), ``audio_offset_s`` and
+    ``mix_rule``, ``params_preset`` (whose audio parameters the mix uses), ``power_limit`` (``sum (I/100)^2`` over all actuators, or None), ``audio_offset_s`` and
     ``audio_params`` (the analysis parameters, for the record).
     """
 
@@ -240,8 +240,13 @@ def parse_description(data: bytes, show: str) -> ShowDescription:
         ratio = music.get("mix_ratio")
         if not (isinstance(ratio, list) and len(ratio) == 2 and all(isinstance(r, (int, float)) for r in ratio)):
             raise InputError(src, "music.mix_ratio", "expected [audio, motion] weights")
-        if music.get("mix_domain") not in ("linear", "energy"):
-            raise InputError(src, "music.mix_domain", "expected linear or energy")
+        from ..audio.params import MIX_RULES
+        from ..render.params import PRESETS
+
+        if music.get("mix_rule") not in MIX_RULES:
+            raise InputError(src, "music.mix_rule", f"expected one of {', '.join(MIX_RULES)}")
+        if music.get("params_preset") not in PRESETS:
+            raise InputError(src, "music.params_preset", f"expected one of {', '.join(PRESETS)}")
         limit = music.get("power_limit")
         if limit is not None and not (isinstance(limit, (int, float)) and limit > 0):
             raise InputError(src, "music.power_limit", "expected a positive number or null")

@@ -39,15 +39,17 @@ Examples:
 @click.option("--preset", default=None, help="Renderer preset (paper, energy) [default: the show's].")
 @click.option("--mode", type=click.Choice(["motion", "multimodal", "audio"]), default=None,
               help="Channels felt: the motion, the music, or both mixed [default: the show's].")
-@click.option("--gain", type=float, default=1.0, show_default=True, help="Scales every intensity (0..4).")
-@click.option("--max-intensity", type=float, default=100.0, show_default=True,
-              help="Comfort ceiling per motor, 0..100.")
+@click.option("--gain", type=float, default=1.0, show_default=True, help="Scales every intensity (0..5).")
+@click.option("--max-level", "max_intensity", type=float, default=100.0, show_default=True,
+              help="Comfort ceiling per motor, percent 0..100.")
+@click.option("--max-duty", type=float, default=1.0, show_default=True,
+              help="Fraction of full drive each motor may average (comfort limit, 0..1).")
 @click.option("--zone-off", "zones_off", metavar="ZONE[,ZONE]", multiple=True,
               help="Devices (VestBack, ForearmL, ...) or actuators (VestFront_5) that stay off.")
 @click.option("--stats", "show_stats", is_flag=True, help="Print frame counts and latency every second.")
 @click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
 def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Optional[bool], method: Optional[str],
-            preset: Optional[str], mode: Optional[str], gain: float, max_intensity: float,
+            preset: Optional[str], mode: Optional[str], gain: float, max_intensity: float, max_duty: float,
             zones_off: tuple[str, ...], show_stats: bool, quiet: bool) -> None:
     from ..audience import Seat, run_listen
     from ..audience.listener import parse_show_url
@@ -56,7 +58,7 @@ def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Opti
     _setup_logging(quiet)
     parse_show_url(show_url)  # a usage error before anything connects
     seat = Seat(method=method, preset=preset, mirror=mirror, mode=mode, zones_off=_split(zones_off), gain=gain,
-                max_intensity=max_intensity, delay_s=delay_ms / 1000.0)
+                max_intensity=max_intensity, max_duty=max_duty, delay_s=delay_ms / 1000.0)
     sessions: list = []
 
     def ready(engine) -> None:
