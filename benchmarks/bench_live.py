@@ -1,4 +1,4 @@
-"""Live mode benchmark (issue 4): latency, memory under a flood, many viewers. Prints each figure beside its target.
+"""Live mode benchmark: latency, memory under a flood, many viewers. Prints each figure beside its target.
 
     python benchmarks/bench_live.py            # about 80 s
     python benchmarks/bench_live.py --quick    # shorter runs, same figures

@@ -20,7 +20,7 @@ import hapmotion
 from hapmotion.motion_files import save_motion_table
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "motion"
-TARGET_BVH_FPS = 100_000.0  # frames/s, issue 2
+TARGET_BVH_FPS = 100_000.0  # frames/s: an hour of 120 fps motion read in about 4 s
 
 
 def long_bvh(src: Path, dst: Path, n_frames: int) -> int:

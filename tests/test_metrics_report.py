@@ -267,3 +267,17 @@ def test_cli_with_audio_adds_onset_columns(tmp_path):
     # one-hand side of the jabs, and the mix follows the music
     assert float(rec["onset_p"]) >= 0.9 and float(rec["onset_r"]) >= 0.9
     assert float(rec["mix_follows_audio"]) > 0.3
+
+
+@pytest.mark.slow
+def test_cli_default_presets_with_figures_and_bench(tmp_path):
+    """With no --presets every preset is scored, figures and bench included (a preset whose sweep goes silent in
+    part has no energy range: the bench figure says so instead of failing)."""
+    from hapmotion.cli.evaluate import command
+    from hapmotion.render.params import PRESETS
+
+    clip = str(SHARED_DATA / "motion" / "dataset-1_punch_normal_001.bvh")
+    res = CliRunner().invoke(command, [clip, "--methods", "mst", "-o", str(tmp_path / "r")])
+    assert res.exit_code == 0, res.output
+    assert f"scored {len(PRESETS)} runs" in res.output
+    assert (tmp_path / "r" / "bench.png").stat().st_size > 10_000

@@ -1,6 +1,6 @@
 """Azure Kinect offline_processor JSON: round trip of a real clip converted to the SDK layout, schema errors.
 
-No openly licensed real recording exists (shared/docs/motion-formats.md section 2.4), so :func:`kinect_document`
+No openly licensed real recording of this format could be found, so :func:`kinect_document`
 converts a BVH clip into that layout: millimetres, depth-camera axes (+Y down, +Z away from the camera), keys in
 alphabetical order, 4-space indent (nlohmann::json's output), two bodies, a dropped capture and frames where the
 main body is not tracked.

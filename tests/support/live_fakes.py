@@ -1,4 +1,5 @@
-"""Fakes for the live tests, written from the documented protocols (docs/bhaptics-protocol.md §2, §3, §4) and not
+"""Fakes for the live tests, written from bHaptics' own clients (GitHub bhaptics/tact-python, tact-js, haptic-library,
+tact-simhub: SDK1 ``Submit`` frames, SDK2 ``SdkRequestAuth``/``SdkPlayDotMode``, device sizes) and not
 from hapmotion's own encoders, plus the tests that show the fakes catch bad messages.
 
 * :class:`FakePlayerV2` - a bHaptics Player SDK1 endpoint ``/v2/feedbacks``: checks every request, keeps per-key

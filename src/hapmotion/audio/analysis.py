@@ -1,6 +1,7 @@
 """Audio analysis for an ERM vest: bass-band envelope, onsets and a waveform overview, at the track's frame rate.
 
-Pipeline (docs/rendering-research.md 3.7; every constant lives in :class:`AudioParams`):
+Pipeline (built from Meta's Haptics SDK analyser and Google's audio-to-tactile, see :mod:`hapmotion.audio.params`
+and docs/audio.md; every constant lives in :class:`AudioParams`):
 
 1. **Streamed band split** (:class:`BandEnergies`). Mono blocks at the native rate ``sr`` are first averaged in
    runs of ``P = floor(sr / 11025)`` samples (a first-order CIC decimator, about 1 ns a sample) to the front rate

@@ -1,7 +1,10 @@
 """Every parameter of the audio-to-tactile channel in one documented, frozen object.
 
-The chain follows docs/rendering-research.md section 3.7 (the recommended audio channel for an ERM vest, built
-from the open Meta Haptics SDK analyser, section 3.2, and Google's audio-to-tactile, section 3.3). Each field says
+The chain is built from two open audio-to-haptics analysers: Meta's Haptics SDK (GitHub
+``facebook/meta-haptics-sdk``, ``interfaces/studio/audio_analysis``: envelope release, onset spacing and rise, the
+50 % duck) and Google's audio-to-tactile (GitHub ``google/audio-to-tactile``, ``src/tactile``: the power-law
+compression, the minimum peak spacing, the total power limit), cut down to what an ERM motor can reproduce: an
+envelope with a bandwidth of a few Hz (docs/audio.md). Each field says
 where its value comes from: a source, or "(ours)" where the sources give a range or nothing and this project chose.
 docs/audio.md explains every choice at length.
 

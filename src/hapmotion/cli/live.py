@@ -200,8 +200,11 @@ def _finish(engine, stats_json: Optional[str]) -> list[str]:
 
     log = logging.getLogger("hapmotion.live")
     stats = engine.stats
-    for line in stats.summary_lines():
-        click.echo(line, err=True)
+    try:
+        for line in stats.summary_lines():
+            click.echo(line, err=True)
+    except OSError:  # the terminal is gone (SIGHUP after an ssh session closed): the summary has nowhere to go
+        pass
     lost = [f"{s.name}: {s.error}" for s in engine.sinks if getattr(s, "error", None)]
     if stats_json:
         try:

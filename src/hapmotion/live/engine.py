@@ -1,6 +1,6 @@
 """The live loop: source -> newest-wins slot -> ``Renderer.step`` -> every sink's own slot; stall fade; stop.
 
-Safety rules (issue 4, docs/live.md):
+Safety rules (docs/live.md, "Safety"):
 
 * a stalled source (no usable frame) fades every actuator linearly to zero, reaching zero ``stall_s`` after the
   last frame arrived; then the renderer and the frame order are reset, so a performer who comes back starts fresh;

@@ -51,7 +51,7 @@ def _registrations(ep: Endpoint) -> dict[str, Any]:
 
 
 def build_sink(ep: Endpoint, *, dmap: DeviceMap, layout_name: str, fps: float,
-               workspace_id: Optional[str] = None, api_key: Optional[str] = None, version: str = "1",
+               workspace_id: Optional[str] = None, api_key: Optional[str] = None, version: int = 1,
                meta: Optional[dict[str, Any]] = None, time_scale: float = 1.0,
                audience: Optional[dict[str, Any]] = None) -> Sink:
     """A sink object for a parsed ``--sink``; ``audience`` holds what a ``nats://`` sink describes to its seats

@@ -1,4 +1,4 @@
-"""Counters and latency figures of a live session (issue 4, "Timing").
+"""Counters and latency figures of a live session (docs/live.md, "Timing").
 
 Definitions used in the summary (docs/live.md repeats them):
 

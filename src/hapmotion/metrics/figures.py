@@ -237,7 +237,8 @@ def bench_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path:
                 continue
             g = np.asarray(r["progress"])
             pos = g[:, 0] if case != "column" else g[:, 1]
-            ax.plot(pos, r["energy_db"], color=colors[r["preset"]], label=f"{r['preset']} ({r['range_db']:.2f} dB)")
+            spread = "silent in part" if r["range_db"] is None else f"{r['range_db']:.2f} dB"  # None: an unbounded dip
+            ax.plot(pos, r["energy_db"], color=colors[r["preset"]], label=f"{r['preset']} ({spread})")
         ax.set_ylim(-7, 0.5)
         ax.axhline(0, color="0.6", lw=0.5)
         ax.set_title(f"{case} sweep", fontsize=10)

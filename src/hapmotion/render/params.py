@@ -2,8 +2,10 @@
 
 The ``paper`` preset follows the HapMotion paper (Jung et al., Virtual Reality 28:13, 2024, Section 4) as closely
 as its text can be followed; where the text is silent the value is this project's reading, marked "(ours)" and
-explained in docs/algorithm.md. The ``energy`` preset keeps the paper's pipeline and changes the parts that
-docs/rendering-research.md shows to lose energy or to be jumpy (see docs/metrics.md for the measured evidence).
+explained in docs/algorithm.md. The ``energy`` preset keeps the paper's pipeline and changes the parts that lose
+energy (the linear phantom split: Israr and Poupyrev, "Tactile Brush", CHI 2011, energy model) or are jumpy
+(a symmetric filter on ERM motors); docs/metrics.md has the measured evidence. The ``felt`` preset (the default)
+calibrates the paper's steps for ERM vests (docs/algorithm.md, "The felt preset").
 
 Rates: values given "at 60 Hz" are per-frame constants of the paper's 60 Hz stream; the renderer converts them so
 that the same *time* behaviour holds at any frame rate (exactly the paper's numbers at 60 Hz).
@@ -213,7 +215,8 @@ def alpha_at(alpha_60: float, fps: float) -> float:
     """Per-frame smoothing factor at ``fps`` with the same time constant as ``alpha_60`` at 60 Hz.
 
     A one-pole filter ``y += alpha (x - y)`` has time constant ``-1 / (fps ln(1 - alpha))``
-    (rendering-research.md 2.6); keeping it gives ``1 - (1 - alpha_60) ** (60 / fps)``.
+    (the discrete one-pole filter's step response, derived in docs/algorithm.md); keeping it gives
+    ``1 - (1 - alpha_60) ** (60 / fps)``.
     """
     if alpha_60 >= 1.0:
         return 1.0

@@ -45,7 +45,7 @@ from .colors import SCALE_TOPS, bright_from, page_colors
 from .signals import ENERGY_UNITS, track_motion_energy, triangle_vertices
 
 PANEL_TEXT = {
-    # Vest panels: col 0 is the wearer's left on BOTH panels (docs/bhaptics-protocol.md 4.1), so both are drawn with
+    # Vest panels: col 0 is the wearer's left on BOTH panels (the layout stored in every bHaptics .tact file of type Tactot, e.g. GitHub bhaptics/tact-python CenterX.tact), so both are drawn with
     # the wearer's left on the left: the front as the wearer looks down at their chest, the back as seen from behind.
     "front": dict(title="FRONT (wearer's left | right)", subtitle="",
                   left="wearer's LEFT", right="wearer's RIGHT", top="collar", bottom="belly"),
