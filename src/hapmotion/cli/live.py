@@ -43,6 +43,7 @@ SINK (one or more):
                              options ?actuators=0|1&devices=0|1
   ws-broadcast[://HOST:PORT] WebSocket broadcast of frames, skeleton and dynamic point (default 127.0.0.1:8766)
   record:PATH                the session as a track at stop (.csv .json .npz .tact)
+  nats://HOST:PORT/SHOW      publish the show to an audience (skeleton, music, cues; hapmotion listen)
 \b
 Safety: a source silent for --stall-ms fades every actuator to zero; Ctrl-C, SIGTERM, the end of a replay or an
 error sends turn-off to every sink before exiting. A summary (frames in/out/dropped/late, p50/p99 latency) is

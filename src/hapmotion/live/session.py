@@ -52,8 +52,10 @@ def _registrations(ep: Endpoint) -> dict[str, Any]:
 
 def build_sink(ep: Endpoint, *, dmap: DeviceMap, layout_name: str, fps: float,
                workspace_id: Optional[str] = None, api_key: Optional[str] = None, version: int = 1,
-               meta: Optional[dict[str, Any]] = None, time_scale: float = 1.0) -> Sink:
-    """A sink object for a parsed ``--sink``."""
+               meta: Optional[dict[str, Any]] = None, time_scale: float = 1.0,
+               audience: Optional[dict[str, Any]] = None) -> Sink:
+    """A sink object for a parsed ``--sink``; ``audience`` holds what a ``nats://`` sink describes to its seats
+    (:func:`hapmotion.audience.publisher.publisher_sink`)."""
     if ep.kind == "player":
         return PlayerV2Sink(dmap, host=ep.host, port=ep.port, path=ep.path or "/v2/feedbacks",
                             app_id=ep.option("app_id"), app_name=ep.option("app_name"),
@@ -75,6 +77,10 @@ def build_sink(ep: Endpoint, *, dmap: DeviceMap, layout_name: str, fps: float,
         return BroadcastSink(dmap.actuators, layout_name, host=ep.host, port=ep.port, fps=fps, render_info=meta)
     if ep.kind == "record":
         return RecorderSink(ep.path, dmap.actuators, layout_name, fps=fps, meta=meta, time_scale=time_scale)
+    if ep.kind == "nats":
+        from ..audience.publisher import publisher_sink
+
+        return publisher_sink(ep, fps=fps, **(audience or {}))
     raise UsageError(f"--sink {ep.text!r}: unknown kind {ep.kind}")  # pragma: no cover
 
 
@@ -167,10 +173,12 @@ async def live(
     meta = {**show.describe(mode), "source": src.describe(), "audio": os.fspath(show.audio) if show.audio else None}
     if renderer is not None and getattr(renderer, "params", None) is not None:
         meta["mirror"] = renderer.params.mirror
+    audience = {"show": show, "mode": mode, "layout": layout, "body": body, "music": channel,
+                "stall_ms": stall_ms, "mirror": meta.get("mirror", show.params().mirror)}
     sink_objs = [s if isinstance(s, Sink) else
                  build_sink(parse_sink(s), dmap=dmap, layout_name=layout.name, fps=fps, workspace_id=workspace_id,
                             api_key=api_key, meta=meta,
-                            time_scale=src.speed if isinstance(src, ReplaySource) else 1.0)
+                            time_scale=src.speed if isinstance(src, ReplaySource) else 1.0, audience=audience)
                  for s in sinks]
     engine = LiveEngine(renderer, sink_objs, n_actuators=dmap.n, fps=fps, rate=rate, stall_s=stall_ms / 1000.0,
                         audio=channel, mode=mode, handle_signals=handle_signals, stats_interval=stats_interval,

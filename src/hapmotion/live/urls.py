@@ -13,6 +13,7 @@ Sinks::
     osc://HOST:PORT[/PREFIX][?actuators=0|1&devices=0|1]
     ws-broadcast[://HOST:PORT]     (default 127.0.0.1:8766)
     record:PATH                    .csv .json .npz .tact
+    nats://HOST:PORT/SHOW          publish the show to an audience (hapmotion.audience; default port 4222)
 """
 
 from __future__ import annotations
@@ -25,12 +26,12 @@ from ..errors import UsageError
 
 SOURCE_HELP = "osc://HOST:PORT[/PREFIX] | ws://HOST:PORT | vmc://HOST:PORT | replay:PATH"
 SINK_HELP = ("player[://HOST:PORT] | player-v3[://HOST:PORT] | osc://HOST:PORT[/PREFIX] | "
-             "ws-broadcast[://HOST:PORT] | record:PATH")
+             "ws-broadcast[://HOST:PORT] | record:PATH | nats://HOST:PORT/SHOW")
 
 _DEFAULTS = {
     "osc-in": ("127.0.0.1", 9000), "ws": ("127.0.0.1", 8765), "vmc": ("127.0.0.1", 39539),
     "player": ("127.0.0.1", 15881), "player-v3": ("127.0.0.1", 15882),
-    "osc": ("127.0.0.1", 9001), "ws-broadcast": ("127.0.0.1", 8766),
+    "osc": ("127.0.0.1", 9001), "ws-broadcast": ("127.0.0.1", 8766), "nats": ("127.0.0.1", 4222),
 }
 # Network sources: scheme -> kind (its default address is in _DEFAULTS). Sources listen on loopback unless the
 # SOURCE names another interface. A new network source kind is one line here and one in _DEFAULTS.
@@ -40,6 +41,7 @@ _SINK_QUERY = {
     "player-v3": {"workspace_id", "api_key", "version", "duration"},
     "osc": {"actuators", "devices"},
     "ws-broadcast": set(),
+    "nats": set(),
 }
 
 
@@ -129,7 +131,7 @@ def parse_sink(text: str) -> Endpoint:
     t = text.strip()
     if t.startswith("record:"):
         return _file(t, "record", "--sink")
-    for kind in ("player-v3", "player", "ws-broadcast", "osc"):
+    for kind in ("player-v3", "player", "ws-broadcast", "osc", "nats"):
         if t == kind or t.startswith(kind + "://") or t.startswith(kind + "?"):
             if kind == "osc" and t == "osc":
                 raise UsageError(f"--sink {text!r}: expected osc://HOST:PORT (where to send)")

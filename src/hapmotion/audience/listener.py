@@ -1,0 +1,410 @@
+"""A seat: ``hapmotion listen nats://HOST:4222/SHOW --sink player`` renders a published show locally.
+
+The seat reads the show description from the key-value bucket, builds the same ``Renderer`` and mix as the venue
+with its own :class:`~hapmotion.audience.seat.Seat` settings, and runs the live engine
+(:class:`~hapmotion.live.engine.LiveEngine`) with an :class:`AudienceSource`: frames arrive on core NATS, wait
+until their media time plus the seat's delay (:class:`~hapmotion.audience.clock.MediaClock`), and go to the
+engine, whose stall watchdog fades a silent show (a lost connection, a stopped publisher) to zero and whose stop
+path turns every motor off.
+
+::
+
+    from hapmotion.audience import Seat, run_listen
+    run_listen("nats://127.0.0.1:4222/concert", ["player"], seat=Seat(mirror=False, delay_s=0.120))
+"""
+
+from __future__ import annotations
+
+import asyncio
+import heapq
+import itertools
+import logging
+import time
+from collections import OrderedDict
+from typing import Any, Callable, Optional, Sequence, Union
+from urllib.parse import urlsplit
+
+import numpy as np
+
+from ..errors import InputError, UsageError
+from ..live.devices import DeviceMap
+from ..live.engine import AudioChannel, LiveEngine
+from ..live.frames import SkeletonFrame
+from ..live.sinks.base import Sink
+from ..live.sources import Source
+from ..live.stats import LiveStats
+from .clock import MediaClock
+from .publisher import connect, description_bucket
+from .seat import Seat, SeatSink, SeatStage
+from .wire import ShowDescription, check_show_name, decode_event, decode_frame, parse_description, subject
+
+log = logging.getLogger("hapmotion.live")
+
+LATE_S = 0.05
+"""A frame whose play time passed more than this long ago is stale and dropped: audio-haptic asynchrony becomes
+noticeable around 50 ms (see docs/audience.md)."""
+POLL_S = 0.5
+"""How often a seat asks for the show description while it has none (or a wrong one)."""
+
+SinkSpec = Union[str, Callable[[DeviceMap, float], Sink]]
+
+
+def parse_show_url(text: str) -> tuple[str, str]:
+    """``nats://HOST[:PORT]/SHOW`` -> (``nats://HOST:PORT``, ``SHOW``); UsageError otherwise."""
+    try:
+        parts = urlsplit(text.strip())
+        host, port = parts.hostname, parts.port
+    except ValueError as exc:
+        raise UsageError(f"{text!r}: {exc}") from None
+    if parts.scheme != "nats" or not host:
+        raise UsageError(f"{text!r}: expected nats://HOST:PORT/SHOW")
+    return f"nats://{host}:{port or 4222}", check_show_name(parts.path.strip("/"))
+
+
+class StreamedMusic(AudioChannel):
+    """The music's haptic rows as they arrive with the frames, looked up by media time.
+
+    ``mode`` is the seat's: ``"audio"`` rows go through the output stage of the music alone, ``"multimodal"`` rows
+    are mixed with each rendered motion row; both with the show's ratio, domain and power limit.
+    """
+
+    KEEP = 64  # rows waiting for the engine (it renders the newest submitted frame: a few at most)
+
+    def __init__(self, n: int, fps: float, music: dict[str, Any], mode: str, layout: Any):
+        from ..audio.params import params_for_preset
+        from ..audio.pattern import layout_of
+        from ..show import output_stage
+
+        # the same output stage as hapmotion.show.live_music at the venue: ratio, rule, limit, preset parameters
+        # and the actuators' positions
+        ratio = (float(music["mix_ratio"][0]), float(music["mix_ratio"][1]))
+        rule, limit = music["mix_rule"], music.get("power_limit")
+        params = params_for_preset(music["params_preset"])
+        geometry = layout_of(layout)
+        positions = geometry.positions() if geometry is not None else None
+
+        def mix(motion_row: np.ndarray, audio_row: np.ndarray) -> np.ndarray:
+            return output_stage(motion_row, audio_row, mode="multimodal", ratio=ratio, power_limit=limit, rule=rule,
+                                positions=positions, params=params)
+
+        def alone(audio_row: np.ndarray) -> np.ndarray:
+            return output_stage(np.zeros_like(audio_row), audio_row, mode="audio", ratio=ratio, power_limit=limit,
+                                rule=rule)
+
+        super().__init__(np.zeros((1, n)), fps, mix)
+        self._alone = alone if mode == "audio" else None
+        self._rows: OrderedDict[float, np.ndarray] = OrderedDict()
+
+    def put(self, media_t: float, row: Optional[np.ndarray]) -> None:
+        self._rows[media_t] = row if row is not None else self._zeros
+        while len(self._rows) > self.KEEP:
+            self._rows.popitem(last=False)
+
+    def row(self, t: float) -> np.ndarray:
+        raw = self._rows.get(t, self._zeros)
+        return self._alone(raw) if self._alone is not None else raw
+
+    def mixed(self, motion_row: np.ndarray, t: float) -> np.ndarray:
+        return np.asarray(self._mix(motion_row, self._rows.get(t, self._zeros)), dtype=np.float64)
+
+
+class AudienceSource(Source):
+    """Frames of one show run (one ``epoch``) from NATS, each handed to the engine at its play time.
+
+    Frames of another run make the source fetch the description again: the same rendering facts continue in
+    this session (the clock re-anchors), different ones end it (``changed`` holds the new description) so the
+    seat builds a new session. Malformed frames, frames of an unknown run, stale frames (play time more than
+    :data:`LATE_S` ago) and frames out of order are counted by kind and skipped.
+    """
+
+    def __init__(self, nc: Any, kv: Any, desc: ShowDescription, seat: Seat, *, mode: str,
+                 music: Optional[StreamedMusic], on_cue: Optional[Callable[[dict, float], None]] = None,
+                 max_pending: Optional[int] = None):
+        self.nc, self.kv, self.desc, self.seat, self.mode, self.music = nc, kv, desc, seat, mode, music
+        self.name = f"nats show {desc.show}"
+        self.clock = MediaClock(seat.delay_s)
+        self.on_cue = on_cue
+        self.changed: Optional[ShowDescription] = None
+        self.ended = asyncio.Event()
+        self.max_pending = max_pending or int(desc.fps * (seat.delay_s + 2.0)) + 64
+        self._heap: list[tuple[float, int, Any]] = []
+        self._count = itertools.count()
+        self._arrived = asyncio.Event()
+        self._last_seq: Optional[int] = None
+        self._subs: list[Any] = []
+        self._fetching: Optional[asyncio.Task] = None
+        self._last_fetch = -1e9
+        self._n_music = len(desc.actuators)
+        self.published_at: OrderedDict[float, float] = OrderedDict()  # media time -> publisher wall time
+        # submit time (perf_counter, the OutFrame's ``received``) -> publisher wall time: frame age at the device
+        # when both machines' clocks agree (the benchmark, on one machine)
+        self.wall_of_submit: OrderedDict[float, float] = OrderedDict()
+        self.cues: list[tuple[dict, float]] = []
+
+    def describe(self) -> str:
+        return self.name
+
+    async def start(self, engine: LiveEngine) -> None:
+        await super().start(engine)
+        show = self.desc.show
+        limits = {"pending_msgs_limit": 4 * self.max_pending, "pending_bytes_limit": 8 << 20}
+        self._subs = [await self.nc.subscribe(subject(show, "frame"), cb=self._on_frame, **limits),
+                      await self.nc.subscribe(subject(show, "cue"), cb=self._on_cue),
+                      await self.nc.subscribe(subject(show, "end"), cb=self._on_end)]
+
+    async def run(self) -> None:
+        while not self.ended.is_set():
+            if not self._heap:
+                await self._wait_arrival(None)
+                continue
+            due = self._heap[0][0]
+            wait = due - time.perf_counter()
+            if wait > 0.0005:
+                await self._wait_arrival(wait)
+                continue
+            _, _, wf = heapq.heappop(self._heap)
+            now = time.perf_counter()
+            if now - due > LATE_S:
+                self.engine.faults.add("stale", f"frame at media time {wf.media_t:.3f} s would play "
+                                                f"{(now - due) * 1e3:.0f} ms after its time; dropped")
+                self.engine.stats.late += 1
+                self.engine.stats.frames_in += 1
+                continue
+            self._submit(wf, now)
+
+    async def _wait_arrival(self, timeout: Optional[float]) -> None:
+        self._arrived.clear()
+        try:
+            await asyncio.wait_for(self._arrived.wait(), timeout)
+        except asyncio.TimeoutError:
+            pass
+
+    def _submit(self, wf: Any, now: float) -> None:
+        if self.music is not None:
+            self.music.put(wf.media_t, wf.music)
+        positions = wf.skeleton if self.mode != "audio" else np.zeros((0, 3))
+        self.wall_of_submit[now] = wf.wall_t
+        if len(self.wall_of_submit) > 256:
+            self.wall_of_submit.popitem(last=False)
+        self.engine.submit(SkeletonFrame(positions, None, None, now, show_t=wf.media_t))
+
+    # ------------------------------------------------------------------ NATS callbacks
+    async def _on_frame(self, msg: Any) -> None:
+        arrival = time.perf_counter()
+        faults = self.engine.faults
+        try:
+            wf = decode_frame(msg.data, self._n_music)
+        except ValueError as exc:
+            faults.add("malformed", f"frame: {exc}")
+            return
+        if wf.epoch != self.desc.epoch:
+            faults.add("other_run", f"frames of publisher run {wf.epoch}, not {self.desc.epoch}: fetching the "
+                                    f"show description again")
+            self._refetch()
+            return
+        if self._last_seq is not None and wf.seq <= self._last_seq:
+            faults.add("late", f"frame seq={wf.seq} arrived after seq={self._last_seq}")
+            self.engine.stats.late += 1
+            return
+        self._last_seq = wf.seq
+        if self.mode != "audio" and wf.skeleton is None:
+            faults.add("no_skeleton", "a frame without a skeleton in a show rendered from motion")
+            return
+        if self.mode != "motion" and wf.music is None:
+            faults.add("no_music", "a frame without the music's row; its music is silent")
+        self.published_at[wf.media_t] = wf.wall_t
+        if len(self.published_at) > self.max_pending:
+            self.published_at.popitem(last=False)
+        due = self.clock.due(wf.media_t, arrival)
+        if len(self._heap) >= self.max_pending:
+            heapq.heappop(self._heap)
+            faults.add("overflow", f"more than {self.max_pending} frames waiting; the oldest is dropped")
+        heapq.heappush(self._heap, (due, next(self._count), wf))
+        self._arrived.set()
+
+    async def _on_cue(self, msg: Any) -> None:
+        try:
+            event = decode_event(msg.data)
+        except ValueError as exc:
+            self.engine.faults.add("malformed", f"cue: {exc}")
+            return
+        if event["epoch"] != self.desc.epoch:
+            return
+        due = self.clock.due(float(event["t"]), time.perf_counter())
+        self.cues.append((event, due))
+        if self.on_cue is not None:
+            self.on_cue(event, due)
+
+    async def _on_end(self, msg: Any) -> None:
+        try:
+            event = decode_event(msg.data)
+        except ValueError as exc:
+            self.engine.faults.add("malformed", f"end: {exc}")
+            return
+        if event["epoch"] == self.desc.epoch:
+            log.info("%s: the publisher stopped; the vest fades out and the seat waits for the show", self.name)
+
+    # ------------------------------------------------------------------ another run
+    def _refetch(self) -> None:
+        now = time.perf_counter()
+        if (self._fetching is not None and not self._fetching.done()) or now - self._last_fetch < POLL_S:
+            return
+        self._last_fetch = now
+        self._fetching = asyncio.ensure_future(self._fetch())
+
+    async def _fetch(self) -> None:
+        desc, problem = await fetch_description(self.kv, self.desc.show)
+        if desc is None or desc.epoch == self.desc.epoch:
+            if problem:
+                self.engine.faults.add("description", problem)
+            return
+        if desc.rendering_facts() == self.desc.rendering_facts():
+            log.info("%s: publisher run %d follows run %d; same show settings, playing on", self.name,
+                     desc.epoch, self.desc.epoch)
+            self.desc = desc
+            self._last_seq = None
+            self.clock.reset()
+        else:
+            log.info("%s: the show description changed (run %d); rebuilding the seat", self.name, desc.epoch)
+            self.changed = desc
+            self.ended.set()
+            self._arrived.set()
+
+    async def close(self) -> None:
+        if self._fetching is not None:
+            self._fetching.cancel()
+        for sub in self._subs:
+            try:
+                await sub.unsubscribe()
+            except Exception:  # the connection may be gone: nothing to release then
+                pass
+        self._subs = []
+
+
+async def fetch_description(kv: Any, show: str) -> tuple[Optional[ShowDescription], str]:
+    """The show's description, or (None, what is wrong): missing, unreadable, or not a description."""
+    from nats.js.errors import KeyNotFoundError
+
+    try:
+        entry = await kv.get(show)
+    except KeyNotFoundError:
+        return None, f"no show description for {show!r} yet (is the show published?)"
+    except Exception as exc:
+        return None, f"cannot read the show description ({exc.__class__.__name__}: {exc})"
+    try:
+        return parse_description(entry.value or b"", show), ""
+    except InputError as exc:
+        return None, str(exc)
+
+
+def seat_parts(desc: ShowDescription, seat: Seat) -> dict[str, Any]:
+    """What a seat session is built from: renderer, layout, mode, music; InputError when this machine cannot
+    render the described show."""
+    from ..body.model import BodyModel
+    from ..show import Show
+
+    src = f"show description {desc.show}"
+    mode = seat.mode or desc.mode
+    if desc.mode == "audio" and mode != "audio":
+        raise InputError(src, "render.mode", f"the show carries the music alone; the seat's mode {mode} needs motion")
+    if desc.mode == "motion" and mode != "motion":
+        raise InputError(src, "render.mode", f"the show carries no music; the seat's mode {mode} needs it")
+    try:
+        show = Show(method=seat.method or desc.render["method"], preset=seat.preset or desc.render["preset"],
+                    overrides=desc.render.get("overrides", {}),
+                    mirror=desc.render["mirror"] if seat.mirror is None else seat.mirror)
+        layout = show.load_layout()
+    except UsageError as exc:
+        raise InputError(src, "render", str(exc)) from None
+    if tuple(layout.actuators) != desc.actuators:
+        raise InputError(src, "actuators", f"the show's {len(desc.actuators)} actuators ({desc.layout}) are not "
+                                           f"this seat's layout {layout.name}")
+    renderer = None if mode == "audio" else show.renderer(desc.fps, body=BodyModel(**desc.body))
+    music = None if mode == "motion" else StreamedMusic(len(desc.actuators), desc.fps, desc.music or {}, mode,
+                                                        layout)
+    comfort = seat.comfort()
+    limiter = None if comfort.is_neutral else comfort_limiter(comfort, desc.fps, len(desc.actuators))
+    return {"renderer": renderer, "layout": layout, "mode": mode, "music": music, "comfort": limiter}
+
+
+def comfort_limiter(comfort: Any, fps: float, n: int) -> Any:
+    """The engine's last stage for the seat's gain and comfort limits (:class:`hapmotion.comfort.Limiter`)."""
+    from ..comfort import Limiter
+
+    return Limiter(comfort, n, fps)
+
+
+async def _first_description(kv: Any, show: str, skip_epoch: Optional[int] = None) -> ShowDescription:
+    """Wait until a usable description is there (a different run than ``skip_epoch``); each problem logged once."""
+    said: set[str] = set()
+    while True:
+        desc, problem = await fetch_description(kv, show)
+        if desc is not None and desc.epoch != skip_epoch:
+            return desc
+        if problem and problem not in said:
+            said.add(problem)
+            log.warning("seat: %s; waiting", problem)
+        await asyncio.sleep(POLL_S)
+
+
+async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(), handle_signals: bool = True,
+                 stats_interval: Optional[float] = None, on_stats: Optional[Callable[[str], None]] = None,
+                 on_ready: Optional[Callable[[LiveEngine], None]] = None,
+                 on_cue: Optional[Callable[[dict, float], None]] = None,
+                 sessions: Optional[list] = None) -> LiveStats:
+    """Render the show at ``nats://HOST:PORT/SHOW`` for one seat until a stop signal; return the statistics of the
+    last session (a new session starts when the show's settings change).
+
+    ``sinks`` are SINK strings of ``hapmotion live`` (``player``, ``player-v3``, ``osc://``, ``record:``, ...) or
+    callables ``(device_map, fps) -> Sink``; each is wrapped in the seat's :class:`SeatSink`. ``sessions``
+    (a list) receives each session's ``(engine, source)``.
+    """
+    from ..live.session import build_sink
+    from ..live.urls import parse_sink
+
+    server, show = parse_show_url(url)
+    if not sinks:
+        raise UsageError("at least one --sink is required")
+    parsed = [parse_sink(s) if isinstance(s, str) else s for s in sinks]
+    from ..layout import load_layout
+
+    SeatStage(seat, load_layout())  # a zone this seat's vest does not have is a usage error before connecting
+    try:
+        nc = await connect(server, name=f"hapmotion seat {show}",
+                           on_state=lambda state: log.info("seat: NATS %s", state))
+    except Exception as exc:
+        raise UsageError(f"{url}: cannot reach the NATS server ({exc.__class__.__name__}: {exc})") from None
+    stats = LiveStats.__new__(LiveStats)
+    try:
+        kv = await description_bucket(nc)
+        desc = await _first_description(kv, show)
+        while True:
+            try:
+                parts = seat_parts(desc, seat)
+            except InputError as exc:
+                log.warning("seat: %s; waiting for another description", exc)
+                desc = await _first_description(kv, show, skip_epoch=desc.epoch)
+                continue
+            layout, mode = parts["layout"], parts["mode"]
+            dmap = DeviceMap.from_layout(layout)
+            stage = SeatStage(seat, layout)
+            sink_objs = [SeatSink(build_sink(p, dmap=dmap, layout_name=layout.name, fps=desc.fps)
+                                  if not callable(p) else p(dmap, desc.fps), stage) for p in parsed]
+            source = AudienceSource(nc, kv, desc, seat, mode=mode, music=parts["music"], on_cue=on_cue)
+            engine = LiveEngine(parts["renderer"], sink_objs, n_actuators=dmap.n, fps=desc.fps,
+                                stall_s=desc.stall_ms / 1000.0, audio=parts["music"], mode=mode,
+                                handle_signals=handle_signals, stats_interval=stats_interval, on_stats=on_stats,
+                                on_ready=on_ready, source_name=source.describe(), comfort=parts["comfort"])
+            if sessions is not None:
+                sessions.append((engine, source))
+            stats = await engine.run(source)
+            if source.changed is None:
+                return stats
+            desc = source.changed
+    finally:
+        await nc.close()
+
+
+def run_listen(*args: Any, **kwargs: Any) -> LiveStats:
+    """Blocking :func:`listen` (runs its own event loop)."""
+    return asyncio.run(listen(*args, **kwargs))

@@ -1,0 +1,258 @@
+"""The audience wire format on NATS (sans-I/O): subjects, the binary frame, cue and end events, and the retained
+show description. docs/audience.md describes it for other implementations.
+
+Subjects for a show ``SHOW`` (letters, digits, ``-`` and ``_``)::
+
+    hapmotion.show.SHOW.frame     one binary frame per rendered motion frame (core NATS, at most once)
+    hapmotion.show.SHOW.cue       a cue fired at a media time (JSON)
+    hapmotion.show.SHOW.end       the publisher stopped (JSON)
+    KV bucket hapmotion_shows, key SHOW: the show description (JSON), the last value kept for late joiners
+
+**Frame** (little-endian; 32-byte header then float32 payload)::
+
+    offset size  field
+     0     2     magic  b"HM"
+     2     1     version (1)
+     3     1     kind (1 = frame)
+     4     2     n_joints: 0 (music only) or 32
+     6     2     n_music: 0 (no music) or N, the description's actuator count
+     8     4     epoch: the publisher run (u32, the description's ``epoch``)
+    12     4     seq: frame number within the run (u32)
+    16     8     media_t: show (media) time, seconds (float64)
+    24     8     wall_t: the publisher's ``time.time()`` when it sent the frame (float64, for frame-age figures)
+    32     12*n_joints   skeleton (n_joints, 3) float32 metres, +Y up, canonical joint order; NaN = not tracked
+    ...    4*n_music     the music's haptic row (N,) float32, 0..100, in the description's actuator order
+
+float32 because a frame goes to every seat 60 times a second: 384 bytes of skeleton instead of 768 for float64
+(and a fraction of JSON's size), while float32 resolves about 1 micrometre at 10 m, a thousand times finer than
+a body tracker's millimetre noise; the music's intensities (0..100) reach the Player as whole percents.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import struct
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+import numpy as np
+
+from ..errors import InputError, UsageError
+from ..joints import JOINTS
+
+PROTOCOL = "hapmotion-audience"
+VERSION = 1
+MAGIC = b"HM"
+KIND_FRAME = 1
+HEADER = struct.Struct("<2sBBHHIIdd")
+"""magic, version, kind, n_joints, n_music, epoch, seq, media_t, wall_t (32 bytes)."""
+N_JOINTS = len(JOINTS)
+BUCKET = "hapmotion_shows"
+"""JetStream key-value bucket holding one description per show (history 1: only the last value is kept)."""
+MAX_MEDIA_T = 1e7
+"""Media times beyond about 115 days are refused as corrupt."""
+MAX_DESCRIPTION_BYTES = 64 * 1024
+SHOW_NAME = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
+
+
+def check_show_name(name: str) -> str:
+    """A show name usable as a NATS subject token and a key-value key; UsageError otherwise."""
+    if not isinstance(name, str) or not SHOW_NAME.match(name):
+        raise UsageError(f"show name {name!r}: expected 1 to 64 letters, digits, '-' or '_' (nats://HOST:PORT/SHOW)")
+    return name
+
+
+def subject(show: str, what: str) -> str:
+    """``hapmotion.show.SHOW.frame`` / ``.cue`` / ``.end``."""
+    return f"hapmotion.show.{show}.{what}"
+
+
+# ---------------------------------------------------------------------------------------------------- frames
+@dataclass(slots=True)
+class WireFrame:
+    """One decoded frame: ``skeleton`` ``(32, 3)`` float64 (NaN = not tracked) or None (music only), ``music``
+    ``(N,)`` float64 0..100 or None."""
+
+    epoch: int
+    seq: int
+    media_t: float
+    wall_t: float
+    skeleton: Optional[np.ndarray]
+    music: Optional[np.ndarray]
+
+
+def encode_frame(epoch: int, seq: int, media_t: float, wall_t: float, skeleton: Optional[np.ndarray],
+                 music: Optional[np.ndarray]) -> bytes:
+    """The bytes of one frame (module docstring); ``skeleton`` ``(32, 3)`` metres or None, ``music`` ``(N,)``
+    or None."""
+    n_j = 0 if skeleton is None else N_JOINTS
+    n_m = 0 if music is None else int(np.asarray(music).shape[0])
+    parts = [HEADER.pack(MAGIC, VERSION, KIND_FRAME, n_j, n_m, epoch & 0xFFFFFFFF, seq & 0xFFFFFFFF,
+                         float(media_t), float(wall_t))]
+    if skeleton is not None:
+        parts.append(np.ascontiguousarray(skeleton, dtype="<f4").reshape(N_JOINTS * 3).tobytes())
+    if music is not None:
+        parts.append(np.ascontiguousarray(music, dtype="<f4").tobytes())
+    return b"".join(parts)
+
+
+def decode_frame(data: bytes, n_music: int) -> WireFrame:
+    """Parse one frame; ``n_music`` is the description's actuator count. ValueError naming the field on anything
+    that does not fit (callers count it as ``malformed``)."""
+    if len(data) < HEADER.size:
+        raise ValueError(f"{len(data)} bytes, shorter than the {HEADER.size}-byte header")
+    magic, version, kind, n_j, n_m, epoch, seq, media_t, wall_t = HEADER.unpack_from(data)
+    if magic != MAGIC:
+        raise ValueError(f"magic {magic!r}, expected {MAGIC!r}")
+    if version != VERSION or kind != KIND_FRAME:
+        raise ValueError(f"version {version} kind {kind}, expected version {VERSION} kind {KIND_FRAME}")
+    if n_j not in (0, N_JOINTS):
+        raise ValueError(f"n_joints {n_j}, expected 0 or {N_JOINTS}")
+    if n_m not in (0, n_music):
+        raise ValueError(f"n_music {n_m}, expected 0 or {n_music} (the description's actuators)")
+    if len(data) != HEADER.size + 4 * (3 * n_j + n_m):
+        raise ValueError(f"{len(data)} bytes, expected {HEADER.size + 4 * (3 * n_j + n_m)} for {n_j} joints and "
+                         f"{n_m} music values")
+    if not (math.isfinite(media_t) and abs(media_t) <= MAX_MEDIA_T):
+        raise ValueError(f"media_t {media_t}, expected finite seconds")
+    values = np.frombuffer(data, dtype="<f4", offset=HEADER.size).astype(np.float64)
+    skeleton = values[:3 * n_j].reshape(n_j, 3) if n_j else None
+    music = values[3 * n_j:] if n_m else None
+    if music is not None and not (np.isfinite(music).all() and music.min() >= 0.0 and music.max() <= 100.0):
+        raise ValueError("music values outside 0..100")
+    return WireFrame(int(epoch), int(seq), float(media_t), float(wall_t), skeleton, music)
+
+
+# ---------------------------------------------------------------------------------------------------- events
+def encode_event(**fields: Any) -> bytes:
+    """A cue or end event: a small JSON object (``epoch``, ``t`` and, for cues, ``name``, ``gain``)."""
+    return json.dumps(fields, separators=(",", ":")).encode()
+
+
+def decode_event(data: bytes) -> dict[str, Any]:
+    """ValueError when the event is not a JSON object with a whole ``epoch`` and a finite ``t``."""
+    if len(data) > 4096:
+        raise ValueError(f"event of {len(data)} bytes, at most 4096")
+    obj = json.loads(data)
+    if not isinstance(obj, dict):
+        raise ValueError("event is not a JSON object")
+    epoch, t = obj.get("epoch"), obj.get("t")
+    if not isinstance(epoch, int) or isinstance(epoch, bool):
+        raise ValueError("event without a whole epoch")
+    if not isinstance(t, (int, float)) or isinstance(t, bool) or not math.isfinite(t):
+        raise ValueError("event without a finite media time t")
+    return obj
+
+
+# ---------------------------------------------------------------------------------------------------- description
+@dataclass(frozen=True)
+class ShowDescription:
+    """What a seat needs to render a show the way the venue does, and to read its frames.
+
+    ``render`` holds ``method``, ``preset``, ``mirror``, ``mode`` and ``overrides``; ``body`` the performer's
+    :class:`~hapmotion.body.model.BodyModel` fields; ``music`` ``None`` (no song) or ``mix_ratio``,
+    ``mix_rule``, ``params_preset`` (whose audio parameters the mix uses), ``power_limit`` (``sum (I/100)^2`` over all actuators, or None), ``audio_offset_s`` and
+    ``audio_params`` (the analysis parameters, for the record).
+    """
+
+    show: str
+    epoch: int
+    fps: float
+    layout: str
+    actuators: tuple[str, ...]
+    render: dict[str, Any]
+    body: dict[str, float]
+    music: Optional[dict[str, Any]] = None
+    stall_ms: float = 250.0
+    extra: dict[str, Any] = field(default_factory=dict, compare=False)
+
+    def to_json(self) -> bytes:
+        obj = {"protocol": PROTOCOL, "version": VERSION, "show": self.show, "epoch": self.epoch, "fps": self.fps,
+               "layout": self.layout, "actuators": list(self.actuators), "joints": list(JOINTS),
+               "render": self.render, "body": self.body, "music": self.music, "stall_ms": self.stall_ms,
+               "encoding": {"frame": "header <2sBBHHIIdd (magic HM, version, kind, n_joints, n_music, epoch, "
+                                     "seq, media_t, wall_t) + float32 LE skeleton (n_joints x 3) + music (n_music)",
+                            "subjects": {k: subject(self.show, k) for k in ("frame", "cue", "end")}},
+               **self.extra}
+        return json.dumps(obj, separators=(",", ":")).encode()
+
+    def rendering_facts(self) -> tuple:
+        """Everything but the run (``epoch``): two runs with equal facts can share one seat session."""
+        return (self.fps, self.layout, self.actuators, json.dumps(self.render, sort_keys=True),
+                json.dumps(self.body, sort_keys=True), json.dumps(self.music, sort_keys=True), self.stall_ms)
+
+    @property
+    def mode(self) -> str:
+        return self.render["mode"]
+
+
+def parse_description(data: bytes, show: str) -> ShowDescription:
+    """Check and read a description; InputError naming the field that does not fit."""
+    src = f"show description {show}"
+    if len(data) > MAX_DESCRIPTION_BYTES:
+        raise InputError(src, None, f"{len(data)} bytes, at most {MAX_DESCRIPTION_BYTES}")
+    try:
+        obj = json.loads(data)
+    except (ValueError, RecursionError) as exc:
+        raise InputError(src, None, f"expected JSON ({exc.__class__.__name__})") from None
+    if not isinstance(obj, dict):
+        raise InputError(src, None, "expected a JSON object")
+    if obj.get("protocol") != PROTOCOL or obj.get("version") != VERSION:
+        raise InputError(src, "protocol", f"expected {PROTOCOL!r} version {VERSION}, found "
+                                          f"{obj.get('protocol')!r} version {obj.get('version')!r}")
+    if obj.get("show") != show:
+        raise InputError(src, "show", f"expected {show!r}, found {obj.get('show')!r}")
+
+    def need(key: str, kind: Any, what: str) -> Any:
+        value = obj.get(key)
+        if not isinstance(value, kind) or isinstance(value, bool):
+            raise InputError(src, key, f"expected {what}, found {value!r}"[:200])
+        return value
+
+    epoch = need("epoch", int, "a whole number")
+    fps = float(need("fps", (int, float), "frames per second"))
+    if not (math.isfinite(fps) and 1.0 <= fps <= 1000.0):
+        raise InputError(src, "fps", f"expected 1..1000, found {fps}")
+    actuators = need("actuators", list, "a list of actuator ids")
+    if not actuators or not all(isinstance(a, str) for a in actuators) or len(actuators) > 4096:
+        raise InputError(src, "actuators", "expected 1 to 4096 actuator ids")
+    if obj.get("joints") != list(JOINTS):
+        raise InputError(src, "joints", "expected the 32 canonical joints in order")
+    render = need("render", dict, "an object")
+    for key, kind in (("method", str), ("preset", str), ("mirror", bool), ("mode", str)):
+        if not isinstance(render.get(key), kind):
+            raise InputError(src, f"render.{key}", f"expected a {kind.__name__}, found {render.get(key)!r}")
+    if render["mode"] not in ("motion", "audio", "multimodal"):
+        raise InputError(src, "render.mode", f"expected motion, audio or multimodal, found {render['mode']!r}")
+    if not isinstance(render.get("overrides", {}), dict):
+        raise InputError(src, "render.overrides", "expected an object")
+    body = need("body", dict, "an object")
+    for key in ("shoulder_width", "shoulder_height", "pelvis_height"):
+        v = body.get(key)
+        if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) or abs(v) > 5:
+            raise InputError(src, f"body.{key}", f"expected metres, found {v!r}")
+    music = obj.get("music")
+    if render["mode"] != "motion":
+        if not isinstance(music, dict):
+            raise InputError(src, "music", f"mode {render['mode']} needs the music's mix settings")
+        ratio = music.get("mix_ratio")
+        if not (isinstance(ratio, list) and len(ratio) == 2 and all(isinstance(r, (int, float)) for r in ratio)):
+            raise InputError(src, "music.mix_ratio", "expected [audio, motion] weights")
+        from ..audio.params import MIX_RULES
+        from ..render.params import PRESETS
+
+        if music.get("mix_rule") not in MIX_RULES:
+            raise InputError(src, "music.mix_rule", f"expected one of {', '.join(MIX_RULES)}")
+        if music.get("params_preset") not in PRESETS:
+            raise InputError(src, "music.params_preset", f"expected one of {', '.join(PRESETS)}")
+        limit = music.get("power_limit")
+        if limit is not None and not (isinstance(limit, (int, float)) and limit > 0):
+            raise InputError(src, "music.power_limit", "expected a positive number or null")
+    stall_ms = float(obj.get("stall_ms", 250.0)) if isinstance(obj.get("stall_ms", 250.0), (int, float)) else -1
+    if not (0 < stall_ms <= 60_000):
+        raise InputError(src, "stall_ms", "expected 1..60000 ms")
+    return ShowDescription(show, epoch, fps, str(obj.get("layout", "")), tuple(actuators), render,
+                           {k: float(body[k]) for k in ("shoulder_width", "shoulder_height", "pelvis_height")},
+                           music if render["mode"] != "motion" else None, stall_ms)

@@ -1,0 +1,75 @@
+"""``hapmotion listen``: one audience seat renders a show published on NATS, with its own settings
+(docs/audience.md)."""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import click
+
+HELP = """Render a show published with `hapmotion live ... --sink nats://HOST:PORT/SHOW` on this seat's vest.
+
+\b
+SHOW_URL: nats://HOST:PORT/SHOW (default port 4222).
+The seat reads the show's description (renderer, music mix, frame rate, the performer's body) from the server,
+renders the performer's skeleton with the same Renderer, mixes the music's channel, then applies its own
+settings. Each frame plays --delay after its media time arrived live, so the vest matches a video/audio stream
+running that far behind the venue.
+\b
+SINK (one or more): the sinks of `hapmotion live` (player, player-v3, osc://, ws-broadcast, record:PATH).
+\b
+Safety: a silent show (lost connection, publisher stopped) fades every actuator to zero within the show's stall
+time; Ctrl-C or SIGTERM turns every motor off before exiting.
+\b
+Examples:
+  hapmotion listen nats://venue.example:4222/concert --sink player
+  hapmotion listen nats://127.0.0.1:4222/concert --sink player --no-mirror --gain 0.7 --zone-off VestBack --delay 180
+"""
+
+
+@click.command("listen", help=HELP)
+@click.argument("show_url", metavar="SHOW_URL")
+@click.option("--sink", "sinks", metavar="SINK", multiple=True, required=True,
+              help="Where the seat's frames go; repeat for several sinks at once.")
+@click.option("--delay", "delay_ms", type=float, default=0.0, show_default=True,
+              help="Milliseconds this seat's video/audio stream runs behind the venue (0..60000).")
+@click.option("--mirror/--no-mirror", default=None, help="Mirror the performer left/right [default: the show's].")
+@click.option("--method", type=click.Choice(["mst", "baseline"]), default=None,
+              help="Motion renderer [default: the show's].")
+@click.option("--preset", default=None, help="Renderer preset (paper, energy) [default: the show's].")
+@click.option("--mode", type=click.Choice(["motion", "multimodal", "audio"]), default=None,
+              help="Channels felt: the motion, the music, or both mixed [default: the show's].")
+@click.option("--gain", type=float, default=1.0, show_default=True, help="Scales every intensity (0..5).")
+@click.option("--max-level", "max_intensity", type=float, default=100.0, show_default=True,
+              help="Comfort ceiling per motor, percent 0..100.")
+@click.option("--max-duty", type=float, default=1.0, show_default=True,
+              help="Fraction of full drive each motor may average (comfort limit, 0..1).")
+@click.option("--zone-off", "zones_off", metavar="ZONE[,ZONE]", multiple=True,
+              help="Devices (VestBack, ForearmL, ...) or actuators (VestFront_5) that stay off.")
+@click.option("--stats", "show_stats", is_flag=True, help="Print frame counts and latency every second.")
+@click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
+def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Optional[bool], method: Optional[str],
+            preset: Optional[str], mode: Optional[str], gain: float, max_intensity: float, max_duty: float,
+            zones_off: tuple[str, ...], show_stats: bool, quiet: bool) -> None:
+    from ..audience import Seat, run_listen
+    from ..audience.listener import parse_show_url
+    from .live import _finish, _setup_logging, _split
+
+    _setup_logging(quiet)
+    parse_show_url(show_url)  # a usage error before anything connects
+    seat = Seat(method=method, preset=preset, mirror=mirror, mode=mode, zones_off=_split(zones_off), gain=gain,
+                max_intensity=max_intensity, max_duty=max_duty, delay_s=delay_ms / 1000.0)
+    sessions: list = []
+
+    def ready(engine) -> None:
+        names = ", ".join(s.describe() for s in engine.sinks)
+        click.echo(f"listen: {show_url} (delay {delay_ms:g} ms); sinks: {names}; Ctrl-C stops", err=True)
+
+    try:
+        run_listen(show_url, list(sinks), seat=seat, on_ready=ready, sessions=sessions,
+                   stats_interval=1.0 if show_stats else None,
+                   on_stats=lambda text: click.echo(f"listen: {text}", err=True))
+    finally:
+        lost = _finish(sessions[-1][0] if sessions else None, None)
+    if lost:
+        raise click.exceptions.Exit(1)

@@ -1,0 +1,246 @@
+"""Seats when things go wrong, over loopback with a real nats-server: a late join, a missing or wrong show
+description, a publisher restart (same and changed settings), clock jumps, a slow Player, a lost server; cues;
+the `hapmotion listen` command."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from support.live_fakes import BVH, FakePlayerV2, start_session, wait_for
+from test_audience import DelayedReplay, Tap, reference_rows, start_seat, stop
+
+import hapmotion
+from hapmotion.audience import Seat, listen
+from hapmotion.audience.publisher import NatsPublisherSink, connect, describe_show, description_bucket
+from hapmotion.audience.server import LocalNatsServer
+from hapmotion.audience.wire import encode_frame, subject
+from hapmotion.layout import load_layout
+from hapmotion.live import ReplaySource
+from hapmotion.show import Show
+
+
+@pytest.fixture(scope="module")
+def nats_server():
+    with LocalNatsServer() as server:
+        yield server
+
+
+@pytest.fixture(scope="module")
+def motion():
+    return hapmotion.load_motion(BVH).slice(0, 90)
+
+
+class ManualShow:
+    """A hand-driven publisher: stores a description, sends frames with chosen media times."""
+
+    def __init__(self, server, show: str, motion, epoch: int = 11, method: str = "mst"):
+        self.server, self.show, self.motion = server, show, motion
+        self.desc = describe_show(show, show=Show(method=method), mode="motion", fps=motion.fps,
+                                  layout=load_layout(), body=None, stall_ms=250.0, mirror=True, epoch=epoch)
+
+    async def __aenter__(self):
+        self.nc = await connect(self.server.url, name="manual")
+        self.kv = await description_bucket(self.nc)
+        return self
+
+    async def __aexit__(self, *exc):
+        await self.nc.close()
+
+    async def describe(self, raw: bytes | None = None):
+        await self.kv.put(self.show, raw if raw is not None else self.desc.to_json())
+
+    async def play(self, media_ts, start_seq: int = 0, frames=None):
+        """Frame k of the recording at media time media_ts[k], one frame interval apart."""
+        interval = 1 / self.motion.fps
+        t0 = time.perf_counter()
+        for k, m in enumerate(media_ts):
+            pos = self.motion.positions[k if frames is None else frames[k]]
+            await self.nc.publish(subject(self.show, "frame"),
+                                  encode_frame(self.desc.epoch, start_seq + k, m, time.time(), pos, None))
+            await asyncio.sleep(max(0.0, t0 + (k + 1) * interval - time.perf_counter()))
+        await self.nc.flush()
+
+
+def test_late_join_gets_the_description_and_renders_from_its_first_frame(nats_server, motion):
+    async def scenario():
+        tap = Tap()
+        show_task, _ = await start_session(ReplaySource(motion), [f"{nats_server.url}/late"])
+        await asyncio.sleep(1.0)  # a third of the show has gone by
+        task, sessions = await start_seat(f"{nats_server.url}/late", [lambda d, f: tap], Seat(delay_s=0.1))
+        await show_task
+        await asyncio.sleep(0.4)
+        await stop(task)
+        return tap
+
+    tap = asyncio.run(asyncio.wait_for(scenario(), 40))
+    got = tap.rendered()
+    ks = [round(f.t * motion.fps) for _, f in got]
+    assert 20 <= ks[0] and ks == sorted(set(ks)) and len(ks) >= 0.9 * (motion.n_frames - ks[0])
+    # a seat that joins starts fresh: its rows are the rendering of the recording from its first frame on
+    np.testing.assert_allclose(np.array([f.row for _, f in got]), reference_rows(motion, Seat(), "motion", ks),
+                               atol=1e-9)
+    assert tap.frames[-1][1].kind == "off"
+
+
+def test_missing_then_wrong_then_right_description(nats_server, motion, caplog):
+    caplog.set_level(logging.INFO, logger="hapmotion.live")
+
+    async def scenario():
+        tap = Tap()
+        task = asyncio.create_task(listen(f"{nats_server.url}/wrong", [lambda d, f: tap], handle_signals=False))
+        async with ManualShow(nats_server, "wrong", motion) as show:
+            await asyncio.sleep(0.8)  # no description yet: the seat waits
+            await show.play([k / motion.fps for k in range(10)])
+            await show.describe(b'{"protocol": "something else"}')
+            await asyncio.sleep(0.8)
+            await show.play([k / motion.fps for k in range(10)])
+            missing_or_wrong = list(tap.frames)
+            await show.describe()
+            await asyncio.sleep(0.8)
+            await show.play([k / motion.fps for k in range(30)])
+            await asyncio.sleep(0.4)
+        await stop(task)
+        return tap, missing_or_wrong
+
+    tap, before = asyncio.run(asyncio.wait_for(scenario(), 40))
+    assert before == []  # nothing plays without a usable description
+    assert len(tap.rendered()) >= 25
+    text = caplog.text
+    assert "no show description for 'wrong' yet" in text and "protocol" in text
+
+
+def test_publisher_restart_same_settings_plays_on_changed_settings_rebuild(nats_server, motion):
+    async def scenario():
+        tap = Tap()
+        async with ManualShow(nats_server, "restart", motion, epoch=1) as first:
+            await first.describe()
+            task, sessions = await start_seat(f"{nats_server.url}/restart", [lambda d, f: tap], Seat())
+            await first.play([k / motion.fps for k in range(20)])
+        n_first = len(tap.rendered())
+        async with ManualShow(nats_server, "restart", motion, epoch=2) as second:  # restarted, same show
+            await second.describe()
+            await second.play([k / motion.fps for k in range(40)])
+        n_second = len(tap.rendered()) - n_first
+        one_session = len(sessions)
+        async with ManualShow(nats_server, "restart", motion, epoch=3, method="baseline") as third:
+            await third.describe()
+            await third.play([k / motion.fps for k in range(40)])
+            await asyncio.sleep(0.3)
+        await stop(task)
+        return tap, n_first, n_second, one_session, sessions
+
+    tap, n_first, n_second, one_session, sessions = asyncio.run(asyncio.wait_for(scenario(), 40))
+    assert n_first >= 18 and n_second >= 30 and one_session == 1
+    # different settings: a new seat session with the new renderer, which rendered frames too
+    assert len(sessions) == 2 and sessions[1][0].renderer.method == "baseline" and sessions[1][0].stats.rendered >= 25
+
+
+def test_clock_jumps_keep_playing_at_the_delay(nats_server, motion):
+    delay = 0.15
+
+    async def scenario():
+        tap = Tap()
+        async with ManualShow(nats_server, "jumps", motion) as show:
+            await show.describe()
+            task, sessions = await start_seat(f"{nats_server.url}/jumps", [lambda d, f: tap], Seat(delay_s=delay))
+            fps = motion.fps
+            # 0..1 s, then back to 0 (a loop), then 600 s ahead (a seek), then a small jitter-size step back
+            media = [k / fps for k in range(30)] + [k / fps for k in range(30)] + [600 + k / fps for k in range(30)]
+            await show.play(media, frames=list(range(30)) * 3)
+            await asyncio.sleep(0.5)
+        await stop(task)
+        return tap, sessions[0][1]
+
+    tap, source = asyncio.run(asyncio.wait_for(scenario(), 40))
+    got = tap.rendered()
+    assert len(got) >= 85 and source.clock.jumps == 2
+    assert source.engine.faults.counts["stale"] == 0
+    ages = [w - source.published_at[f.t] for w, f in got if f.t in source.published_at]
+    assert abs(np.median(ages) - delay) < 0.03
+    assert [f.t for _, f in got][-1] == pytest.approx(600 + 29 / motion.fps)
+
+
+def test_a_slow_player_does_not_hold_up_its_seat_or_the_others(nats_server, motion):
+    async def scenario():
+        slow, fine = await FakePlayerV2(stop_reading_after=5).start(), await FakePlayerV2().start()
+        tap_slow, tap_fine = Tap(), Tap()
+        show_task, _ = await start_session(DelayedReplay(motion, wait=1.2), [f"{nats_server.url}/slow"])
+        a, sa = await start_seat(f"{nats_server.url}/slow", [slow.url(), lambda d, f: tap_slow], Seat(delay_s=0.1))
+        b, sb = await start_seat(f"{nats_server.url}/slow", [fine.url(), lambda d, f: tap_fine],
+                                 Seat(gain=0.5, delay_s=0.1))
+        await show_task
+        await asyncio.sleep(0.5)
+        await stop(a)
+        await stop(b)
+        await slow.stop()
+        await fine.stop()
+        return slow, fine, tap_slow, tap_fine
+
+    slow, fine, tap_slow, tap_fine = asyncio.run(asyncio.wait_for(scenario(), 40))
+    # the seat with the hung Player renders as many frames as the other: its Player sink alone falls behind
+    assert slow.hung and len(tap_slow.rendered()) >= 0.9 * motion.n_frames
+    assert len(tap_fine.rendered()) >= 0.9 * motion.n_frames
+    assert len([1 for _, p, _, _ in fine.frames if p == "VestFront"]) >= motion.n_frames * 0.6
+    assert fine.errors == []
+
+
+def test_lost_server_fades_to_zero_and_the_show_comes_back(motion):
+    async def scenario(server):
+        player, tap = await FakePlayerV2().start(), Tap()
+        async with ManualShow(server, "lost", motion) as show:
+            await show.describe()
+            task, sessions = await start_seat(f"{server.url}/lost", [player.url(), lambda d, f: tap], Seat())
+            await show.play([k / motion.fps for k in range(30)])
+            server.stop()  # the venue's server dies mid-show
+            lost_at = time.perf_counter()
+            await asyncio.sleep(0.6)
+            off_after = [w for w, f in tap.frames if f.kind == "off"]
+            server.start()  # back (memory storage: the description is gone until the publisher stores it again)
+            await wait_for(lambda: show.nc.is_connected and sessions[0][1].nc.is_connected, 10)
+            show.kv = await description_bucket(show.nc)  # as the publisher sink does after a reconnect
+            await show.describe()
+            await show.play([1 + k / motion.fps for k in range(30)], start_seq=30)  # the same run goes on
+            await asyncio.sleep(0.4)
+        await stop(task)
+        await player.stop()
+        return tap, player, off_after, lost_at
+
+    with LocalNatsServer() as server:
+        tap, player, off_after, lost_at = asyncio.run(asyncio.wait_for(scenario(server), 40))
+    kinds = [f.kind for _, f in tap.frames]
+    assert "fade" in kinds and len(off_after) == 1
+    assert player.errors == [] and player.last_values("VestFront") == [0] * 20
+    assert len(tap.rendered()) >= 50  # played again after the server came back
+
+
+def test_publisher_announces_cues_to_the_seat(nats_server, motion):
+    async def scenario():
+        tap, heard = Tap(), []
+        sink = NatsPublisherSink(nats_server.url, describe_show(
+            "cues", show=Show(), mode="motion", fps=30.0, layout=load_layout(), body=None, stall_ms=250.0,
+            mirror=True))
+        await sink.start()
+        task, sessions = await start_seat(f"{nats_server.url}/cues", [lambda d, f: tap], Seat(delay_s=0.05),
+                                          on_cue=lambda event, due: heard.append(event))
+        await sink.publish_cue("pyro", 12.5, gain=1.2)
+        await wait_for(lambda: heard, 5)
+        await sink.shutdown()
+        await stop(task)
+        return heard
+
+    heard = asyncio.run(asyncio.wait_for(scenario(), 20))
+    assert heard[0]["name"] == "pyro" and heard[0]["t"] == 12.5 and heard[0]["gain"] == 1.2
+
+
+def test_listen_command_usage_errors():
+    from hapmotion.cli.listen import command
+
+    r = CliRunner().invoke(command, ["ws://x/show", "--sink", "player"])
+    assert r.exit_code != 0 and "nats://HOST:PORT/SHOW" in str(r.exception or r.output)
+    r = CliRunner().invoke(command, ["nats://127.0.0.1:1/show", "--sink", "player", "--delay", "-5"])
+    assert r.exit_code != 0 and "--delay" in str(r.exception or r.output)
