@@ -42,9 +42,9 @@ def cli() -> None:
 
 
 def _register() -> None:
-    from . import check, demo, evaluate, info, live, play, plot, render, view
+    from . import check, demo, evaluate, info, listen, live, play, plot, render, view
 
-    for module in (render, info, demo, live, play, check, view, plot, evaluate):
+    for module in (render, info, demo, live, listen, play, check, view, plot, evaluate):
         cli.add_command(module.command, module.__name__.rsplit(".", 1)[1])
 
 
