@@ -7,6 +7,11 @@ from typing import Optional
 
 import click
 
+from ..comfort import Comfort
+from ..render.params import METHODS, PRESETS
+from ..show import MODES
+from .show_options import comfort_options
+
 HELP = """Render a show published with `hapmotion live ... --sink nats://HOST:PORT/SHOW` on this seat's vest.
 
 \b
@@ -34,31 +39,28 @@ Examples:
 @click.option("--delay", "delay_ms", type=float, default=0.0, show_default=True,
               help="Milliseconds this seat's video/audio stream runs behind the venue (0..60000).")
 @click.option("--mirror/--no-mirror", default=None, help="Mirror the performer left/right [default: the show's].")
-@click.option("--method", type=click.Choice(["mst", "baseline"]), default=None,
+@click.option("--method", type=click.Choice(METHODS), default=None,
               help="Motion renderer [default: the show's].")
-@click.option("--preset", default=None, help="Renderer preset (paper, energy) [default: the show's].")
-@click.option("--mode", type=click.Choice(["motion", "multimodal", "audio"]), default=None,
+@click.option("--preset", type=click.Choice(tuple(PRESETS)), default=None,
+              help="Renderer preset [default: the show's].")
+@click.option("--mode", type=click.Choice(MODES), default=None,
               help="Channels felt: the motion, the music, or both mixed [default: the show's].")
-@click.option("--gain", type=float, default=1.0, show_default=True, help="Scales every intensity (0..5).")
-@click.option("--max-level", "max_intensity", type=float, default=100.0, show_default=True,
-              help="Comfort ceiling per motor, percent 0..100.")
-@click.option("--max-duty", type=float, default=1.0, show_default=True,
-              help="Fraction of full drive each motor may average (comfort limit, 0..1).")
 @click.option("--zone-off", "zones_off", metavar="ZONE[,ZONE]", multiple=True,
               help="Devices (VestBack, ForearmL, ...) or actuators (VestFront_5) that stay off.")
 @click.option("--stats", "show_stats", is_flag=True, help="Print frame counts and latency every second.")
 @click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
+@comfort_options
 def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Optional[bool], method: Optional[str],
-            preset: Optional[str], mode: Optional[str], gain: float, max_intensity: float, max_duty: float,
-            zones_off: tuple[str, ...], show_stats: bool, quiet: bool) -> None:
+            preset: Optional[str], mode: Optional[str], zones_off: tuple[str, ...], show_stats: bool, quiet: bool,
+            comfort: Comfort) -> None:
     from ..audience import Seat, run_listen
     from ..audience.listener import parse_show_url
     from .live import _finish, _setup_logging, _split
 
     _setup_logging(quiet)
     parse_show_url(show_url)  # a usage error before anything connects
-    seat = Seat(method=method, preset=preset, mirror=mirror, mode=mode, zones_off=_split(zones_off), gain=gain,
-                max_intensity=max_intensity, max_duty=max_duty, delay_s=delay_ms / 1000.0)
+    seat = Seat(method=method, preset=preset, mirror=mirror, mode=mode, zones_off=_split(zones_off),
+                gain=comfort.gain, max_intensity=comfort.max_level, max_duty=comfort.max_duty, delay_s=delay_ms / 1000.0)
     sessions: list = []
 
     def ready(engine) -> None:
