@@ -28,7 +28,7 @@ class Seat:
 
     ``method``, ``preset``, ``mirror``, ``mode`` ``None`` keep the show's. ``zones_off`` names devices
     (``VestBack``) or single actuators (``VestFront_5``) that stay off. ``gain``, ``max_intensity`` (percent) and
-    ``max_duty`` are the seat's :class:`hapmotion.comfort.Comfort`. ``delay_s`` is how far the seat's
+    ``max_duty`` (over ``duty_window_s``) are the seat's :class:`hapmotion.comfort.Comfort`. ``delay_s`` is how far the seat's
     video/audio stream runs behind the venue: each frame plays ``delay_s`` after its media time arrived live.
     """
 
@@ -40,6 +40,7 @@ class Seat:
     gain: float = 1.0
     max_intensity: float = 100.0
     max_duty: float = 1.0
+    duty_window_s: float = 10.0
     delay_s: float = 0.0
 
     def __post_init__(self) -> None:
@@ -54,7 +55,8 @@ class Seat:
         """The seat's gain and comfort limits as a :class:`hapmotion.comfort.Comfort`."""
         from ..comfort import Comfort
 
-        return Comfort(gain=self.gain, max_level=self.max_intensity, max_duty=self.max_duty)
+        return Comfort(gain=self.gain, max_level=self.max_intensity, max_duty=self.max_duty,
+                       window_s=self.duty_window_s)
 
 
 def zone_mask(zones_off: Sequence[str], actuators: Sequence[str], devices: Sequence[str]) -> np.ndarray:

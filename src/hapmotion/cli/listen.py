@@ -60,7 +60,8 @@ def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Opti
     _setup_logging(quiet)
     parse_show_url(show_url)  # a usage error before anything connects
     seat = Seat(method=method, preset=preset, mirror=mirror, mode=mode, zones_off=_split(zones_off),
-                gain=comfort.gain, max_intensity=comfort.max_level, max_duty=comfort.max_duty, delay_s=delay_ms / 1000.0)
+                gain=comfort.gain, max_intensity=comfort.max_level, max_duty=comfort.max_duty,
+                duty_window_s=comfort.window_s, delay_s=delay_ms / 1000.0)
     sessions: list = []
 
     def ready(engine) -> None:
