@@ -6,21 +6,15 @@ restart, clock jumps, a slow Player."""
 from __future__ import annotations
 
 import asyncio
-import time
 
 import numpy as np
 import pytest
-from support.live_fakes import BVH, FakePlayerV2, is_tick_max_sequence, start_session, wait_for
+from support.live_fakes import BVH, FakePlayerV2, is_tick_max_sequence, start_session
 
 import hapmotion
-from hapmotion.audience import Seat, listen
-from hapmotion.audience.publisher import connect, describe_show, description_bucket
+from hapmotion.audience import Seat
 from hapmotion.audience.server import LocalNatsServer
-from hapmotion.audience.wire import encode_frame, subject
-from hapmotion.body.model import BodyModel
-from hapmotion.live import ReplaySource
-from hapmotion.live.sinks import Sink
-from hapmotion.show import Show
+from support.audience import DelayedReplay, Tap, reference_rows, start_seat, stop
 
 SONG = BVH.parents[1] / "audio" / "vibe_ace.ogg"
 
@@ -34,75 +28,6 @@ def nats_server():
 @pytest.fixture(scope="module")
 def motion():
     return hapmotion.load_motion(BVH).slice(0, 100)
-
-
-class Tap(Sink):
-    """Keeps every frame a seat's engine emits (after the seat's stage), with its local wall time."""
-
-    def __init__(self, *_: object):
-        super().__init__("tap")
-        self.frames: list = []
-
-    def offer(self, frame) -> None:
-        self.frames.append((time.time(), frame))
-
-    async def run(self) -> None:
-        await asyncio.Event().wait()
-
-    def rendered(self) -> list:
-        return [(w, f) for w, f in self.frames if f.kind == "frame"]
-
-
-class DelayedReplay(ReplaySource):
-    """A replay that starts ``wait`` seconds after the session (and its description) is up."""
-
-    def __init__(self, motion, wait: float = 1.5, **kwargs):
-        super().__init__(motion, **kwargs)
-        self.wait = wait
-
-    async def run(self) -> None:
-        await asyncio.sleep(self.wait)
-        await super().run()
-
-
-def reference_rows(motion, seat: Seat, mode: str, ks) -> np.ndarray:
-    """Frames ``ks`` of the recording (in that order, the frames a seat rendered) rendered here with the seat's
-    settings, from the numbers on the wire (float32 skeleton and music), through the venue's own live mix
-    (``live_music``), the seat's comfort stage and zones: with every frame from the first on, the rendering of the
-    recording itself."""
-    from hapmotion.audience.seat import SeatStage
-    from hapmotion.comfort import Limiter
-    from hapmotion.show import live_music
-
-    show = Show(method=seat.method or "mst", preset=seat.preset or Show().preset, mirror=seat.mirror)
-    layout = show.load_layout()
-    wire = motion.positions.astype(np.float32).astype(np.float64)
-    rows, _ = show.renderer(motion.fps, body=BodyModel.from_motion(motion)).run(wire[ks])
-    if mode == "multimodal":
-        music = live_music(Show(audio=SONG), "multimodal", fps=motion.fps, layout=layout, actuators=layout.actuators)
-        audio = music.rows.astype(np.float32).astype(np.float64)
-        rows = np.array([music.mix_row(r, audio[k]) for r, k in zip(rows, ks)])
-    rows = np.clip(rows, 0.0, 100.0)
-    if not seat.comfort().is_neutral:
-        rows = Limiter(seat.comfort(), len(layout.actuators), motion.fps).run(rows)
-    stage = SeatStage(seat, layout)
-    return np.array([stage(r) for r in rows])
-
-
-async def start_seat(url: str, sinks: list, seat: Seat, **kwargs):
-    sessions: list = []
-    task = asyncio.create_task(listen(url, sinks, seat=seat, handle_signals=False, sessions=sessions, **kwargs))
-    await wait_for(lambda: sessions or task.done(), 10)
-    if task.done():
-        task.result()
-    engine, source = sessions[0]
-    await wait_for(lambda: source._subs or task.done(), 10)
-    return task, sessions
-
-
-async def stop(task) -> None:
-    task.cancel()
-    await asyncio.gather(task, return_exceptions=True)
 
 
 def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_server, motion):

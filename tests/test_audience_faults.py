@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from support.live_fakes import BVH, FakePlayerV2, start_session, wait_for
-from test_audience import DelayedReplay, Tap, reference_rows, start_seat, stop
+from support.audience import DelayedReplay, Tap, reference_rows, start_seat, stop
 
 import hapmotion
 from hapmotion.audience import Seat, listen

@@ -3,7 +3,6 @@ song with a known beat grid and on the bundled music."""
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pytest

@@ -8,37 +8,16 @@ import time
 
 import numpy as np
 import pytest
+from support.live_fakes import ScriptSource
 from support.synthetic import pose, waving
 
 import hapmotion
 from hapmotion.audio import mix
 from hapmotion.live import AudioChannel, ClockSource, LiveEngine, SkeletonFrame, Source
 from hapmotion.live.sinks import Sink
-from support.data import AUDIO
 
 N = 52
 FPS = 60.0
-
-
-class ScriptSource(Source):
-    """Submits ``frames`` every ``interval`` seconds (seqs optional), then ends or waits (``then="wait"``)."""
-
-    name = "script"
-
-    def __init__(self, frames, interval=1 / FPS, seqs=None, then="end", before=None):
-        self.frames, self.interval, self.seqs, self.then, self.before = frames, interval, seqs, then, before
-        self.done = asyncio.Event()
-
-    async def run(self):
-        for k, pos in enumerate(self.frames):
-            if self.before:
-                self.before(k)
-            seq = self.seqs[k] if self.seqs is not None else k
-            self.engine.submit(SkeletonFrame(np.array(pos, dtype=float), seq, None, time.perf_counter()))
-            await asyncio.sleep(self.interval)
-        self.done.set()
-        if self.then == "wait":
-            await asyncio.Event().wait()
 
 
 class MemorySink(Sink):

@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 import pytest
-from support.live_fakes import BVH
+from support.live_fakes import BVH, ScriptSource
 from support.synthetic import waving
 
 import hapmotion
@@ -27,7 +27,9 @@ from hapmotion.live import LiveEngine
 from hapmotion.live.sinks import RecorderSink
 from hapmotion.live.sinks.journal import PAGE, TrackJournal, format_rows, journal_path, recover_journal
 from hapmotion.track_files import load_track
-from test_live_engine import FPS, N, ScriptSource
+
+FPS = 60.0
+N = 52
 
 HAPMOTION = [sys.executable, "-c", "import sys; from hapmotion.cli import main; sys.exit(main(sys.argv[1:]))"]
 ACTUATORS = hapmotion.load_layout().actuators

@@ -16,9 +16,9 @@ import pytest
 
 import hapmotion
 from hapmotion.errors import InputError, UsageError
-from hapmotion.joints import JOINT_INDEX, JOINTS, PARENTS
+from hapmotion.joints import JOINT_INDEX, JOINTS
 from support.data import MOTION
-from support.motion_files import PERIOD_US, assert_input_error, kinect_document, to_camera_mm
+from support.motion_files import assert_input_error, kinect_document
 
 CLIP = MOTION / "dataset-1_punch_normal_001.bvh"
 def write(tmp_path, doc, name="body.json") -> Path:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import hapmotion
-from hapmotion.errors import InputError, UsageError
+from hapmotion.errors import UsageError
 from hapmotion.motion_files.options import MAX_FPS, MIN_FPS
 from support.data import MOTION
 from support.motion_files import assert_input_error

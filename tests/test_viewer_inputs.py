@@ -7,7 +7,6 @@ is rendered as motion, never read as intensities.
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 

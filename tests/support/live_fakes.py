@@ -30,6 +30,9 @@ import pytest
 from pythonosc.osc_packet import OscPacket
 from pythonosc.udp_client import SimpleUDPClient
 from websockets.asyncio.server import serve
+
+from hapmotion.live.frames import SkeletonFrame
+from hapmotion.live.sources import Source
 from websockets.exceptions import ConnectionClosed
 from .data import MOTION
 
@@ -451,3 +454,24 @@ def is_tick_max_sequence(sent: list, emitted: list) -> bool:
         return fits(0, 0)
     finally:
         sys.setrecursionlimit(limit)
+
+
+class ScriptSource(Source):
+    """Submits ``frames`` every ``interval`` seconds (seqs optional), then ends or waits (``then="wait"``)."""
+
+    name = "script"
+
+    def __init__(self, frames, interval=1 / 60.0, seqs=None, then="end", before=None):
+        self.frames, self.interval, self.seqs, self.then, self.before = frames, interval, seqs, then, before
+        self.done = asyncio.Event()
+
+    async def run(self):
+        for k, pos in enumerate(self.frames):
+            if self.before:
+                self.before(k)
+            seq = self.seqs[k] if self.seqs is not None else k
+            self.engine.submit(SkeletonFrame(np.array(pos, dtype=float), seq, None, time.perf_counter()))
+            await asyncio.sleep(self.interval)
+        self.done.set()
+        if self.then == "wait":
+            await asyncio.Event().wait()

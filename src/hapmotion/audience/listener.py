@@ -225,7 +225,7 @@ class AudienceSource(Source):
     async def _on_cue(self, msg: Any) -> None:
         try:
             event = decode_event(msg.data)
-        except ValueError as exc:
+        except (ValueError, RecursionError) as exc:  # RecursionError: absurd nesting in a crafted event
             self.engine.faults.add("malformed", f"cue: {exc}")
             return
         if event["epoch"] != self.desc.epoch:
@@ -238,7 +238,7 @@ class AudienceSource(Source):
     async def _on_end(self, msg: Any) -> None:
         try:
             event = decode_event(msg.data)
-        except ValueError as exc:
+        except (ValueError, RecursionError) as exc:  # RecursionError: absurd nesting in a crafted event
             self.engine.faults.add("malformed", f"end: {exc}")
             return
         if event["epoch"] == self.desc.epoch:
@@ -347,18 +347,39 @@ async def _first_description(kv: Any, show: str, skip_epoch: Optional[int] = Non
         await asyncio.sleep(POLL_S)
 
 
+def _cue_player(seat_cues: Any, on_cue: Optional[Callable[[dict, float], None]]):
+    """The seat's handler of an announced cue: fire it on the seat's cue layer when the seat's playback reaches the
+    media time it was fired at (its due time, :class:`~hapmotion.audience.clock.MediaClock`), then tell ``on_cue``."""
+    from ..cues import MAX_GAIN
+
+    def handle(event: dict, due: float) -> None:
+        gain = event.get("gain", 1.0)
+        usable = (isinstance(gain, (int, float)) and not isinstance(gain, bool) and 0.0 <= gain <= MAX_GAIN
+                  and seat_cues is not None and seat_cues.cue_list.by_name(str(event.get("name"))) is not None)
+        if usable:
+            delay = max(0.0, due - time.perf_counter())
+            asyncio.get_running_loop().call_later(delay, seat_cues.fire, str(event["name"]), float(gain))
+        if on_cue is not None:
+            on_cue(event, due)
+
+    return handle if (seat_cues is not None or on_cue is not None) else None
+
+
 async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(), handle_signals: bool = True,
                  stats_interval: Optional[float] = None, on_stats: Optional[Callable[[str], None]] = None,
                  on_ready: Optional[Callable[[LiveEngine], None]] = None,
-                 on_cue: Optional[Callable[[dict, float], None]] = None,
+                 on_cue: Optional[Callable[[dict, float], None]] = None, cues: Any = None,
                  sessions: Optional[list] = None) -> LiveStats:
     """Render the show at ``nats://HOST:PORT/SHOW`` for one seat until a stop signal; return the statistics of the
     last session (a new session starts when the show's settings change).
 
     ``sinks`` are SINK strings of ``hapmotion live`` (``player``, ``player-v3``, ``osc://``, ``record:``, ...) or
     callables ``(device_map, fps) -> Sink``; each is wrapped in the seat's :class:`SeatSink`. ``sessions``
-    (a list) receives each session's ``(engine, source)``.
+    (a list) receives each session's ``(engine, source)``. ``cues`` is the show's cue list (a file or a
+    :class:`~hapmotion.cues.CueList`, the seat's copy of the venue's): its timed cues play at their media time, and
+    the cues the venue fires are played when the seat reaches the media time they were fired at.
     """
+    from ..live.cue_trigger import live_cues
     from ..live.session import build_sink
     from ..live.urls import parse_sink
 
@@ -390,11 +411,14 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(), ha
             stage = SeatStage(seat, layout)
             sink_objs = [SeatSink(build_sink(p, dmap=dmap, layout_name=layout.name, fps=desc.fps)
                                   if not callable(p) else p(dmap, desc.fps), stage) for p in parsed]
-            source = AudienceSource(nc, kv, desc, seat, mode=mode, music=parts["music"], on_cue=on_cue)
+            seat_cues = live_cues(cues, fps=desc.fps, layout=layout, actuators=dmap.actuators)
+            source = AudienceSource(nc, kv, desc, seat, mode=mode, music=parts["music"],
+                                    on_cue=_cue_player(seat_cues, on_cue))
             engine = LiveEngine(parts["renderer"], sink_objs, n_actuators=dmap.n, fps=desc.fps,
                                 stall_s=desc.stall_ms / 1000.0, audio=parts["music"], mode=mode,
                                 handle_signals=handle_signals, stats_interval=stats_interval, on_stats=on_stats,
-                                on_ready=on_ready, source_name=source.describe(), comfort=parts["comfort"])
+                                on_ready=on_ready, source_name=source.describe(), comfort=parts["comfort"],
+                                cues=seat_cues)
             if sessions is not None:
                 sessions.append((engine, source))
             stats = await engine.run(source)

@@ -90,7 +90,7 @@ class SeatSink(Sink):
     """Wraps one of the seat's sinks: every row goes through the :class:`SeatStage` first; everything else (its
     task, statistics, turn-off) is the wrapped sink's."""
 
-    def __init__(self, inner: Sink, stage: SeatStage):  # noqa: super().__init__ not called: the inner sink's state
+    def __init__(self, inner: Sink, stage: SeatStage):  # no super().__init__(): the state is the inner sink's
         self.inner = inner
         self.stage = stage
 

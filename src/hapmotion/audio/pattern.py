@@ -15,7 +15,7 @@ name (``global``, ``bands``); see :func:`region_weights` and docs/audio.md.
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 

@@ -10,7 +10,7 @@ import click
 from ..comfort import Comfort
 from ..render.params import METHODS, PRESETS
 from ..show import MODES
-from .show_options import comfort_options
+from .show_options import comfort_options, cues_option, read_cues
 
 HELP = """Render a show published with `hapmotion live ... --sink nats://HOST:PORT/SHOW` on this seat's vest.
 
@@ -49,10 +49,11 @@ Examples:
               help="Devices (VestBack, ForearmL, ...) or actuators (VestFront_5) that stay off.")
 @click.option("--stats", "show_stats", is_flag=True, help="Print frame counts and latency every second.")
 @click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
+@cues_option
 @comfort_options
 def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Optional[bool], method: Optional[str],
             preset: Optional[str], mode: Optional[str], zones_off: tuple[str, ...], show_stats: bool, quiet: bool,
-            comfort: Comfort) -> None:
+            cues: Optional[str], comfort: Comfort) -> None:
     from ..audience import Seat, run_listen
     from ..audience.listener import parse_show_url
     from .live import _finish, _setup_logging, _split
@@ -69,7 +70,7 @@ def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Opti
         click.echo(f"listen: {show_url} (delay {delay_ms:g} ms); sinks: {names}; Ctrl-C stops", err=True)
 
     try:
-        run_listen(show_url, list(sinks), seat=seat, on_ready=ready, sessions=sessions,
+        run_listen(show_url, list(sinks), seat=seat, on_ready=ready, sessions=sessions, cues=read_cues(cues),
                    stats_interval=1.0 if show_stats else None,
                    on_stats=lambda text: click.echo(f"listen: {text}", err=True))
     finally:

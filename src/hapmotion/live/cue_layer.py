@@ -76,6 +76,8 @@ class LiveCues:
         self._active: list[tuple[int, np.ndarray]] = []  # (start frame, energy rows)
         self._last_frame: Optional[int] = None
         self.fired = 0
+        self.on_fire: list = []
+        """Callables ``(name, gain, show_t)`` told of every fired cue (an audience publisher announces it)."""
         self.dropped = 0
         self.trigger: Any = None
         """The :class:`~hapmotion.live.cue_trigger.CueTrigger` that fires these cues by OSC, if any."""
@@ -106,6 +108,9 @@ class LiveCues:
             raise ValueError(f"gain {gain} outside 0..{MAX_GAIN:g}")
         self._pending.append((time.perf_counter(), self._energy[self._prepare(cue, gain)]))
         self.fired += 1
+        start_t = 0.0 if self._last_frame is None else (self._last_frame + 1) / self.fps
+        for listener in self.on_fire:
+            listener(name, cue.gain if gain is None else gain, start_t)
         return True
 
     def energy_at(self, t: float) -> np.ndarray:

@@ -180,11 +180,29 @@ async def live(
                             api_key=api_key, meta=meta,
                             time_scale=src.speed if isinstance(src, ReplaySource) else 1.0, audience=audience)
                  for s in sinks]
+    if cue_layer is not None:
+        _announce_cues(cue_layer, sink_objs)
     engine = LiveEngine(renderer, sink_objs, n_actuators=dmap.n, fps=fps, rate=rate, stall_s=stall_ms / 1000.0,
                         audio=channel, mode=mode, handle_signals=handle_signals, stats_interval=stats_interval,
                         on_ready=on_ready, source_name=src.describe(), cues=cue_layer, comfort=limiter,
                         **engine_options)
     return await run_with_cues(engine, src)
+
+
+def _announce_cues(cue_layer: Any, sinks: Sequence[Sink]) -> None:
+    """Fired cues are announced to an audience by every NATS publisher among ``sinks`` (each seat plays them at
+    their show time plus its own delay)."""
+    publishers = [s for s in sinks if hasattr(s, "publish_cue")]
+    pending: set = set()  # the announcing tasks, kept until done
+
+    def announce(name: str, gain: float, show_t: float) -> None:
+        for sink in publishers:
+            task = asyncio.get_running_loop().create_task(sink.publish_cue(name, show_t, gain))
+            pending.add(task)
+            task.add_done_callback(pending.discard)
+
+    if publishers:
+        cue_layer.on_fire.append(announce)
 
 
 def run_live(*args: Any, **kwargs: Any) -> LiveStats:

@@ -51,7 +51,7 @@ from __future__ import annotations
 import logging
 import math
 from collections import Counter
-from typing import Any, Optional
+from typing import Optional
 
 import numpy as np
 from pythonosc.osc_bundle import OscBundle

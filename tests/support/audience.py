@@ -1,0 +1,89 @@
+"""Helpers of the audience tests: a seat's tap sink, a paced replay that starts later, the reference rendering of
+a seat's settings, and starting/stopping a seat (no tests here)."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+
+import numpy as np
+
+from hapmotion.audience import Seat, listen
+from hapmotion.body.model import BodyModel
+from hapmotion.live import ReplaySource
+from hapmotion.live.sinks import Sink
+from hapmotion.show import Show
+
+from .data import AUDIO
+from .live_fakes import wait_for
+
+SONG = AUDIO / "vibe_ace.ogg"
+
+
+class Tap(Sink):
+    """Keeps every frame a seat's engine emits (after the seat's stage), with its local wall time."""
+
+    def __init__(self, *_: object):
+        super().__init__("tap")
+        self.frames: list = []
+
+    def offer(self, frame) -> None:
+        self.frames.append((time.time(), frame))
+
+    async def run(self) -> None:
+        await asyncio.Event().wait()
+
+    def rendered(self) -> list:
+        return [(w, f) for w, f in self.frames if f.kind == "frame"]
+
+
+class DelayedReplay(ReplaySource):
+    """A replay that starts ``wait`` seconds after the session (and its description) is up."""
+
+    def __init__(self, motion, wait: float = 1.5, **kwargs):
+        super().__init__(motion, **kwargs)
+        self.wait = wait
+
+    async def run(self) -> None:
+        await asyncio.sleep(self.wait)
+        await super().run()
+
+
+def reference_rows(motion, seat: Seat, mode: str, ks) -> np.ndarray:
+    """Frames ``ks`` of the recording (in that order, the frames a seat rendered) rendered here with the seat's
+    settings, from the numbers on the wire (float32 skeleton and music), through the venue's own live mix
+    (``live_music``), the seat's comfort stage and zones: with every frame from the first on, the rendering of the
+    recording itself."""
+    from hapmotion.audience.seat import SeatStage
+    from hapmotion.comfort import Limiter
+    from hapmotion.show import live_music
+
+    show = Show(method=seat.method or "mst", preset=seat.preset or Show().preset, mirror=seat.mirror)
+    layout = show.load_layout()
+    wire = motion.positions.astype(np.float32).astype(np.float64)
+    rows, _ = show.renderer(motion.fps, body=BodyModel.from_motion(motion)).run(wire[ks])
+    if mode == "multimodal":
+        music = live_music(Show(audio=SONG), "multimodal", fps=motion.fps, layout=layout, actuators=layout.actuators)
+        audio = music.rows.astype(np.float32).astype(np.float64)
+        rows = np.array([music.mix_row(r, audio[k]) for r, k in zip(rows, ks)])
+    rows = np.clip(rows, 0.0, 100.0)
+    if not seat.comfort().is_neutral:
+        rows = Limiter(seat.comfort(), len(layout.actuators), motion.fps).run(rows)
+    stage = SeatStage(seat, layout)
+    return np.array([stage(r) for r in rows])
+
+
+async def start_seat(url: str, sinks: list, seat: Seat, **kwargs):
+    sessions: list = []
+    task = asyncio.create_task(listen(url, sinks, seat=seat, handle_signals=False, sessions=sessions, **kwargs))
+    await wait_for(lambda: sessions or task.done(), 10)
+    if task.done():
+        task.result()
+    engine, source = sessions[0]
+    await wait_for(lambda: source._subs or task.done(), 10)
+    return task, sessions
+
+
+async def stop(task) -> None:
+    task.cancel()
+    await asyncio.gather(task, return_exceptions=True)
