@@ -9,7 +9,7 @@ import asyncio
 
 import numpy as np
 import pytest
-from support.live_fakes import BVH, FakePlayerV2, is_tick_max_sequence, start_session
+from support.live_fakes import BVH, FakePlayerV2, is_tick_max_sequence, start_session, wait_for
 
 import hapmotion
 from hapmotion.audience import Seat
@@ -91,3 +91,42 @@ def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_se
     # the seats' settings made a difference
     assert not np.allclose(taps["venue"].rendered()[-1][1].row, taps["home"].rendered()[-1][1].row)
 
+
+
+def test_a_cue_fired_at_the_venue_plays_on_the_seat_at_its_media_time(nats_server, motion, tmp_path):
+    """The venue fires a named cue mid-show; the seat, holding the same cue list, layers it from the frame whose
+    media time it was fired at (the seat's delay shifts it with everything else), by the layering rule."""
+    from hapmotion.cues import load_cues
+    from support.data import TACT
+
+    cue_file = tmp_path / "show.cues"
+    cue_file.write_text(f"86400 {TACT / 'FeedbackFiles_Vest_Heartbeat.tact'} name=heart\n")   # fired only
+    cues = load_cues(cue_file)
+    fired: list = []
+
+    async def scenario():
+        tap = Tap()
+        task = None
+        show_task, engine = await start_session(DelayedReplay(motion), [f"{nats_server.url}/cued"], cues=cues)
+        try:
+            task, _ = await start_seat(f"{nats_server.url}/cued", [lambda d, f: tap], Seat(delay_s=0.1), cues=cues)
+            engine.cues.on_fire.append(lambda name, gain, t: fired.append(t))
+            await wait_for(lambda: engine.stats.rendered >= 30, 20)     # mid-show
+            assert engine.cues.fire("heart")
+            await show_task
+            await asyncio.sleep(0.5)
+        finally:
+            if task is not None:
+                await stop(task)
+        return tap
+
+    tap = asyncio.run(asyncio.wait_for(scenario(), 60))
+    got = tap.rendered()
+    ks = np.array([round(f.t * motion.fps) for _, f in got])
+    rows = np.array([f.row for _, f in got])
+    plain = reference_rows(motion, Seat(), "motion", list(ks))
+    start = round(fired[0] * motion.fps)
+    before, after = ks < start, (ks >= start) & (ks < start + 10)
+    np.testing.assert_allclose(rows[before], plain[before], atol=1e-9)          # nothing before the cue
+    assert after.any() and (rows[after] - plain[after]).sum() > 50               # the heartbeat from its frame on
+    assert (rows[after] >= plain[after] - 1e-9).all()
