@@ -67,9 +67,9 @@ class Source:
         return ""
 
 
-# ---------------------------------------------------------------------------------------------------- OSC
-class _OscProtocol(asyncio.DatagramProtocol):
-    def __init__(self, source: "OscSource"):
+# ---------------------------------------------------------------------------------------------------- UDP
+class _UdpProtocol(asyncio.DatagramProtocol):
+    def __init__(self, source: "UdpSource"):
         self.source = source
 
     def datagram_received(self, data: bytes, addr: Any) -> None:
@@ -79,8 +79,9 @@ class _OscProtocol(asyncio.DatagramProtocol):
         self.source.engine.faults.add("socket", f"UDP receive error ({exc})")
 
 
-class OscSource(Source):
-    """Listens for OSC skeleton messages on UDP ``host:port`` (port 0: any free port).
+class UdpSource(Source):
+    """A source listening on UDP ``host:port`` (port 0: any free port) for one wire format: who may send, each
+    sender's budget, then the format's sans-I/O decoder (:meth:`make_decoder`, a ``feed(data, now) -> frames``).
 
     Parameters
     ----------
@@ -90,36 +91,47 @@ class OscSource(Source):
     allow_senders:
         Sender addresses allowed to send (empty: any); datagrams from others are counted as ``sender_refused``.
     max_senders, sender_rate:
-        At most ``max_senders`` sender addresses at once, each within ``sender_rate`` messages per second (default
-        :data:`~hapmotion.live.access.OSC_MESSAGE_BUDGET` x the frame rate); the excess is counted as ``flood`` or
-        ``too_many_senders`` and never decoded.
+        At most ``max_senders`` sender addresses at once, each within ``sender_rate`` datagrams per second (default:
+        :meth:`default_budget`); the excess is counted as ``flood`` or ``too_many_senders`` and never decoded.
     """
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 9000, prefix: str = OSC_PREFIX, *,
-                 allow_senders: Optional[SenderAllowList] = None, max_senders: int = MAX_SENDERS,
-                 sender_rate: Optional[float] = None):
-        self.host, self.port, self.prefix = host, port, prefix
-        self.name = f"osc://{host}:{port}"
+    scheme = "udp"
+
+    def __init__(self, host: str, port: int, *, allow_senders: Optional[SenderAllowList] = None,
+                 max_senders: int = MAX_SENDERS, sender_rate: Optional[float] = None):
+        self.host, self.port = host, port
+        self.name = f"{self.scheme}://{host}:{port}"
         self.allow_senders = allow_senders or SenderAllowList()
         self.max_senders = max_senders
         self.sender_rate = sender_rate
+        self.decoder: Any = None
         self._transport: Optional[asyncio.DatagramTransport] = None
-        self._decoder: Optional[OscSkeletonDecoder] = None
         self._budgets: Optional[SenderBudgets] = None
+
+    def make_decoder(self, engine: "LiveEngine") -> Any:  # pragma: no cover (every wire format has its own)
+        raise NotImplementedError
+
+    def default_budget(self, rate: float) -> tuple[float, float]:
+        """Messages per second and burst allowed per sender at a stream of ``rate`` frames/s."""
+        return OSC_MESSAGE_BUDGET * rate, burst_for(rate)
+
+    def wants(self, data: bytes) -> bool:
+        """Whether a datagram is worth its budget (a format may drop what its decoder never reads, unparsed)."""
+        return True
 
     async def start(self, engine: "LiveEngine") -> None:
         await super().start(engine)
-        self._decoder = OscSkeletonDecoder(engine.faults, self.prefix)
-        rate = self.sender_rate or OSC_MESSAGE_BUDGET * engine.rate
-        self._budgets = SenderBudgets(rate, burst_for(engine.rate), self.max_senders)
+        self.decoder = self.make_decoder(engine)
+        rate, burst = self.default_budget(engine.rate)
+        self._budgets = SenderBudgets(self.sender_rate or rate, burst, self.max_senders)
         loop = asyncio.get_running_loop()
         try:
-            self._transport, _ = await loop.create_datagram_endpoint(lambda: _OscProtocol(self),
+            self._transport, _ = await loop.create_datagram_endpoint(lambda: _UdpProtocol(self),
                                                                       local_addr=(self.host, self.port))
         except OSError as exc:
             raise UsageError(f"--source {self.name}: cannot listen ({exc.strerror or exc})") from None
         self.port = self._transport.get_extra_info("sockname")[1]
-        self.name = f"osc://{self.host}:{self.port}"
+        self.name = f"{self.scheme}://{self.host}:{self.port}"
         if not is_loopback(self.host) and not self.allow_senders:
             log.warning("%s: reachable from %s and any sender is accepted; --allow-sender limits who may send",
                         self.name, reach(self.host))
@@ -134,17 +146,34 @@ class OscSource(Source):
         if not self.allow_senders.allows(sender):
             engine.faults.add("sender_refused", f"a datagram from {sender}, which is not in --allow-sender")
             return
-        assert self._budgets is not None and self._decoder is not None
+        if not self.wants(data):
+            return
+        assert self._budgets is not None and self.decoder is not None
         refused = self._budgets.admit(sender, now)
         if refused is not None:
             _count_refusal(engine, refused, sender, self._budgets)
             return
-        for frame in self._decoder.feed(data, now):
+        for frame in self.decoder.feed(data, now):
             engine.submit(frame)
 
     async def close(self) -> None:
         if self._transport is not None:
             self._transport.close()
+
+
+# ---------------------------------------------------------------------------------------------------- OSC
+class OscSource(UdpSource):
+    """Listens for OSC skeleton messages (docs/live.md) on UDP ``host:port``; see :class:`UdpSource` for who may send
+    (each sender's default budget: :data:`~hapmotion.live.access.OSC_MESSAGE_BUDGET` x the frame rate)."""
+
+    scheme = "osc"
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 9000, prefix: str = OSC_PREFIX, **access: Any):
+        super().__init__(host, port, **access)
+        self.prefix = prefix
+
+    def make_decoder(self, engine: "LiveEngine") -> OscSkeletonDecoder:
+        return OscSkeletonDecoder(engine.faults, self.prefix)
 
 
 def _count_refusal(engine: "LiveEngine", kind: str, sender: str, budgets: SenderBudgets) -> None:
