@@ -13,7 +13,8 @@ from ..comfort import Comfort
 from ..render.params import METHODS
 from ..show import MODES
 from .motion_options import CLI_SPELLING, motion_options, read_motion
-from .show_options import comfort_options, cues_option, mix_rule_option, preset_option, read_cues
+from .show_options import (comfort_options, cue_port_option, cues_option, mix_rule_option, preset_option,
+                           read_cues, session_options)
 
 HELP = """Render a live skeleton stream frame by frame and drive haptic devices, recorders and viewers.
 
@@ -82,13 +83,7 @@ Examples:
 @mix_rule_option
 @click.option("--stall-ms", type=float, default=250.0, show_default=True,
               help="A silent source has faded every actuator to zero after this many milliseconds.")
-@click.option("--stats", "show_stats", is_flag=True, help="Print frame counts and latency every second.")
-@click.option("--stats-json", type=click.Path(dir_okay=False), default=None,
-              help="Also write the final summary as JSON to this file.")
-@click.option("--workspace-id", envvar="BHAPTICS_WORKSPACE_ID", default=None,
-              help="bHaptics SDK2 workspace (app) id for player-v3 [env BHAPTICS_WORKSPACE_ID].")
-@click.option("--api-key", envvar="BHAPTICS_API_KEY", default=None,
-              help="bHaptics SDK2 API key for player-v3 [env BHAPTICS_API_KEY].")
+@session_options
 @click.option("--allow-origin", "allow_origins", metavar="ORIGIN[,ORIGIN]", multiple=True,
               help="ws:// source: web page origins (https://show.example) allowed to connect; browser pages are "
                    "refused otherwise. Programs (no Origin header) are not affected.")
@@ -100,9 +95,7 @@ Examples:
 @click.option("--max-senders", type=click.IntRange(min=1), default=8, show_default=True,
               help="Network sources: senders served at once (WebSocket connections, OSC sender addresses).")
 @cues_option
-@click.option("--cue-port", default=None, metavar="[HOST:]PORT",
-              help="Also fire the cue list's named cues by OSC: /hapmotion/cue NAME [gain] on this UDP port "
-                   "(loopback unless HOST names an interface).")
+@cue_port_option
 @click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
 @comfort_options
 @motion_options

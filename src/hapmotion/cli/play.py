@@ -7,7 +7,7 @@ from typing import Optional
 import click
 
 from .motion_options import cli_limits, limit_option
-from .show_options import cues_option
+from .show_options import cue_port_option, cues_option, session_options
 
 HELP = """Play TRACK in real time to the same sinks as 'hapmotion live'.
 
@@ -42,16 +42,9 @@ Examples:
               help="Playback speed factor (2 = twice as fast), above 0 and at most 10.")
 @click.option("--layout", "layout_file", type=click.Path(dir_okay=False, exists=True), default=None,
               help="Session device layout JSON (default: X40 + two shoulder Tactosy).")
-@click.option("--stats", "show_stats", is_flag=True, help="Print frame counts and latency every second.")
-@click.option("--stats-json", type=click.Path(dir_okay=False), default=None,
-              help="Also write the final summary as JSON to this file.")
-@click.option("--workspace-id", envvar="BHAPTICS_WORKSPACE_ID", default=None,
-              help="bHaptics SDK2 workspace (app) id for player-v3 [env BHAPTICS_WORKSPACE_ID].")
-@click.option("--api-key", envvar="BHAPTICS_API_KEY", default=None,
-              help="bHaptics SDK2 API key for player-v3 [env BHAPTICS_API_KEY].")
+@session_options
 @cues_option
-@click.option("--cue-port", default=None, metavar="[HOST:]PORT",
-              help="Also fire the cue list's named cues by OSC: /hapmotion/cue NAME [gain] (loopback by default).")
+@cue_port_option
 @click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
 @limit_option
 def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, layout_file: Optional[str],

@@ -1,5 +1,6 @@
-"""The show options every command that renders shares, from one definition: the preset, the mix rule, the cue
-list and the wearer's strength and comfort limits (:class:`hapmotion.show.Show` holds what they choose)."""
+"""The options commands share, from one definition: the preset, the mix rule, the cue list and the wearer's strength
+and comfort limits of every command that renders (:class:`hapmotion.show.Show` holds what they choose), and the
+options of the real-time sessions (``live``, ``play``)."""
 
 from __future__ import annotations
 
@@ -38,6 +39,29 @@ def read_cues(path: Optional[str], motion_opts: Optional[dict] = None):
     from .motion_options import cli_limits
 
     return load_cues(path, limits=cli_limits((motion_opts or {}).get("limits")))
+
+
+cue_port_option = click.option(
+    "--cue-port", default=None, metavar="[HOST:]PORT",
+    help="Also fire the cue list's named cues by OSC: /hapmotion/cue NAME [gain] on this UDP port (loopback unless "
+         "HOST names an interface).")
+
+
+def session_options(f: Callable[..., Any]) -> Callable[..., Any]:
+    """Click decorator: the options of every command that runs a real-time session (``live``, ``play``): progress
+    and summary (``show_stats``, ``stats_json``) and the bHaptics SDK2 credentials (``workspace_id``, ``api_key``)."""
+    options = [
+        click.option("--stats", "show_stats", is_flag=True, help="Print frame counts and latency every second."),
+        click.option("--stats-json", type=click.Path(dir_okay=False), default=None,
+                     help="Also write the final summary as JSON to this file."),
+        click.option("--workspace-id", envvar="BHAPTICS_WORKSPACE_ID", default=None,
+                     help="bHaptics SDK2 workspace (app) id for player-v3 [env BHAPTICS_WORKSPACE_ID]."),
+        click.option("--api-key", envvar="BHAPTICS_API_KEY", default=None,
+                     help="bHaptics SDK2 API key for player-v3 [env BHAPTICS_API_KEY]."),
+    ]
+    for option in reversed(options):
+        f = option(f)
+    return f
 
 
 COMFORT_OPTION_NAMES = ("gain", "max_level", "max_duty", "duty_window")
