@@ -192,3 +192,9 @@ def test_absurd_numbers_are_one_line_usage_errors(tmp_path, capsys, extra, expec
     code, _, err = run(args, capsys)
     assert code == 2 and expect in err and len(err.strip().splitlines()) == 1, err
     assert not out.exists()
+
+
+def test_render_with_nothing_to_render_says_what_to_give(tmp_path, capsys):
+    code, _, err = run(["render", "-o", tmp_path / "x.csv"], capsys)
+    assert code == 2 and err.strip() == "error: give a MOTION_FILE to render, or --audio SONG for the music alone"
+    assert list(tmp_path.iterdir()) == []

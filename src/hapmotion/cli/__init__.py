@@ -33,7 +33,7 @@ def cli() -> None:
     Typical use:
       hapmotion info dance.bvh                      what is in a recording
       hapmotion render dance.bvh -o dance.tact      the haptic track (.tact .csv .json .npz)
-      hapmotion render dance.bvh --audio song.ogg -o show.csv   motion + music, mixed 2:3
+      hapmotion render dance.bvh --audio song.ogg -o show.csv   motion + music, the music making room
       hapmotion live --source replay:dance.bvh --sink player   a show to the bHaptics Player, in real time
       hapmotion play pattern.tact --sink player     a saved track or Designer pattern on the vest
       hapmotion check                               the Player's devices and a labelled test pattern

@@ -57,11 +57,15 @@ def command(motion_file, output, method, preset, params, no_mirror, fps, layout_
             mix_rule, audio_offset, length, cues, comfort, motion_opts=None):
     """Render MOTION_FILE (BVH, Azure Kinect JSON, AIST++ .pkl, CSV/NPZ joints) into a haptic track.
 
-    With --audio the music is rendered too and mixed with the motion (audio:motion = 2:3 by default, as in the
-    HapMotion paper); with --audio and no MOTION_FILE the track is the music alone.
+    With --audio the music is rendered too and mixed with the motion (audio:motion = 2:3; the default mix rule
+    makes room for the motion, --mix-rule paper is the HapMotion paper's weighted sum); with --audio and no
+    MOTION_FILE the track is the music alone. --cues layers authored patterns on top; --gain and the comfort limits
+    come last.
     """
     from ..audio.mix import parse_mix_ratio
 
+    if motion_file is None and audio_file is None:
+        raise UsageError("give a MOTION_FILE to render, or --audio SONG for the music alone")
     if fps is not None and not math.isfinite(fps):  # click's FloatRange lets nan through
         raise UsageError(f"--fps must be a number in 1..1000, not {fps}")
     overrides = parse_param_overrides(params)

@@ -14,7 +14,7 @@ from ..comfort import MAX_GAIN, Comfort
 from ..render.params import DEFAULT_PRESET, PRESETS
 
 PRESET_HELP = (f"Renderer preset: {', '.join(PRESETS)}. felt (default): calibrated for ERM vests, the wearer feels "
-               "the performer move, on the right side, more when the motion is faster and bigger; paper: the "
+               "the performer move, on the mirrored side of the moving hand, more when the motion is faster and bigger; paper: the "
                "HapMotion paper's numbers; energy: energy-preserving split with the paper's intensity rule.")
 
 preset_option = click.option("--preset", default=DEFAULT_PRESET, show_default=True, help=PRESET_HELP)

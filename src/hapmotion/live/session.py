@@ -134,7 +134,7 @@ async def live(
     if mode == "audio" and source is not None:
         raise UsageError("--mode audio plays the song's haptic channel alone: leave out --source")
     if mode != "audio" and source is None:
-        raise UsageError("--source is required (osc://, ws:// or replay:PATH)")
+        raise UsageError("--source is required (osc://, ws://, vmc:// or replay:PATH)")
     if not sinks:
         raise UsageError("at least one --sink is required")
     if not (stall_ms > 0):
