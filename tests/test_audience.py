@@ -13,16 +13,9 @@ from support.live_fakes import BVH, FakePlayerV2, is_tick_max_sequence, start_se
 
 import hapmotion
 from hapmotion.audience import Seat
-from hapmotion.audience.server import LocalNatsServer
 from support.audience import DelayedReplay, Tap, reference_rows, start_seat, stop
 
 SONG = BVH.parents[1] / "audio" / "vibe_ace.ogg"
-
-
-@pytest.fixture(scope="module")
-def nats_server():
-    with LocalNatsServer() as server:
-        yield server
 
 
 @pytest.fixture(scope="module")

@@ -25,12 +25,6 @@ from hapmotion.show import Show
 
 
 @pytest.fixture(scope="module")
-def nats_server():
-    with LocalNatsServer() as server:
-        yield server
-
-
-@pytest.fixture(scope="module")
 def motion():
     return hapmotion.load_motion(BVH).slice(0, 90)
 

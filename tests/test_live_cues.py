@@ -46,20 +46,6 @@ class ConstantRenderer:
         pass
 
 
-@pytest.fixture
-def live_log():
-    records: list[logging.LogRecord] = []
-    keep = logging.Handler(logging.DEBUG)
-    keep.emit = records.append  # type: ignore[method-assign]
-    logger = logging.getLogger("hapmotion.live")
-    level = logger.level
-    logger.addHandler(keep)
-    logger.setLevel(logging.INFO)
-    yield records
-    logger.removeHandler(keep)
-    logger.setLevel(level)
-
-
 def osc(address: str, *args) -> bytes:
     b = OscMessageBuilder(address)
     for a in args:

@@ -5,7 +5,6 @@ the middle, SIGINT on a real subprocess, and user mistakes as one line."""
 from __future__ import annotations
 
 import asyncio
-import logging
 import os
 import re
 import signal
@@ -37,21 +36,6 @@ HAPMOTION = [sys.executable, "-c", "import sys; from hapmotion.cli import cli, m
 @pytest.fixture(autouse=True)
 def registered():
     cli.add_command(play_cli.command, "play")
-
-
-@pytest.fixture
-def live_log():
-    """Every record of the live logger, whatever an earlier CLI test did to its handlers and propagation."""
-    records: list[logging.LogRecord] = []
-    keep = logging.Handler(logging.DEBUG)
-    keep.emit = records.append  # type: ignore[method-assign]
-    logger = logging.getLogger("hapmotion.live")
-    level = logger.level
-    logger.addHandler(keep)
-    logger.setLevel(logging.INFO)
-    yield records
-    logger.removeHandler(keep)
-    logger.setLevel(level)
 
 
 def v2_rows(player: FakePlayerV2) -> list[list[int]]:
