@@ -363,31 +363,14 @@ async def bench_clients(frames: np.ndarray, seconds: float, tmp: Path, clients: 
 
 
 # ------------------------------------------------------------------------------------------------ 4. stuck viewers
-async def _stuck_viewers(port: int, n: int) -> list:
-    """Clients that send the WebSocket handshake request and then never read a byte (4 KiB receive buffers)."""
-    import base64
-    import socket
-
-    loop = asyncio.get_running_loop()
-    socks = []
-    for _ in range(n):
-        s = socket.socket()
-        s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
-        s.setblocking(False)
-        await loop.sock_connect(s, ("127.0.0.1", port))
-        key = base64.b64encode(os.urandom(16)).decode()
-        s.send((f"GET / HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-                f"Sec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n").encode())
-        socks.append(s)
-    return socks
-
-
 async def _player_session(frames: np.ndarray, seconds: float, tmp: Path, stuck: int) -> tuple[dict, int]:
     player = await Player().start()
     port = _free_port()
     session = await Session([f"player://127.0.0.1:{player.port}", f"ws-broadcast://127.0.0.1:{port}"],
                             tmp / f"stuck{stuck}.json").start()
-    socks = await _stuck_viewers(port, stuck)
+    from support.live_fakes import stuck_viewers  # the test helpers are on the path (see PlayerV3)
+
+    socks = await stuck_viewers(port, stuck)
     await asyncio.sleep(1.0)
     n = int(seconds * FPS)
     sender = await Sender().start(session.port)

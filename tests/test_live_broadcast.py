@@ -11,15 +11,12 @@ measured on reserved cores by benchmarks/bench_live.py."""
 from __future__ import annotations
 
 import asyncio
-import base64
 import json
 import logging
-import os
-import socket
 import time
 
 import numpy as np
-from support.live_fakes import FakePlayerV2, real_frames, send_osc, start_session, wait_for
+from support.live_fakes import FakePlayerV2, real_frames, send_osc, start_session, stuck_viewers, wait_for
 from websockets.asyncio.client import connect
 from websockets.exceptions import ConnectionClosed
 
@@ -39,28 +36,12 @@ class Records(logging.Handler):
         self.records.add(id(record))
 
 
-async def _stuck_viewers(port: int, n: int) -> list[socket.socket]:
-    """Clients that complete the WebSocket handshake request and then never read (tiny receive buffers)."""
-    loop = asyncio.get_running_loop()
-    socks = []
-    for _ in range(n):
-        s = socket.socket()
-        s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
-        s.setblocking(False)
-        await loop.sock_connect(s, ("127.0.0.1", port))
-        key = base64.b64encode(os.urandom(16)).decode()
-        s.send((f"GET / HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-                f"Sec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n").encode())
-        socks.append(s)
-    return socks
-
-
 async def _session(frames: np.ndarray, stuck: int):
     player = await FakePlayerV2().start()
     sink = BroadcastSink(hapmotion.load_layout().actuators, host="127.0.0.1", port=0, fps=FPS, slow_client_s=0.5,
                          client_buffer=16384, sndbuf=16384)
     task, engine = await start_session("osc://127.0.0.1:0", [player.url(), sink])
-    socks = await _stuck_viewers(sink.bound_port, stuck)
+    socks = await stuck_viewers(sink.bound_port, stuck)
     got: list[dict] = []
 
     async def reader():

@@ -14,7 +14,7 @@ import time
 import pytest
 from click.testing import CliRunner
 from support.live_fakes import send_osc
-from support.live_fakes import FakePlayerV2, real_frames, wait_for
+from support.live_fakes import FakePlayerV2, real_frames, start_live_process, wait_for
 
 from hapmotion.cli import main
 from hapmotion.cli.live import command
@@ -69,19 +69,8 @@ def test_signal_stops_a_running_session_with_turn_off(sig, tmp_path):
 
     async def scenario():
         player = await FakePlayerV2().start()
-        proc = await asyncio.create_subprocess_exec(
-            *HAPMOTION, "live", "--source", "osc://127.0.0.1:0", "--sink", player.url(),
-            "--sink", f"record:{out}", "--stats-json", str(summary),
-            stderr=asyncio.subprocess.PIPE, env={**os.environ, "PYTHONUNBUFFERED": "1"})
-        port = None
-        lines = []
-        deadline = time.perf_counter() + 60
-        while port is None:
-            line = (await asyncio.wait_for(proc.stderr.readline(), deadline - time.perf_counter())).decode()
-            assert line, "".join(lines)
-            lines.append(line)
-            m = re.search(r"listening on osc://127\.0\.0\.1:(\d+)", line)
-            port = int(m.group(1)) if m else None
+        proc, port, lines = await start_live_process(HAPMOTION, "--sink", player.url(), "--sink", f"record:{out}",
+                                                     "--stats-json", str(summary))
         sender = asyncio.create_task(send_osc(port, frames[:600]))
         await wait_for(lambda: len(player.frames) >= 4 * 30, 10)
         sent_at = time.perf_counter()

@@ -5,14 +5,12 @@ finishes the recording, also when its terminal (stderr) is already gone."""
 from __future__ import annotations
 
 import asyncio
-import os
-import re
 import signal
 import sys
 import time
 
 import pytest
-from support.live_fakes import FakePlayerV2, real_frames, send_osc, wait_for
+from support.live_fakes import FakePlayerV2, real_frames, send_osc, start_live_process, wait_for
 
 from hapmotion.live.engine import STOP_SIGNALS
 from hapmotion.track_files import load_track
@@ -30,17 +28,7 @@ async def _session_until_signal(sig: int, out, close_terminal: bool):
     """Run ``hapmotion live`` (OSC in, fake Player and recorder out), stream a real recording, send ``sig``."""
     frames, _ = real_frames()
     player = await FakePlayerV2().start()
-    proc = await asyncio.create_subprocess_exec(
-        *HAPMOTION, "live", "--source", "osc://127.0.0.1:0", "--sink", player.url(), "--sink", f"record:{out}",
-        stderr=asyncio.subprocess.PIPE, env={**os.environ, "PYTHONUNBUFFERED": "1"})
-    port, lines = None, []
-    deadline = time.perf_counter() + 60
-    while port is None:
-        line = (await asyncio.wait_for(proc.stderr.readline(), deadline - time.perf_counter())).decode()
-        assert line, "".join(lines)
-        lines.append(line)
-        m = re.search(r"listening on osc://127\.0\.0\.1:(\d+)", line)
-        port = int(m.group(1)) if m else None
+    proc, port, lines = await start_live_process(HAPMOTION, "--sink", player.url(), "--sink", f"record:{out}")
     sender = asyncio.create_task(send_osc(port, frames[:900]))
     await wait_for(lambda: len(player.frames) >= 4 * 30, 15)
     rest = b""

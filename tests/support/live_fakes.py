@@ -475,3 +475,43 @@ class ScriptSource(Source):
         self.done.set()
         if self.then == "wait":
             await asyncio.Event().wait()
+
+
+async def stuck_viewers(port: int, n: int) -> list[socket.socket]:
+    """``n`` clients that send the WebSocket handshake request to ``127.0.0.1:port`` and then never read a byte
+    (4 KiB receive buffers): viewers that stopped reading."""
+    import base64
+    import os
+
+    loop = asyncio.get_running_loop()
+    socks = []
+    for _ in range(n):
+        s = socket.socket()
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        s.setblocking(False)
+        await loop.sock_connect(s, ("127.0.0.1", port))
+        key = base64.b64encode(os.urandom(16)).decode()
+        s.send((f"GET / HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                f"Sec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n").encode())
+        socks.append(s)
+    return socks
+
+
+async def start_live_process(command: list, *args: str, timeout: float = 60.0):
+    """Start ``command live --source osc://127.0.0.1:0 ARGS...`` (stderr piped, unbuffered); return the process, the
+    OSC port it printed and the stderr lines read so far."""
+    import os
+    import re
+
+    proc = await asyncio.create_subprocess_exec(*command, "live", "--source", "osc://127.0.0.1:0", *args,
+                                                stderr=asyncio.subprocess.PIPE,
+                                                env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    port, lines = None, []
+    deadline = time.perf_counter() + timeout
+    while port is None:
+        line = (await asyncio.wait_for(proc.stderr.readline(), deadline - time.perf_counter())).decode()
+        assert line, "".join(lines)
+        lines.append(line)
+        m = re.search(r"listening on osc://127\.0\.0\.1:(\d+)", line)
+        port = int(m.group(1)) if m else None
+    return proc, port, lines
