@@ -125,3 +125,10 @@ def test_show_urls():
     for bad in ("ws://x/concert", "nats://host:4222/", "nats://host/a.b", "nats://host/a>"):
         with pytest.raises(UsageError):
             parse_show_url(bad)
+
+
+def test_a_deeply_nested_event_is_malformed():
+    from hapmotion.audience.wire import decode_event
+
+    with pytest.raises(ValueError, match="nested too deeply"):
+        decode_event(b"[" * 2000 + b"]" * 2000)          # within the 4 KiB size limit

@@ -135,7 +135,10 @@ def decode_event(data: bytes) -> dict[str, Any]:
     """ValueError when the event is not a JSON object with a whole ``epoch`` and a finite ``t``."""
     if len(data) > 4096:
         raise ValueError(f"event of {len(data)} bytes, at most 4096")
-    obj = json.loads(data)
+    try:
+        obj = json.loads(data)
+    except RecursionError:  # absurd nesting in a crafted event: malformed like any other
+        raise ValueError("event nested too deeply") from None
     if not isinstance(obj, dict):
         raise ValueError("event is not a JSON object")
     epoch, t = obj.get("epoch"), obj.get("t")
