@@ -436,11 +436,11 @@ def evaluate(preset: str | None, clips: list[Clip], song_list, layout, verbose: 
         sp = hand_speeds(m)
         fast = sp.max(axis=1) > FELT_SPEED
         tr = render(m, "mst", preset)
-        I = tr.intensities
-        felt_hits += int((I[fast].max(axis=1) >= FELT_LEVEL).sum())
+        rows_mst = tr.intensities
+        felt_hits += int((rows_mst[fast].max(axis=1) >= FELT_LEVEL).sum())
         felt_all += int(fast.sum())
         n = max(1, int(round(SMOOTH_S * m.fps)))
-        total = I.sum(axis=1)
+        total = rows_mst.sum(axis=1)
         r = spearman(smooth(sp.max(axis=1), n), smooth(total, n))
         couplings.append(r)
         still = still_mask(sp, m.fps)
@@ -453,7 +453,7 @@ def evaluate(preset: str | None, clips: list[Clip], song_list, layout, verbose: 
         pieces = [(0, m.n_frames, clip.hand)] if clip.hand is not None else list(clip.segments)
         side_s = ""
         for method in ("mst", "baseline"):
-            rows = I if method == "mst" else render(m, "baseline", preset).intensities
+            rows = rows_mst if method == "mst" else render(m, "baseline", preset).intensities
             for a, b, h in pieces:
                 c, w = lateral(rows[a:b], h, left, right)
                 side[method].append(c > w)
@@ -468,7 +468,7 @@ def evaluate(preset: str | None, clips: list[Clip], song_list, layout, verbose: 
                 music_ok.append(c > w)
                 contrasts.append((c - w) / (c + w) if c + w > 0 else 0.0)
                 follows.append(spearman(mm.sum(axis=1), au.sum(axis=1)))
-        rows_out.append((clip.name, fast.mean(), (I[fast].max(axis=1) >= FELT_LEVEL).mean() if fast.any() else np.nan,
+        rows_out.append((clip.name, fast.mean(), (rows_mst[fast].max(axis=1) >= FELT_LEVEL).mean() if fast.any() else np.nan,
                          r, quieter, side_s))
     if verbose:
         print(f"  {'clip':44s} {'moving':>6s} {'felt':>6s} {'r':>6s} still  side")

@@ -168,6 +168,11 @@ def test_demo_renders_the_bundled_example(tmp_path, capsys):
     assert "Kevin MacLeod" in stdout and "mocap.cs.cmu.edu" in stdout  # attribution shown
     page = (out / "demo.html").read_text()
     assert "Vibe Ace" in page and "<script" in page and "https://" not in page.split("<footer", 1)[0]
+    from hapmotion.viewer.page import read_page
+
+    data, _ = read_page(out / "demo.html")  # the page ends with the dance, not 47 s later with the song
+    assert data["audio"]["duration_s"] == pytest.approx(track.duration)
+    assert max(data["audio"]["onsets"]) < track.duration
 
 
 def test_bundled_examples_are_the_shared_files_with_attribution():

@@ -18,10 +18,10 @@ from support.live_fakes import FakePlayerV2, real_frames, start_live_process, wa
 
 from hapmotion.cli import main
 from hapmotion.cli.live import command
+from hapmotion.track_files import load_track
 
 # The installed entry point (hapmotion.cli:main), run with this interpreter.
 HAPMOTION = [sys.executable, "-c", "import sys; from hapmotion.cli import main; sys.exit(main(sys.argv[1:]))"]
-from hapmotion.track_files import load_track
 
 
 @pytest.mark.parametrize("args, message", [

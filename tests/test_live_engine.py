@@ -262,3 +262,41 @@ def test_audio_only_mode_plays_the_song_rows_on_the_clock():
     assert stats.rendered == len(rows) and 6 <= len(rows) <= 12   # 12 ticks; a late tick is skipped, not queued
     assert np.all(np.isin(rows[:, 0], audio_rows[:, 0])) and rows[0, 0] == 0.0
     assert stats.stop_reason == "source ended"
+
+
+def test_the_startup_heap_is_frozen_while_sessions_run_and_handed_back_after_the_last():
+    """A full garbage collection during a show walks only what the show allocated (docs/live.md, "Timing")."""
+    import gc
+
+    seen = {"a": [], "b": []}
+
+    async def both():
+        a = make([MemorySink("a")])
+        b = make([MemorySink("b")])
+        run_a = asyncio.create_task(a.run(ScriptSource(waving(n=10), before=lambda k: seen["a"].append(
+            gc.get_freeze_count()))))
+        run_b = asyncio.create_task(b.run(ScriptSource(waving(n=40), before=lambda k: seen["b"].append(
+            gc.get_freeze_count()))))
+        await run_a
+        after_a = gc.get_freeze_count()
+        await run_b
+        return after_a
+
+    assert gc.get_freeze_count() == 0
+    after_a = asyncio.run(asyncio.wait_for(both(), 10))
+    # everything the process held at the start (NumPy, numba, the renderer: tens of thousands of objects) is frozen
+    assert min(seen["a"] + seen["b"]) > 10_000
+    assert after_a > 10_000          # the other session still runs: still frozen
+    assert gc.get_freeze_count() == 0  # the last one ended: handed back to the collector
+
+
+def test_a_session_that_cannot_start_leaves_nothing_frozen():
+    import gc
+
+    class Broken(MemorySink):
+        async def start(self):
+            raise OSError("no such device")
+
+    with pytest.raises(OSError):
+        run(make([Broken()]), ScriptSource(waving(n=5)))
+    assert gc.get_freeze_count() == 0

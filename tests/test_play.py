@@ -295,6 +295,7 @@ def test_sigint_on_a_running_play_turns_the_player_off(tmp_path):
     assert code == 0, err
     assert re.search(r"play: play:\S+Heartbeat\.tact \(50 rows at 50/s, looped\)", err), err
     assert "stopped: SIGINT" in err and "Traceback" not in err
+    assert re.search(r"^play: \d+ frames in, \d+ out", err, re.M), err   # the summary names the command that ran
     assert player.errors == []
     assert player.turn_off_all and player.turn_off_all[-1] - sent_at < 2.0
     assert all(player.last_values(p) == [0] * n for p, n in (("VestFront", 20), ("VestBack", 20), ("ForearmL", 6),

@@ -15,7 +15,7 @@ from hapmotion.joints import JOINT_INDEX
 from hapmotion.motion import new_motion
 from hapmotion.viewer import write_page
 from hapmotion.track_files.sniff import is_track_file
-from hapmotion.viewer.page import AudioPart, read_page
+from hapmotion.viewer.page import AudioPart, load_audio_part, read_page
 from hapmotion.viewer.signals import triangle_vertices
 from support.data import SHARED_DATA
 
@@ -240,6 +240,16 @@ def test_page_duration_counts_the_audio_offset_once(tmp_path):
     info = write_page(tmp_path / "p.html", [track], audio=audio)
     assert info.duration_s == pytest.approx(12.0)
     assert info.n_frames == 30 and info.n_bytes == (tmp_path / "p.html").stat().st_size
+
+
+def test_music_cut_where_the_show_ends(tmp_path):
+    full = load_audio_part(SONG, fps=30.0, offset_s=2.0)
+    cut = load_audio_part(SONG, fps=30.0, offset_s=2.0, until_s=12.0)
+    assert full.duration_s > 60 and cut.duration_s == 12.0      # track time: the song starts at 2 s
+    assert len(cut.waveform) == 12 * 30 and np.array_equal(cut.waveform, full.waveform[:360])
+    assert cut.onsets.size and cut.onsets.max() < 12.0 and np.array_equal(cut.onsets, full.onsets[full.onsets < 12])
+    assert cut.data == full.data                                # the file itself stays whole (the browser plays it)
+    assert load_audio_part(SONG, fps=30.0, until_s=1e6).duration_s == pytest.approx(full.duration_s - 2.0)
 
 
 def test_view_command_reports_the_duration_with_an_audio_offset(tmp_path, capsys):

@@ -1,5 +1,5 @@
-"""Helpers of the audience tests: a seat's tap sink, a paced replay that starts later, the reference rendering of
-a seat's settings, and starting/stopping a seat (no tests here)."""
+"""Helpers of the audience tests: a seat's tap sink, a watch on the event loop, a paced replay that starts later,
+the reference rendering of a seat's settings, and starting/stopping a seat (no tests here)."""
 
 from __future__ import annotations
 
@@ -35,6 +35,31 @@ class Tap(Sink):
 
     def rendered(self) -> list:
         return [(w, f) for w, f in self.frames if f.kind == "frame"]
+
+
+class LoopWatch:
+    """Measures how long the test's event loop was held up (the longest gap between 5 ms wake-ups), so a test can
+    tell a seat's own fault from a machine that stopped the whole process: publisher, seat and Player all run in
+    this one loop, and a busy CI machine (or a full garbage collection) can pause it for hundreds of ms."""
+
+    def __init__(self, tick: float = 0.005):
+        self.tick, self.longest = tick, 0.0
+
+    async def __aenter__(self):
+        self._task = asyncio.create_task(self._watch())
+        return self
+
+    async def __aexit__(self, *exc):
+        self._task.cancel()
+        await asyncio.gather(self._task, return_exceptions=True)
+
+    async def _watch(self) -> None:
+        last = time.perf_counter()
+        while True:
+            await asyncio.sleep(self.tick)
+            now = time.perf_counter()
+            self.longest = max(self.longest, now - last - self.tick)
+            last = now
 
 
 class DelayedReplay(ReplaySource):

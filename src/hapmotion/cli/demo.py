@@ -47,7 +47,7 @@ def command(out_dir, mode, preset):
         track.save(out / name)
         written.append(out / name)
     title = f"{EXAMPLE_MOTION} + {EXAMPLE_AUDIO} ({mode}, mst/{preset})"
-    audio_part = load_audio_part(audio, fps=track.fps)
+    audio_part = load_audio_part(audio, fps=track.fps, until_s=track.duration)  # the page ends with the dance
     plot_track(track, out / "demo.png", title=title, audio=audio_part)
     written.append(out / "demo.png")
     write_page(out / "demo.html", [track], motion, audio=audio_part, title=title, footer=credits)

@@ -74,6 +74,6 @@ def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Opti
                    stats_interval=1.0 if show_stats else None,
                    on_stats=lambda text: click.echo(f"listen: {text}", err=True))
     finally:
-        lost = _finish(sessions[-1][0] if sessions else None, None)
+        lost = _finish(sessions[-1][0] if sessions else None, None, "listen")
     if lost:
         raise click.exceptions.Exit(1)

@@ -185,8 +185,9 @@ def _source(text: Optional[str], *, fps: Optional[float], speed: float, loop: bo
                           allow_senders=SenderAllowList.parse(allow_senders), max_senders=max_senders)
 
 
-def _finish(engine, stats_json: Optional[str]) -> list[str]:
-    """Print the summary, write ``--stats-json`` atomically; return the outputs that could not be written."""
+def _finish(engine, stats_json: Optional[str], command: str = "live") -> list[str]:
+    """Print the summary (headed by ``command``), write ``--stats-json`` atomically; return the outputs that could
+    not be written."""
     if engine is None:
         return []
     from ..filesafety import atomic_path
@@ -194,7 +195,7 @@ def _finish(engine, stats_json: Optional[str]) -> list[str]:
     log = logging.getLogger("hapmotion.live")
     stats = engine.stats
     try:
-        for line in stats.summary_lines():
+        for line in stats.summary_lines(command):
             click.echo(line, err=True)
     except OSError:  # the terminal is gone (SIGHUP after an ssh session closed): the summary has nowhere to go
         pass

@@ -82,6 +82,6 @@ def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, layout
                  on_stats=lambda text: click.echo(f"play: {text}", err=True), cues=cue_list, cue_port=cue_port,
                  limits=input_limits)
     finally:
-        lost = _finish(started[0] if started else None, stats_json)
+        lost = _finish(started[0] if started else None, stats_json, "play")
     if lost:
         raise click.exceptions.Exit(1)

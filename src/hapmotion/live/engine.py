@@ -5,7 +5,7 @@ Safety rules (docs/live.md, "Safety"):
 * a stalled source (no usable frame) fades every actuator linearly to zero, reaching zero ``stall_s`` after the
   last frame arrived; then the renderer and the frame order are reset, so a performer who comes back starts fresh;
 * a frame counts as fresh (renders, holds off the fade) only if it carries at least one joint the renderer uses
-  (``hapmotion.render.kernel.KERNEL_JOINTS``); others are counted as ``empty`` and skipped;
+  (``hapmotion.joints.RENDER_JOINTS``); others are counted as ``empty`` and skipped;
 * SIGINT, SIGTERM, SIGHUP, SIGQUIT (:data:`STOP_SIGNALS`), the source ending or failing, and an exception
   anywhere in the loop all end in
   :meth:`_turn_off`, which sends turn-off to every sink (each under its own time limit, all at once) before
@@ -26,6 +26,7 @@ from typing import Any, Callable, Optional, Protocol, Sequence
 
 import numpy as np
 
+from . import steady_heap
 from .frames import OutFrame, SkeletonFrame
 from .hygiene import MAX_ABS_M, Faults, FrameOrder, RateLimiter, sanitize
 from .sinks.base import Sink
@@ -164,10 +165,9 @@ class LiveEngine:
         self.on_stats = on_stats or (lambda text: log.info("stats: %s", text))
         self._required: Optional[np.ndarray] = None
         if mode != "audio":
-            from ..joints import JOINT_INDEX
-            from ..joints import RENDER_JOINTS as KERNEL_JOINTS
+            from ..joints import JOINT_INDEX, RENDER_JOINTS
 
-            self._required = np.array([JOINT_INDEX[j] for j in KERNEL_JOINTS], dtype=np.intp)
+            self._required = np.array([JOINT_INDEX[j] for j in RENDER_JOINTS], dtype=np.intp)
         self.faults = Faults(source_name, log)
         self.stats = LiveStats(self.faults, fps=self.fps)
         for s in self.sinks:
@@ -239,12 +239,14 @@ class LiveEngine:
         tasks: list[asyncio.Task] = []
         sink_tasks: list[asyncio.Task] = []
         error: Optional[BaseException] = None
-        running = False
+        running = held = False
         try:
             self._warm_up()
             for s in self.sinks:
                 await s.start()
             await source.start(self)
+            steady_heap.hold()  # (full garbage collections over the startup heap would stall the stream)
+            held = True
             sink_tasks = [asyncio.create_task(s.run(), name=f"sink {s.name}") for s in self.sinks]
             for t in sink_tasks:
                 t.add_done_callback(_log_sink_crash)
@@ -291,6 +293,8 @@ class LiveEngine:
             self.stats.stop_reason = self._stop_reason
             for sig in installed:
                 loop.remove_signal_handler(sig)
+            if held:
+                steady_heap.release()
         if error is not None:
             raise error
         return self.stats

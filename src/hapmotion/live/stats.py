@@ -145,11 +145,12 @@ class LiveStats:
             "sinks": [s.as_dict() for s in self.sinks.values()], "stop_reason": self.stop_reason,
         }
 
-    def summary_lines(self) -> list[str]:
-        """The human summary printed at exit."""
+    def summary_lines(self, command: str = "live") -> list[str]:
+        """The human summary printed at exit, its first line headed by the ``command`` that ran (live, play,
+        listen)."""
         lat = self.pooled_latency()
         lines = [
-            f"live: {self.frames_in} frames in, {self.rendered} out, {self.dropped} dropped "
+            f"{command}: {self.frames_in} frames in, {self.rendered} out, {self.dropped} dropped "
             f"({self.superseded} superseded, {self.empty} empty, {self.flood} flood messages), {self.late} late; "
             f"{self.fade_frames} fade frames, {self.stalls} stalls; latency {_fmt(lat)}"
             + (f"; stopped: {self.stop_reason}" if self.stop_reason else ""),

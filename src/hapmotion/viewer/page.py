@@ -82,8 +82,13 @@ class AudioPart:
     name: str = ""
 
 
-def load_audio_part(path: "str | os.PathLike[str]", *, fps: float = 60.0, offset_s: float = 0.0) -> AudioPart:
-    """Read and analyse an audio file for the page (analysis by :func:`hapmotion.audio.analyze_file`)."""
+def load_audio_part(path: "str | os.PathLike[str]", *, fps: float = 60.0, offset_s: float = 0.0,
+                    until_s: "float | None" = None) -> AudioPart:
+    """Read and analyse an audio file for the page (analysis by :func:`hapmotion.audio.analyze_file`).
+
+    ``until_s`` (track time, seconds) ends the music there on the page, when the show was rendered shorter than
+    the music (length rule ``motion``): the page then lasts as long as the haptics, and the waveform and onsets
+    stop with it."""
     from ..audio.analysis import analyze_file
 
     p = Path(path)
@@ -93,9 +98,15 @@ def load_audio_part(path: "str | os.PathLike[str]", *, fps: float = 60.0, offset
     except OSError as err:
         raise InputError(p, None, f"cannot read the audio file ({err.strerror})") from None
     mime = AUDIO_MIME.get(p.suffix.lower()) or mimetypes.guess_type(p.name)[0] or "application/octet-stream"
-    return AudioPart(path=p, data=data, mime=mime, waveform=np.asarray(an.waveform, dtype=np.float64),
-                     waveform_fps=float(an.fps), onsets=np.asarray(an.onset_times, dtype=np.float64),
-                     offset_s=float(offset_s), duration_s=float(an.duration_s), name=p.name)
+    waveform = np.asarray(an.waveform, dtype=np.float64)
+    onsets = np.asarray(an.onset_times, dtype=np.float64)
+    end = float(an.duration_s)
+    if until_s is not None and until_s < end:
+        end = max(0.0, float(until_s))
+        waveform = waveform[:int(np.ceil(end * an.fps))]
+        onsets = onsets[onsets < end]
+    return AudioPart(path=p, data=data, mime=mime, waveform=waveform, waveform_fps=float(an.fps), onsets=onsets,
+                     offset_s=float(offset_s), duration_s=end, name=p.name)
 
 
 @dataclass
