@@ -243,3 +243,6 @@ def test_listen_command_usage_errors():
     assert r.exit_code != 0 and "nats://HOST:PORT/SHOW" in str(r.exception or r.output)
     r = CliRunner().invoke(command, ["nats://127.0.0.1:1/show", "--sink", "player", "--delay", "-5"])
     assert r.exit_code != 0 and "--delay" in str(r.exception or r.output)
+    # a seat does not publish a show of its own: refused before connecting (nothing listens on port 1)
+    r = CliRunner().invoke(command, ["nats://127.0.0.1:1/show", "--sink", "nats://127.0.0.1:1/again"])
+    assert r.exit_code != 0 and "only 'hapmotion live' publishes one" in str(r.exception or r.output)

@@ -138,3 +138,10 @@ def test_device_reports_name_what_is_missing():
     silent = PlayerReport("player", reachable=True)
     _v2_report(silent, {"ConnectedPositions": None}, LAYOUT)
     assert not silent.answered and "did not report its devices" in silent.lines()[0]
+
+
+def test_an_audience_sink_is_refused_in_one_line():
+    code, out, err = asyncio.run(run_check("--sink", "nats://127.0.0.1:4222/show"))
+    assert code == 2 and out == ""
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "only 'hapmotion live' publishes one" in lines[0] and "Traceback" not in err

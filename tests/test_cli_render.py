@@ -27,6 +27,8 @@ def test_render_writes_each_format(tmp_path, capsys, ext):
     code, stdout, err = run(["render", PUNCH, "-o", out], capsys)
     assert code == 0, err
     assert out.is_file() and "wrote" in stdout
+    # every file written is named: a .tact show is the vest file and one file per sleeve
+    assert ("punch.ForearmL.tact, punch.ForearmR.tact" in stdout) == (ext == "tact")
     track = load_track(out)
     # .tact plays on the Player's 20 ms tick: 224 frames at 30 fps (7.47 s) are 374 ticks; the others keep the rate
     assert (track.n_frames, track.fps) == ((374, 50.0) if ext == "tact" else (224, 30.0))

@@ -267,6 +267,7 @@ def test_a_slow_track_is_played_with_each_row_repeated_exactly():
     ([str(TACT / "FeedbackFiles_Tactosy_BowShoot.tact"), "--sink", "player"],
      "it holds only Left, Right, which the session layout lacks"),
     ([str(HEARTBEAT)], "Missing option '--sink'"),
+    ([str(HEARTBEAT), "--sink", "nats://127.0.0.1:4222/show"], "only 'hapmotion live' publishes one"),
 ])
 def test_user_mistakes_are_one_line(args, message, capsys):
     code = main(["play", *args])
@@ -293,9 +294,10 @@ def test_sigint_on_a_running_play_turns_the_player_off(tmp_path):
 
     code, err, player, sent_at = asyncio.run(run())
     assert code == 0, err
-    assert re.search(r"play: play:\S+Heartbeat\.tact \(50 rows at 50/s, looped\)", err), err
+    assert re.search(r"^play: \S+Heartbeat\.tact \(50 rows at 50/s, looped\)", err, re.M), err
     assert "stopped: SIGINT" in err and "Traceback" not in err
     assert re.search(r"^play: \d+ frames in, \d+ out", err, re.M), err   # the summary names the command that ran
+    assert all(ln.startswith(("play: ", "  ")) for ln in err.splitlines() if ln.strip()), err  # and every log line
     assert player.errors == []
     assert player.turn_off_all and player.turn_off_all[-1] - sent_at < 2.0
     assert all(player.last_values(p) == [0] * n for p, n in (("VestFront", 20), ("VestBack", 20), ("ForearmL", 6),

@@ -62,8 +62,10 @@ def test_json_and_npz_round_trip(track, tmp_path, ext):
 
 def test_tact_files_follow_the_designer_format(track, tmp_path):
     path = tmp_path / "show.tact"
-    track.save(path)
+    written = track.save(path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["show.ForearmL.tact", "show.ForearmR.tact", "show.tact"]
+    assert written[0] == path and sorted(written) == sorted(tmp_path.iterdir())  # save names every file it wrote
+    assert track.save(tmp_path / "show.csv") == [tmp_path / "show.csv"]
     vest = json.loads(path.read_text())
     arms = {side: json.loads((tmp_path / f"show.Forearm{side}.tact").read_text()) for side in "LR"}
     ticked = track.resample(50.0)

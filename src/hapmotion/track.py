@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -125,11 +126,12 @@ class HapticTrack:
         return HapticTrack(out, fps, self.actuators, self.layout, meta)
 
     # ------------------------------------------------------------------ files
-    def save(self, path: "str | os.PathLike[str]") -> None:
-        """Write the track; the format follows the extension (``.csv``, ``.json``, ``.npz``, ``.tact``).
+    def save(self, path: "str | os.PathLike[str]") -> "list[Path]":
+        """Write the track; the format follows the extension (``.csv``, ``.json``, ``.npz``, ``.tact``). Returns the
+        files written, ``path`` first: a ``.tact`` also writes one file per sleeve beside it.
 
-        The file appears whole or not at all (written to a temporary file, then renamed).
+        Each file appears whole or not at all (written to a temporary file, then renamed).
         """
         from .track_files import save_track
 
-        save_track(self, path)
+        return save_track(self, path)

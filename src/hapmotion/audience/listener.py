@@ -378,13 +378,16 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(), ha
     the cues the venue fires are played when the seat reaches the media time they were fired at.
     """
     from ..live.cue_trigger import live_cues
-    from ..live.session import build_sink
+    from ..live.session import NATS_ONLY_LIVE, build_sink
     from ..live.urls import parse_sink
 
     server, show = parse_show_url(url)
     if not sinks:
         raise UsageError("at least one --sink is required")
     parsed = [parse_sink(s) if isinstance(s, str) else s for s in sinks]
+    for p in parsed:
+        if not callable(p) and p.kind == "nats":  # refused before connecting, not once a show is found
+            raise UsageError(NATS_ONLY_LIVE.format(sink=p.text))
     from ..layout import load_layout
 
     SeatStage(seat, load_layout())  # a zone this seat's vest does not have is a usage error before connecting

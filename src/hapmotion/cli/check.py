@@ -46,9 +46,9 @@ def command(sinks: tuple[str, ...], step_ms: int, gap_ms: int, intensity: float,
     from ..live.session import build_sink
     from ..live.urls import parse_sink
     from ..show import Show
-    from .live import _setup_logging
+    from .session_report import setup_logging
 
-    _setup_logging(quiet=True)  # the check prints its own lines; the session's warnings still show
+    setup_logging("check", quiet=True)  # the check prints its own lines; the session's warnings still show
     layout = Show(layout=layout_file).load_layout()
     dmap = DeviceMap.from_layout(layout)
     objs = [build_sink(parse_sink(s), dmap=dmap, layout_name=layout.name, fps=CHECK_FPS, workspace_id=workspace_id,

@@ -56,11 +56,11 @@ def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Opti
             cues: Optional[str], comfort: Comfort) -> None:
     from ..audience import Seat, run_listen
     from ..audience.listener import parse_show_url
-    from .live import _finish, _setup_logging, _split
+    from .session_report import finish_session, setup_logging, split_values
 
-    _setup_logging(quiet)
+    setup_logging("listen", quiet)
     parse_show_url(show_url)  # a usage error before anything connects
-    seat = Seat(method=method, preset=preset, mirror=mirror, mode=mode, zones_off=_split(zones_off),
+    seat = Seat(method=method, preset=preset, mirror=mirror, mode=mode, zones_off=split_values(zones_off),
                 gain=comfort.gain, max_intensity=comfort.max_level, max_duty=comfort.max_duty,
                 duty_window_s=comfort.window_s, delay_s=delay_ms / 1000.0)
     sessions: list = []
@@ -74,6 +74,6 @@ def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Opti
                    stats_interval=1.0 if show_stats else None,
                    on_stats=lambda text: click.echo(f"listen: {text}", err=True))
     finally:
-        lost = _finish(sessions[-1][0] if sessions else None, None, "listen")
+        lost = finish_session(sessions[-1][0] if sessions else None, None, "listen")
     if lost:
         raise click.exceptions.Exit(1)

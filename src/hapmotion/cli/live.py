@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import json
-import logging
-import sys
 from typing import Optional
 
 import click
@@ -15,6 +12,7 @@ from ..show import MODES
 from .motion_options import CLI_SPELLING, motion_options, read_motion
 from .show_options import (comfort_options, cue_port_option, cues_option, mix_rule_option, preset_option,
                            read_cues, session_options)
+from .session_report import finish_session, setup_logging, split_values
 
 HELP = """Render a live skeleton stream frame by frame and drive haptic devices, recorders and viewers.
 
@@ -107,7 +105,7 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
             cues: Optional[str], cue_port: Optional[str], quiet: bool, comfort: Comfort, motion_opts: dict) -> None:
     from ..live import run_live
 
-    _setup_logging(quiet)
+    setup_logging("live", quiet)
 
     started = []
 
@@ -135,7 +133,7 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
         ratio = parse_mix_ratio(mix_ratio)
     cue_list = read_cues(cues, motion_opts)
     src = _source(source, fps=fps, speed=speed, loop=loop, motion_opts=motion_opts,
-                  allow_origins=_split(allow_origins), token=token, allow_senders=allow_senders,
+                  allow_origins=split_values(allow_origins), token=token, allow_senders=allow_senders,
                   max_senders=max_senders)
     try:
         run_live(src, list(sinks), method=method, preset=preset, mirror=mirror, fps=fps, speed=speed,
@@ -146,14 +144,9 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
     finally:
         # The summary is printed however the session ended (turn-off has been sent by then). Nothing here raises:
         # a session error in flight stays the one reported.
-        lost = _finish(started[0] if started else None, stats_json)
+        lost = finish_session(started[0] if started else None, stats_json, "live")
     if lost:  # the show ran but an output it was asked for is missing (already logged)
         raise click.exceptions.Exit(1)
-
-
-def _split(values: tuple[str, ...]) -> tuple[str, ...]:
-    """Repeated and comma-separated option values as one tuple."""
-    return tuple(v.strip() for value in values for v in value.split(",") if v.strip())
 
 
 def _source(text: Optional[str], *, fps: Optional[float], speed: float, loop: bool, motion_opts: dict,
@@ -183,61 +176,3 @@ def _source(text: Optional[str], *, fps: Optional[float], speed: float, loop: bo
         raise UsageError(f"{reader_given[0]} is a reader option: it applies to replay:FILE sources")
     return network_source(ep, allow_origins=allow_origins, token=token,
                           allow_senders=SenderAllowList.parse(allow_senders), max_senders=max_senders)
-
-
-def _finish(engine, stats_json: Optional[str], command: str = "live") -> list[str]:
-    """Print the summary (headed by ``command``), write ``--stats-json`` atomically; return the outputs that could
-    not be written."""
-    if engine is None:
-        return []
-    from ..filesafety import atomic_path
-
-    log = logging.getLogger("hapmotion.live")
-    stats = engine.stats
-    try:
-        for line in stats.summary_lines(command):
-            click.echo(line, err=True)
-    except OSError:  # the terminal is gone (SIGHUP after an ssh session closed): the summary has nowhere to go
-        pass
-    lost = [f"{s.name}: {s.error}" for s in engine.sinks if getattr(s, "error", None)]
-    if stats_json:
-        try:
-            with atomic_path(stats_json) as tmp:
-                tmp.write_text(json.dumps(stats.as_dict(), indent=1), encoding="utf-8")
-        except Exception as exc:
-            log.error("--stats-json %s not written: %s", stats_json, exc)
-            lost.append(f"--stats-json: {exc}")
-    return lost
-
-
-class _StderrHandler(logging.StreamHandler):
-    """Writes to whatever ``sys.stderr`` is at the time of the message (tests and embedders swap it)."""
-
-    @property  # type: ignore[override]
-    def stream(self):
-        return sys.stderr
-
-    @stream.setter
-    def stream(self, value) -> None:
-        pass
-
-
-_HANDLER = _StderrHandler()
-_HANDLER.setFormatter(logging.Formatter("live: %(message)s"))
-
-
-def _setup_logging(quiet: bool) -> None:
-    """Live messages go to the current stderr as ``live: ...`` lines (INFO and up, or WARNING with -q)."""
-    logger = logging.getLogger("hapmotion.live")
-    if _HANDLER not in logger.handlers:
-        logger.addHandler(_HANDLER)
-        logger.propagate = False
-    logger.setLevel(logging.WARNING if quiet else logging.INFO)
-    # python-osc warns on the root logger for every unreadable bundle element; live mode counts those itself
-    # ("logged once per kind"), so a flood of bad packets must not flood the terminal.
-    logging.getLogger().addFilter(_not_pythonosc)
-
-
-def _not_pythonosc(record: logging.LogRecord) -> bool:
-    return "pythonosc" not in record.pathname
-

@@ -51,9 +51,9 @@ def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, layout
             show_stats: bool, stats_json: Optional[str], workspace_id: Optional[str], api_key: Optional[str],
             cues: Optional[str], cue_port: Optional[str], quiet: bool, limits: tuple[str, ...]) -> None:
     from ..live.playback import run_play
-    from .live import _finish, _setup_logging
+    from .session_report import finish_session, setup_logging
 
-    _setup_logging(quiet)
+    setup_logging("play", quiet)
     input_limits = cli_limits(limits)
     cue_list = None
     if cues is not None:
@@ -69,7 +69,7 @@ def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, layout
     def ready(engine) -> None:
         started.append(engine)
         names = ", ".join(s.describe() for s in engine.sinks)
-        click.echo(f"play: {engine.source.describe()} ({engine.source.n} rows at {engine.source.fps:g}/s"
+        click.echo(f"play: {track} ({engine.source.n} rows at {engine.source.fps:g}/s"
                    f"{', looped' if loop else ''}) to {names}; Ctrl-C stops", err=True)
         trigger = getattr(engine.cues, "trigger", None)
         if trigger is not None:
@@ -82,6 +82,6 @@ def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, layout
                  on_stats=lambda text: click.echo(f"play: {text}", err=True), cues=cue_list, cue_port=cue_port,
                  limits=input_limits)
     finally:
-        lost = _finish(started[0] if started else None, stats_json, "play")
+        lost = finish_session(started[0] if started else None, stats_json, "play")
     if lost:
         raise click.exceptions.Exit(1)

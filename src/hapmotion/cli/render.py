@@ -84,7 +84,8 @@ def command(motion_file, output, method, preset, params, no_mirror, fps, layout_
         track = render_show(show, motion, progress=update)
     finally:
         close()
-    track.save(out_path)
+    written = track.save(out_path)
     peak = float(track.intensities.max()) if track.n_frames else 0.0
-    click.echo(f"wrote {out_path} ({track.n_frames} frames at {track.fps:g} fps, {track.duration:.2f} s, "
+    also = f" and {', '.join(p.name for p in written[1:])}" if len(written) > 1 else ""
+    click.echo(f"wrote {out_path}{also} ({track.n_frames} frames at {track.fps:g} fps, {track.duration:.2f} s, "
                f"mode {mode}, peak {peak:.0f}%)")

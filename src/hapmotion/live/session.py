@@ -50,6 +50,10 @@ def _registrations(ep: Endpoint) -> dict[str, Any]:
     return regs
 
 
+NATS_ONLY_LIVE = ("--sink {sink}: an audience show carries the performer's skeleton and the music for each seat to "
+                  "render; only 'hapmotion live' publishes one")
+
+
 def build_sink(ep: Endpoint, *, dmap: DeviceMap, layout_name: str, fps: float,
                workspace_id: Optional[str] = None, api_key: Optional[str] = None, version: int = 1,
                meta: Optional[dict[str, Any]] = None, time_scale: float = 1.0,
@@ -78,9 +82,11 @@ def build_sink(ep: Endpoint, *, dmap: DeviceMap, layout_name: str, fps: float,
     if ep.kind == "record":
         return RecorderSink(ep.path, dmap.actuators, layout_name, fps=fps, meta=meta, time_scale=time_scale)
     if ep.kind == "nats":
+        if audience is None:
+            raise UsageError(NATS_ONLY_LIVE.format(sink=ep.text))
         from ..audience.publisher import publisher_sink
 
-        return publisher_sink(ep, fps=fps, **(audience or {}))
+        return publisher_sink(ep, fps=fps, **audience)
     raise UsageError(f"--sink {ep.text!r}: unknown kind {ep.kind}")  # pragma: no cover
 
 

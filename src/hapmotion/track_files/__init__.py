@@ -35,9 +35,11 @@ def _ext(path: "str | os.PathLike[str]", table: dict) -> str:
     return ext
 
 
-def save_track(track: HapticTrack, path: "str | os.PathLike[str]") -> None:
-    """Write ``track`` in the format its extension names. ``.tact`` also writes one file per sleeve (see tact.py)."""
-    WRITERS[_ext(path, WRITERS)](track, Path(path))
+def save_track(track: HapticTrack, path: "str | os.PathLike[str]") -> list[Path]:
+    """Write ``track`` in the format its extension names; return the files written, ``path`` first (``.tact`` also
+    writes one file per sleeve, see tact.py)."""
+    written = WRITERS[_ext(path, WRITERS)](track, Path(path))
+    return list(written) if written else [Path(path)]
 
 
 def load_track(path: "str | os.PathLike[str]", limits: LimitsArg = None) -> HapticTrack:

@@ -103,7 +103,8 @@ def _project(name: str, type_name: str, rows: dict[str, np.ndarray], duration_ms
     }
 
 
-def write_tact(track: HapticTrack, path: Path) -> None:
+def write_tact(track: HapticTrack, path: Path) -> list[Path]:
+    """Write the vest file at ``path`` and one file per other device beside it; return the files, ``path`` first."""
     plan = _files(track, path)
     ticked = track.resample(TICK_FPS)
     duration_ms = ticked.n_frames * TICK_MS
@@ -115,6 +116,7 @@ def write_tact(track: HapticTrack, path: Path) -> None:
         tmps = {target: stack.enter_context(atomic_path(target)) for target in docs}
         for target, doc in docs.items():
             tmps[target].write_text(json.dumps(doc, separators=(",", ":")), encoding="utf-8")
+    return sorted(docs, key=lambda target: target != path)
 
 
 # ------------------------------------------------------------------------------------------------------ reading
