@@ -300,3 +300,23 @@ def test_a_session_that_cannot_start_leaves_nothing_frozen():
     with pytest.raises(OSError):
         run(make([Broken()]), ScriptSource(waving(n=5)))
     assert gc.get_freeze_count() == 0
+
+
+def test_a_stop_while_a_sink_is_still_starting_ends_the_start_at_once():
+    """Ctrl-C while a sink still looks for its server: the start is cancelled, nothing was streamed."""
+
+    class Searching(MemorySink):
+        async def start(self):
+            await asyncio.Event().wait()  # a server that never answers
+
+    async def scenario():
+        engine = make([Searching()])
+        asyncio.get_running_loop().call_later(0.2, engine.request_stop, "SIGINT")
+        t0 = time.perf_counter()
+        with pytest.raises(KeyboardInterrupt):
+            await engine.run(ScriptSource(waving(n=5)))
+        return engine, time.perf_counter() - t0
+
+    engine, took = asyncio.run(asyncio.wait_for(scenario(), 10))
+    assert took < 2.0 and engine.stats.stop_reason.startswith("could not start")
+    assert engine.stats.rendered == 0

@@ -25,9 +25,11 @@ from .wire import BUCKET, ShowDescription, check_show_name, encode_event, encode
 log = logging.getLogger("hapmotion.live")
 
 
-async def connect(url: str, *, name: str, on_state: Any = None, connect_timeout: float = 2.0):
-    """A NATS connection that reconnects for ever (0.25 s apart) and keeps nothing buffered while it is down
-    beyond a small buffer; ``on_state(text)`` hears about disconnects and reconnects."""
+async def connect(url: str, *, name: str, on_state: Any = None, connect_timeout: float = 2.0,
+                  first_try_s: float = 5.0):
+    """A NATS connection that reconnects for ever (0.25 s apart) once it has been made, and keeps nothing buffered
+    while it is down beyond a small buffer; ``on_state(text)`` hears about disconnects and reconnects.
+    ConnectionError when no server answers within ``first_try_s`` seconds."""
     import nats
 
     async def disconnected() -> None:
@@ -42,10 +44,17 @@ async def connect(url: str, *, name: str, on_state: Any = None, connect_timeout:
         if on_state:
             on_state(f"error: {exc.__class__.__name__}: {exc}")
 
-    return await nats.connect(servers=[url], name=name, allow_reconnect=True, max_reconnect_attempts=-1,
-                              reconnect_time_wait=0.25, connect_timeout=connect_timeout,
-                              disconnected_cb=disconnected, reconnected_cb=reconnected, error_cb=error,
-                              pending_size=64 * 1024)
+    # nats-py keeps retrying the first connection too when reconnects are unlimited: a server that is not there
+    # would hang the command for ever, so the first connection gets one bounded try (then reconnects are endless)
+    try:
+        return await asyncio.wait_for(
+            nats.connect(servers=[url], name=name, allow_reconnect=True, max_reconnect_attempts=-1,
+                         reconnect_time_wait=0.25, connect_timeout=connect_timeout,
+                         disconnected_cb=disconnected, reconnected_cb=reconnected, error_cb=error,
+                         pending_size=64 * 1024),
+            first_try_s)
+    except asyncio.TimeoutError:
+        raise ConnectionError(f"no NATS server answered within {first_try_s:g} s") from None
 
 
 async def description_bucket(nc: Any):

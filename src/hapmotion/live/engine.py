@@ -241,10 +241,7 @@ class LiveEngine:
         error: Optional[BaseException] = None
         running = held = False
         try:
-            self._warm_up()
-            for s in self.sinks:
-                await s.start()
-            await source.start(self)
+            await self._start_or_stop(source)
             steady_heap.hold()  # (full garbage collections over the startup heap would stall the stream)
             held = True
             sink_tasks = [asyncio.create_task(s.run(), name=f"sink {s.name}") for s in self.sinks]
@@ -298,6 +295,29 @@ class LiveEngine:
         if error is not None:
             raise error
         return self.stats
+
+    async def _start_or_stop(self, source: Source) -> None:
+        """Warm up, start every sink, then the source; a stop asked for meanwhile (Ctrl-C while a sink is still
+        looking for its server) cancels the start at once and ends like Ctrl-C before a session: KeyboardInterrupt."""
+
+        async def start() -> None:
+            self._warm_up()
+            for s in self.sinks:
+                await s.start()
+            await source.start(self)
+
+        starting = asyncio.ensure_future(start())
+        stopping = asyncio.ensure_future(self._stop.wait())
+        try:
+            await asyncio.wait({starting, stopping}, return_when=asyncio.FIRST_COMPLETED)
+        finally:
+            stopping.cancel()
+            if not starting.done():
+                starting.cancel()
+                await asyncio.gather(starting, return_exceptions=True)
+        if starting.cancelled():
+            raise KeyboardInterrupt(f"stopped while starting ({self._stop_reason})")
+        starting.result()
 
     def _warm_up(self) -> None:
         """Step the renderer once before the show so its first real frame is not delayed by JIT compilation."""
