@@ -104,20 +104,16 @@ def spearman(a: np.ndarray, b: np.ndarray) -> float:
 def still_mask(speeds: np.ndarray, fps: float) -> np.ndarray:
     """Frames inside a run of at least ``STILL_S`` where both hands are under ``STILL_SPEED``."""
     calm = (speeds < STILL_SPEED).all(axis=1)
-    n = max(1, int(round(STILL_S * fps)))
     out = np.zeros_like(calm)
-    t = 0
-    while t < calm.size:
-        if calm[t]:
-            e = t
-            while e < calm.size and calm[e]:
-                e += 1
-            if e - t >= n:
-                out[t:e] = True
-            t = e
-        else:
-            t += 1
+    for t, e in runs(calm, max(1, int(round(STILL_S * fps)))):
+        out[t:e] = True
     return out
+
+
+def runs(mask: np.ndarray, min_len: int) -> list[tuple[int, int]]:
+    """``[(start, stop), ...]`` of the runs of True in ``mask`` (T,) that last at least ``min_len`` frames."""
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
+    return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2]) if b - a >= min_len]
 
 
 def halves(layout) -> tuple[np.ndarray, np.ndarray]:
@@ -312,17 +308,7 @@ def one_hand_segments(speeds: np.ndarray, fps: float) -> list[tuple[int, int, in
     segs = []
     for h in (0, 1):
         mask = (sm[:, h] > FELT_SPEED) & (sm[:, 1 - h] < sm[:, h] / 3.0)
-        t = 0
-        while t < mask.size:
-            if mask[t]:
-                e = t
-                while e < mask.size and mask[e]:
-                    e += 1
-                if e - t >= int(fps):
-                    segs.append((t, e, h))
-                t = e
-            else:
-                t += 1
+        segs.extend((t, e, h) for t, e in runs(mask, int(fps)))
     return segs
 
 

@@ -10,7 +10,7 @@ import click
 from ..comfort import Comfort
 from ..render.params import METHODS, PRESETS
 from ..show import MODES
-from .show_options import comfort_options, cues_option, read_cues
+from .show_options import comfort_options, cues_option, read_cues, split_values
 
 HELP = """Render a show published with `hapmotion live ... --sink nats://HOST:PORT/SHOW` on this seat's vest.
 
@@ -56,7 +56,7 @@ def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Opti
             cues: Optional[str], comfort: Comfort) -> None:
     from ..audience import Seat, run_listen
     from ..audience.listener import parse_show_url
-    from .session_report import finish_session, setup_logging, split_values
+    from .session_report import finish_session, setup_logging
 
     setup_logging("listen", quiet)
     parse_show_url(show_url)  # a usage error before anything connects

@@ -11,8 +11,8 @@ from ..render.params import METHODS
 from ..show import MODES
 from .motion_options import CLI_SPELLING, motion_options, read_motion
 from .show_options import (comfort_options, cue_port_option, cues_option, mix_rule_option, preset_option,
-                           read_cues, session_options)
-from .session_report import finish_session, setup_logging, split_values
+                           read_cues, session_options, split_values)
+from .session_report import finish_session, setup_logging
 
 HELP = """Render a live skeleton stream frame by frame and drive haptic devices, recorders and viewers.
 

@@ -11,11 +11,6 @@ from typing import Optional
 import click
 
 
-def split_values(values: tuple[str, ...]) -> tuple[str, ...]:
-    """Repeated and comma-separated option values as one tuple."""
-    return tuple(v.strip() for value in values for v in value.split(",") if v.strip())
-
-
 class _StderrHandler(logging.StreamHandler):
     """Writes to whatever ``sys.stderr`` is at the time of the message (tests and embedders swap it)."""
 

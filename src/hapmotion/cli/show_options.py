@@ -30,6 +30,11 @@ cues_option = click.option(
     help="Cue list (text or JSON: time, pattern file, gain, side, devices): authored effects layered over the show "
          "(docs/playback.md).")
 
+def split_values(values: tuple[str, ...]) -> tuple[str, ...]:
+    """Repeated and comma-separated option values as one tuple."""
+    return tuple(v.strip() for value in values for v in value.split(",") if v.strip())
+
+
 def read_cues(path: Optional[str], motion_opts: Optional[dict] = None):
     """The ``--cues`` file as a :class:`~hapmotion.cues.CueList`, read within the command's ``--limit`` values
     (``None`` without ``--cues``)."""
