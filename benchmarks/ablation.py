@@ -17,7 +17,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from hapmotion.render.params import PRESETS, Params
+from hapmotion.renderer.params import PRESETS, Params
 from hapmotion.metrics.scorecard import COLUMNS, PERCENT_KEYS, motion_facts, score_track
 from hapmotion.metrics.sweep import run_bench
 from hapmotion.show import Show, parse_param_overrides, render_motion

@@ -158,18 +158,18 @@ async def role_subscribers(url: str, n: int) -> dict:
 
 async def role_seats(url: str, k: int) -> dict:
     sys.path.insert(0, str(ROOT / "tests"))
-    from support.live_fakes import FakePlayerV2
+    from support.live_fakes import FakePlayerSdk1
 
     from hapmotion.audience import Seat, listen
-    from hapmotion.live.sinks import PlayerV2Sink
+    from hapmotion.live.sinks import PlayerSdk1Sink
 
     ages: list[float] = []
     sessions: list = []
-    players = [await FakePlayerV2().start() for _ in range(k)]
+    players = [await FakePlayerSdk1().start() for _ in range(k)]
 
     def timed_player(port: int):
         def make(dmap, fps):
-            sink = PlayerV2Sink(dmap, port=port, fps=fps)
+            sink = PlayerSdk1Sink(dmap, port=port, fps=fps)
             record = sink.stats.record
 
             def timed(received, now, interval, held=None):

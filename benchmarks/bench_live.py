@@ -47,7 +47,7 @@ from websockets.asyncio.client import connect
 from websockets.asyncio.server import serve
 
 import hapmotion
-from hapmotion.joints import JOINT_INDEX
+from hapmotion.skeleton.joints import JOINT_INDEX
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from support.data import MOTION  # noqa: E402  (the one place that says where the real recordings are)

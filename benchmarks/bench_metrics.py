@@ -15,7 +15,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from hapmotion.render.params import PRESETS
+from hapmotion.renderer.params import PRESETS
 
 ROOT = Path(__file__).resolve().parents[1]
 MOTION_EXT = (".bvh", ".json", ".pkl", ".csv", ".npz")
@@ -45,7 +45,7 @@ def main() -> None:
     from hapmotion.metrics.evaluation import evaluate
     from hapmotion.metrics.scorecard import score_track
     from hapmotion.motion_files import load_motion
-    from hapmotion.render import render
+    from hapmotion.renderer import render
 
     with tempfile.TemporaryDirectory() as tmp:
         rep = evaluate(files, out_dir=tmp)

@@ -46,7 +46,7 @@ CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic"
 def synthetic_motion(minutes: float, fps: float, seed: int = 1):
     """A performer on all 32 Kinect joints: rest pose plus sums of sinusoids (0.1-2.5 Hz) per joint, stronger on
     the arms, a slow walk around the stage, and 1 mm Gaussian jitter (Azure Kinect-like noise)."""
-    from hapmotion.joints import JOINT_INDEX, JOINTS
+    from hapmotion.skeleton.joints import JOINT_INDEX, JOINTS
     from hapmotion.motion import new_motion
 
     rest = {

@@ -51,7 +51,7 @@ def tact_dir():
 def compiled_renderer():
     """Compile the numba loops a live stream runs (the renderer's frame loop, the comfort limiter: seconds each on a
     cold cache) before any test runs, so tests that stream against the clock never wait for the compiler."""
-    from hapmotion.comfort import Comfort
+    from hapmotion.show.comfort import Comfort
     from hapmotion.show import Show
     from support.synthetic import motion_from_frames, waving
 

@@ -9,7 +9,7 @@ import asyncio
 
 import numpy as np
 import pytest
-from support.live_fakes import BVH, FakePlayerV2, is_tick_max_sequence, start_session, wait_for
+from support.live_fakes import BVH, FakePlayerSdk1, is_tick_max_sequence, start_session, wait_for
 
 import hapmotion
 from hapmotion.audience import Seat
@@ -37,7 +37,7 @@ def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_se
         show_task = None
         try:
             for name, seat in seats.items():
-                players[name] = await FakePlayerV2().start()
+                players[name] = await FakePlayerSdk1().start()
             # the publisher stores the description, the seats join, then the recording plays
             show_task, engine = await start_session(DelayedReplay(motion), [f"nats://127.0.0.1:{nats_server.port}/done"],
                                                     audio=SONG)
@@ -89,7 +89,7 @@ def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_se
 def test_a_cue_fired_at_the_venue_plays_on_the_seat_at_its_media_time(nats_server, motion, tmp_path):
     """The venue fires a named cue mid-show; the seat, holding the same cue list, layers it from the frame whose
     media time it was fired at (the seat's delay shifts it with everything else), by the layering rule."""
-    from hapmotion.cues import load_cues
+    from hapmotion.show.cues import load_cues
     from support.data import TACT
 
     cue_file = tmp_path / "show.cues"

@@ -11,7 +11,7 @@ import time
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from support.live_fakes import BVH, FakePlayerV2, start_session, wait_for
+from support.live_fakes import BVH, FakePlayerSdk1, start_session, wait_for
 from support.audience import DelayedReplay, LoopWatch, Tap, reference_rows, start_seat, stop
 
 import hapmotion
@@ -162,7 +162,7 @@ def test_clock_jumps_keep_playing_at_the_delay(nats_server, motion):
 
 def test_a_slow_player_does_not_hold_up_its_seat_or_the_others(nats_server, motion):
     async def scenario():
-        slow, fine = await FakePlayerV2(stop_reading_after=5).start(), await FakePlayerV2().start()
+        slow, fine = await FakePlayerSdk1(stop_reading_after=5).start(), await FakePlayerSdk1().start()
         tap_slow, tap_fine = Tap(), Tap()
         show_task, _ = await start_session(DelayedReplay(motion, wait=1.2), [f"{nats_server.url}/slow"])
         a, sa = await start_seat(f"{nats_server.url}/slow", [slow.url(), lambda d, f: tap_slow], Seat(delay_s=0.1))
@@ -186,7 +186,7 @@ def test_a_slow_player_does_not_hold_up_its_seat_or_the_others(nats_server, moti
 
 def test_lost_server_fades_to_zero_and_the_show_comes_back(motion):
     async def scenario(server):
-        player, tap = await FakePlayerV2().start(), Tap()
+        player, tap = await FakePlayerSdk1().start(), Tap()
         async with ManualShow(server, "lost", motion) as show:
             await show.describe()
             task, sessions = await start_seat(f"{server.url}/lost", [player.url(), lambda d, f: tap], Seat())

@@ -9,7 +9,7 @@ import os
 import sys
 
 import numpy as np
-from support.live_fakes import FakePlayerV2, FakePlayerV3, self_signed_cert
+from support.live_fakes import FakePlayerSdk1, FakePlayerSdk2, self_signed_cert
 
 from hapmotion.layout import load_layout
 from hapmotion.live.player_check import PlayerReport, _v2_report, _v3_report, pattern_steps, pattern_track
@@ -64,7 +64,7 @@ def test_check_reports_the_devices_and_plays_the_steps_in_order():
     steps = pattern_steps(LAYOUT)
 
     async def run():
-        player = await FakePlayerV2().start()
+        player = await FakePlayerSdk1().start()
         result = await run_check("--sink", player.url(), "--step-ms", "200", "--gap-ms", "100")
         await player.stop()
         return result, player
@@ -99,7 +99,7 @@ def test_check_over_sdk2_reports_the_players_device_list(tmp_path):
     cert = self_signed_cert(tmp_path)
 
     async def run():
-        player = await FakePlayerV3(cert).start()
+        player = await FakePlayerSdk2(cert).start()
         result = await run_check("--sink", player.url(workspace_id="show", api_key="k"), "--no-pattern")
         await player.stop()
         return result, player

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from support.synthetic import motion_from_frames, waving
 
-from hapmotion.comfort import Comfort, Limiter, limit_rows
+from hapmotion.show.comfort import Comfort, Limiter, limit_rows
 from hapmotion.errors import UsageError
 from hapmotion.show import Show, render_show
 

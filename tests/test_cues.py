@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from hapmotion.cues import Cue, CueList, cue_layer, layer, load_cues, pattern_rows
+from hapmotion.show.cues import Cue, CueList, cue_layer, layer, load_cues, pattern_rows
 from hapmotion.errors import InputError
 from hapmotion.layout import load_layout
 from hapmotion.track import HapticTrack

@@ -11,12 +11,12 @@ from support.synthetic import motion_from_frames, pose, still, waving
 import hapmotion
 from hapmotion.body.model import BodyModel
 from hapmotion.errors import UsageError
-from hapmotion.render.params import DEFAULT_PRESET, PRESETS, Params
-from hapmotion.render.steps.choice import moving_only, update_speeds
-from hapmotion.render.packed import ST_PREV_VEL, ST_SPEED, new_state
-from hapmotion.render.steps.intensity import speed_reach_drive
-from hapmotion.render.steps.triangle import speed_weighted
-from hapmotion.render.packed import CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT
+from hapmotion.renderer.params import DEFAULT_PRESET, PRESETS, Params
+from hapmotion.renderer.steps.choice import moving_only, update_speeds
+from hapmotion.renderer.packed import ST_PREV_VEL, ST_SPEED, new_state
+from hapmotion.renderer.steps.intensity import speed_reach_drive
+from hapmotion.renderer.steps.triangle import speed_weighted
+from hapmotion.renderer.packed import CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT
 
 LAYOUT = hapmotion.load_layout()
 X = LAYOUT.positions()[:, 0]

@@ -11,7 +11,7 @@ import pytest
 import hapmotion
 import hapmotion.limits as limits_module
 from hapmotion.cli import main
-from hapmotion.cues import load_cues
+from hapmotion.show.cues import load_cues
 from hapmotion.errors import InputError, UsageError
 from hapmotion.json_scan import scan_json
 from hapmotion.layout import load_layout

@@ -16,7 +16,7 @@ import logging
 import time
 
 import numpy as np
-from support.live_fakes import FakePlayerV2, real_frames, send_osc, start_session, stuck_viewers, wait_for
+from support.live_fakes import FakePlayerSdk1, real_frames, send_osc, start_session, stuck_viewers, wait_for
 from websockets.asyncio.client import connect
 from websockets.exceptions import ConnectionClosed
 
@@ -37,7 +37,7 @@ class Records(logging.Handler):
 
 
 async def _session(frames: np.ndarray, stuck: int):
-    player = await FakePlayerV2().start()
+    player = await FakePlayerSdk1().start()
     sink = BroadcastSink(hapmotion.load_layout().actuators, host="127.0.0.1", port=0, fps=FPS, slow_client_s=0.5,
                          client_buffer=16384, sndbuf=16384)
     task, engine = await start_session("osc://127.0.0.1:0", [player.url(), sink])

@@ -14,7 +14,7 @@ import time
 import pytest
 from click.testing import CliRunner
 from support.live_fakes import send_osc
-from support.live_fakes import FakePlayerV2, real_frames, start_live_process, wait_for
+from support.live_fakes import FakePlayerSdk1, real_frames, start_live_process, wait_for
 
 from hapmotion.cli import main
 from hapmotion.cli.live import command
@@ -68,7 +68,7 @@ def test_signal_stops_a_running_session_with_turn_off(sig, tmp_path):
     out, summary = tmp_path / "rec.npz", tmp_path / "stats.json"
 
     async def scenario():
-        player = await FakePlayerV2().start()
+        player = await FakePlayerSdk1().start()
         proc, port, lines = await start_live_process(HAPMOTION, "--sink", player.url(), "--sink", f"record:{out}",
                                                      "--stats-json", str(summary))
         sender = asyncio.create_task(send_osc(port, frames[:600]))

@@ -1,5 +1,5 @@
 """Live cues end to end over loopback: a cue at its show time and a cue fired by OSC land on the fake Player layered
-by the offline rule (``hapmotion.cues.layer``, the show's power limit), bad cue messages are counted faults logged
+by the offline rule (``hapmotion.show.cues.layer``, the show's power limit), bad cue messages are counted faults logged
 once per kind, and the options fail as one line."""
 
 from __future__ import annotations
@@ -13,10 +13,10 @@ from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
 from pythonosc.osc_message_builder import OscMessageBuilder
 from pythonosc.udp_client import SimpleUDPClient
 from support.data import TACT
-from support.live_fakes import BVH, FakePlayerV2, Tap, is_tick_max_sequence, start_session, wait_for
+from support.live_fakes import BVH, FakePlayerSdk1, Tap, is_tick_max_sequence, start_session, wait_for
 
 from hapmotion.cli import main
-from hapmotion.cues import cue_layer, layer, load_cues
+from hapmotion.show.cues import cue_layer, layer, load_cues
 from hapmotion.layout import load_layout
 from hapmotion.show import show_power_limit
 from hapmotion.live.cue_trigger import decode_cue_messages, parse_cue_port
@@ -58,7 +58,7 @@ def test_cue_at_a_time_and_by_osc_land_on_the_player_layered_by_the_rule(tmp_pat
     cues = load_cues(tmp_path / "show.cues")
 
     async def run():
-        player = await FakePlayerV2().start()
+        player = await FakePlayerSdk1().start()
         tap = Tap()
         task, engine = await start_session(f"replay:{BVH}", [tap, player.url()], renderer=ConstantRenderer(),
                                            cues=str(tmp_path / "show.cues"), cue_port="0")
@@ -88,7 +88,7 @@ def test_cue_at_a_time_and_by_osc_land_on_the_player_layered_by_the_rule(tmp_pat
     assert touched and min(f.t for f in touched) == pytest.approx(1.0 + 1 / fps, abs=1.5 / fps)
     assert max(f.row.max() for f in timed) == pytest.approx(100 * np.sqrt(0.09 + (1.5 * 0.48) ** 2), abs=1.0)
     # after it: the fired pattern (gain 2 from the message) from the first row after the message on
-    from hapmotion.cues import Cue, pattern_rows
+    from hapmotion.show.cues import Cue, pattern_rows
     from hapmotion.track_files import load_track
 
     pattern = pattern_rows(load_track(HEARTBEAT), fps=fps, actuators=IDS, mirror_map=LAYOUT.mirror_map(),
@@ -219,7 +219,7 @@ def test_cues_over_a_played_track_match_the_offline_timeline(tmp_path):
 
 
 def test_a_cue_fired_while_nothing_is_sent_is_dropped_not_played_late(tmp_path, live_log):
-    from hapmotion.live.cue_layer import FIRE_WAIT_S, LiveCues
+    from hapmotion.show.cue_layer import FIRE_WAIT_S, LiveCues
 
     (tmp_path / "show.cues").write_text(f"3600 {HEARTBEAT} name=beat\n")
     cues = LiveCues(load_cues(tmp_path / "show.cues"), fps=50.0, actuators=IDS, mirror_map=LAYOUT.mirror_map())

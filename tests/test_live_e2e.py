@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from pythonosc.osc_message_builder import OscMessageBuilder
 from pythonosc.udp_client import SimpleUDPClient
-from support.live_fakes import (BVH, FakePlayerV2, FakePlayerV3, OscReceiver, Tap, free_port,
+from support.live_fakes import (BVH, FakePlayerSdk1, FakePlayerSdk2, OscReceiver, Tap, free_port,
                                is_tick_max_sequence, real_frames, self_signed_cert, send_osc, start_session,
                                wait_for)
 from websockets.asyncio.client import connect
@@ -64,8 +64,8 @@ def test_osc_recording_drives_every_sink(recording, expected, tmp_path):
     out = tmp_path / "show.csv"
 
     async def scenario():
-        v2 = await FakePlayerV2().start()
-        v3 = await FakePlayerV3(cert).start()
+        v2 = await FakePlayerSdk1().start()
+        v3 = await FakePlayerSdk2(cert).start()
         osc_rx = await OscReceiver().start()
         tap = Tap()
         task, engine = await start_session(
@@ -163,12 +163,12 @@ def test_osc_recording_drives_every_sink(recording, expected, tmp_path):
 # ----------------------------------------------------------------------------------------------- WebSocket source
 def test_websocket_source_with_bad_messages(recording, expected):
     async def scenario():
-        player = await FakePlayerV2().start()
+        player = await FakePlayerSdk1().start()
         tap = Tap()
         task, engine = await start_session("ws://127.0.0.1:0", [player.url(), tap])
         async with connect(f"ws://127.0.0.1:{engine.source.port}") as ws:
             for k, pos in enumerate(recording[:60]):
-                joints = {name: pos[j].tolist() for j, name in enumerate(hapmotion.joints.JOINTS)}
+                joints = {name: pos[j].tolist() for j, name in enumerate(hapmotion.skeleton.joints.JOINTS)}
                 await ws.send(json.dumps({"type": "skeleton", "seq": k, "t": k / FPS, "joints": joints}))
                 if k == 10:
                     await ws.send("{oops")
@@ -201,7 +201,7 @@ def test_websocket_source_with_bad_messages(recording, expected):
 # ----------------------------------------------------------------------------------------------- OSC faults, flood
 def test_osc_faults_and_flood_do_not_stop_the_stream(recording):
     async def scenario():
-        player = await FakePlayerV2().start()
+        player = await FakePlayerSdk1().start()
         # On loopback the kernel drops most of a flood before it is read; a 200 messages/s budget per sender (still
         # over 3 x the frame rate) makes sure the limit itself is exercised too, even on a busy machine.
         task, engine = await start_session(OscSource("127.0.0.1", 0, sender_rate=200.0), [player.url()])
@@ -256,7 +256,7 @@ def test_replay_is_paced_and_its_end_turns_everything_off(recording):
     motion = hapmotion.load_motion(BVH).slice(0, 30)   # 1 s at the file's 30 fps
 
     async def scenario():
-        player = await FakePlayerV2().start()
+        player = await FakePlayerSdk1().start()
         task, engine = await start_session(ReplaySource(motion, speed=1.5), [player.url()])
         t0 = time.perf_counter()
         stats = await task
@@ -302,7 +302,7 @@ def test_player_refusing_then_coming_back_gets_registrations_again(recording, tm
         sink = engine.sinks[0]
         sender = asyncio.create_task(send_osc(engine.source.port, np.concatenate([recording] * 5)))
         await wait_for(lambda: sink.stats.errors >= 2, 3)          # refused, retrying with back-off
-        player = await FakePlayerV2(port=port, close_after=20).start()
+        player = await FakePlayerSdk1(port=port, close_after=20).start()
         await wait_for(lambda: len(player.connections) >= 2 and player.connections[1]["requests"] >= 5, 5)
         sender.cancel()
         engine.request_stop("test over")
@@ -323,13 +323,13 @@ def test_v3_player_restart_gets_auth_again(recording, tmp_path):
     port = free_port()
 
     async def scenario():
-        player = await FakePlayerV3(cert, port=port).start()
+        player = await FakePlayerSdk2(cert, port=port).start()
         task, engine = await start_session("osc://127.0.0.1:0", [player.url(workspace_id="w", api_key="k")])
         sender = asyncio.create_task(send_osc(engine.source.port, np.concatenate([recording] * 5)))
         await wait_for(lambda: len(player.dots) >= 30, 5)
         await player.stop()                                          # the Player quits ...
         await asyncio.sleep(0.3)
-        player2 = await FakePlayerV3(cert, port=port).start()        # ... and comes back
+        player2 = await FakePlayerSdk2(cert, port=port).start()        # ... and comes back
         await wait_for(lambda: len(player2.dots) >= 30, 5)
         sender.cancel()
         engine.request_stop("test over")
@@ -377,7 +377,7 @@ def test_never_reading_client_does_not_block_the_others(recording):
 # ----------------------------------------------------------------------------------------------- stall over the wire
 def test_stalled_osc_source_fades_the_player_to_zero(recording):
     async def scenario():
-        player = await FakePlayerV2().start()
+        player = await FakePlayerSdk1().start()
         task, engine = await start_session("osc://127.0.0.1:0", [player.url()])
         await send_osc(engine.source.port, recording[:60])
         last_sent = time.perf_counter()
@@ -483,8 +483,8 @@ def test_an_exception_mid_show_still_turns_the_players_off(recording, tmp_path):
             return super().step(frame)
 
     async def scenario():
-        v2 = await FakePlayerV2().start()
-        v3 = await FakePlayerV3(cert).start()
+        v2 = await FakePlayerSdk1().start()
+        v3 = await FakePlayerSdk2(cert).start()
         task, engine = await start_session("osc://127.0.0.1:0", [v2.url(), v3.url(workspace_id="w", api_key="k")],
                                            renderer=Failing(fps=FPS))
         sender = asyncio.create_task(send_osc(engine.source.port, recording))

@@ -134,7 +134,7 @@ def test_stalled_source_fades_to_zero_within_stall_time_then_resets():
 
 def test_frames_without_any_renderer_joint_do_not_keep_the_motors_running():
     """Feet-only frames after real ones must not count as fresh: the output fades to zero within the stall time."""
-    from hapmotion.joints import JOINT_INDEX
+    from hapmotion.skeleton.joints import JOINT_INDEX
 
     real = waving(n=30)
     feet = np.full((40, 32, 3), np.nan)

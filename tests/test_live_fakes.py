@@ -7,12 +7,12 @@ from typing import Any
 
 import pytest
 
-from support.live_fakes import FakePlayerV2, FakePlayerV3, self_signed_cert
+from support.live_fakes import FakePlayerSdk1, FakePlayerSdk2, self_signed_cert
 
 
 # ------------------------------------------------------------------------------------- the fakes can fail
-def _v2(obj: Any) -> FakePlayerV2:
-    p = FakePlayerV2()
+def _v2(obj: Any) -> FakePlayerSdk1:
+    p = FakePlayerSdk1()
     p.check(json.dumps(obj), {"registered": []})
     return p
 
@@ -38,7 +38,7 @@ def test_fake_v2_rejects_what_the_protocol_forbids(frame, problem):
 
 
 def test_fake_v3_rejects_wrong_array_lengths(tmp_path):
-    p = FakePlayerV3(self_signed_cert(tmp_path))
+    p = FakePlayerSdk2(self_signed_cert(tmp_path))
     p._check_dot({"requestId": 1, "position": 0, "motorValues": [0] * 20, "durationMillis": 40, "deviceIndex": -1})
     p._check_dot({"requestId": 2, "position": 1, "motorValues": [0] * 5 + [101], "durationMillis": 40,
                   "deviceIndex": -1})
@@ -55,7 +55,7 @@ def test_fake_player_that_stops_reading_swallows_frames_silently():
     from websockets.asyncio.client import connect
 
     async def scenario():
-        player = await FakePlayerV2(stop_reading_after=5).start()
+        player = await FakePlayerSdk1(stop_reading_after=5).start()
         async with connect(f"ws://127.0.0.1:{player.port}/v2/feedbacks", compression=None) as ws:
             frame = json.dumps({"Submit": [{"Type": "frame", "Key": "k", "Frame": {
                 "position": "VestFront", "durationMillis": 40,

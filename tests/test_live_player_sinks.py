@@ -18,15 +18,15 @@ import time
 
 import numpy as np
 import pytest
-from support.live_fakes import FakePlayerV2, FakePlayerV3, is_tick_max_sequence, self_signed_cert, wait_for
+from support.live_fakes import FakePlayerSdk1, FakePlayerSdk2, is_tick_max_sequence, self_signed_cert, wait_for
 
 from hapmotion.errors import UsageError
 from hapmotion.layout import load_layout
-from hapmotion.live.devices import DeviceMap
+from hapmotion.bhaptics.device_map import DeviceMap
 from hapmotion.live.frames import OutFrame
-from hapmotion.live.sinks import PlayerV2Sink, PlayerV3Sink
+from hapmotion.live.sinks import PlayerSdk1Sink, PlayerSdk2Sink
 from hapmotion.live.sinks.pacing import TickPacer
-from hapmotion.live.wire.player_json import PLAYER_TICK_MS
+from hapmotion.bhaptics.player_json import PLAYER_TICK_MS
 
 DMAP = DeviceMap.from_layout(load_layout())
 
@@ -75,8 +75,8 @@ def test_a_player_that_stops_reading_is_noticed_within_two_seconds(live_log):
     was not confirmed (the Player indeed never read it)."""
 
     async def scenario():
-        player = await FakePlayerV2(stop_reading_after=45).start()
-        sink = PlayerV2Sink(DMAP, host="127.0.0.1", port=player.port, fps=30.0)
+        player = await FakePlayerSdk1(stop_reading_after=45).start()
+        sink = PlayerSdk1Sink(DMAP, host="127.0.0.1", port=player.port, fps=30.0)
         run = asyncio.create_task(sink.run())
         feed = asyncio.create_task(_feed(sink, 30.0, 30 * 60))
         await wait_for(lambda: player.hung, 10)
@@ -110,8 +110,8 @@ def test_a_player_that_stops_reading_is_noticed_within_two_seconds(live_log):
 
 def test_a_reading_player_is_never_taken_for_a_stuck_one(live_log):
     async def scenario():
-        player = await FakePlayerV2().start()
-        sink = PlayerV2Sink(DMAP, host="127.0.0.1", port=player.port, fps=60.0)
+        player = await FakePlayerSdk1().start()
+        sink = PlayerSdk1Sink(DMAP, host="127.0.0.1", port=player.port, fps=60.0)
         run = asyncio.create_task(sink.run())
         await _feed(sink, 60.0, 150)                     # 2.5 s: ten liveness checks
         await asyncio.sleep(0.1)
@@ -134,8 +134,8 @@ def test_a_120_fps_stream_reaches_the_player_once_per_tick_with_its_peaks():
     fps, n, peak_at = 120.0, 240, 101
 
     async def scenario():
-        player = await FakePlayerV2().start()
-        sink = PlayerV2Sink(DMAP, host="127.0.0.1", port=player.port, fps=fps)
+        player = await FakePlayerSdk1().start()
+        sink = PlayerSdk1Sink(DMAP, host="127.0.0.1", port=player.port, fps=fps)
         run = asyncio.create_task(sink.run())
         await wait_for(lambda: sink.stats.connects == 1, 5)
         t0 = time.perf_counter()
@@ -188,8 +188,8 @@ def test_tick_pacer_by_hand():
 # ------------------------------------------------------------------------------------------- SDK2 auth
 def test_sdk2_auth_sends_the_version_as_an_integer(tmp_path):
     async def scenario():
-        player = await FakePlayerV3(self_signed_cert(tmp_path)).start()
-        sink = PlayerV3Sink(DMAP, workspace_id="ws", api_key="key", version="3", host="127.0.0.1",
+        player = await FakePlayerSdk2(self_signed_cert(tmp_path)).start()
+        sink = PlayerSdk2Sink(DMAP, workspace_id="ws", api_key="key", version="3", host="127.0.0.1",
                             port=player.port)
         run = asyncio.create_task(sink.run())
         await wait_for(lambda: player.auths or player.errors, 10)
@@ -203,11 +203,11 @@ def test_sdk2_auth_sends_the_version_as_an_integer(tmp_path):
     assert player.errors == [] and player.auths[0]["version"] == 3
     assert "version=3" in player.queries[0]
     with pytest.raises(UsageError, match="whole number"):
-        PlayerV3Sink(DMAP, version="1.0.2")
+        PlayerSdk2Sink(DMAP, version="1.0.2")
 
 
 def test_the_fake_sdk2_player_refuses_a_string_version(tmp_path):
-    p = FakePlayerV3(self_signed_cert(tmp_path))
+    p = FakePlayerSdk2(self_signed_cert(tmp_path))
     p.check_auth({"applicationId": "a", "sdkApiKey": "k", "version": "1"})
     p.check_auth({"applicationId": "a", "sdkApiKey": "k", "version": 1})
     assert p.errors == ["auth version '1', expected an integer"] and len(p.auths) == 1

@@ -35,7 +35,7 @@ def frames():
 
 def skeleton_json(pos: np.ndarray, seq: int) -> str:
     return json.dumps({"type": "skeleton", "seq": seq, "t": seq / FPS,
-                       "joints": {name: pos[j].tolist() for j, name in enumerate(hapmotion.joints.JOINTS)}})
+                       "joints": {name: pos[j].tolist() for j, name in enumerate(hapmotion.skeleton.joints.JOINTS)}})
 
 
 def skeleton_dgram(pos: np.ndarray, seq: int) -> bytes:

@@ -10,7 +10,7 @@ import sys
 import time
 
 import pytest
-from support.live_fakes import FakePlayerV2, real_frames, send_osc, start_live_process, wait_for
+from support.live_fakes import FakePlayerSdk1, real_frames, send_osc, start_live_process, wait_for
 
 from hapmotion.live.engine import STOP_SIGNALS
 from hapmotion.track_files import load_track
@@ -27,7 +27,7 @@ def test_every_terminating_signal_is_handled():
 async def _session_until_signal(sig: int, out, close_terminal: bool):
     """Run ``hapmotion live`` (OSC in, fake Player and recorder out), stream a real recording, send ``sig``."""
     frames, _ = real_frames()
-    player = await FakePlayerV2().start()
+    player = await FakePlayerSdk1().start()
     proc, port, lines = await start_live_process(HAPMOTION, "--sink", player.url(), "--sink", f"record:{out}")
     sender = asyncio.create_task(send_osc(port, frames[:900]))
     await wait_for(lambda: len(player.frames) >= 4 * 30, 15)

@@ -10,9 +10,9 @@ import numpy as np
 from support.live_fakes import OscReceiver
 
 from hapmotion.layout import load_layout
-from hapmotion.live.devices import DeviceMap
+from hapmotion.bhaptics.device_map import DeviceMap
 from hapmotion.live.frames import OutFrame
-from hapmotion.live.sinks import OscOutSink, PlayerV2Sink
+from hapmotion.live.sinks import OscOutSink, PlayerSdk1Sink
 
 
 def test_osc_turn_off_is_sent_three_times_even_when_the_buffer_is_over_its_limit():
@@ -58,7 +58,7 @@ def test_player_turn_off_after_a_lost_connection_fits_in_the_stop_timeout():
             held.append(writer)  # accept, read nothing, answer nothing
         server = await asyncio.start_server(silent, "127.0.0.1", 0)
         port = server.sockets[0].getsockname()[1]
-        sink = PlayerV2Sink(dmap, host="127.0.0.1", port=port)
+        sink = PlayerSdk1Sink(dmap, host="127.0.0.1", port=port)
         run = asyncio.create_task(sink.run())  # streaming began, then the connection never came back
         await asyncio.sleep(0.1)
         run.cancel()

@@ -19,15 +19,15 @@ from support.vmc_sender import VmcSender, send_vmc
 
 import hapmotion
 from hapmotion.errors import UsageError
-from hapmotion.humanoid import (BONE_INDEX, CANONICAL_TO_BONE, HUMAN_BODY_BONES, HUMANOID_PARENT, SPINE_BONES,
+from hapmotion.skeleton.humanoid import (BONE_INDEX, CANONICAL_TO_BONE, HUMAN_BODY_BONES, HUMANOID_PARENT, SPINE_BONES,
                                 ancestors, bone_name, present_parent)
-from hapmotion.joints import JOINT_INDEX as J
-from hapmotion.joints import JOINTS, RENDER_JOINTS
+from hapmotion.skeleton.joints import JOINT_INDEX as J
+from hapmotion.skeleton.joints import JOINTS, RENDER_JOINTS
 from hapmotion.live.access import SenderAllowList
 from hapmotion.live.hygiene import Faults
 from hapmotion.live.vmc import VmcSource
 from hapmotion.live.wire.vmc_in import VMC_PORT, VmcDecoder
-from hapmotion.motion_files.derived_joints import derive_missing
+from hapmotion.skeleton.derived import derive_missing
 
 BYEBYE = MOTION / "dataset-1_byebye_happy_001.bvh"
 IDENTITY = (0.0, 0.0, 0.0, 1.0)

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from hapmotion.joints import BONES, JOINTS
+from hapmotion.skeleton.joints import BONES, JOINTS
 from hapmotion.layout import load_layout
 from hapmotion.live.wire.broadcast import broadcast_frame, broadcast_hello, broadcast_stop
 

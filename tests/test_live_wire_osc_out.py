@@ -7,7 +7,7 @@ import pytest
 from pythonosc.osc_packet import OscPacket
 
 from hapmotion.layout import load_layout
-from hapmotion.live.devices import DeviceMap
+from hapmotion.bhaptics.device_map import DeviceMap
 from hapmotion.live.wire.osc_out import OscOutEncoder
 
 DMAP = DeviceMap.from_layout(load_layout())

@@ -11,10 +11,10 @@ import pytest
 import hapmotion.layout
 from hapmotion.errors import InputError
 from hapmotion.layout import load_layout
-from hapmotion.live.devices import DeviceMap
-from hapmotion.live.wire.player_v2 import (parse_v2_status, tact_project, v2_frame_message, v2_register_message,
+from hapmotion.bhaptics.device_map import DeviceMap
+from hapmotion.bhaptics.sdk1 import (parse_v2_status, tact_project, v2_frame_message, v2_register_message,
                                            v2_turn_off_all)
-from hapmotion.live.wire.player_v3 import parse_v3_message, v3_auth_message, v3_dot_messages, v3_stop_all
+from hapmotion.bhaptics.sdk2 import parse_v3_message, v3_auth_message, v3_dot_messages, v3_stop_all
 
 LAYOUT = load_layout()
 DMAP = DeviceMap.from_layout(LAYOUT)

@@ -8,7 +8,7 @@ import logging
 import numpy as np
 import pytest
 
-from hapmotion.joints import JOINT_INDEX
+from hapmotion.skeleton.joints import JOINT_INDEX
 from hapmotion.live.hygiene import Faults
 from hapmotion.live.wire.ws_in import decode_ws_skeleton
 

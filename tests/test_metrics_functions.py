@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from hapmotion.joints import JOINT_INDEX
-from hapmotion.metrics import constancy, coupling, events, felt, limits, locus, smoothness
+from hapmotion.skeleton.joints import JOINT_INDEX
+from hapmotion.metrics import constancy, coupling, events, felt, locus, saturation as limits, smoothness
 from hapmotion.metrics.motor import MotorModel, drive, simulate
 
 FPS = 60.0

@@ -13,7 +13,7 @@ from hapmotion.metrics.evaluation import evaluate
 from hapmotion.metrics.motor import DEFAULT_MOTOR, MotorModel, simulate
 from hapmotion.metrics.scorecard import AUDIO_COLUMNS, COLUMNS, csv_key, score_audio, score_track
 from hapmotion.metrics.tables import csv_text, markdown_table
-from hapmotion.render import render
+from hapmotion.renderer import render
 from hapmotion.show import Show, render_motion
 from hapmotion.track import HapticTrack
 from support.data import SHARED_DATA
@@ -204,7 +204,7 @@ def test_one_hand_punches_land_on_the_mirrored_side():
 def test_energy_split_keeps_energy_constant_on_real_recordings(clip):
     """Known answer on real data: with the energy split alone, energy is a function of the level only (0 dB)."""
     from hapmotion.motion_files import load_motion
-    from hapmotion.render import PRESETS
+    from hapmotion.renderer import PRESETS
 
     motion = load_motion(clip)
     for method in ("mst", "baseline"):
@@ -274,7 +274,7 @@ def test_cli_default_presets_with_figures_and_bench(tmp_path):
     """With no --presets every preset is scored, figures and bench included (a preset whose sweep goes silent in
     part has no energy range: the bench figure says so instead of failing)."""
     from hapmotion.cli.evaluate import command
-    from hapmotion.render.params import PRESETS
+    from hapmotion.renderer.params import PRESETS
 
     clip = str(SHARED_DATA / "motion" / "dataset-1_punch_normal_001.bvh")
     res = CliRunner().invoke(command, [clip, "--methods", "mst", "-o", str(tmp_path / "r")])

@@ -8,7 +8,7 @@ import pytest
 from hapmotion.body.model import BodyModel
 from hapmotion.metrics import coupling
 from hapmotion.metrics import sweep
-from hapmotion.render import PRESETS, render
+from hapmotion.renderer import PRESETS, render
 
 # The energy split alone (no dead-zone lift, no release hold): its answers are exact.
 PURE_ENERGY = PRESETS["energy"].replace(dead_zone=0.0, actuator_release_s=0.0, perceptual_exponent=0.0)

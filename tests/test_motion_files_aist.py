@@ -11,7 +11,7 @@ import pytest
 
 import hapmotion
 from hapmotion.errors import InputError
-from hapmotion.joints import JOINT_INDEX
+from hapmotion.skeleton.joints import JOINT_INDEX
 from hapmotion.motion_files.aist import COCO17
 from support.data import MOTION
 from support.motion_files import assert_input_error

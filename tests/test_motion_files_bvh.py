@@ -11,9 +11,9 @@ from hypothesis import strategies as st
 
 import hapmotion
 from hapmotion.errors import InputError, UsageError
-from hapmotion.joints import JOINT_INDEX, RENDER_JOINTS
+from hapmotion.skeleton.joints import JOINT_INDEX, RENDER_JOINTS
 from hapmotion.motion_files import bvh as bvh_mod
-from hapmotion.motion_files import skeletons
+from hapmotion.skeleton import naming as skeletons
 from hapmotion.motion_files._floats import OK, parse_table
 from support.data import MOTION
 from support.motion_files import assert_input_error

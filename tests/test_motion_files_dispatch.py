@@ -8,7 +8,7 @@ import pytest
 
 import hapmotion
 from hapmotion.errors import InputError, UsageError
-from hapmotion.joints import JOINT_INDEX, RENDER_JOINTS
+from hapmotion.skeleton.joints import JOINT_INDEX, RENDER_JOINTS
 from hapmotion.motion_files import SUPPORTED_EXTENSIONS
 from hapmotion.motion_files.info import describe, summary
 

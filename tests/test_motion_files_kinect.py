@@ -16,7 +16,7 @@ import pytest
 
 import hapmotion
 from hapmotion.errors import InputError, UsageError
-from hapmotion.joints import JOINT_INDEX, JOINTS
+from hapmotion.skeleton.joints import JOINT_INDEX, JOINTS
 from support.data import MOTION
 from support.motion_files import assert_input_error, kinect_document
 

@@ -209,7 +209,7 @@ def test_npz_of_compressed_zeros(tmp_path):
     size = frames * 32 * 3 * 8
     block = b"\0" * 2**22
     chunks = [block] * (size // len(block)) + [b"\0" * (size % len(block))]
-    from hapmotion.joints import JOINTS
+    from hapmotion.skeleton.joints import JOINTS
 
     data = npz_member("positions", {"descr": "<f8", "fortran_order": False, "shape": (frames, 32, 3)}, chunks,
                       joints=np.array(JOINTS), fps=np.float64(120.0))

@@ -15,7 +15,7 @@ from hypothesis.extra.numpy import arrays
 
 import hapmotion
 from hapmotion.errors import InputError, UsageError
-from hapmotion.joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS
+from hapmotion.skeleton.joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS
 from hapmotion.motion import new_motion
 from hapmotion.motion_files import save_motion_table
 from support.data import MOTION

@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pytest
 from support.data import TACT
-from support.live_fakes import FakePlayerV2, FakePlayerV3, Tap, free_port, is_tick_max_sequence, self_signed_cert, \
+from support.live_fakes import FakePlayerSdk1, FakePlayerSdk2, Tap, free_port, is_tick_max_sequence, self_signed_cert, \
     wait_for
 
 import hapmotion
@@ -38,7 +38,7 @@ def registered():
     cli.add_command(play_cli.command, "play")
 
 
-def v2_rows(player: FakePlayerV2) -> list[list[int]]:
+def v2_rows(player: FakePlayerSdk1) -> list[list[int]]:
     """The Player's requests as session rows (VestFront, VestBack, ForearmL, ForearmR per request)."""
     by_pos: dict[str, list[list[int]]] = {}
     for _, pos, values, _ in player.frames:
@@ -73,7 +73,7 @@ def test_designer_pattern_reaches_the_player_with_the_files_numbers():
     assert track.fps == 50.0 and track.intensities.max() == 48.0
 
     async def run():
-        player = await FakePlayerV2().start()
+        player = await FakePlayerSdk1().start()
         tap = Tap()
         t0 = time.perf_counter()
         stats = await play(HEARTBEAT, [tap, player.url()], handle_signals=False)
@@ -113,7 +113,7 @@ def test_our_own_track_reaches_the_sdk2_player_with_its_numbers(tmp_path):
     cert = self_signed_cert(tmp_path)
 
     async def run():
-        player = await FakePlayerV3(cert).start()
+        player = await FakePlayerSdk2(cert).start()
         tap = Tap()
         stats = await play(path, [tap, player.url(workspace_id="show", api_key="k")], handle_signals=False)
         await player.stop()
@@ -136,7 +136,7 @@ def test_loop_plays_the_pattern_again_until_stopped():
     track = hapmotion.load_track(HEARTBEAT)
 
     async def run():
-        player = await FakePlayerV2().start()
+        player = await FakePlayerSdk1().start()
         tap = Tap()
         task = asyncio.create_task(play(HEARTBEAT, [tap, player.url()], loop=True, handle_signals=False))
         await wait_for(lambda: sum(1 for f in tap.frames if f.t == 0.0) >= 3, 10)   # a third pass began
@@ -175,7 +175,7 @@ def test_a_player_that_disappears_mid_play_is_reconnected_and_turned_off():
 
     async def run():
         port = free_port()
-        first = await FakePlayerV2(port=port).start()
+        first = await FakePlayerSdk1(port=port).start()
         tap = Tap()
         task = asyncio.create_task(play(track, [tap, first.url()], loop=True, handle_signals=False))
         await wait_for(lambda: len(first.frames) >= 4 * 20, 10)
@@ -183,7 +183,7 @@ def test_a_player_that_disappears_mid_play_is_reconnected_and_turned_off():
         gone_at = len(tap.frames)
         await asyncio.sleep(0.5)
         assert not task.done() and len(tap.frames) > gone_at  # the show went on without it
-        second = await FakePlayerV2(port=port).start()        # and it comes back
+        second = await FakePlayerSdk1(port=port).start()        # and it comes back
         await wait_for(lambda: len(second.frames) >= 4 * 20, 10)
         task.cancel()
         with pytest.raises(asyncio.CancelledError):
@@ -206,7 +206,7 @@ def test_a_player_that_never_comes_back_does_not_stop_the_playback(live_log):
     track = synthetic_track()
 
     async def run():
-        player = await FakePlayerV2().start()
+        player = await FakePlayerSdk1().start()
         tap = Tap()
         task = asyncio.create_task(play(track, [tap, player.url()], handle_signals=False))
         await wait_for(lambda: len(player.frames) >= 4 * 5, 10)
@@ -279,7 +279,7 @@ def test_user_mistakes_are_one_line(args, message, capsys):
 
 def test_sigint_on_a_running_play_turns_the_player_off(tmp_path):
     async def run():
-        player = await FakePlayerV2().start()
+        player = await FakePlayerSdk1().start()
         proc = await asyncio.create_subprocess_exec(
             *HAPMOTION, "play", str(HEARTBEAT), "--sink", player.url(), "--loop",
             stderr=asyncio.subprocess.PIPE, env={**os.environ, "PYTHONUNBUFFERED": "1"})

@@ -12,10 +12,10 @@ from support.synthetic import motion_from_frames, pose, still
 
 import hapmotion
 from hapmotion.body.model import BodyModel
-from hapmotion.joints import JOINT_INDEX
+from hapmotion.skeleton.joints import JOINT_INDEX
 from hapmotion.layout import load_layout
-from hapmotion.render.steps.phantom import split_energy, split_paper
-from hapmotion.render.params import alpha_at
+from hapmotion.renderer.steps.phantom import split_energy, split_paper
+from hapmotion.renderer.params import alpha_at
 
 LAYOUT = load_layout()
 IDS = LAYOUT.actuators

@@ -1,6 +1,6 @@
 """Each compiled step of the renderer on small inputs whose answer is worked out by hand.
 
-The steps are the compiled functions that ``render_frames`` runs in order (``hapmotion.render.steps``); each is
+The steps are the compiled functions that ``render_frames`` runs in order (``hapmotion.renderer.steps``); each is
 called here on its own from Python. The last test renders a clip with and without compilation, which catches a
 stale numba cache.
 """
@@ -19,18 +19,18 @@ from support.synthetic import motion_from_frames, pose, waving
 
 import hapmotion
 from hapmotion.layout import CHART_BACK, CHART_FRONT, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, load_layout
-from hapmotion.render.packed import (C_COLS, C_OFFSET, C_ROWS, C_X0, C_X1, C_Z0, C_Z1, CHOICE_BOTH, CHOICE_LEFT,
+from hapmotion.renderer.packed import (C_COLS, C_OFFSET, C_ROWS, C_X0, C_X1, C_Z0, C_Z1, CHOICE_BOTH, CHOICE_LEFT,
                                      CHOICE_NONE, CHOICE_RIGHT, J_HAND_L, J_HAND_R, J_NECK, J_SHOULDER_L,
                                      J_SHOULDER_R, J_TORSO, N_RENDER_JOINTS, N_SURFACE, S_A, S_B, S_YBOT, S_YROW0,
                                      S_YROWN, S_YSLEEVE, S_YTOP, ST_SEEN, new_state)
-from hapmotion.render.steps.choice import (active_hand, active_hands, choose_active, hand_accelerations,
+from hapmotion.renderer.steps.choice import (active_hand, active_hands, choose_active, hand_accelerations,
                                            update_thresholds)
-from hapmotion.render.steps.held_joints import hold_joints
-from hapmotion.render.steps.intensity import boosted_level, filtered_level, level_drive, normalised_distance
-from hapmotion.render.steps.output import dead_zone_lift, write_outputs
-from hapmotion.render.steps.phantom import spread_on_charts
-from hapmotion.render.steps.triangle import dynamic_point, salient_triangle
-from hapmotion.render.steps.warping import (FACE_BOTTOM, FACE_SIDE, FACE_TOP, front_share, locate_on_body,
+from hapmotion.renderer.steps.held_joints import hold_joints
+from hapmotion.renderer.steps.intensity import boosted_level, filtered_level, level_drive, normalised_distance
+from hapmotion.renderer.steps.output import dead_zone_lift, write_outputs
+from hapmotion.renderer.steps.phantom import spread_on_charts
+from hapmotion.renderer.steps.triangle import dynamic_point, salient_triangle
+from hapmotion.renderer.steps.warping import (FACE_BOTTOM, FACE_SIDE, FACE_TOP, front_share, locate_on_body,
                                             nearest_surface_point, panel_u, panel_v, ray_entry, sleeve_reached,
                                             sleeve_uv)
 

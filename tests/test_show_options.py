@@ -11,7 +11,7 @@ import pytest
 
 import hapmotion
 from hapmotion.cli import main
-from hapmotion.comfort import Comfort
+from hapmotion.show.comfort import Comfort
 from hapmotion.show import Show, render_show
 from support.data import AUDIO, MOTION, TACT
 
@@ -79,7 +79,7 @@ def test_cues_are_layered_into_the_rendered_show(tmp_path, capsys, punch):
 def test_live_applies_the_same_comfort_as_files():
     """The live engine's last stage is the show's limiter: stepping a stream gives the rows the offline comfort
     stage writes for the same frames (gain, level and the stateful duty limit)."""
-    from hapmotion.comfort import limit_rows
+    from hapmotion.show.comfort import limit_rows
     from hapmotion.live import LiveEngine
     from hapmotion.live.frames import SkeletonFrame
     from hapmotion.live.sources import Source

@@ -16,7 +16,7 @@ from support.data import TACT
 from hapmotion.errors import InputError
 from hapmotion.layout import bhaptics_devices
 from hapmotion.track_files import load_track
-from hapmotion.track_files.tact_render import PATH_RADIUS
+from hapmotion.bhaptics.tact.render import PATH_RADIUS
 
 REAL = sorted(TACT.glob("*.tact"))
 WITH_ORACLE = [p for p in REAL if "feedback" in json.loads(p.read_bytes().decode("utf-8-sig"))]

@@ -135,7 +135,7 @@ def test_tact_is_all_or_nothing(track, tmp_path, monkeypatch):
             raise RuntimeError("disk full")
         return real(*args, **kwargs)
 
-    monkeypatch.setattr("hapmotion.track_files.tact.json.dumps", fail_third)
+    monkeypatch.setattr("hapmotion.bhaptics.tact.files.json.dumps", fail_third)
     with pytest.raises(RuntimeError):
         track.save(tmp_path / "show.tact")
     assert list(tmp_path.iterdir()) == []

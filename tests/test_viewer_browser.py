@@ -18,7 +18,7 @@ import pytest
 
 import hapmotion
 from hapmotion.cli import main
-from hapmotion.joints import BONES, JOINTS
+from hapmotion.skeleton.joints import BONES, JOINTS
 from hapmotion.viewer import write_page
 from hapmotion.show import Show, render_variants
 from hapmotion.viewer.page import read_page

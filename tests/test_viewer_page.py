@@ -11,12 +11,12 @@ import pytest
 
 import hapmotion
 from hapmotion.cli import main
-from hapmotion.joints import JOINT_INDEX
+from hapmotion.skeleton.joints import JOINT_INDEX
 from hapmotion.motion import new_motion
 from hapmotion.viewer import write_page
 from hapmotion.track_files.sniff import is_track_file
 from hapmotion.viewer.page import AudioPart, load_audio_part, read_page
-from hapmotion.viewer.signals import triangle_vertices
+from hapmotion.viewer.curves import triangle_vertices
 from support.data import SHARED_DATA
 
 SALSA = SHARED_DATA / "motion" / "60_12_scaled.bvh"          # CMU subject 60 salsa, 120 fps, 14 s

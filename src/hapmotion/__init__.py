@@ -27,7 +27,7 @@ _LAZY = {
 }
 
 # Imported eagerly: importing the subpackage ``hapmotion.render`` would otherwise bind the name to the module.
-from .render import PRESETS, Params, Renderer, render  # noqa: E402
+from .renderer import PRESETS, Params, Renderer, render  # noqa: E402
 
 __all__ = sorted(_LAZY) + ["PRESETS", "Params", "Renderer", "render", "__version__"]
 

@@ -9,7 +9,7 @@ admit every real recording and pattern we know of with a wide margin. The table 
 each protects is in docs/formats.md ("Size limits").
 
 Readers of every kind share this module: motion files (:mod:`hapmotion.motion_files`), tracks and ``.tact``
-patterns (:mod:`hapmotion.track_files`), cue lists (:mod:`hapmotion.cues`) and the patterns the live mode registers
+patterns (:mod:`hapmotion.track_files`), cue lists (:mod:`hapmotion.show.cues`) and the patterns the live mode registers
 with the bHaptics Player. JSON goes through one guard, :func:`load_json` (:func:`checked_json_text` for a caller
 with its own parser): size, nesting depth, the memory its parse would take and the length of its numbers, all from
 one compiled pass over the bytes (:mod:`hapmotion.json_scan`) before ``json.loads`` runs.

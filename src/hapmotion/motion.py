@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
-from .joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS
+from .skeleton.joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS
 
 
 @dataclass

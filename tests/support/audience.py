@@ -80,7 +80,7 @@ def reference_rows(motion, seat: Seat, mode: str, ks) -> np.ndarray:
     (``live_music``), the seat's comfort stage and zones: with every frame from the first on, the rendering of the
     recording itself."""
     from hapmotion.audience.seat import SeatStage
-    from hapmotion.comfort import Limiter
+    from hapmotion.show.comfort import Limiter
     from hapmotion.show import live_music
 
     show = Show(method=seat.method or "mst", preset=seat.preset or Show().preset, mirror=seat.mirror)

@@ -2,10 +2,10 @@
 tact-simhub: SDK1 ``Submit`` frames, SDK2 ``SdkRequestAuth``/``SdkPlayDotMode``, device sizes) and not
 from hapmotion's own encoders, plus the tests that show the fakes catch bad messages.
 
-* :class:`FakePlayerV2` - a bHaptics Player SDK1 endpoint ``/v2/feedbacks``: checks every request, keeps per-key
+* :class:`FakePlayerSdk1` - a bHaptics Player SDK1 endpoint ``/v2/feedbacks``: checks every request, keeps per-key
   state, answers each request with a status object; optionally closes connections (a restart) or hangs (stops
   reading, keeping its connections open);
-* :class:`FakePlayerV3` - the SDK2 ``/v3/feedback`` endpoint over TLS with a self-signed certificate made here;
+* :class:`FakePlayerSdk2` - the SDK2 ``/v3/feedback`` endpoint over TLS with a self-signed certificate made here;
 * :func:`self_signed_cert` - with the ``cryptography`` package when importable, else the ``openssl`` CLI;
 * :class:`OscReceiver` - a UDP socket collecting OSC packets (parsed with python-osc);
 * :func:`send_osc` - sends frames as ``/hapmotion/skeleton`` OSC messages, paced;
@@ -81,7 +81,7 @@ class _Server:
             self._server = None
 
 
-class FakePlayerV2(_Server):
+class FakePlayerSdk1(_Server):
     """SDK1 Player. ``errors`` lists every rule a message broke (tests assert it stays empty)."""
 
     def __init__(self, port: int = 0, close_after: Optional[int] = None, stop_reading_after: Optional[int] = None):
@@ -237,7 +237,7 @@ def self_signed_cert(folder: Path) -> tuple[Path, Path]:
     return cert, key
 
 
-class FakePlayerV3(_Server):
+class FakePlayerSdk2(_Server):
     """SDK2 Player on ``wss://127.0.0.1:PORT/v3/feedback`` with a self-signed certificate."""
 
     def __init__(self, cert: tuple[Path, Path], port: int = 0):

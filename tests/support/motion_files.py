@@ -8,7 +8,7 @@ import pytest
 
 import hapmotion
 from hapmotion.errors import InputError
-from hapmotion.joints import JOINTS, PARENTS
+from hapmotion.skeleton.joints import JOINTS, PARENTS
 
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hapmotion.joints import JOINT_INDEX, JOINTS
+from hapmotion.skeleton.joints import JOINT_INDEX, JOINTS
 from hapmotion.motion import Motion, new_motion
 
 STANDING = {

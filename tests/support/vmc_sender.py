@@ -29,8 +29,8 @@ from pythonosc.osc_message import OscMessage
 from pythonosc.osc_message_builder import OscMessageBuilder
 from scipy.spatial.transform import Rotation
 
-from hapmotion.humanoid import CANONICAL_TO_BONE, HUMAN_BODY_BONES, LAST_BONE, present_parent
-from hapmotion.joints import JOINT_INDEX
+from hapmotion.skeleton.humanoid import CANONICAL_TO_BONE, HUMAN_BODY_BONES, LAST_BONE, present_parent
+from hapmotion.skeleton.joints import JOINT_INDEX
 
 # The joint at each bone's origin (the *Hand bone is the wrist, HAND_* in the recordings; this avatar's Spine and
 # Chest bones sit at the recording's navel and chest joints) and the joint its Y axis aims at; a bone without a

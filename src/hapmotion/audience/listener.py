@@ -27,7 +27,7 @@ from urllib.parse import urlsplit
 import numpy as np
 
 from ..errors import InputError, UsageError
-from ..live.devices import DeviceMap
+from ..bhaptics.device_map import DeviceMap
 from ..live.engine import AudioChannel, LiveEngine
 from ..live.frames import SkeletonFrame
 from ..live.sinks.base import Sink
@@ -326,8 +326,8 @@ def seat_parts(desc: ShowDescription, seat: Seat) -> dict[str, Any]:
 
 
 def comfort_limiter(comfort: Any, fps: float, n: int) -> Any:
-    """The engine's last stage for the seat's gain and comfort limits (:class:`hapmotion.comfort.Limiter`)."""
-    from ..comfort import Limiter
+    """The engine's last stage for the seat's gain and comfort limits (:class:`hapmotion.show.comfort.Limiter`)."""
+    from ..show.comfort import Limiter
 
     return Limiter(comfort, n, fps)
 
@@ -348,7 +348,7 @@ async def _first_description(kv: Any, show: str, skip_epoch: Optional[int] = Non
 def _cue_player(seat_cues: Any, on_cue: Optional[Callable[[dict, float], None]]):
     """The seat's handler of an announced cue: fire it on the seat's cue layer when the seat's playback reaches the
     media time it was fired at (its due time, :class:`~hapmotion.audience.clock.MediaClock`), then tell ``on_cue``."""
-    from ..cues import MAX_GAIN
+    from ..show.cues import MAX_GAIN
 
     def handle(event: dict, due: float) -> None:
         gain = event.get("gain", 1.0)
@@ -374,7 +374,7 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(), ha
     ``sinks`` are SINK strings of ``hapmotion live`` (``player``, ``player-v3``, ``osc://``, ``record:``, ...) or
     callables ``(device_map, fps) -> Sink``; each is wrapped in the seat's :class:`SeatSink`. ``sessions``
     (a list) receives each session's ``(engine, source)``. ``cues`` is the show's cue list (a file or a
-    :class:`~hapmotion.cues.CueList`, the seat's copy of the venue's): its timed cues play at their media time, and
+    :class:`~hapmotion.show.cues.CueList`, the seat's copy of the venue's): its timed cues play at their media time, and
     the cues the venue fires are played when the seat reaches the media time they were fired at.
     """
     from ..live.cue_trigger import live_cues

@@ -1,7 +1,7 @@
 """One seat's own settings and the stage that applies them to every row before it reaches the seat's vest.
 
 The renderer-side settings (method, preset, mirroring, which channels) choose how the seat's ``Renderer`` and
-mix are built; gain and comfort limits are the live engine's last stage (:class:`hapmotion.comfort.Limiter`, as
+mix are built; gain and comfort limits are the live engine's last stage (:class:`hapmotion.show.comfort.Limiter`, as
 in ``hapmotion live``); zones switched off are applied by :class:`SeatSink` around each of the seat's sinks, so
 fade and turn-off rows pass through the same stage.
 """
@@ -28,7 +28,7 @@ class Seat:
 
     ``method``, ``preset``, ``mirror``, ``mode`` ``None`` keep the show's. ``zones_off`` names devices
     (``VestBack``) or single actuators (``VestFront_5``) that stay off. ``gain``, ``max_intensity`` (percent) and
-    ``max_duty`` (over ``duty_window_s``) are the seat's :class:`hapmotion.comfort.Comfort`. ``delay_s`` is how far the seat's
+    ``max_duty`` (over ``duty_window_s``) are the seat's :class:`hapmotion.show.comfort.Comfort`. ``delay_s`` is how far the seat's
     video/audio stream runs behind the venue: each frame plays ``delay_s`` after its media time arrived live.
     """
 
@@ -52,8 +52,8 @@ class Seat:
         object.__setattr__(self, "zones_off", tuple(self.zones_off))
 
     def comfort(self):
-        """The seat's gain and comfort limits as a :class:`hapmotion.comfort.Comfort`."""
-        from ..comfort import Comfort
+        """The seat's gain and comfort limits as a :class:`hapmotion.show.comfort.Comfort`."""
+        from ..show.comfort import Comfort
 
         return Comfort(gain=self.gain, max_level=self.max_intensity, max_duty=self.max_duty,
                        window_s=self.duty_window_s)

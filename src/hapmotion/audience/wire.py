@@ -40,7 +40,7 @@ from typing import Any, Optional
 import numpy as np
 
 from ..errors import InputError, UsageError
-from ..joints import JOINTS
+from ..skeleton.joints import JOINTS
 
 PROTOCOL = "hapmotion-audience"
 VERSION = 1
@@ -244,7 +244,7 @@ def parse_description(data: bytes, show: str) -> ShowDescription:
         if not (isinstance(ratio, list) and len(ratio) == 2 and all(isinstance(r, (int, float)) for r in ratio)):
             raise InputError(src, "music.mix_ratio", "expected [audio, motion] weights")
         from ..audio.params import MIX_RULES
-        from ..render.params import PRESETS
+        from ..renderer.params import PRESETS
 
         if music.get("mix_rule") not in MIX_RULES:
             raise InputError(src, "music.mix_rule", f"expected one of {', '.join(MIX_RULES)}")

@@ -119,7 +119,7 @@ class BodyModel:
         return (front + back + left + right) / 4.0
 
     def as_array(self) -> np.ndarray:
-        """Surface numbers for the renderer kernel (slot order: ``hapmotion.render.packed`` ``S_*``)."""
+        """Surface numbers for the renderer kernel (slot order: ``hapmotion.renderer.packed`` ``S_*``)."""
         return np.array(
             [
                 self.half_width,

@@ -40,7 +40,7 @@ Examples:
               help="bHaptics SDK2 API key for player-v3 [env BHAPTICS_API_KEY].")
 def command(sinks: tuple[str, ...], step_ms: int, gap_ms: int, intensity: float, layout_file: Optional[str],
             no_pattern: bool, workspace_id: Optional[str], api_key: Optional[str]) -> None:
-    from ..live.devices import DeviceMap
+    from ..bhaptics.device_map import DeviceMap
     from ..live.player_check import CHECK_FPS, pattern_steps, pattern_track, probe_player
     from ..live.playback import run_play
     from ..live.session import build_sink

@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from ..errors import UsageError
-from ..render.params import METHODS, PRESETS
+from ..renderer.params import METHODS, PRESETS
 from ..show import parse_param_overrides, split_list
 from .motion_options import motion_options, read_motion
 

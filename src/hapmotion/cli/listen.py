@@ -7,8 +7,8 @@ from typing import Optional
 
 import click
 
-from ..comfort import Comfort
-from ..render.params import METHODS, PRESETS
+from ..show.comfort import Comfort
+from ..renderer.params import METHODS, PRESETS
 from ..show import MODES
 from .show_options import comfort_options, cues_option, read_cues, split_values
 

@@ -6,8 +6,8 @@ from typing import Optional
 
 import click
 
-from ..comfort import Comfort
-from ..render.params import METHODS
+from ..show.comfort import Comfort
+from ..renderer.params import METHODS
 from ..show import MODES
 from .motion_options import CLI_SPELLING, motion_options, read_motion
 from .show_options import (comfort_options, cue_port_option, cues_option, mix_rule_option, preset_option,

@@ -57,7 +57,7 @@ def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, layout
     input_limits = cli_limits(limits)
     cue_list = None
     if cues is not None:
-        from ..cues import load_cues
+        from ..show.cues import load_cues
 
         cue_list = load_cues(cues, limits=input_limits)
     if stats_json:

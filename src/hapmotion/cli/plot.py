@@ -52,7 +52,7 @@ def command(input_path, output, method, preset, mirror, audio_path, mode, mix_ra
       hapmotion plot dance.npz --start 10 --end 40 -o detail.pdf
     """
     from ..audio.mix import parse_mix_ratio
-    from ..render.params import METHODS, PRESETS
+    from ..renderer.params import METHODS, PRESETS
     from ..show import Show, split_list
     from ..viewer.page import load_audio_part
     from .view_input import read_view_input

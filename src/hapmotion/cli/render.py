@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from ..errors import UsageError
-from ..render.params import METHODS
+from ..renderer.params import METHODS
 from ..show import LENGTH_RULES, MODES, Show, parse_param_overrides, render_show
 from .motion_options import motion_options, read_motion
 from .show_options import comfort_options, cues_option, mix_rule_option, preset_option, read_cues

@@ -10,8 +10,8 @@ from typing import Any, Callable, Optional
 import click
 
 from ..audio.params import MIX_RULES
-from ..comfort import MAX_GAIN, Comfort
-from ..render.params import DEFAULT_PRESET, PRESETS
+from ..show.comfort import MAX_GAIN, Comfort
+from ..renderer.params import DEFAULT_PRESET, PRESETS
 
 PRESET_HELP = (f"Renderer preset: {', '.join(PRESETS)}. felt (default): calibrated for ERM vests, the wearer feels "
                "the performer move, on the mirrored side of the moving hand, more when the motion is faster and bigger; paper: the "
@@ -36,11 +36,11 @@ def split_values(values: tuple[str, ...]) -> tuple[str, ...]:
 
 
 def read_cues(path: Optional[str], motion_opts: Optional[dict] = None):
-    """The ``--cues`` file as a :class:`~hapmotion.cues.CueList`, read within the command's ``--limit`` values
+    """The ``--cues`` file as a :class:`~hapmotion.show.cues.CueList`, read within the command's ``--limit`` values
     (``None`` without ``--cues``)."""
     if path is None:
         return None
-    from ..cues import load_cues
+    from ..show.cues import load_cues
     from .motion_options import cli_limits
 
     return load_cues(path, limits=cli_limits((motion_opts or {}).get("limits")))
@@ -74,7 +74,7 @@ COMFORT_OPTION_NAMES = ("gain", "max_level", "max_duty", "duty_window")
 
 def comfort_options(f: Callable[..., Any]) -> Callable[..., Any]:
     """Click decorator: the wearer's strength control and comfort limits, handed to the command as one
-    :class:`~hapmotion.comfort.Comfort`, keyword ``comfort``."""
+    :class:`~hapmotion.show.comfort.Comfort`, keyword ``comfort``."""
 
     @functools.wraps(f)
     def wrapper(*args: Any, **kwargs: Any) -> Any:

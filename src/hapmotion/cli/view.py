@@ -59,7 +59,7 @@ def command(input_path, output, audio_path, audio_offset, modes, mix_ratio, meth
     """
     from .. import __version__
     from ..audio.mix import parse_mix_ratio
-    from ..render.params import METHODS, PRESETS
+    from ..renderer.params import METHODS, PRESETS
     from ..show import MODES, Show, split_list
     from ..viewer.page import load_audio_part, write_page
     from .view_input import read_view_input

@@ -4,7 +4,7 @@ viewers, in real time and safely.
 * :func:`run_live` / :func:`live` - the whole session from SOURCE/SINK strings (what ``hapmotion live`` calls);
 * :class:`LiveEngine` - the loop itself, for custom sources and sinks;
 * :mod:`~hapmotion.live.frames` (what flows), :mod:`~hapmotion.live.hygiene` (cleaning incoming frames),
-  :mod:`~hapmotion.live.devices` (row columns per device, from the layout);
+  :mod:`~hapmotion.bhaptics.device_map` (row columns per device, from the layout);
 * :mod:`~hapmotion.live.wire` - sans-I/O message building and parsing, one module per wire format;
 * :mod:`~hapmotion.live.sources`, :mod:`~hapmotion.live.sinks` - the network edges.
 
@@ -12,17 +12,17 @@ docs/live.md describes the address scheme, message schemas, SOURCE/SINK syntax, 
 """
 
 from .engine import AudioChannel, LiveEngine
-from .devices import DeviceMap
+from ..bhaptics.device_map import DeviceMap
 from .frames import OutFrame, SkeletonFrame
 from .session import build_sink, build_source, live, run_live
-from .sinks import BroadcastSink, OscOutSink, PlayerV2Sink, PlayerV3Sink, RecorderSink, Sink
+from .sinks import BroadcastSink, OscOutSink, PlayerSdk1Sink, PlayerSdk2Sink, RecorderSink, Sink
 from .sources import ClockSource, OscSource, ReplaySource, Source, WsSource
 from .stats import LiveStats
 from .urls import parse_sink, parse_source
 
 __all__ = [
     "AudioChannel", "BroadcastSink", "ClockSource", "DeviceMap", "LiveEngine", "LiveStats", "OscOutSink",
-    "OscSource", "OutFrame", "PlayerV2Sink", "PlayerV3Sink", "RecorderSink", "ReplaySource", "Sink",
+    "OscSource", "OutFrame", "PlayerSdk1Sink", "PlayerSdk2Sink", "RecorderSink", "ReplaySource", "Sink",
     "SkeletonFrame", "Source", "WsSource", "build_sink", "build_source", "live", "parse_sink", "parse_source",
     "run_live",
 ]

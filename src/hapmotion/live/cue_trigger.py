@@ -22,13 +22,13 @@ from typing import TYPE_CHECKING, Any, Optional
 
 from pythonosc.osc_packet import OscPacket
 
-from ..cues import MAX_GAIN
+from ..show.cues import MAX_GAIN
 from ..errors import UsageError
 from .access import MAX_SENDERS, SenderAllowList, SenderBudgets, exposure_line, is_loopback, reach
 from .hygiene import Faults, is_number
 
 if TYPE_CHECKING:
-    from .cue_layer import LiveCues
+    from ..show.cue_layer import LiveCues
 
 log = logging.getLogger("hapmotion.live")
 
@@ -167,11 +167,11 @@ class CueTrigger:
 
 def live_cues(cues: Any, *, fps: float, layout: Any, actuators: Any, cue_port: "str | int | None" = None,
               allow_senders: Optional[SenderAllowList] = None) -> "Optional[LiveCues]":
-    """The cue layer of a session from ``--cues`` (a cue list file or a :class:`~hapmotion.cues.CueList`) and
+    """The cue layer of a session from ``--cues`` (a cue list file or a :class:`~hapmotion.show.cues.CueList`) and
     ``--cue-port``, or None without cues. The trigger, when asked for, is :attr:`LiveCues.trigger` (not yet
     listening: :func:`run_with_cues` starts it)."""
-    from ..cues import CueList, load_cues
-    from .cue_layer import LiveCues
+    from ..show.cues import CueList, load_cues
+    from ..show.cue_layer import LiveCues
 
     if cues is None:
         if cue_port is not None:

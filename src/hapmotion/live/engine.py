@@ -5,7 +5,7 @@ Safety rules (docs/live.md, "Safety"):
 * a stalled source (no usable frame) fades every actuator linearly to zero, reaching zero ``stall_s`` after the
   last frame arrived; then the renderer and the frame order are reset, so a performer who comes back starts fresh;
 * a frame counts as fresh (renders, holds off the fade) only if it carries at least one joint the renderer uses
-  (``hapmotion.joints.RENDER_JOINTS``); others are counted as ``empty`` and skipped;
+  (``hapmotion.skeleton.joints.RENDER_JOINTS``); others are counted as ``empty`` and skipped;
 * SIGINT, SIGTERM, SIGHUP, SIGQUIT (:data:`STOP_SIGNALS`), the source ending or failing, and an exception
   anywhere in the loop all end in
   :meth:`_turn_off`, which sends turn-off to every sink (each under its own time limit, all at once) before
@@ -122,10 +122,10 @@ class LiveEngine:
     stats_interval, on_stats:
         Every ``stats_interval`` seconds, a one-line progress report goes to ``on_stats`` (default: the log).
     cues:
-        Object with ``layer(row, t) -> row`` (:class:`~hapmotion.live.cue_layer.LiveCues`): authored cues layered
+        Object with ``layer(row, t) -> row`` (:class:`~hapmotion.show.cue_layer.LiveCues`): authored cues layered
         onto each rendered row at its show time.
     comfort:
-        Object with ``step(row) -> row`` (:class:`~hapmotion.comfort.Limiter`): the wearer's gain and comfort limits,
+        Object with ``step(row) -> row`` (:class:`~hapmotion.show.comfort.Limiter`): the wearer's gain and comfort limits,
         the last stage of every rendered row, as offline.
     """
 
@@ -165,7 +165,7 @@ class LiveEngine:
         self.on_stats = on_stats or (lambda text: log.info("stats: %s", text))
         self._required: Optional[np.ndarray] = None
         if mode != "audio":
-            from ..joints import JOINT_INDEX, RENDER_JOINTS
+            from ..skeleton.joints import JOINT_INDEX, RENDER_JOINTS
 
             self._required = np.array([JOINT_INDEX[j] for j in RENDER_JOINTS], dtype=np.intp)
         self.faults = Faults(source_name, log)

@@ -8,7 +8,7 @@ from typing import Any, Mapping, Optional
 
 import numpy as np
 
-from ..joints import JOINT_INDEX, canonical
+from ..skeleton.joints import JOINT_INDEX, canonical
 
 
 @dataclass(slots=True)

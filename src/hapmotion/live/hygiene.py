@@ -10,7 +10,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ..joints import JOINTS
+from ..skeleton.joints import JOINTS
 
 log = logging.getLogger("hapmotion.live")
 

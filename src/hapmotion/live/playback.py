@@ -8,7 +8,7 @@ pacing, reconnection, the stall watchdog, and turn-off on every exit (end of the
 SIGQUIT, an error).
 
 The track's columns are matched to the session layout by actuator id (``VestFront_5`` -> ``VestFront_5``), the way
-cues are (:func:`hapmotion.cues.pattern_rows`); devices the layout lacks (a head or an old-sleeve pattern on the
+cues are (:func:`hapmotion.show.cues.pattern_rows`); devices the layout lacks (a head or an old-sleeve pattern on the
 vest layout) are left out and noted once.
 """
 
@@ -27,7 +27,7 @@ import numpy as np
 from ..errors import InputError, UsageError
 from ..track import HapticTrack, parse_actuator_id
 from .cue_trigger import live_cues, run_with_cues
-from .devices import DeviceMap
+from ..bhaptics.device_map import DeviceMap
 from .engine import AudioChannel, LiveEngine
 from .frames import SkeletonFrame
 from .sinks import Sink
@@ -58,7 +58,7 @@ def layout_rows(track: HapticTrack, actuators: Sequence[str], name: str = "track
     """The track's rows ``(T, N)`` 0..100 in the session's actuator order, matched by actuator id (columns of the
     session that the track lacks are 0). Devices of the track the session lacks are logged once; a track of which
     nothing maps is an :class:`~hapmotion.errors.InputError`."""
-    from ..cues import Cue, pattern_rows
+    from ..show.cues import Cue, pattern_rows
 
     index = {a: i for i, a in enumerate(actuators)}
     present = sorted({parse_actuator_id(a)[0] for a in track.actuators if a in index})

@@ -31,8 +31,8 @@ from websockets.asyncio.client import connect
 
 from ..layout import CHART_BACK, CHART_FRONT, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, Layout
 from ..track import HapticTrack
-from .sinks import PlayerV2Sink, PlayerV3Sink, Sink
-from .wire.player_json import PLAYER_TICK_MS, get_ci
+from .sinks import PlayerSdk1Sink, PlayerSdk2Sink, Sink
+from ..bhaptics.player_json import PLAYER_TICK_MS, get_ci
 
 CHECK_FPS = 1000.0 / PLAYER_TICK_MS
 """The test pattern is made on the Player's tick (50 rows per second)."""
@@ -171,7 +171,7 @@ def _v3_report(report: PlayerReport, devices: Any, layout: Layout) -> None:
 
 async def probe_player(sink: Sink, layout: Layout, timeout: float = 2.0) -> Optional[PlayerReport]:
     """Ask the Player behind ``sink`` which devices it has (None for sinks that are not a Player)."""
-    if not isinstance(sink, (PlayerV2Sink, PlayerV3Sink)):
+    if not isinstance(sink, (PlayerSdk1Sink, PlayerSdk2Sink)):
         return None
     report = PlayerReport(sink.name, reachable=False)
     kwargs: dict[str, Any] = dict(open_timeout=timeout, close_timeout=0.5, compression=None, ping_interval=None)
@@ -194,9 +194,9 @@ async def probe_player(sink: Sink, layout: Layout, timeout: float = 2.0) -> Opti
             except asyncio.TimeoutError:
                 break
             sink.on_message(message)
-            if isinstance(sink, PlayerV2Sink) and sink.status is not None:
+            if isinstance(sink, PlayerSdk1Sink) and sink.status is not None:
                 _v2_report(report, sink.status, layout)
-            elif isinstance(sink, PlayerV3Sink) and "ServerDevices" in sink.server_messages:
+            elif isinstance(sink, PlayerSdk2Sink) and "ServerDevices" in sink.server_messages:
                 _v3_report(report, sink.server_messages["ServerDevices"], layout)
     except Exception as exc:  # the connection dropped while asking: report what is known
         report.error = str(exc) or exc.__class__.__name__

@@ -17,16 +17,16 @@ from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, Union
 
 
-from ..comfort import Comfort
+from ..show.comfort import Comfort
 from ..errors import UsageError
 from ..limits import checked_json_text
-from ..render.params import DEFAULT_PRESET
+from ..renderer.params import DEFAULT_PRESET
 from ..show import Show, live_music
 from .cue_trigger import live_cues, run_with_cues
 from .engine import AudioChannel, LiveEngine
-from .devices import DeviceMap
-from .wire.player_v2 import tact_project
-from .sinks import BroadcastSink, OscOutSink, PlayerV2Sink, PlayerV3Sink, RecorderSink, Sink
+from ..bhaptics.device_map import DeviceMap
+from ..bhaptics.sdk1 import tact_project
+from .sinks import BroadcastSink, OscOutSink, PlayerSdk1Sink, PlayerSdk2Sink, RecorderSink, Sink
 from .sources import ClockSource, ReplaySource, Source, network_source
 from .stats import LiveStats
 from .urls import Endpoint, parse_sink, parse_source
@@ -61,7 +61,7 @@ def build_sink(ep: Endpoint, *, dmap: DeviceMap, layout_name: str, fps: float,
     """A sink object for a parsed ``--sink``; ``audience`` holds what a ``nats://`` sink describes to its seats
     (:func:`hapmotion.audience.publisher.publisher_sink`)."""
     if ep.kind == "player":
-        return PlayerV2Sink(dmap, host=ep.host, port=ep.port, path=ep.path or "/v2/feedbacks",
+        return PlayerSdk1Sink(dmap, host=ep.host, port=ep.port, path=ep.path or "/v2/feedbacks",
                             app_id=ep.option("app_id"), app_name=ep.option("app_name"),
                             duration_ms=ep.int_option("duration"), key_prefix=ep.option("key") or "hapmotion",
                             registrations=_registrations(ep), fps=fps)
@@ -71,7 +71,7 @@ def build_sink(ep: Endpoint, *, dmap: DeviceMap, layout_name: str, fps: float,
         if not (wid and key):
             log.warning("player-v3: no workspace id / API key given (--workspace-id, --api-key or "
                         "BHAPTICS_WORKSPACE_ID / BHAPTICS_API_KEY); the Player may refuse the connection")
-        return PlayerV3Sink(dmap, workspace_id=wid or "hapmotion", api_key=key,
+        return PlayerSdk2Sink(dmap, workspace_id=wid or "hapmotion", api_key=key,
                             version=ep.option("version") or version, host=ep.host, port=ep.port,
                             path=ep.path or "/v3/feedback", duration_ms=ep.int_option("duration"), fps=fps)
     if ep.kind == "osc":
@@ -127,7 +127,7 @@ async def live(
     and ``comfort`` (the wearer's gain and limits, the last stage of every row). The mode
     defaults to ``"multimodal"`` with music and ``"motion"`` without; ``"audio"`` plays the song's channel alone
     (no source). ``renderer`` replaces the show's ``Renderer``. ``cues`` (a cue list file or
-    :class:`~hapmotion.cues.CueList`) are layered onto the rows at their show times; ``cue_port`` (``PORT`` or
+    :class:`~hapmotion.show.cues.CueList`) are layered onto the rows at their show times; ``cue_port`` (``PORT`` or
     ``HOST:PORT``, loopback by default) also fires them by name by OSC (:mod:`~hapmotion.live.cue_trigger`). Every
     sink is sent turn-off before this returns or raises.
     """

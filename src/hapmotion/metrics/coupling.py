@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage, stats
 
-from ..joints import JOINT_INDEX
+from ..skeleton.joints import JOINT_INDEX
 
 __all__ = [
     "HANDS",

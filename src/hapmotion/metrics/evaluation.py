@@ -138,7 +138,7 @@ def evaluate(
     progress:
         Called with a short label after each rendered run (for progress bars).
     """
-    from ..render.params import PRESETS
+    from ..renderer.params import PRESETS
     from ..show import Show, render_motion, render_show
 
     t_start = time.perf_counter()

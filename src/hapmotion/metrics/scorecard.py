@@ -21,7 +21,7 @@ from .constancy import level_controlled_spread_db
 from .coupling import coupling, energy, hand_speeds, pearson, reach, smooth, spearman, total_intensity
 from .events import kick_times, match_events
 from .felt import felt_share, median_peak, moving_frames, still_frames, stillness_ratio
-from .limits import dead_zone_rate, saturation_rate
+from .saturation import dead_zone_rate, saturation_rate
 from .locus import active_hand, jumps_per_s, lateral_accuracy, locus_errors, mean_finite
 from .motor import DEFAULT_MOTOR, MotorModel, drive, simulate
 from .smoothness import burst_sparc, jerk_rms, power_above, toggles_per_s

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
-from .limits import SENT_MIN
+from .saturation import SENT_MIN
 
 __all__ = ["jerk_rms", "toggles_per_s", "power_above", "sparc", "burst_sparc"]
 

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..body.model import BodyModel
-from ..joints import JOINT_INDEX, N_JOINTS
+from ..skeleton.joints import JOINT_INDEX, N_JOINTS
 from ..layout import Layout, load_layout
 from ..motion import Motion, new_motion
 from .constancy import energy_range_db
@@ -294,8 +294,8 @@ def run_bench(
     for the preset's phantom model, plus ``energy_db`` ``(T_sweep,)`` (dB re. the sweep's maximum: 0 where the
     energy is highest, the dips below) and ``progress`` ``(T_sweep, 2)`` (grid coordinates) for figures.
     """
-    from ..render import render
-    from ..render.renderer import resolve_params
+    from ..renderer import render
+    from ..renderer.renderer import resolve_params
     from .motor import simulate
 
     layout = layout or load_layout()

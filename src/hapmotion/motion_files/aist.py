@@ -6,7 +6,7 @@ rebuilds plain numpy arrays, dicts and lists; anything else is refused with an :
 
 Joint mapping (COCO-17 index -> canonical): wrists 9/10 -> WRIST_* and HAND_* (COCO has no hand point; BVH readers
 use the wrist for HAND_* too), shoulders 5/6, elbows 7/8, hips 11/12, knees 13/14, ankles 15/16, nose 0, eyes 1/2,
-ears 3/4. Derived (:func:`hapmotion.motion_files.derived_joints.derive_missing`): PELVIS = mid hips, NECK = mid shoulders, SPINE_NAVEL and
+ears 3/4. Derived (:func:`hapmotion.skeleton.derived.derive_missing`): PELVIS = mid hips, NECK = mid shoulders, SPINE_NAVEL and
 SPINE_CHEST on PELVIS -> NECK at 0.38 and 0.60, HEAD = mid ears (nose where an ear is missing). Frames with NaN
 keypoints (some AIST++ sequences have them) are gaps.
 """
@@ -21,9 +21,9 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..joints import JOINT_INDEX, N_JOINTS
+from ..skeleton.joints import JOINT_INDEX, N_JOINTS
 from ..motion import Motion, new_motion
-from .derived_joints import derive_missing
+from ..skeleton.derived import derive_missing
 from ..limits import DEFAULT_LIMITS, InputLimits, check_frames, read_bytes
 from .options import ReaderOptions, skip_count
 from .units import units_or_default

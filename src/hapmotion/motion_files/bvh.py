@@ -27,10 +27,10 @@ from typing import Optional
 import numpy as np
 
 from ..errors import InputError
-from ..joints import JOINT_INDEX, JOINTS, N_JOINTS
+from ..skeleton.joints import JOINT_INDEX, JOINTS, N_JOINTS
 from ..motion import Motion, new_motion
-from . import skeletons
-from .derived_joints import derive_missing, missing_needed
+from ..skeleton import naming as skeletons
+from ..skeleton.derived import derive_missing, missing_needed
 from .joint_map import MAP_EXAMPLE, load_joint_map
 from ..limits import DEFAULT_LIMITS, InputLimits, check_frames, over_limit, read_bytes
 from .options import FPS_RANGE, ReaderOptions, fps_in_range, skip_count, snap_rate
@@ -459,7 +459,7 @@ def unmatched_message(missing: list[str], bvh: BvhFile, mapping: dict[str, str])
     matched as its nearest canonical ancestor: the hand is a joint below the elbow), then the names that look
     most alike.
     """
-    from ..joints import JOINT_INDEX, PARENTS
+    from ..skeleton.joints import JOINT_INDEX, PARENTS
 
     names = bvh.names
     index = {j.name: k for k, j in enumerate(bvh.joints)}

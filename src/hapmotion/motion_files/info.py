@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from ..joints import JOINTS
+from ..skeleton.joints import JOINTS
 from ..motion import Motion
 
 

@@ -10,7 +10,7 @@ table), for example ``map.toml``::
     "torso_2" = "SPINE_CHEST"
 
 or ``{"joints": {"lhnd": "HAND_LEFT", "rhnd": "HAND_RIGHT"}}`` in JSON. Canonical names are the 32 Azure Kinect
-joints (``hapmotion.joints.JOINTS``), case-insensitive. Joints the map leaves out are matched automatically.
+joints (``hapmotion.skeleton.joints.JOINTS``), case-insensitive. Joints the map leaves out are matched automatically.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import os
 from typing import Any, Mapping
 
 from ..errors import InputError, UsageError
-from ..joints import JOINTS, canonical
+from ..skeleton.joints import JOINTS, canonical
 
 MAP_EXAMPLE = '"YourJointName" = "HAND_LEFT"'
 """One line of a map, for messages."""

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..joints import JOINTS, N_JOINTS, canonical
+from ..skeleton.joints import JOINTS, N_JOINTS, canonical
 from ..motion import Motion, new_motion
 from ..limits import check_frames, load_json
 from .options import FPS_RANGE, ReaderOptions, fps_in_range, skip_count, snap_rate

@@ -26,10 +26,10 @@ import numpy as np
 import numpy.lib.format as npy_format
 
 from ..errors import InputError, UsageError
-from ..joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS, canonical
+from ..skeleton.joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS, canonical
 from ..motion import Motion, new_motion
 from ..filesafety import atomic_path
-from .derived_joints import derive_missing
+from ..skeleton.derived import derive_missing
 from ..limits import InputLimits, check_frames, over_limit, read_bytes
 from .options import FPS_RANGE, MAX_FPS, MIN_FPS, STEP_RANGE, ReaderOptions, skip_count, fps_in_range
 from .units import units_or_default

@@ -6,7 +6,7 @@ import math
 from typing import Optional
 
 from ..errors import UsageError
-from .skeletons import CMU_METRES_PER_UNIT
+from ..skeleton.naming import CMU_METRES_PER_UNIT
 
 UNITS: dict[str, float] = {
     "m": 1.0,

@@ -18,7 +18,7 @@ from ..limits import LimitsArg, as_limits
 from .csv_track import read_csv, write_csv
 from .json_track import read_json, write_json
 from .npz_track import read_npz, write_npz
-from .tact import read_tact, tact_paths, write_tact
+from ..bhaptics.tact.files import read_tact, tact_paths, write_tact
 
 WRITERS = {".csv": write_csv, ".json": write_json, ".npz": write_npz, ".tact": write_tact}
 READERS = {".csv": read_csv, ".json": read_json, ".npz": read_npz, ".tact": read_tact}

@@ -36,13 +36,13 @@ import numpy as np
 
 from .. import __version__
 from ..errors import InputError, UsageError
-from ..joints import BONES, JOINTS
+from ..skeleton.joints import BONES, JOINTS
 from ..motion import Motion
 from ..track import HapticTrack
 from ..filesafety import atomic_path
 from . import packing
 from .colors import SCALE_TOPS, bright_from, page_colors
-from .signals import ENERGY_UNITS, track_motion_energy, triangle_vertices
+from .curves import ENERGY_UNITS, track_motion_energy, triangle_vertices
 
 PANEL_TEXT = {
     # Vest panels: col 0 is the wearer's left on BOTH panels (the layout stored in every bHaptics .tact file of type Tactot, e.g. GitHub bhaptics/tact-python CenterX.tact), so both are drawn with

@@ -16,7 +16,7 @@ from ..errors import UsageError
 from ..track import HapticTrack, parse_actuator_id
 from ..filesafety import atomic_path
 from .colors import plot_cmap, scale_top
-from .signals import ENERGY_UNITS, total_intensity, track_motion_energy
+from .curves import ENERGY_UNITS, total_intensity, track_motion_energy
 
 MAX_COLUMNS = 3000
 """Heat map columns drawn at most; longer tracks are max-pooled so a short pulse never disappears."""

@@ -4,9 +4,9 @@ from .base import Sink
 from .ws_client import WebSocketClientSink
 from .broadcast import BroadcastSink
 from .osc_out import OscOutSink
-from .player_v2 import PlayerV2Sink
-from .player_v3 import PlayerV3Sink
+from .player_sdk1 import PlayerSdk1Sink
+from .player_sdk2 import PlayerSdk2Sink
 from .recorder import RecorderSink
 
-__all__ = ["BroadcastSink", "OscOutSink", "PlayerV2Sink", "PlayerV3Sink", "RecorderSink", "Sink",
+__all__ = ["BroadcastSink", "OscOutSink", "PlayerSdk1Sink", "PlayerSdk2Sink", "RecorderSink", "Sink",
            "WebSocketClientSink"]

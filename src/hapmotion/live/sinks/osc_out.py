@@ -14,7 +14,7 @@ from typing import Any, Optional
 import numpy as np
 
 from ...errors import UsageError
-from ..devices import DeviceMap
+from ...bhaptics.device_map import DeviceMap
 from ..frames import OutFrame
 from ..wire.osc_address import OSC_PREFIX
 from ..wire.osc_out import OscOutEncoder

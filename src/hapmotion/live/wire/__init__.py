@@ -5,8 +5,7 @@ return :class:`~hapmotion.live.frames.SkeletonFrame` s; encoders take a row of i
 bytes/text to send. :mod:`hapmotion.live.sources` and :mod:`hapmotion.live.sinks` only move these messages, so
 every rule of a wire format is unit-tested without a network.
 
-In (skeletons): :mod:`.osc_in` (OSC over UDP), :mod:`.ws_in` (WebSocket JSON).
-Out (rows): :mod:`.player_v2` (bHaptics Player SDK1), :mod:`.player_v3` (SDK2), :mod:`.osc_out`,
-:mod:`.broadcast` (the viewer schema of docs/CONTRACTS.md). Shared conventions: :mod:`.osc_address`,
-:mod:`.player_json`.
+In (skeletons): :mod:`.osc_in` (OSC over UDP), :mod:`.ws_in` (WebSocket JSON), :mod:`.vmc_in` (the VMC
+protocol). Out (rows): :mod:`.osc_out`, :mod:`.broadcast` (the viewer schema of docs/CONTRACTS.md); the bHaptics
+Player's SDK1 and SDK2 messages are in :mod:`hapmotion.bhaptics`. Shared conventions: :mod:`.osc_address`.
 """

@@ -7,7 +7,7 @@ from typing import Any, Mapping, Optional, Sequence
 
 import numpy as np
 
-from ...joints import BONES, JOINTS
+from ...skeleton.joints import BONES, JOINTS
 
 
 def _xyz(v: Any) -> Optional[list[float]]:

@@ -17,7 +17,7 @@ import numpy as np
 from pythonosc.osc_bundle import OscBundle
 from pythonosc.osc_packet import OscPacket
 
-from ...joints import N_JOINTS
+from ...skeleton.joints import N_JOINTS
 from ..frames import SkeletonFrame, joint_index
 from ..hygiene import Faults, is_number, seq_value, time_value
 from .osc_address import OSC_PREFIX, normalize_prefix

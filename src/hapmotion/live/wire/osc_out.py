@@ -8,7 +8,7 @@ import numpy as np
 from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
 from pythonosc.osc_message_builder import OscMessageBuilder
 
-from ..devices import DeviceMap
+from ...bhaptics.device_map import DeviceMap
 from .osc_address import OSC_PREFIX, normalize_prefix
 
 

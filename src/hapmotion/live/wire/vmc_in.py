@@ -8,7 +8,7 @@ docs/marionette-spec; OSC over UDP, port 39539 by default, packets may be bundle
   (name ``"root"``); the spec recommends receivers take it as a local pose. The v2.1 MR scale and offset are
   ignored (they fit the avatar to a camera picture, not to the performer).
 * ``/VMC/Ext/Bone/Pos (s)name (f)p.x p.y p.z q.x q.y q.z q.w`` - one bone's *local* pose (relative to its parent
-  transform), named by Unity's ``HumanBodyBones`` (:mod:`hapmotion.humanoid`); every bone is sent, ``LastBone``
+  transform), named by Unity's ``HumanBodyBones`` (:mod:`hapmotion.skeleton.humanoid`); every bone is sent, ``LastBone``
   included.
 * ``/VMC/Ext/OK (i)loaded [(i)calibration state (i)calibration mode [(i)tracking status]]`` - 0 before an avatar is
   loaded (no bone data is meaningful); calibration state 0 uncalibrated, 1 waiting for calibration,
@@ -57,9 +57,9 @@ import numpy as np
 from pythonosc.osc_bundle import OscBundle
 from pythonosc.osc_packet import OscPacket
 
-from ...humanoid import (BONE_INDEX, CANONICAL_TO_BONE, HUMAN_BODY_BONES, LAST_BONE, N_BONES, SPINE_BONES,
+from ...skeleton.humanoid import (BONE_INDEX, CANONICAL_TO_BONE, HUMAN_BODY_BONES, LAST_BONE, N_BONES, SPINE_BONES,
                          bone_name, present_parent)
-from ...joints import JOINT_INDEX, N_JOINTS, RENDER_JOINTS
+from ...skeleton.joints import JOINT_INDEX, N_JOINTS, RENDER_JOINTS
 from ..frames import SkeletonFrame
 from ..hygiene import Faults, is_number
 
@@ -350,7 +350,7 @@ class VmcDecoder:
         pos = np.full((N_JOINTS, 3), np.nan)
         pos[joints] = unity_to_ours([world[b][0] for b in bones])  # type: ignore[index]
         if np.isnan(pos[_NEEDED]).any():
-            from ...motion_files.derived_joints import derive_missing
+            from ...skeleton.derived import derive_missing
 
             derive_missing(pos[None])
         return pos
@@ -382,7 +382,7 @@ class VmcDecoder:
         """Choose the SPINE_NAVEL and SPINE_CHEST bones by where they sit on Hips -> Neck in this pose (the first
         after the avatar's bones arrived), as the readers place any spine; without a Neck bone the middle of the
         upper arms stands for it. A point no bone sits near is left out and derived from PELVIS and NECK."""
-        from ...motion_files.skeletons import assign_spine
+        from ...skeleton.naming import assign_spine
 
         self._spine_placed = True
         self.spine = {}

@@ -15,7 +15,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ...joints import N_JOINTS
+from ...skeleton.joints import N_JOINTS
 from ..frames import SkeletonFrame, joint_index
 from ..hygiene import Faults, as_float, seq_value, time_value
 

@@ -2,7 +2,7 @@
 ``SdkStopAll`` and the Player's replies, as bHaptics' own SimHub plugin speaks them without any bHaptics binary
 (GitHub ``bhaptics/tact-simhub`` ``bHapticsSimHub/BhapticsWebsocket.cs``, ``bHapticsSimHub/Model/Sdk2Message.cs``).
 Which SDK2 position and array slot each device fills comes from the layout file
-(:class:`~hapmotion.live.devices.DeviceMap`), the one place that says so."""
+(:class:`~hapmotion.bhaptics.device_map.DeviceMap`), the one place that says so."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ..devices import DeviceMap
+from .device_map import DeviceMap
 from .player_json import get_ci, json_object, to_int_percent
 
 

@@ -2,7 +2,7 @@
 
 numba compiles the frame loop over plain arrays; this module names every slot of them:
 
-- joints ``(T, N_RENDER_JOINTS, 3)``: world metres, in :data:`hapmotion.joints.RENDER_JOINTS` order (``J_*``);
+- joints ``(T, N_RENDER_JOINTS, 3)``: world metres, in :data:`hapmotion.skeleton.joints.RENDER_JOINTS` order (``J_*``);
 - parameters ``(N_PARAMS,)``: filled by ``render.renderer.pack_params`` (``P_*``);
 - surface ``(N_SURFACE,)``: ``BodyModel.as_array()`` (``S_*``), body coordinates, metres;
 - chart table ``(4, N_CHART_COLUMNS)``: ``Layout.chart_table()``, one row per ``layout.CHART_*`` (``C_*`` columns);
@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..body.frame import DEFAULT_AXES
-from ..joints import RENDER_JOINTS
+from ..skeleton.joints import RENDER_JOINTS
 
 # ---- joints: rows of the joint array, in RENDER_JOINTS order
 N_RENDER_JOINTS = len(RENDER_JOINTS)

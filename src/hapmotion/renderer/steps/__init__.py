@@ -14,7 +14,7 @@ step   what                                                                  whe
 out    mirror (step 6), dead zone, per-actuator release                      ``output``
 =====  ====================================================================  ==========================
 
-``hapmotion.render.kernel.render_frames`` runs them in order, frame by frame; docs/algorithm.md names every function
+``hapmotion.renderer.kernel.render_frames`` runs them in order, frame by frame; docs/algorithm.md names every function
 and gives the paper's text and our reading for each step. Every function is ``@njit(cache=True)`` on plain arrays
 and scalars, so each can also be called (and tested) from Python on its own. The small ones are compiled
 ``inline="always"`` into the loop, which then runs as fast as one long function.

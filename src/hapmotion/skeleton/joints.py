@@ -32,7 +32,7 @@ RENDER_JOINTS: tuple[str, ...] = (
     "HAND_LEFT", "HAND_RIGHT", "SHOULDER_LEFT", "SHOULDER_RIGHT", "SPINE_NAVEL", "PELVIS", "NECK",
 )
 """Joints every motion must provide (read or derived) before it can be rendered, in the order the compiled renderer
-receives them (``hapmotion.render.packed`` derives its joint indices from this tuple)."""
+receives them (``hapmotion.renderer.packed`` derives its joint indices from this tuple)."""
 
 # Skeleton edges worth drawing (parent, child), for viewers and plots.
 BONES: tuple[tuple[int, int], ...] = tuple((p, c) for c, p in enumerate(PARENTS) if p >= 0)

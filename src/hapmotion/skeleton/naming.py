@@ -302,7 +302,7 @@ def assign_spine(pelvis: np.ndarray, neck: np.ndarray, chain: dict[str, np.ndarr
     the navel (0.38) and the chest (0.60) point takes the nearest joint within :data:`SPINE_TOLERANCE`; one joint
     serves one point only (the nearer one); a point with no joint near enough is left out (and derived later).
     """
-    from .derived_joints import CHEST_FRACTION, NAVEL_FRACTION
+    from .derived import CHEST_FRACTION, NAVEL_FRACTION
 
     axis = np.asarray(neck, dtype=float) - np.asarray(pelvis, dtype=float)
     length2 = float(axis @ axis)

@@ -15,11 +15,11 @@ from urllib.parse import urlencode
 import numpy as np
 
 from ...errors import UsageError
-from ..devices import DeviceMap
+from ...bhaptics.device_map import DeviceMap
 from ..frames import OutFrame
-from ..wire.player_v3 import parse_v3_message, v3_auth_message, v3_dot_messages, v3_stop_all
+from ...bhaptics.sdk2 import parse_v3_message, v3_auth_message, v3_dot_messages, v3_stop_all
 from .ws_client import WebSocketClientSink
-from .player_v2 import PLAYER_TICK_S, _host, default_duration_ms
+from .player_sdk1 import PLAYER_TICK_S, _host, default_duration_ms
 
 
 def insecure_tls_context() -> ssl.SSLContext:
@@ -32,7 +32,7 @@ def insecure_tls_context() -> ssl.SSLContext:
     return ctx
 
 
-class PlayerV3Sink(WebSocketClientSink):
+class PlayerSdk2Sink(WebSocketClientSink):
     """Streams rows to the Player's SDK2 endpoint.
 
     Parameters
@@ -44,7 +44,7 @@ class PlayerV3Sink(WebSocketClientSink):
         message: an ``int`` or a string of digits (the SINK option ``version=``); anything else is a
         :class:`~hapmotion.errors.UsageError`.
     host, port, path, duration_ms:
-        As for :class:`~hapmotion.live.sinks.player_v2.PlayerV2Sink` (default ``127.0.0.1:15882/v3/feedback``).
+        As for :class:`~hapmotion.live.sinks.player_sdk1.PlayerSdk1Sink` (default ``127.0.0.1:15882/v3/feedback``).
     """
 
     def __init__(self, dmap: DeviceMap, *, workspace_id: str = "hapmotion", api_key: str = "",

@@ -12,7 +12,7 @@ missing, and then a bone hangs from its nearest ancestor that exists (:func:`pre
 UpperChest has its shoulders and neck under Chest.
 
 Mapping onto the canonical (Azure Kinect) joints follows the readers' conventions
-(:mod:`hapmotion.motion_files.skeletons`): the ``*Hand`` bone, which Unity documents as the wrist, is both
+(:mod:`hapmotion.skeleton.naming`): the ``*Hand`` bone, which Unity documents as the wrist, is both
 ``WRIST_*`` and ``HAND_*``; ``*UpperArm`` (the humerus head) is ``SHOULDER_*`` and ``*Shoulder`` is the clavicle;
 SPINE_NAVEL and SPINE_CHEST are the Spine/Chest/UpperChest bones that sit nearest the navel and chest points of
 the Hips-Neck line (:data:`SPINE_BONES`), as the readers place any spine. Finger bones and the jaw are not mapped.

@@ -13,10 +13,10 @@ import math
 from typing import Any, Mapping, Optional
 from urllib.parse import urlencode
 
-from ..devices import DeviceMap
+from ...bhaptics.device_map import DeviceMap
 from ..frames import OutFrame
-from ..wire.player_json import PLAYER_TICK_MS
-from ..wire.player_v2 import parse_v2_status, v2_frame_message, v2_register_message, v2_turn_off_all
+from ...bhaptics.player_json import PLAYER_TICK_MS
+from ...bhaptics.sdk1 import parse_v2_status, v2_frame_message, v2_register_message, v2_turn_off_all
 from .ws_client import WebSocketClientSink
 
 import numpy as np
@@ -31,7 +31,7 @@ def default_duration_ms(fps: float) -> int:
     return max(2 * PLAYER_TICK_MS, int(math.ceil(2000.0 / fps)))
 
 
-class PlayerV2Sink(WebSocketClientSink):
+class PlayerSdk1Sink(WebSocketClientSink):
     """Streams rows to the Player's SDK1 endpoint.
 
     Parameters

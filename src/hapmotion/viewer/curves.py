@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..joints import JOINT_INDEX
+from ..skeleton.joints import JOINT_INDEX
 from ..motion import Motion
 from ..track import HapticTrack
 

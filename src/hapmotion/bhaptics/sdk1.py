@@ -10,8 +10,8 @@ from typing import Any, Mapping, Optional
 
 import numpy as np
 
-from ...errors import InputError
-from ..devices import DeviceMap
+from ..errors import InputError
+from .device_map import DeviceMap
 from .player_json import get_ci, json_object, to_int_percent
 
 # SDK1 frame positions (the position names of the clients above). "Vest" is deliberately absent: bHaptics staff say

@@ -3,7 +3,7 @@
 Batch rendering of a recording and stepping it frame by frame give *exactly* the same numbers because they run
 this same code: batch calls :func:`render_frames` once with all T frames, ``step`` calls it with one frame; the
 state vector carries everything between calls. The loop only sequences the paper's steps (Jung et al., Virtual
-Reality 28:13, 2024, Section 4); each step is a compiled function of :mod:`hapmotion.render.steps`, and
+Reality 28:13, 2024, Section 4); each step is a compiled function of :mod:`hapmotion.renderer.steps`, and
 docs/algorithm.md maps the steps onto them with every interpretation.
 
 The loop allocates its scratch arrays once per call and nothing per frame (about a microsecond per frame).

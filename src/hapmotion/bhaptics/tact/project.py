@@ -11,9 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
-from ..layout import device_type, type_for_position
-from .tact_render import MOVING_PATTERNS, PLAYBACK_TYPES, DotFrame, Effect, PathPoint, PositionPart
+from ...errors import InputError
+from ...layout import device_type, type_for_position
+from .render import MOVING_PATTERNS, PLAYBACK_TYPES, DotFrame, Effect, PathPoint, PositionPart
 
 MAX_MOTORS = 64
 """Most motors one position may list."""

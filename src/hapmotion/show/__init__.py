@@ -3,7 +3,7 @@
 A :class:`Show` holds every choice that turns a performance into vibration: the renderer (method, preset,
 parameter overrides, mirroring), the paper's study-2 condition (``mode``: motion, audio or both mixed), the music
 (file, offset, mix ratio and rule), the length rule and the wearer's gain and comfort limits (applied to every row
-that leaves the show, files and live alike: :mod:`hapmotion.comfort`). Every entry point composes a show here and nowhere else:
+that leaves the show, files and live alike: :mod:`hapmotion.show.comfort`). Every entry point composes a show here and nowhere else:
 
 * offline, :func:`render_show` turns a :class:`~hapmotion.motion.Motion` (and/or the music) into a
   :class:`~hapmotion.track.HapticTrack` (``hapmotion render``, ``demo``, ``view``, ``plot``, ``evaluate``);
@@ -33,15 +33,15 @@ from typing import Any, Callable, Mapping, Optional, Sequence
 
 import numpy as np
 
-from .audio.analysis import analyze_file
-from .audio.mix import check_ratio, limit_power, mix, resolve_rule
-from .audio.params import DEFAULT_PARAMS, MIX_DOMAINS, MIX_RULES, AudioParams, params_for_preset
-from .audio.pattern import actuators_of, audio_track, layout_of
+from ..audio.analysis import analyze_file
+from ..audio.mix import check_ratio, limit_power, mix, resolve_rule
+from ..audio.params import DEFAULT_PARAMS, MIX_DOMAINS, MIX_RULES, AudioParams, params_for_preset
+from ..audio.pattern import actuators_of, audio_track, layout_of
 from .comfort import Comfort, Limiter, limit_rows
-from .errors import UsageError
-from .motion import Motion
-from .render.params import DEFAULT_PRESET, METHODS, PRESETS, Params
-from .track import HapticTrack
+from ..errors import UsageError
+from ..motion import Motion
+from ..renderer.params import DEFAULT_PRESET, METHODS, PRESETS, Params
+from ..track import HapticTrack
 
 MODES = ("multimodal", "motion", "audio")
 """The paper's study-2 conditions: motion and music mixed, the motion alone, the music alone."""
@@ -69,8 +69,8 @@ class Show:
     keeps the motion's rate (60 frames/s for the music alone). ``layout`` ``None`` is the default X40 + two shoulder
     sleeves. ``mix_rule`` ``None`` is the preset's (``paper`` for the paper preset, ``duck`` otherwise;
     ``mix_domain``, the older spelling, wins when given). ``cues`` is a cue list (a file or a
-    :class:`~hapmotion.cues.CueList`) layered over motion and music by :func:`hapmotion.cues.layer`. ``comfort``
-    holds the wearer's gain and limits, applied to every row that leaves the show (:mod:`hapmotion.comfort`).
+    :class:`~hapmotion.show.cues.CueList`) layered over motion and music by :func:`hapmotion.show.cues.layer`. ``comfort``
+    holds the wearer's gain and limits, applied to every row that leaves the show (:mod:`hapmotion.show.comfort`).
     """
 
     method: str = "mst"
@@ -100,7 +100,7 @@ class Show:
         if self.mix_rule is not None:
             _choice(self.mix_rule, MIX_RULES, "mix rule")
         if not isinstance(self.comfort, Comfort):
-            raise UsageError(f"comfort must be a hapmotion.comfort.Comfort, not {type(self.comfort).__name__}")
+            raise UsageError(f"comfort must be a hapmotion.show.comfort.Comfort, not {type(self.comfort).__name__}")
         _choice(self.length, LENGTH_RULES, "length rule")
         object.__setattr__(self, "mix_ratio", check_ratio(self.mix_ratio))
         try:
@@ -135,7 +135,7 @@ class Show:
 
     def params(self) -> Params:
         """The renderer's parameters: the preset, then the overrides, then ``mirror``."""
-        from .render.renderer import resolve_params
+        from ..renderer.renderer import resolve_params
 
         changes = dict(self.overrides)
         if self.mirror is not None:
@@ -145,7 +145,7 @@ class Show:
     def load_layout(self):
         """The device layout (:class:`~hapmotion.layout.Layout`): ``layout`` itself, a file it names, or the
         default."""
-        from .layout import Layout, load_layout
+        from ..layout import Layout, load_layout
 
         if isinstance(self.layout, Layout):
             return self.layout
@@ -153,7 +153,7 @@ class Show:
 
     def renderer(self, fps: float, body: Any = None):
         """A live :class:`~hapmotion.render.Renderer` for this show at ``fps`` (``body`` ``None``: average adult)."""
-        from .render import Renderer
+        from ..renderer import Renderer
 
         return Renderer(self.method, self.params(), fps=fps, body=body, layout=self.load_layout())
 
@@ -171,7 +171,7 @@ class Show:
 def render_motion(show: Show, motion: Motion, progress: Optional[Callable[[int], object]] = None) -> HapticTrack:
     """The motion channel alone: ``motion`` resampled to ``show.fps`` (if set) and rendered with the show's
     renderer; ``progress(n_frames)`` is called as frames are done."""
-    from .render import render
+    from ..renderer import render
 
     if show.fps is not None:
         motion = motion.resample(show.fps)
@@ -210,7 +210,7 @@ def show_power_limit(n_actuators: int) -> Optional[float]:
 
 
 def load_show_cues(show: Show, limits: Any = None):
-    """The show's cue list (:class:`~hapmotion.cues.CueList`), read within ``limits`` if given as a file; ``None``
+    """The show's cue list (:class:`~hapmotion.show.cues.CueList`), read within ``limits`` if given as a file; ``None``
     without cues."""
     from .cues import CueList, load_cues
 
@@ -220,7 +220,7 @@ def load_show_cues(show: Show, limits: Any = None):
 
 
 def apply_cues(show: Show, track: HapticTrack) -> HapticTrack:
-    """``track`` with the show's cues layered on (:func:`hapmotion.cues.layer`, under :func:`show_power_limit`);
+    """``track`` with the show's cues layered on (:func:`hapmotion.show.cues.layer`, under :func:`show_power_limit`);
     unchanged without cues. ``meta["cues"]`` names the cue list and ``meta["cue_notes"]`` what was left out."""
     from .cues import cue_layer, layer
 
@@ -241,7 +241,7 @@ def apply_cues(show: Show, track: HapticTrack) -> HapticTrack:
 
 
 def apply_comfort(show: Show, track: HapticTrack) -> HapticTrack:
-    """``track`` with the show's gain and comfort limits applied to its rows (:func:`hapmotion.comfort.limit_rows`
+    """``track`` with the show's gain and comfort limits applied to its rows (:func:`hapmotion.show.comfort.limit_rows`
     from a fresh state); unchanged when they change nothing. ``meta["comfort"]`` records them."""
     if show.comfort.is_neutral:
         return track

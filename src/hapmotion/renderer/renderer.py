@@ -1,6 +1,6 @@
 """Renderer (sans-I/O, one frame at a time) and ``render`` (a whole recording at once).
 
-Both drive the same compiled frame loop (:func:`hapmotion.render.kernel.render_frames`), so ``render(motion)`` equals
+Both drive the same compiled frame loop (:func:`hapmotion.renderer.kernel.render_frames`), so ``render(motion)`` equals
 stepping a ``Renderer`` through the frames, number for number.
 """
 
@@ -12,7 +12,7 @@ import numpy as np
 
 from ..body.model import BodyModel
 from ..errors import UsageError
-from ..joints import JOINT_INDEX, RENDER_JOINTS
+from ..skeleton.joints import JOINT_INDEX, RENDER_JOINTS
 from ..layout import Layout, load_layout
 from ..motion import Motion
 from ..track import HapticTrack

@@ -2,7 +2,7 @@
 name (an OSC message from a lighting desk or Unity, :mod:`.cue_trigger`), with the offline layering rule.
 
 Each row the engine sends at show time ``t`` (frame ``j = floor(t * fps)``) gets the energy of every cue playing
-then, added by :func:`hapmotion.cues.layer` under the show's power limit, exactly as offline:
+then, added by :func:`hapmotion.show.cues.layer` under the show's power limit, exactly as offline:
 
 * a cue of the list plays its pattern row ``j - round(time_s * fps)`` (the offline timeline's placement), so a
   replay (or a ``--loop`` of it, whose show time starts again) plays its cues where ``hapmotion render`` puts them;
@@ -24,7 +24,7 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
-from ..cues import MAX_GAIN, Cue, CueList, layer, pattern_rows
+from .cues import MAX_GAIN, Cue, CueList, layer, pattern_rows
 from ..track import HapticTrack
 
 log = logging.getLogger("hapmotion.live")
@@ -42,7 +42,7 @@ class LiveCues:
     Parameters
     ----------
     cue_list:
-        The cues (:func:`hapmotion.cues.load_cues`).
+        The cues (:func:`hapmotion.show.cues.load_cues`).
     fps:
         The session's frame rate: patterns are resampled to it (peaks kept).
     actuators, mirror_map:
@@ -53,7 +53,7 @@ class LiveCues:
 
     def __init__(self, cue_list: CueList, *, fps: float, actuators: Sequence[str], mirror_map: np.ndarray,
                  power_limit: Any = "show"):
-        from ..show import show_power_limit
+        from . import show_power_limit
         from ..track_files import load_track
 
         self.cue_list = cue_list
@@ -145,7 +145,7 @@ class LiveCues:
 
     def layer(self, row: np.ndarray, t: float) -> np.ndarray:
         """``row`` ``(N,)`` 0..100 with the cues playing at show time ``t`` layered on by
-        :func:`hapmotion.cues.layer` (rows with no cue playing are left as they are)."""
+        :func:`hapmotion.show.cues.layer` (rows with no cue playing are left as they are)."""
         energy = self.energy_at(t)
         if not energy.any():
             return row

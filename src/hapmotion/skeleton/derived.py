@@ -6,7 +6,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ..joints import JOINT_INDEX
+from .joints import JOINT_INDEX
 
 # Where the derived torso joints sit on the segment PELVIS -> NECK (0 = pelvis, 1 = neck). Measured on the three
 # BVH skeletons of the test recordings (median over each clip of the spine joint's projection on PELVIS -> NECK):

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from .errors import UsageError
+from ..errors import UsageError
 
 MAX_GAIN = 5.0
 """Largest accepted gain (the bHaptics SDKs' scale options go up to a few times the original)."""

@@ -35,10 +35,10 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
-from .audio.mix import limit_power
-from .errors import InputError
-from .limits import DEFAULT_LIMITS, InputLimits, LimitsArg, as_limits, loads_json
-from .track import HapticTrack, parse_actuator_id
+from ..audio.mix import limit_power
+from ..errors import InputError
+from ..limits import DEFAULT_LIMITS, InputLimits, LimitsArg, as_limits, loads_json
+from ..track import HapticTrack, parse_actuator_id
 
 MAX_CUE_FILE_BYTES = 4 << 20
 """A cue list is a small hand-written file; anything larger is refused before reading."""
@@ -215,7 +215,7 @@ def cue_layer(cue_list: CueList, *, fps: float, n_frames: int, actuators: Sequen
               mirror_map: np.ndarray) -> np.ndarray:
     """Every cue of ``cue_list`` on one timeline: ``(n_frames, N)`` cue *energy* ``sum_k (g_k I_k / 100)^2``
     (the quantity :func:`layer` adds), cues past the end cut off. Each pattern file is read once."""
-    from .track_files import load_track
+    from ..track_files import load_track
 
     energy = np.zeros((n_frames, len(actuators)))
     loaded: dict[Path, HapticTrack] = {}

@@ -30,13 +30,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, UsageError
-from ..filesafety import atomic_path
-from ..layout import bhaptics_devices, load_layout, position_order, type_for_position
-from ..track import HapticTrack
-from ..limits import DEFAULT_LIMITS, InputLimits, check_frames, load_json
-from .tact_project import parse_project
-from .tact_render import TICK_MS, render
+from ...errors import InputError, UsageError
+from ...filesafety import atomic_path
+from ...layout import bhaptics_devices, load_layout, position_order, type_for_position
+from ...track import HapticTrack
+from ...limits import DEFAULT_LIMITS, InputLimits, check_frames, load_json
+from .project import parse_project
+from .render import TICK_MS, render
 
 TICK_FPS = 1000.0 / TICK_MS
 
