@@ -16,27 +16,43 @@ path turns every motor off.
 from __future__ import annotations
 
 import asyncio
+import os
 import heapq
 import itertools
 import logging
 import time
 from collections import OrderedDict
+from dataclasses import dataclass
 from typing import Any, Callable, Optional, Sequence, Union
 from urllib.parse import urlsplit
 
 import numpy as np
+from nats.aio.client import Client as NatsClient
+from nats.aio.msg import Msg
+from nats.aio.subscription import Subscription
+from nats.js.errors import KeyNotFoundError
+from nats.js.kv import KeyValue
 
+from ..body.model import BodyModel
 from ..errors import InputError, UsageError
-from ..bhaptics.device_map import DeviceMap
-from ..live.engine import AudioChannel, LiveEngine
+from ..layout import Layout
+from ..live.builders import NATS_ONLY_LIVE
+from ..show.cue_layer import LiveCues
+from ..live.engine import LiveEngine
 from ..live.frames import SkeletonFrame
-from ..live.sinks.base import Sink
+from ..live.session import Session, SinkSpec
 from ..live.sources import Source
 from ..live.stats import LiveStats
+from ..live.urls import parse_sink
+from ..renderer.renderer import Renderer
+from ..show.cues import MAX_GAIN, CueList
+from ..show.settings import Show
+from ..show.stage import OutputStage
+from ..show.timeline import RowTimeline
 from .clock import MediaClock
 from .publisher import connect, description_bucket
 from .seat import Seat, SeatSink, SeatStage
-from .wire import ShowDescription, check_show_name, decode_event, decode_frame, parse_description, subject
+from .wire import ShowDescription, WireFrame, check_show_name, decode_event, decode_frame, parse_description, subject
 
 log = logging.getLogger("hapmotion.live")
 
@@ -46,7 +62,6 @@ noticeable around 50 ms (see docs/audience.md)."""
 POLL_S = 0.5
 """How often a seat asks for the show description while it has none (or a wrong one)."""
 
-SinkSpec = Union[str, Callable[[DeviceMap, float], Sink]]
 
 
 def parse_show_url(text: str) -> tuple[str, str]:
@@ -61,53 +76,6 @@ def parse_show_url(text: str) -> tuple[str, str]:
     return f"nats://{host}:{port or 4222}", check_show_name(parts.path.strip("/"))
 
 
-class StreamedMusic(AudioChannel):
-    """The music's haptic rows as they arrive with the frames, looked up by media time.
-
-    ``mode`` is the seat's: ``"audio"`` rows go through the output stage of the music alone, ``"multimodal"`` rows
-    are mixed with each rendered motion row; both with the show's ratio, domain and power limit.
-    """
-
-    KEEP = 64  # rows waiting for the engine (it renders the newest submitted frame: a few at most)
-
-    def __init__(self, n: int, fps: float, music: dict[str, Any], mode: str, layout: Any):
-        from ..audio.params import params_for_preset
-        from ..audio.pattern import layout_of
-        from ..show import output_stage
-
-        # the same output stage as hapmotion.show.live_music at the venue: ratio, rule, limit, preset parameters
-        # and the actuators' positions
-        ratio = (float(music["mix_ratio"][0]), float(music["mix_ratio"][1]))
-        rule, limit = music["mix_rule"], music.get("power_limit")
-        params = params_for_preset(music["params_preset"])
-        geometry = layout_of(layout)
-        positions = geometry.positions() if geometry is not None else None
-
-        def mix(motion_row: np.ndarray, audio_row: np.ndarray) -> np.ndarray:
-            return output_stage(motion_row, audio_row, mode="multimodal", ratio=ratio, power_limit=limit, rule=rule,
-                                positions=positions, params=params)
-
-        def alone(audio_row: np.ndarray) -> np.ndarray:
-            return output_stage(np.zeros_like(audio_row), audio_row, mode="audio", ratio=ratio, power_limit=limit,
-                                rule=rule)
-
-        super().__init__(np.zeros((1, n)), fps, mix)
-        self._alone = alone if mode == "audio" else None
-        self._rows: OrderedDict[float, np.ndarray] = OrderedDict()
-
-    def put(self, media_t: float, row: Optional[np.ndarray]) -> None:
-        self._rows[media_t] = row if row is not None else self._zeros
-        while len(self._rows) > self.KEEP:
-            self._rows.popitem(last=False)
-
-    def row(self, t: float) -> np.ndarray:
-        raw = self._rows.get(t, self._zeros)
-        return self._alone(raw) if self._alone is not None else raw
-
-    def mixed(self, motion_row: np.ndarray, t: float) -> np.ndarray:
-        return np.asarray(self._mix(motion_row, self._rows.get(t, self._zeros)), dtype=np.float64)
-
-
 class AudienceSource(Source):
     """Frames of one show run (one ``epoch``) from NATS, each handed to the engine at its play time.
 
@@ -117,8 +85,8 @@ class AudienceSource(Source):
     :data:`LATE_S` ago) and frames out of order are counted by kind and skipped.
     """
 
-    def __init__(self, nc: Any, kv: Any, desc: ShowDescription, seat: Seat, *, mode: str,
-                 music: Optional[StreamedMusic], on_cue: Optional[Callable[[dict, float], None]] = None,
+    def __init__(self, nc: NatsClient, kv: KeyValue, desc: ShowDescription, seat: Seat, *, mode: str,
+                 music: Optional[RowTimeline], on_cue: Optional[Callable[[dict, float], None]] = None,
                  max_pending: Optional[int] = None):
         self.nc, self.kv, self.desc, self.seat, self.mode, self.music = nc, kv, desc, seat, mode, music
         self.name = f"nats show {desc.show}"
@@ -127,11 +95,11 @@ class AudienceSource(Source):
         self.changed: Optional[ShowDescription] = None
         self.ended = asyncio.Event()
         self.max_pending = max_pending or int(desc.fps * (seat.delay_s + 2.0)) + 64
-        self._heap: list[tuple[float, int, Any]] = []
+        self._heap: list[tuple[float, int, WireFrame]] = []
         self._count = itertools.count()
         self._arrived = asyncio.Event()
         self._last_seq: Optional[int] = None
-        self._subs: list[Any] = []
+        self._subs: list[Subscription] = []
         self._fetching: Optional[asyncio.Task] = None
         self._last_fetch = -1e9
         self._n_music = len(desc.actuators)
@@ -178,7 +146,7 @@ class AudienceSource(Source):
         except asyncio.TimeoutError:
             pass
 
-    def _submit(self, wf: Any, now: float) -> None:
+    def _submit(self, wf: WireFrame, now: float) -> None:
         if self.music is not None:
             self.music.put(wf.media_t, wf.music)
         positions = wf.skeleton if self.mode != "audio" else np.zeros((0, 3))
@@ -188,7 +156,7 @@ class AudienceSource(Source):
         self.engine.submit(SkeletonFrame(positions, None, None, now, show_t=wf.media_t))
 
     # ------------------------------------------------------------------ NATS callbacks
-    async def _on_frame(self, msg: Any) -> None:
+    async def _on_frame(self, msg: Msg) -> None:
         arrival = time.perf_counter()
         faults = self.engine.faults
         try:
@@ -221,7 +189,7 @@ class AudienceSource(Source):
         heapq.heappush(self._heap, (due, next(self._count), wf))
         self._arrived.set()
 
-    async def _on_cue(self, msg: Any) -> None:
+    async def _on_cue(self, msg: Msg) -> None:
         try:
             event = decode_event(msg.data)
         except ValueError as exc:
@@ -233,7 +201,7 @@ class AudienceSource(Source):
         if self.on_cue is not None:
             self.on_cue(event, due)
 
-    async def _on_end(self, msg: Any) -> None:
+    async def _on_end(self, msg: Msg) -> None:
         try:
             event = decode_event(msg.data)
         except ValueError as exc:
@@ -279,10 +247,8 @@ class AudienceSource(Source):
         self._subs = []
 
 
-async def fetch_description(kv: Any, show: str) -> tuple[Optional[ShowDescription], str]:
+async def fetch_description(kv: KeyValue, show: str) -> tuple[Optional[ShowDescription], str]:
     """The show's description, or (None, what is wrong): missing, unreadable, or not a description."""
-    from nats.js.errors import KeyNotFoundError
-
     try:
         entry = await kv.get(show)
     except KeyNotFoundError:
@@ -295,12 +261,21 @@ async def fetch_description(kv: Any, show: str) -> tuple[Optional[ShowDescriptio
         return None, str(exc)
 
 
-def seat_parts(desc: ShowDescription, seat: Seat) -> dict[str, Any]:
-    """What a seat session is built from: renderer, layout, mode, music; InputError when this machine cannot
-    render the described show."""
-    from ..body.model import BodyModel
-    from ..show import Show
+@dataclass
+class SeatShow:
+    """What one seat session is built from: the seat's layout, the mode it plays, its renderer (``None`` for the
+    music alone), and its output stage (the venue's mix with the seat's comfort and cues) fed by the music rows
+    that arrive with the frames."""
 
+    layout: Layout
+    mode: str
+    renderer: Optional[Renderer]
+    stage: OutputStage
+    music: Optional[RowTimeline]
+
+
+def seat_show(desc: ShowDescription, seat: Seat, cues: Optional[CueList] = None) -> SeatShow:
+    """The seat's session for the described show; InputError when this machine cannot render it."""
     src = f"show description {desc.show}"
     mode = seat.mode or desc.mode
     if desc.mode == "audio" and mode != "audio":
@@ -309,8 +284,8 @@ def seat_parts(desc: ShowDescription, seat: Seat) -> dict[str, Any]:
         raise InputError(src, "render.mode", f"the show carries no music; the seat's mode {mode} needs it")
     try:
         show = Show(method=seat.method or desc.render["method"], preset=seat.preset or desc.render["preset"],
-                    overrides=desc.render.get("overrides", {}),
-                    mirror=desc.render["mirror"] if seat.mirror is None else seat.mirror)
+                    overrides={**desc.render.get("overrides", {}), **seat.overrides},
+                    mirror=desc.render["mirror"] if seat.mirror is None else seat.mirror, layout=seat.layout)
         layout = show.load_layout()
     except UsageError as exc:
         raise InputError(src, "render", str(exc)) from None
@@ -318,21 +293,13 @@ def seat_parts(desc: ShowDescription, seat: Seat) -> dict[str, Any]:
         raise InputError(src, "actuators", f"the show's {len(desc.actuators)} actuators ({desc.layout}) are not "
                                            f"this seat's layout {layout.name}")
     renderer = None if mode == "audio" else show.renderer(desc.fps, body=BodyModel(**desc.body))
-    music = None if mode == "motion" else StreamedMusic(len(desc.actuators), desc.fps, desc.music or {}, mode,
-                                                        layout)
-    comfort = seat.comfort()
-    limiter = None if comfort.is_neutral else comfort_limiter(comfort, desc.fps, len(desc.actuators))
-    return {"renderer": renderer, "layout": layout, "mode": mode, "music": music, "comfort": limiter}
+    music = None if mode == "motion" else RowTimeline.streamed(len(desc.actuators), desc.fps)
+    stage = OutputStage.from_dict(desc.music or {}, mode, layout=layout, fps=desc.fps, comfort=seat.comfort,
+                                  cues=cues, music=music)
+    return SeatShow(layout, mode, renderer, stage, music)
 
 
-def comfort_limiter(comfort: Any, fps: float, n: int) -> Any:
-    """The engine's last stage for the seat's gain and comfort limits (:class:`hapmotion.show.comfort.Limiter`)."""
-    from ..show.comfort import Limiter
-
-    return Limiter(comfort, n, fps)
-
-
-async def _first_description(kv: Any, show: str, skip_epoch: Optional[int] = None) -> ShowDescription:
+async def _first_description(kv: KeyValue, show: str, skip_epoch: Optional[int] = None) -> ShowDescription:
     """Wait until a usable description is there (a different run than ``skip_epoch``); each problem logged once."""
     said: set[str] = set()
     while True:
@@ -345,11 +312,10 @@ async def _first_description(kv: Any, show: str, skip_epoch: Optional[int] = Non
         await asyncio.sleep(POLL_S)
 
 
-def _cue_player(seat_cues: Any, on_cue: Optional[Callable[[dict, float], None]]):
+def _cue_player(seat_cues: Optional[LiveCues], on_cue: Optional[Callable[[dict, float], None]]
+                ) -> Optional[Callable[[dict, float], None]]:
     """The seat's handler of an announced cue: fire it on the seat's cue layer when the seat's playback reaches the
     media time it was fired at (its due time, :class:`~hapmotion.audience.clock.MediaClock`), then tell ``on_cue``."""
-    from ..show.cues import MAX_GAIN
-
     def handle(event: dict, due: float) -> None:
         gain = event.get("gain", 1.0)
         usable = (isinstance(gain, (int, float)) and not isinstance(gain, bool) and 0.0 <= gain <= MAX_GAIN
@@ -366,7 +332,8 @@ def _cue_player(seat_cues: Any, on_cue: Optional[Callable[[dict, float], None]])
 async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(), handle_signals: bool = True,
                  stats_interval: Optional[float] = None, on_stats: Optional[Callable[[str], None]] = None,
                  on_ready: Optional[Callable[[LiveEngine], None]] = None,
-                 on_cue: Optional[Callable[[dict, float], None]] = None, cues: Any = None,
+                 on_cue: Optional[Callable[[dict, float], None]] = None,
+                 cues: Union[CueList, str, "os.PathLike[str]", None] = None,
                  sessions: Optional[list] = None) -> LiveStats:
     """Render the show at ``nats://HOST:PORT/SHOW`` for one seat until a stop signal; return the statistics of the
     last session (a new session starts when the show's settings change).
@@ -377,52 +344,40 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(), ha
     :class:`~hapmotion.show.cues.CueList`, the seat's copy of the venue's): its timed cues play at their media time, and
     the cues the venue fires are played when the seat reaches the media time they were fired at.
     """
-    from ..live.cue_trigger import live_cues
-    from ..live.session import NATS_ONLY_LIVE, build_sink
-    from ..live.urls import parse_sink
-
     server, show = parse_show_url(url)
     if not sinks:
         raise UsageError("at least one --sink is required")
-    parsed = [parse_sink(s) if isinstance(s, str) else s for s in sinks]
-    for p in parsed:
-        if not callable(p) and p.kind == "nats":  # refused before connecting, not once a show is found
-            raise UsageError(NATS_ONLY_LIVE.format(sink=p.text))
-    from ..layout import load_layout
-
-    SeatStage(seat, load_layout())  # a zone this seat's vest does not have is a usage error before connecting
+    for spec in sinks:
+        if isinstance(spec, str) and parse_sink(spec).kind == "nats":  # refused before connecting, not later
+            raise UsageError(NATS_ONLY_LIVE.format(sink=spec))
+    cue_list = Show(cues=cues).load_cues()
+    # a zone this seat's vest does not have, or a layout that cannot be read, is a usage error before connecting
+    SeatStage(seat, Show(layout=seat.layout).load_layout())
     try:
         nc = await connect(server, name=f"hapmotion seat {show}",
                            on_state=lambda state: log.info("seat: NATS %s", state))
     except Exception as exc:
         raise UsageError(f"{url}: cannot reach the NATS server ({exc.__class__.__name__}: {exc})") from None
-    stats = LiveStats.__new__(LiveStats)
     try:
         kv = await description_bucket(nc)
         desc = await _first_description(kv, show)
         while True:
             try:
-                parts = seat_parts(desc, seat)
+                parts = seat_show(desc, seat, cue_list)
             except InputError as exc:
                 log.warning("seat: %s; waiting for another description", exc)
                 desc = await _first_description(kv, show, skip_epoch=desc.epoch)
                 continue
-            layout, mode = parts["layout"], parts["mode"]
-            dmap = DeviceMap.from_layout(layout)
-            stage = SeatStage(seat, layout)
-            sink_objs = [SeatSink(build_sink(p, dmap=dmap, layout_name=layout.name, fps=desc.fps)
-                                  if not callable(p) else p(dmap, desc.fps), stage) for p in parsed]
-            seat_cues = live_cues(cues, fps=desc.fps, layout=layout, actuators=dmap.actuators)
-            source = AudienceSource(nc, kv, desc, seat, mode=mode, music=parts["music"],
-                                    on_cue=_cue_player(seat_cues, on_cue))
-            engine = LiveEngine(parts["renderer"], sink_objs, n_actuators=dmap.n, fps=desc.fps,
-                                stall_s=desc.stall_ms / 1000.0, audio=parts["music"], mode=mode,
-                                handle_signals=handle_signals, stats_interval=stats_interval, on_stats=on_stats,
-                                on_ready=on_ready, source_name=source.describe(), comfort=parts["comfort"],
-                                cues=seat_cues)
+            zones = SeatStage(seat, parts.layout)
+            source = AudienceSource(nc, kv, desc, seat, mode=parts.mode, music=parts.music,
+                                    on_cue=_cue_player(parts.stage.cues, on_cue))
+            session = Session(source, parts.renderer, parts.stage, parts.layout, sinks, fps=desc.fps,
+                              wrap=lambda sink: SeatSink(sink, zones), stall_s=desc.stall_ms / 1000.0,
+                              handle_signals=handle_signals, stats_interval=stats_interval, on_stats=on_stats,
+                              on_ready=on_ready)
             if sessions is not None:
-                sessions.append((engine, source))
-            stats = await engine.run(source)
+                sessions.append((session.engine, source))
+            stats = await session.run()
             if source.changed is None:
                 return stats
             desc = source.changed

@@ -15,23 +15,33 @@ import dataclasses
 import logging
 import secrets
 import time
-from typing import Any, Optional
+from typing import Callable, Optional
 
+import nats
+from nats.aio.client import Client as NatsClient
+from nats.js.api import StorageType
+from nats.js.errors import BucketNotFoundError
+from nats.js.kv import KeyValue
+
+from ..body.model import BodyModel
 from ..errors import UsageError
+from ..layout import Layout
 from ..live.frames import OutFrame
 from ..live.sinks.base import Sink
+from ..live.urls import Endpoint
+from ..show.settings import Show
+from ..show.stage import OutputStage
+from ..show.timeline import RowTimeline
 from .wire import BUCKET, ShowDescription, check_show_name, encode_event, encode_frame, subject
 
 log = logging.getLogger("hapmotion.live")
 
 
-async def connect(url: str, *, name: str, on_state: Any = None, connect_timeout: float = 2.0,
-                  first_try_s: float = 5.0):
+async def connect(url: str, *, name: str, on_state: Optional[Callable[[str], None]] = None,
+                  connect_timeout: float = 2.0, first_try_s: float = 5.0) -> NatsClient:
     """A NATS connection that reconnects for ever (0.25 s apart) once it has been made, and keeps nothing buffered
     while it is down beyond a small buffer; ``on_state(text)`` hears about disconnects and reconnects.
     ConnectionError when no server answers within ``first_try_s`` seconds."""
-    import nats
-
     async def disconnected() -> None:
         if on_state:
             on_state("disconnected")
@@ -57,12 +67,9 @@ async def connect(url: str, *, name: str, on_state: Any = None, connect_timeout:
         raise ConnectionError(f"no NATS server answered within {first_try_s:g} s") from None
 
 
-async def description_bucket(nc: Any):
+async def description_bucket(nc: NatsClient) -> KeyValue:
     """The key-value bucket of show descriptions (created on first use: history 1, in memory, direct gets so any
     server of a cluster answers). UsageError when the server has no JetStream."""
-    from nats.js.api import StorageType
-    from nats.js.errors import BucketNotFoundError
-
     js = nc.jetstream(timeout=2.0)
     try:
         return await js.key_value(BUCKET)
@@ -77,31 +84,22 @@ async def description_bucket(nc: Any):
                                      description="hapmotion show descriptions, one key per show")
 
 
-def describe_show(show_name: str, *, show: Any, mode: str, fps: float, layout: Any, body: Any,
+def describe_show(show_name: str, *, show: Show, stage: OutputStage, layout: Layout, body: Optional[BodyModel],
                   stall_ms: float, mirror: bool, epoch: Optional[int] = None) -> ShowDescription:
-    """The description of a live show (see :class:`~hapmotion.audience.wire.ShowDescription`)."""
-    from ..audio.mix import resolve_rule
-    from ..audio.params import params_for_preset
-    from ..body.model import BodyModel
-    from ..show import power_limit_for
-
+    """The description of a live show played through ``stage`` (see
+    :class:`~hapmotion.audience.wire.ShowDescription`): the stage's serialised form is what each seat rebuilds."""
     body = body or BodyModel.default()
     music = None
-    if mode != "motion":
-        # the facts hapmotion.show.live_music mixes with: the preset's audio parameters, the resolved rule
-        params = params_for_preset(show.preset)
-        music = {"mix_ratio": list(show.mix_ratio), "mix_rule": resolve_rule(show.mix_rule, show.mix_domain, params),
-                 "params_preset": show.preset,
-                 "power_limit": power_limit_for(params.power_limit_fraction, len(layout.actuators)),
-                 "audio_offset_s": show.audio_offset_s, "audio_params": dataclasses.asdict(params)}
+    if stage.mode != "motion":
+        music = {**stage.to_dict(), "audio_offset_s": show.audio_offset_s,
+                 "audio_params": dataclasses.asdict(stage.audio_params)}
     return ShowDescription(
-        show=check_show_name(show_name), epoch=secrets.randbits(32) if epoch is None else epoch, fps=float(fps),
+        show=check_show_name(show_name), epoch=secrets.randbits(32) if epoch is None else epoch, fps=stage.fps,
         layout=layout.name, actuators=tuple(layout.actuators),
-        render={"method": show.method, "preset": show.preset, "mirror": bool(mirror), "mode": mode,
+        render={"method": show.method, "preset": show.preset, "mirror": bool(mirror), "mode": stage.mode,
                 "overrides": dict(show.overrides)},
         body={"shoulder_width": body.shoulder_width, "shoulder_height": body.shoulder_height,
-              "pelvis_height": body.pelvis_height},
-        music=music, stall_ms=float(stall_ms))
+              "pelvis_height": body.pelvis_height}, music=music, stall_ms=float(stall_ms))
 
 
 class NatsPublisherSink(Sink):
@@ -114,17 +112,18 @@ class NatsPublisherSink(Sink):
     description:
         The show's :class:`ShowDescription` (put in the key-value bucket at start and after every reconnect).
     music:
-        The session's :class:`~hapmotion.live.engine.AudioChannel` (its row at each frame's show time is sent) or
-        None.
+        The song's rows (:class:`~hapmotion.show.timeline.RowTimeline`; its row at each frame's show time is sent)
+        or None.
     """
 
-    def __init__(self, url: str, description: ShowDescription, *, music: Any = None, fps: float = 60.0):
+    def __init__(self, url: str, description: ShowDescription, *, music: Optional[RowTimeline] = None,
+                 fps: float = 60.0):
         super().__init__(f"nats {url}/{description.show}", fps=fps)
         self.url = url
         self.description = description
         self.music = music
-        self.nc: Any = None
-        self.kv: Any = None
+        self.nc: Optional[NatsClient] = None
+        self.kv: Optional[KeyValue] = None
         self.seq = 0
         self.published = 0
         self.cues = 0
@@ -207,12 +206,12 @@ class NatsPublisherSink(Sink):
             await self.nc.close()
 
 
-def publisher_sink(ep: Any, *, fps: float, show: Any, mode: str, layout: Any, body: Any, music: Any,
-                   stall_ms: float, mirror: bool) -> NatsPublisherSink:
+def publisher_sink(ep: Endpoint, *, fps: float, show: Show, stage: OutputStage, layout: Layout,
+                   body: Optional[BodyModel], music: Optional[RowTimeline], stall_ms: float,
+                   mirror: bool) -> NatsPublisherSink:
     """The sink for ``--sink nats://HOST:PORT/SHOW`` (a parsed :class:`~hapmotion.live.urls.Endpoint`)."""
     name = ep.path.strip("/")
     if not name:
         raise UsageError(f"--sink {ep.text!r}: expected nats://HOST:PORT/SHOW (the show's name)")
-    desc = describe_show(name, show=show, mode=mode, fps=fps, layout=layout, body=body, stall_ms=stall_ms,
-                         mirror=mirror)
+    desc = describe_show(name, show=show, stage=stage, layout=layout, body=body, stall_ms=stall_ms, mirror=mirror)
     return NatsPublisherSink(f"nats://{ep.host}:{ep.port}", desc, music=music, fps=fps)

@@ -1,22 +1,26 @@
 """One seat's own settings and the stage that applies them to every row before it reaches the seat's vest.
 
 The renderer-side settings (method, preset, mirroring, which channels) choose how the seat's ``Renderer`` and
-mix are built; gain and comfort limits are the live engine's last stage (:class:`hapmotion.show.comfort.Limiter`, as
-in ``hapmotion live``); zones switched off are applied by :class:`SeatSink` around each of the seat's sinks, so
-fade and turn-off rows pass through the same stage.
+output stage are built; the seat's gain and comfort limits are that stage's last step
+(:class:`hapmotion.show.stage.OutputStage`, as in ``hapmotion live``); zones switched off are applied by
+:class:`SeatSink` around each of the seat's sinks, so fade and turn-off rows pass through the same mask.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Any, Optional, Sequence
+import os
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
 from ..errors import UsageError
+from ..layout import Layout
 from ..live.frames import OutFrame
 from ..live.sinks.base import Sink
+from ..show.comfort import Comfort
+from ..show.settings import MODES, check_choice
 
 MAX_DELAY_S = 60.0
 """A seat's stream may lag the venue by up to a minute (HTTP live streaming runs tens of seconds behind)."""
@@ -26,9 +30,11 @@ MAX_DELAY_S = 60.0
 class Seat:
     """How one audience member wants the show.
 
-    ``method``, ``preset``, ``mirror``, ``mode`` ``None`` keep the show's. ``zones_off`` names devices
-    (``VestBack``) or single actuators (``VestFront_5``) that stay off. ``gain``, ``max_intensity`` (percent) and
-    ``max_duty`` (over ``duty_window_s``) are the seat's :class:`hapmotion.show.comfort.Comfort`. ``delay_s`` is how far the seat's
+    ``method``, ``preset``, ``mirror``, ``mode`` ``None`` keep the show's; ``overrides`` are renderer parameters
+    set on top of the show's; ``layout`` is this seat's layout (a file or :class:`~hapmotion.layout.Layout`;
+    ``None``: the default), which must have the show's actuators. ``zones_off`` names devices
+    (``VestBack``) or single actuators (``VestFront_5``) that stay off. ``comfort`` is the seat's gain and limits
+    (:class:`hapmotion.show.comfort.Comfort`), applied last to every row. ``delay_s`` is how far the seat's
     video/audio stream runs behind the venue: each frame plays ``delay_s`` after its media time arrived live.
     """
 
@@ -36,27 +42,21 @@ class Seat:
     preset: Optional[str] = None
     mirror: Optional[bool] = None
     mode: Optional[str] = None
+    overrides: Mapping[str, Any] = field(default_factory=dict)
+    layout: Union[Layout, str, "os.PathLike[str]", None] = None
     zones_off: tuple[str, ...] = ()
-    gain: float = 1.0
-    max_intensity: float = 100.0
-    max_duty: float = 1.0
-    duty_window_s: float = 10.0
+    comfort: Comfort = Comfort()
     delay_s: float = 0.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.delay_s) and 0.0 <= self.delay_s <= MAX_DELAY_S):
             raise UsageError(f"--delay must be 0..{MAX_DELAY_S * 1000:g} ms, not {self.delay_s * 1000:g}")
-        self.comfort()  # UsageError for a gain or limit out of range
-        if self.mode is not None and self.mode not in ("motion", "audio", "multimodal"):
-            raise UsageError(f"--mode {self.mode!r}: expected motion, audio or multimodal")
+        if not isinstance(self.comfort, Comfort):
+            raise UsageError(f"comfort must be a hapmotion.show.comfort.Comfort, not {type(self.comfort).__name__}")
+        if self.mode is not None:
+            check_choice(self.mode, MODES, "--mode")
         object.__setattr__(self, "zones_off", tuple(self.zones_off))
-
-    def comfort(self):
-        """The seat's gain and comfort limits as a :class:`hapmotion.show.comfort.Comfort`."""
-        from ..show.comfort import Comfort
-
-        return Comfort(gain=self.gain, max_level=self.max_intensity, max_duty=self.max_duty,
-                       window_s=self.duty_window_s)
+        object.__setattr__(self, "overrides", dict(self.overrides))
 
 
 def zone_mask(zones_off: Sequence[str], actuators: Sequence[str], devices: Sequence[str]) -> np.ndarray:
@@ -77,7 +77,7 @@ def zone_mask(zones_off: Sequence[str], actuators: Sequence[str], devices: Seque
 class SeatStage:
     """Zones off; ``(N,)`` rows in the layout's order."""
 
-    def __init__(self, seat: Seat, layout: Any):
+    def __init__(self, seat: Seat, layout: Layout):
         self.seat = seat
         self.mask = zone_mask(seat.zones_off, layout.actuators, [d.name for d in layout.devices])
         self.identity = bool(self.mask.all())

@@ -13,12 +13,12 @@ docs/audio.md explains every parameter, the spatial mapping and the mix; hapmoti
 from .analysis import AudioAnalysis, analyze_file, analyze_signal
 from .io import mp3_supported
 from .mix import DEFAULT_RATIO, check_ratio, limit_power, mix, parse_mix_ratio, resolve_rule
-from .params import (DEFAULT_PARAMS, MIX_DOMAINS, MIX_RULES, PAPER_PARAMS, SPATIAL_MAPPINGS, AudioParams,
+from .params import (DEFAULT_PARAMS, MIX_RULES, PAPER_PARAMS, SPATIAL_MAPPINGS, AudioParams,
                      params_for_preset)
 from .pattern import audio_track, kick_frames, region_weights
 
 __all__ = [
-    "AudioAnalysis", "AudioParams", "DEFAULT_PARAMS", "DEFAULT_RATIO", "MIX_DOMAINS", "MIX_RULES", "PAPER_PARAMS",
+    "AudioAnalysis", "AudioParams", "DEFAULT_PARAMS", "DEFAULT_RATIO", "MIX_RULES", "PAPER_PARAMS",
     "SPATIAL_MAPPINGS", "analyze_file", "analyze_signal", "audio_track", "check_ratio", "kick_frames", "limit_power", "mix", "mp3_supported", "params_for_preset", "parse_mix_ratio",
     "region_weights", "resolve_rule",
 ]

@@ -27,9 +27,7 @@ import re
 import numpy as np
 
 from ..errors import UsageError
-from .params import DEFAULT_PARAMS, MIX_DOMAINS, MIX_RULES, AudioParams
-
-_DOMAIN_RULES = {"linear": "paper", "energy": "energy"}
+from .params import DEFAULT_PARAMS, MIX_RULES, AudioParams
 
 DEFAULT_RATIO = (2.0, 3.0)
 """audio:motion weights of the paper's study 2 mix."""
@@ -76,20 +74,13 @@ def limit_power(rows: np.ndarray, limit: float | None) -> np.ndarray:
     return out * scale
 
 
-def resolve_rule(rule: str | None = None, domain: str | None = None, params: AudioParams | None = None) -> str:
-    """The mix rule from an explicit ``rule``, else the older ``domain`` spelling (``linear`` = ``paper``,
-    ``energy``), else ``params.mix_rule`` (default ``duck``). :class:`UsageError` for unknown names or a rule and a
-    domain that disagree."""
-    if domain is not None and domain not in MIX_DOMAINS:
-        raise UsageError(f"mix domain {domain!r}: expected {' or '.join(MIX_DOMAINS)}")
+def resolve_rule(rule: str | None = None, params: AudioParams | None = None) -> str:
+    """The mix rule: ``rule`` if given, else ``params.mix_rule`` (default ``duck``). :class:`UsageError` for an
+    unknown name."""
     if rule is not None:
         if rule not in MIX_RULES:
             raise UsageError(f"mix rule {rule!r}: expected {', '.join(MIX_RULES)}")
-        if domain is not None and _DOMAIN_RULES[domain] != rule:
-            raise UsageError(f"mix rule {rule} and mix domain {domain} disagree; give only the rule")
         return rule
-    if domain is not None:
-        return _DOMAIN_RULES[domain]
     return (params or DEFAULT_PARAMS).mix_rule
 
 
@@ -125,12 +116,12 @@ def duck_mix(motion: np.ndarray, audio: np.ndarray, audio_share: float, kernel: 
 
 
 def mix(motion_rows: np.ndarray, audio_rows: np.ndarray, ratio: "tuple[float, float]" = DEFAULT_RATIO,
-        domain: str | None = None, power_limit: float | None = None, *, rule: str | None = None,
+        power_limit: float | None = None, *, rule: str | None = None,
         positions: np.ndarray | None = None, params: AudioParams | None = None) -> np.ndarray:
     """Mix motion and audio intensities of the same shape, ``(N,)`` (one frame, as live uses it) or ``(T, N)``.
 
-    ``ratio`` is ``(audio, motion)``. ``rule`` is ``duck``, ``paper`` or ``energy`` (module docstring); ``domain``
-    is the older spelling (``linear`` = ``paper``); neither given: ``params.mix_rule`` (``duck``). ``paper`` and
+    ``ratio`` is ``(audio, motion)``. ``rule`` is ``duck``, ``paper`` or ``energy`` (module docstring); not given:
+    ``params.mix_rule`` (``duck``). ``paper`` and
     ``energy`` normalise the weights to sum to 1; ``duck`` keeps the motion whole and uses the audio share for the
     bed. ``positions`` ``(N, 3)`` (metres, e.g. ``Layout.positions()``) let ``duck`` find the motion's neighbours;
     ``params`` (default :data:`DEFAULT_PARAMS`) holds its depths and the start level.
@@ -139,7 +130,7 @@ def mix(motion_rows: np.ndarray, audio_rows: np.ndarray, ratio: "tuple[float, fl
     """
     a_w, m_w = check_ratio(ratio)
     p = params or DEFAULT_PARAMS
-    rule = resolve_rule(rule, domain, p)
+    rule = resolve_rule(rule, p)
     motion = np.clip(np.nan_to_num(np.asarray(motion_rows, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0),
                      0.0, 100.0)
     audio = np.clip(np.nan_to_num(np.asarray(audio_rows, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0),

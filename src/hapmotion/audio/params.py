@@ -21,7 +21,6 @@ from typing import Any
 from ..errors import UsageError
 
 SPATIAL_MAPPINGS = ("layered", "global", "bands")
-MIX_DOMAINS = ("linear", "energy")
 MIX_RULES = ("duck", "paper", "energy")
 """``duck``: the music bed makes room for the motion (default); ``paper``: the paper's weighted sum of
 intensities; ``energy``: weighted sum of vibration powers. See :mod:`hapmotion.audio.mix`."""
@@ -158,13 +157,6 @@ class AudioParams:
     duck_reference_power: float = 0.3
     """``duck``: motion power ``sum (I/100)^2`` at which the side-chain duck is full (ours: one motor at 55 %, or
     a phantom spread over four)."""
-    power_limit_fraction: float | None = 0.75
-    """Total power limit of every output frame as a fraction of all actuators at full drive:
-    ``sum((I / 100) ** 2) <= fraction * N``, the whole frame scaled down together (Google's post-processor limits
-    the summed power x_c^2 across channels; the value is ours: the loudest continuous music on all 52 actuators,
-    power 52 * 0.6^2 = 18.7, passes untouched, a whole-suit kick, power 52, is scaled to 87 %). ``None``
-    disables it."""
-
     def __post_init__(self) -> None:
         self.validate()
 
@@ -210,8 +202,6 @@ class AudioParams:
              "a number > 0")
         need(math.isfinite(self.duck_reference_power) and self.duck_reference_power > 0, "duck_reference_power",
              "a number > 0")
-        need(self.power_limit_fraction is None or 0 < self.power_limit_fraction <= 1, "power_limit_fraction",
-             "None or 0 < fraction <= 1")
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-friendly dict (tuples become lists) for ``HapticTrack.meta``."""

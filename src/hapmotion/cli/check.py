@@ -8,6 +8,9 @@ from typing import Optional
 
 import click
 
+from ..show.settings import Show
+from .show_options import show_options
+
 HELP = """Check the haptic set-up before a show: connect to the bHaptics Player, report the devices it says are
 connected, then play a short labelled test pattern so the wearer can confirm where each motor is.
 
@@ -31,25 +34,23 @@ Examples:
               help="Silence between steps.")
 @click.option("--intensity", type=click.FloatRange(min=1.0, max=100.0), default=60.0, show_default=True,
               help="Intensity of the test pattern, 0..100.")
-@click.option("--layout", "layout_file", type=click.Path(dir_okay=False, exists=True), default=None,
-              help="Session device layout JSON (default: X40 + two shoulder Tactosy).")
 @click.option("--no-pattern", is_flag=True, help="Only report the Player's devices.")
 @click.option("--workspace-id", envvar="BHAPTICS_WORKSPACE_ID", default=None,
               help="bHaptics SDK2 workspace (app) id for player-v3 [env BHAPTICS_WORKSPACE_ID].")
 @click.option("--api-key", envvar="BHAPTICS_API_KEY", default=None,
               help="bHaptics SDK2 API key for player-v3 [env BHAPTICS_API_KEY].")
-def command(sinks: tuple[str, ...], step_ms: int, gap_ms: int, intensity: float, layout_file: Optional[str],
-            no_pattern: bool, workspace_id: Optional[str], api_key: Optional[str]) -> None:
+@show_options("layout", comfort=False)
+def command(sinks: tuple[str, ...], step_ms: int, gap_ms: int, intensity: float, no_pattern: bool,
+            workspace_id: Optional[str], api_key: Optional[str], show: Show) -> None:
     from ..bhaptics.device_map import DeviceMap
     from ..live.player_check import CHECK_FPS, pattern_steps, pattern_track, probe_player
     from ..live.playback import run_play
-    from ..live.session import build_sink
+    from ..live.builders import build_sink
     from ..live.urls import parse_sink
-    from ..show import Show
     from .session_report import setup_logging
 
     setup_logging("check", quiet=True)  # the check prints its own lines; the session's warnings still show
-    layout = Show(layout=layout_file).load_layout()
+    layout = show.load_layout()
     dmap = DeviceMap.from_layout(layout)
     objs = [build_sink(parse_sink(s), dmap=dmap, layout_name=layout.name, fps=CHECK_FPS, workspace_id=workspace_id,
                        api_key=api_key, meta={"mode": "check"}) for s in sinks]
@@ -67,7 +68,7 @@ def command(sinks: tuple[str, ...], step_ms: int, gap_ms: int, intensity: float,
                                  intensity=intensity)
     click.echo(f"check: test pattern, {len(steps)} steps of {step_ms} ms (Ctrl-C stops):")
     count = iter(range(1, len(steps) + 1))
-    run_play(track, objs, layout=layout, on_mark=lambda label: click.echo(f"check: {next(count):2d}. {label}"),
+    run_play(track, objs, show=show, on_mark=lambda label: click.echo(f"check: {next(count):2d}. {label}"),
              marks=marks)
     click.echo("check: done, every motor turned off")
     if unreachable:

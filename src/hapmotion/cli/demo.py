@@ -26,7 +26,7 @@ def example_path(name: str) -> Path:
 @click.option("-o", "--out-dir", type=click.Path(file_okay=False), default="out", show_default=True,
               help="Folder for the results (created if missing).")
 @click.option("--mode", type=click.Choice(MODES), default="multimodal", show_default=True)
-@preset_option
+@preset_option()
 def command(out_dir, mode, preset):
     """Render the bundled salsa clip (CMU mocap) with the bundled music ("Vibe Ace", Kevin MacLeod) into
     OUT_DIR/demo.tact (+ sleeve files), demo.csv, a plot demo.png and a viewer page demo.html."""

@@ -10,8 +10,8 @@ import click
 
 from ..errors import UsageError
 from ..renderer.params import METHODS, PRESETS
-from ..show import parse_param_overrides, split_list
 from .motion_options import motion_options, read_motion
+from .show_options import param_option, parse_param_overrides, split_list
 
 
 def _names(text: str, what: str, allowed) -> list[str]:
@@ -29,8 +29,7 @@ def _names(text: str, what: str, allowed) -> list[str]:
               help="Comma-separated renderer methods to compare.")
 @click.option("--presets", default=None,
               help=f"Comma-separated parameter presets to compare (default: all, {','.join(PRESETS)}).")
-@click.option("--param", "params", multiple=True, metavar="NAME=VALUE",
-              help="Override a renderer parameter in every preset (repeatable); labels get a '*'.")
+@param_option
 @click.option("--audio", "audio_file", type=click.Path(exists=True, dir_okay=False), default=None,
               help="Song to mix with every track (the multimodal show): adds onset agreement, lateral accuracy "
                    "with music, how the mix follows the music.")

@@ -8,9 +8,8 @@ from typing import Optional
 import click
 
 from ..show.comfort import Comfort
-from ..renderer.params import METHODS, PRESETS
-from ..show import MODES
-from .show_options import comfort_options, cues_option, read_cues, split_values
+from .show_options import (comfort_options, cues_option, layout_option, method_option, mirror_option, mode_option,
+                           param_option, parse_param_overrides, preset_option, read_cues, split_values)
 
 HELP = """Render a show published with `hapmotion live ... --sink nats://HOST:PORT/SHOW` on this seat's vest.
 
@@ -38,13 +37,12 @@ Examples:
               help="Where the seat's frames go; repeat for several sinks at once.")
 @click.option("--delay", "delay_ms", type=float, default=0.0, show_default=True,
               help="Milliseconds this seat's video/audio stream runs behind the venue (0..60000).")
-@click.option("--mirror/--no-mirror", default=None, help="Mirror the performer left/right [default: the show's].")
-@click.option("--method", type=click.Choice(METHODS), default=None,
-              help="Motion renderer [default: the show's].")
-@click.option("--preset", type=click.Choice(tuple(PRESETS)), default=None,
-              help="Renderer preset [default: the show's].")
-@click.option("--mode", type=click.Choice(MODES), default=None,
-              help="Channels felt: the motion, the music, or both mixed [default: the show's].")
+@mirror_option
+@method_option(default=None, help_suffix=" [default: the show's]")
+@preset_option(default=None, help_suffix=" [default: the show's]")
+@mode_option
+@param_option
+@layout_option
 @click.option("--zone-off", "zones_off", metavar="ZONE[,ZONE]", multiple=True,
               help="Devices (VestBack, ForearmL, ...) or actuators (VestFront_5) that stay off.")
 @click.option("--stats", "show_stats", is_flag=True, help="Print frame counts and latency every second.")
@@ -52,17 +50,17 @@ Examples:
 @cues_option
 @comfort_options
 def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Optional[bool], method: Optional[str],
-            preset: Optional[str], mode: Optional[str], zones_off: tuple[str, ...], show_stats: bool, quiet: bool,
-            cues: Optional[str], comfort: Comfort) -> None:
+            preset: Optional[str], mode: Optional[str], params: tuple[str, ...], layout_file: Optional[str],
+            zones_off: tuple[str, ...], show_stats: bool, quiet: bool, cues: Optional[str],
+            comfort: Comfort) -> None:
     from ..audience import Seat, run_listen
     from ..audience.listener import parse_show_url
     from .session_report import finish_session, setup_logging
 
     setup_logging("listen", quiet)
     parse_show_url(show_url)  # a usage error before anything connects
-    seat = Seat(method=method, preset=preset, mirror=mirror, mode=mode, zones_off=split_values(zones_off),
-                gain=comfort.gain, max_intensity=comfort.max_level, max_duty=comfort.max_duty,
-                duty_window_s=comfort.window_s, delay_s=delay_ms / 1000.0)
+    seat = Seat(method=method, preset=preset, mirror=mirror, mode=mode, overrides=parse_param_overrides(params),
+                layout=layout_file, zones_off=split_values(zones_off), comfort=comfort, delay_s=delay_ms / 1000.0)
     sessions: list = []
 
     def ready(engine) -> None:

@@ -6,12 +6,9 @@ from typing import Optional
 
 import click
 
-from ..show.comfort import Comfort
-from ..renderer.params import METHODS
-from ..show import MODES
+from ..show import Show
 from .motion_options import CLI_SPELLING, motion_options, read_motion
-from .show_options import (comfort_options, cue_port_option, cues_option, mix_rule_option, preset_option,
-                           read_cues, session_options, split_values)
+from .show_options import cue_port_option, session_options, show_options, split_values
 from .session_report import finish_session, setup_logging
 
 HELP = """Render a live skeleton stream frame by frame and drive haptic devices, recorders and viewers.
@@ -61,24 +58,8 @@ Examples:
 @click.option("--source", "source", metavar="SOURCE", help="Where the skeleton comes from (see above).")
 @click.option("--sink", "sinks", metavar="SINK", multiple=True, required=True,
               help="Where frames go; repeat for several sinks at once.")
-@click.option("--method", type=click.Choice(METHODS), default="mst", show_default=True,
-              help="Motion renderer: the paper's motion salient triangle, or the active hand itself.")
-@preset_option
-@click.option("--mirror/--no-mirror", default=None, help="Mirror the performer left/right (default: preset's, on).")
-@click.option("--fps", type=float, default=None,
-              help="Frame rate of the stream [default: 60; a replay's own rate].")
 @click.option("--speed", type=float, default=1.0, show_default=True, help="Replay speed factor.")
 @click.option("--loop", is_flag=True, help="Replay (or audio-only playback) starts again at the end.")
-@click.option("--audio", "audio", type=click.Path(dir_okay=False), default=None,
-              help="The show's music: its haptic channel is mixed in (multimodal) or played alone (--mode audio).")
-@click.option("--audio-offset", type=float, default=0.0, show_default=True,
-              help="Seconds the music starts after show time 0 (negative: the show starts that far into the "
-                   "song).")
-@click.option("--mode", type=click.Choice(MODES), default=None,
-              help="Channels played [default: multimodal with --audio, else motion].")
-@click.option("--mix", "mix_ratio", default="2:3", show_default=True,
-              help="audio:motion weights of the multimodal mix (the paper's 2:3).")
-@mix_rule_option
 @click.option("--stall-ms", type=float, default=250.0, show_default=True,
               help="A silent source has faded every actuator to zero after this many milliseconds.")
 @session_options
@@ -92,17 +73,15 @@ Examples:
               help="Network sources: only these sender addresses (or networks, 10.0.0.0/24) may send.")
 @click.option("--max-senders", type=click.IntRange(min=1), default=8, show_default=True,
               help="Network sources: senders served at once (WebSocket connections, OSC sender addresses).")
-@cues_option
 @cue_port_option
 @click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
-@comfort_options
 @motion_options
-def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: str, mirror: Optional[bool],
-            fps: Optional[float], speed: float, loop: bool, audio: Optional[str], audio_offset: float,
-            mode: Optional[str], mix_ratio: str, mix_rule: Optional[str], stall_ms: float, show_stats: bool,
-            stats_json: Optional[str], workspace_id: Optional[str], api_key: Optional[str],
+@show_options("method", "preset", "mirror", "param", "layout", "fps", "audio", "audio_offset", "mode", "mix",
+              "mix_rule", "cues")
+def command(source: Optional[str], sinks: tuple[str, ...], speed: float, loop: bool, stall_ms: float,
+            show_stats: bool, stats_json: Optional[str], workspace_id: Optional[str], api_key: Optional[str],
             allow_origins: tuple[str, ...], token: Optional[str], allow_senders: tuple[str, ...], max_senders: int,
-            cues: Optional[str], cue_port: Optional[str], quiet: bool, comfort: Comfort, motion_opts: dict) -> None:
+            cue_port: Optional[str], quiet: bool, show: Show, motion_opts: dict) -> None:
     from ..live import run_live
 
     setup_logging("live", quiet)
@@ -126,21 +105,13 @@ def command(source: Optional[str], sinks: tuple[str, ...], method: str, preset: 
         from ..filesafety import check_writable
 
         check_writable(stats_json, "--stats-json")
-    ratio = (2.0, 3.0)
-    if audio:
-        from ..audio import parse_mix_ratio
-
-        ratio = parse_mix_ratio(mix_ratio)
-    cue_list = read_cues(cues, motion_opts)
-    src = _source(source, fps=fps, speed=speed, loop=loop, motion_opts=motion_opts,
+    src = _source(source, fps=show.fps, speed=speed, loop=loop, motion_opts=motion_opts,
                   allow_origins=split_values(allow_origins), token=token, allow_senders=allow_senders,
                   max_senders=max_senders)
     try:
-        run_live(src, list(sinks), method=method, preset=preset, mirror=mirror, fps=fps, speed=speed,
-                 loop=loop, audio=audio, audio_offset=audio_offset, mode=mode, ratio=ratio, mix_rule=mix_rule,
-                 stall_ms=stall_ms, stats_interval=1.0 if show_stats else None, workspace_id=workspace_id,
-                 api_key=api_key, on_ready=ready, on_stats=lambda text: click.echo(f"live: {text}", err=True),
-                 cues=cue_list, cue_port=cue_port, comfort=comfort)
+        run_live(show, src, list(sinks), speed=speed, loop=loop, stall_ms=stall_ms,
+                 stats_interval=1.0 if show_stats else None, workspace_id=workspace_id, api_key=api_key,
+                 on_ready=ready, on_stats=lambda text: click.echo(f"live: {text}", err=True), cue_port=cue_port)
     finally:
         # The summary is printed however the session ended (turn-off has been sent by then). Nothing here raises:
         # a session error in flight stays the one reported.

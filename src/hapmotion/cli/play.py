@@ -7,7 +7,8 @@ from typing import Optional
 import click
 
 from .motion_options import cli_limits, limit_option
-from .show_options import cue_port_option, cues_option, session_options
+from ..show.settings import Show
+from .show_options import cue_port_option, session_options, show_options
 
 HELP = """Play TRACK in real time to the same sinks as 'hapmotion live'.
 
@@ -40,26 +41,19 @@ Examples:
 @click.option("--loop", is_flag=True, help="Start the track again at its end (until Ctrl-C).")
 @click.option("--speed", type=float, default=1.0, show_default=True,
               help="Playback speed factor (2 = twice as fast), above 0 and at most 10.")
-@click.option("--layout", "layout_file", type=click.Path(dir_okay=False, exists=True), default=None,
-              help="Session device layout JSON (default: X40 + two shoulder Tactosy).")
 @session_options
-@cues_option
 @cue_port_option
 @click.option("-q", "--quiet", is_flag=True, help="Only warnings and the summary.")
 @limit_option
-def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, layout_file: Optional[str],
-            show_stats: bool, stats_json: Optional[str], workspace_id: Optional[str], api_key: Optional[str],
-            cues: Optional[str], cue_port: Optional[str], quiet: bool, limits: tuple[str, ...]) -> None:
+@show_options("layout", "cues")
+def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, show_stats: bool,
+            stats_json: Optional[str], workspace_id: Optional[str], api_key: Optional[str],
+            cue_port: Optional[str], quiet: bool, limits: tuple[str, ...], show: Show) -> None:
     from ..live.playback import run_play
     from .session_report import finish_session, setup_logging
 
     setup_logging("play", quiet)
     input_limits = cli_limits(limits)
-    cue_list = None
-    if cues is not None:
-        from ..show.cues import load_cues
-
-        cue_list = load_cues(cues, limits=input_limits)
     if stats_json:
         from ..filesafety import check_writable
 
@@ -77,9 +71,9 @@ def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, layout
                        f"names: {', '.join(engine.cues.names)}", err=True)
 
     try:
-        run_play(track, list(sinks), speed=speed, loop=loop, layout=layout_file, workspace_id=workspace_id,
+        run_play(track, list(sinks), show=show, speed=speed, loop=loop, workspace_id=workspace_id,
                  api_key=api_key, on_ready=ready, stats_interval=1.0 if show_stats else None,
-                 on_stats=lambda text: click.echo(f"play: {text}", err=True), cues=cue_list, cue_port=cue_port,
+                 on_stats=lambda text: click.echo(f"play: {text}", err=True), cue_port=cue_port,
                  limits=input_limits)
     finally:
         lost = finish_session(started[0] if started else None, stats_json, "play")

@@ -1,23 +1,52 @@
-"""The options commands share, from one definition: the preset, the mix rule, the cue list and the wearer's strength
-and comfort limits of every command that renders (:class:`hapmotion.show.Show` holds what they choose), and the
-options of the real-time sessions (``live``, ``play``)."""
+"""The options commands share, from one definition each: the show's options (every command that renders reads
+them as one :class:`hapmotion.show.Show` from :func:`show_options`), the wearer's strength and comfort limits
+(:func:`comfort_options`, one :class:`~hapmotion.show.comfort.Comfort`), and the options of the real-time
+sessions (``live``, ``play``). Ranges come from the value objects that check them."""
 
 from __future__ import annotations
 
+import dataclasses
 import functools
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Optional, Sequence
 
 import click
 
+from ..audio.mix import parse_mix_ratio
 from ..audio.params import MIX_RULES
-from ..show.comfort import MAX_GAIN, Comfort
-from ..renderer.params import DEFAULT_PRESET, PRESETS
+from ..errors import UsageError
+from ..renderer.params import DEFAULT_PRESET, METHODS, PRESETS, Params
+from ..show.comfort import COMFORT_RANGES, Comfort
+from ..show.cues import CueList, load_cues
+from ..show.settings import LENGTH_RULES, MODES, Show
+from .motion_options import cli_limits
 
 PRESET_HELP = (f"Renderer preset: {', '.join(PRESETS)}. felt (default): calibrated for ERM vests, the wearer feels "
                "the performer move, on the mirrored side of the moving hand, more when the motion is faster and bigger; paper: the "
                "HapMotion paper's numbers; energy: energy-preserving split with the paper's intensity rule.")
 
-preset_option = click.option("--preset", default=DEFAULT_PRESET, show_default=True, help=PRESET_HELP)
+
+def method_option(default: Optional[str] = "mst", help_suffix: str = "") -> Callable[..., Any]:
+    """``--method`` (``None`` default: keep another's choice, as a seat keeps the show's)."""
+    return click.option("--method", type=click.Choice(METHODS), default=default, show_default=default is not None,
+                        help="Motion renderer: mst, the paper's motion salient triangle; baseline, the active hand "
+                             "itself." + help_suffix)
+
+
+def preset_option(default: Optional[str] = DEFAULT_PRESET, help_suffix: str = "") -> Callable[..., Any]:
+    """``--preset`` (checked by :class:`Show`, which names the closest preset on a typo)."""
+    return click.option("--preset", default=default, show_default=default is not None,
+                        help=PRESET_HELP + help_suffix)
+
+
+mirror_option = click.option(
+    "--mirror/--no-mirror", default=None,
+    help="Mirror the performer left/right, so the wearer feels the performer's right hand on the left, as when "
+         "facing them (default: the preset's, on).")
+
+mode_option = click.option(
+    "--mode", type=click.Choice(MODES), default=None,
+    help="Which channels: motion, audio (the music alone) or multimodal (both mixed). Default: multimodal with "
+         "motion and --audio, audio with --audio alone, else motion.")
 
 mix_rule_option = click.option(
     "--mix-rule", type=click.Choice(MIX_RULES), default=None,
@@ -30,20 +59,137 @@ cues_option = click.option(
     help="Cue list (text or JSON: time, pattern file, gain, side, devices): authored effects layered over the show "
          "(docs/playback.md).")
 
+param_option = click.option(
+    "--param", "params", multiple=True, metavar="NAME=VALUE",
+    help="Override one renderer parameter (repeatable), e.g. --param release_alpha=0.2.")
+
+layout_option = click.option(
+    "--layout", "layout_file", type=click.Path(dir_okay=False, exists=True), default=None,
+    help="Device layout JSON (default: X40 + two shoulder Tactosy).")
+
+SHOW_OPTIONS: dict[str, Callable[..., Any]] = {
+    "method": method_option(),
+    "preset": preset_option(),
+    "mirror": mirror_option,
+    "param": param_option,
+    "layout": layout_option,
+    "fps": click.option("--fps", type=float, default=None,
+                        help="Render rate, frames per second (1..1000) [default: the motion's own rate; a live "
+                             "stream's 60; 60 for the music alone]."),
+    "audio": click.option("--audio", "audio_file", type=click.Path(dir_okay=False), default=None,
+                          help="The show's music (WAV, FLAC, Ogg, MP3): its haptic channel is mixed with the motion "
+                               "(multimodal) or played alone (--mode audio)."),
+    "audio_offset": click.option("--audio-offset", type=float, default=0.0, show_default=True, metavar="SECONDS",
+                                 help="Seconds the music starts after show time 0 (negative: the show starts that "
+                                      "far into the song)."),
+    "mode": mode_option,
+    "mix": click.option("--mix", "mix_ratio", default="2:3", show_default=True, metavar="AUDIO:MOTION",
+                        help="audio:motion weights of the multimodal mix (the paper's 2:3)."),
+    "mix_rule": mix_rule_option,
+    "length": click.option("--length", type=click.Choice(LENGTH_RULES), default="longer", show_default=True,
+                           help="Track length with both inputs: as long as the longer one, or cut to the motion."),
+    "cues": cues_option,
+}
+"""Every option of a :class:`Show`, in the order ``--help`` lists them; :func:`show_options` takes a subset."""
+
+_KWARGS = {"method": "method", "preset": "preset", "mirror": "mirror", "param": "params", "layout": "layout_file",
+           "fps": "fps", "audio": "audio_file", "audio_offset": "audio_offset", "mode": "mode", "mix": "mix_ratio",
+           "mix_rule": "mix_rule", "length": "length", "cues": "cues"}
+
+
+def show_options(*names: str, comfort: bool = True) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Click decorator: the :data:`SHOW_OPTIONS` named (all when none are), and the comfort options unless
+    ``comfort`` is False, handed to the command as one validated :class:`Show`, keyword ``show``. Options a command
+    does not take keep the :class:`Show` defaults. A ``--cues`` file is read within the command's ``--limit``
+    values (put :func:`~hapmotion.cli.motion_options.motion_options` above this decorator)."""
+    chosen = list(names or SHOW_OPTIONS)
+    unknown = [n for n in chosen if n not in SHOW_OPTIONS]
+    if unknown:
+        raise ValueError(f"unknown show options {unknown}")
+
+    def decorate(f: Callable[..., Any]) -> Callable[..., Any]:
+        @functools.wraps(f)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            given = {name: kwargs.pop(_KWARGS[name]) for name in chosen}
+            limits = (kwargs.get("motion_opts") or {}).get("limits") or kwargs.get("limits")
+            kwargs["show"] = _build_show(given, kwargs.pop("comfort", Comfort()), limits)
+            return f(*args, **kwargs)
+
+        wrapper.__click_params__ = list(getattr(f, "__click_params__", []))  # type: ignore[attr-defined]
+        inner = comfort_options(wrapper) if comfort else wrapper
+        for name in reversed(chosen):  # click lists params in decoration order, bottom first
+            inner = SHOW_OPTIONS[name](inner)
+        return inner
+
+    return decorate
+
+
+def _build_show(given: dict[str, Any], comfort: Comfort, limits: Optional[Sequence[str]]) -> Show:
+    fields: dict[str, Any] = {"comfort": comfort}
+    for name in ("method", "preset", "mirror", "mode", "mix_rule", "length", "fps"):
+        if name in given:
+            fields[name] = given[name]
+    if "param" in given:
+        fields["overrides"] = parse_param_overrides(given["param"])
+    if "layout" in given:
+        fields["layout"] = given["layout"]
+    if "audio" in given:
+        fields["audio"] = given["audio"]
+    if "audio_offset" in given:
+        fields["audio_offset_s"] = given["audio_offset"]
+    if "mix" in given:
+        fields["mix_ratio"] = parse_mix_ratio(given["mix"])
+    if given.get("cues") is not None:
+        fields["cues"] = load_cues(given["cues"], limits=cli_limits(limits))
+    return Show(**fields)
+
+
+def parse_param_overrides(items: Sequence[str]) -> dict[str, Any]:
+    """``("release_alpha=0.2", "phantom=energy")`` -> typed overrides for :class:`~hapmotion.renderer.Params`."""
+    types = {f.name: f.type for f in dataclasses.fields(Params)}
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        key = key.strip()
+        if not sep or key not in types:
+            known = ", ".join(sorted(types))
+            raise UsageError(f"--param {item!r}: expected NAME=VALUE with NAME one of: {known}")
+        kind = types[key]
+        try:
+            if kind in ("bool", bool):
+                if value.lower() not in ("true", "false", "1", "0", "yes", "no"):
+                    raise ValueError(value)
+                out[key] = value.lower() in ("true", "1", "yes")
+            elif kind in ("float", float):
+                out[key] = float(value)
+            else:
+                out[key] = value
+        except ValueError:
+            raise UsageError(f"--param {item!r}: expected a {kind} value, found {value!r}") from None
+    return out
+
+
+def split_list(text: Optional[str], what: str, allowed: Sequence[str]) -> list[str]:
+    """``"mst,baseline"`` -> ``["mst", "baseline"]``; UsageError for unknown or repeated names."""
+    if not text:
+        return []
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    bad = [n for n in names if n not in allowed]
+    if bad:
+        raise UsageError(f"unknown {what} {', '.join(map(repr, bad))}; choose from {', '.join(allowed)}")
+    if len(set(names)) != len(names):
+        raise UsageError(f"{what} listed twice in {text!r}")
+    return names
+
 def split_values(values: tuple[str, ...]) -> tuple[str, ...]:
     """Repeated and comma-separated option values as one tuple."""
     return tuple(v.strip() for value in values for v in value.split(",") if v.strip())
 
 
-def read_cues(path: Optional[str], motion_opts: Optional[dict] = None):
-    """The ``--cues`` file as a :class:`~hapmotion.show.cues.CueList`, read within the command's ``--limit`` values
-    (``None`` without ``--cues``)."""
-    if path is None:
-        return None
-    from ..show.cues import load_cues
-    from .motion_options import cli_limits
-
-    return load_cues(path, limits=cli_limits((motion_opts or {}).get("limits")))
+def read_cues(path: Optional[str], limits: Optional[Sequence[str]] = None) -> Optional[CueList]:
+    """The ``--cues`` file as a :class:`~hapmotion.show.cues.CueList`, read within the ``--limit NAME=N`` values
+    given (``None`` without ``--cues``)."""
+    return None if path is None else load_cues(path, limits=cli_limits(limits))
 
 
 cue_port_option = click.option(
@@ -84,15 +230,16 @@ def comfort_options(f: Callable[..., Any]) -> Callable[..., Any]:
 
     # functools.wraps copied f's click params (a shared list); give the wrapper its own before adding ours.
     wrapper.__click_params__ = list(getattr(f, "__click_params__", []))  # type: ignore[attr-defined]
+    ranges = COMFORT_RANGES
     options = [
-        click.option("--gain", type=click.FloatRange(0.0, MAX_GAIN), default=1.0, show_default=True,
+        click.option("--gain", type=click.FloatRange(*ranges["gain"]), default=1.0, show_default=True,
                      help="Strength: every intensity times this (like the bHaptics SDKs' intensity scale)."),
-        click.option("--max-level", type=click.FloatRange(0.0, 100.0), default=100.0, show_default=True,
+        click.option("--max-level", type=click.FloatRange(*ranges["max_level"]), default=100.0, show_default=True,
                      help="No motor is driven above this percent."),
-        click.option("--max-duty", type=click.FloatRange(0.0, 1.0), default=1.0, show_default=True,
+        click.option("--max-duty", type=click.FloatRange(*ranges["max_duty"]), default=1.0, show_default=True,
                      help="Each motor's average drive over --duty-window stays at or below this fraction of full "
                           "drive (1 = no limit)."),
-        click.option("--duty-window", type=click.FloatRange(0.001, 3600.0), default=10.0, show_default=True,
+        click.option("--duty-window", type=click.FloatRange(*ranges["window_s"]), default=10.0, show_default=True,
                      metavar="SECONDS", help="Time constant of the average --max-duty watches."),
     ]
     for option in reversed(options):  # click lists params in decoration order, bottom first

@@ -6,42 +6,38 @@ from pathlib import Path
 
 import click
 
+from typing import Optional
+
 from ..errors import UsageError
+from ..renderer.params import METHODS, PRESETS
+from ..show.settings import MODES, Show
 from .motion_options import motion_options, read_motion, read_track
-from .show_options import comfort_options, cues_option, mix_rule_option, preset_option, read_cues
 from .render import progress_bar
+from .show_options import show_options, split_list
+
 
 @click.command("view")
 @click.argument("input_path", metavar="INPUT", required=False, type=click.Path(dir_okay=False, path_type=Path))
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
               help="Page to write (default: INPUT's name with .html in the current folder, or live.html).")
-@click.option("--audio", "audio_path", type=click.Path(dir_okay=False, path_type=Path),
-              help="Music to embed and play in sync (its waveform and onsets are drawn on the timeline).")
-@click.option("--audio-offset", type=float, default=0.0, show_default=True,
-              help="Track time at which the music starts, seconds (negative: skip the song's start).")
 @click.option("--mode", "modes", default=None, metavar="LIST",
               help="What the vest shows: motion, multimodal (music and motion mixed) or audio; a comma list gives "
                    "a switch. Default: multimodal with --audio, else motion.")
-@click.option("--mix", "mix_ratio", default="2:3", show_default=True, help="audio:motion ratio of the multimodal mix.")
-@click.option("--method", default="mst", show_default=True, help="Renderer method for a motion file: mst or baseline.")
-@preset_option
 @click.option("--methods", default=None, metavar="LIST",
               help="Several methods, comma-separated (e.g. mst,baseline); the page gets a switch.")
 @click.option("--presets", default=None, metavar="LIST",
               help="Several presets, comma-separated (e.g. paper,energy); every method x preset is rendered.")
-@click.option("--mirror/--no-mirror", default=None,
-              help="Audience feels the performer mirrored (default: the preset's choice, mirrored).")
 @click.option("--live", "live_url", default=None, metavar="URL",
               help="Make a page that shows a running `hapmotion live` broadcast, e.g. ws://127.0.0.1:8766.")
 @click.option("--title", default=None, help="Title shown on the page (default: INPUT's file name).")
 @click.option("--credit", multiple=True, metavar="TEXT",
               help="Attribution line for the page footer (e.g. the music's title, author and licence); repeatable.")
-@mix_rule_option
-@cues_option
-@comfort_options
 @motion_options
-def command(input_path, output, audio_path, audio_offset, modes, mix_ratio, method, preset, methods, presets, mirror,
-            live_url, title, credit, mix_rule, cues, comfort, motion_opts):
+@show_options("method", "preset", "mirror", "param", "layout", "fps", "audio", "audio_offset", "mix", "mix_rule",
+              "cues")
+def command(input_path: Optional[Path], output: Optional[Path], modes: Optional[str], methods: Optional[str],
+            presets: Optional[str], live_url: Optional[str], title: Optional[str], credit: tuple[str, ...],
+            show: Show, motion_opts: dict) -> None:
     """Write a self-contained HTML viewer of INPUT (a motion file, or a saved track .csv/.json/.npz/.tact).
 
     The page needs no network: it holds the recording, the rendered intensities and the music. It shows the
@@ -58,9 +54,6 @@ def command(input_path, output, audio_path, audio_offset, modes, mix_ratio, meth
       hapmotion view --live ws://127.0.0.1:8766 -o live.html
     """
     from .. import __version__
-    from ..audio.mix import parse_mix_ratio
-    from ..renderer.params import METHODS, PRESETS
-    from ..show import MODES, Show, split_list
     from ..viewer.page import load_audio_part, write_page
     from .view_input import read_view_input
 
@@ -68,8 +61,9 @@ def command(input_path, output, audio_path, audio_offset, modes, mix_ratio, meth
         raise UsageError("give a motion or track file to view, or --live URL for a live page")
     if live_url and not live_url.startswith(("ws://", "wss://")):
         raise UsageError(f"--live expects a ws:// or wss:// address, got {live_url!r}")
-    method_list = split_list(methods or method, "method", METHODS)
-    preset_list = split_list(presets or preset, "preset", tuple(PRESETS))
+    audio_path = show.audio
+    method_list = split_list(methods or show.method, "method", METHODS)
+    preset_list = split_list(presets or show.preset, "preset", tuple(PRESETS))
     mode_list = split_list(modes or ("multimodal" if audio_path else "motion"), "mode", MODES)
     if input_path is None and live_url and (audio_path or modes or methods or presets):
         raise UsageError("a live-only page takes no --audio, --mode, --methods or --presets (the show sends them)")
@@ -80,18 +74,16 @@ def command(input_path, output, audio_path, audio_offset, modes, mix_ratio, meth
 
     tracks, motion, notes, source_name = [], None, [], ""
     if input_path is not None:
-        show = Show(mirror=mirror, audio=audio_path, audio_offset_s=audio_offset, mix_ratio=parse_mix_ratio(mix_ratio),
-                    mix_rule=mix_rule, cues=read_cues(cues, motion_opts), comfort=comfort)
         loaded = read_view_input(input_path, show, methods=method_list, presets=preset_list, modes=mode_list,
                                  read_motion=lambda path: read_motion(path, **motion_opts),
                                  read_track=lambda path: read_track(path, **motion_opts), progress=progress_bar)
         tracks, motion, notes, source_name = loaded.tracks, loaded.motion, loaded.notes, input_path.name
     audio = None
     if audio_path is not None:
-        audio = load_audio_part(audio_path, fps=tracks[0].fps if tracks else 60.0, offset_s=audio_offset)
+        audio = load_audio_part(audio_path, fps=tracks[0].fps if tracks else 60.0, offset_s=show.audio_offset_s)
     footer = [f"source: {source_name}"] if source_name else []
     if audio is not None:
-        footer.append(f"music: {audio.name}" + (f" (starts at {audio_offset:g} s)" if audio_offset else ""))
+        footer.append(f"music: {audio.name}" + (f" (starts at {show.audio_offset_s:g} s)" if show.audio_offset_s else ""))
     footer.extend(credit)
     footer.append(f"made with hapmotion {__version__}")
     info = write_page(output, tracks, motion, audio=audio, live_url=live_url,

@@ -1,7 +1,9 @@
 """Live mode: a skeleton stream in, rendered frame by frame, out to haptic devices, recorders and
 viewers, in real time and safely.
 
-* :func:`run_live` / :func:`live` - the whole session from SOURCE/SINK strings (what ``hapmotion live`` calls);
+* :func:`run_live` / :func:`live` - a show's whole session from SOURCE/SINK strings (what ``hapmotion live``
+  calls); :class:`Session` - the one assembly of source, upstream, output stage and sinks (live, play, check and
+  an audience seat);
 * :class:`LiveEngine` - the loop itself, for custom sources and sinks;
 * :mod:`~hapmotion.live.frames` (what flows), :mod:`~hapmotion.live.hygiene` (cleaning incoming frames),
   :mod:`~hapmotion.bhaptics.device_map` (row columns per device, from the layout);
@@ -11,18 +13,19 @@ viewers, in real time and safely.
 docs/live.md describes the address scheme, message schemas, SOURCE/SINK syntax, safety behaviour and timing.
 """
 
-from .engine import AudioChannel, LiveEngine
 from ..bhaptics.device_map import DeviceMap
+from .builders import build_sink, build_source
+from .engine import LiveEngine, RenderedSkeleton, Upstream
 from .frames import OutFrame, SkeletonFrame
-from .session import build_sink, build_source, live, run_live
+from .session import Session, SinkContext, live, run_live
 from .sinks import BroadcastSink, OscOutSink, PlayerSdk1Sink, PlayerSdk2Sink, RecorderSink, Sink
 from .sources import ClockSource, OscSource, ReplaySource, Source, WsSource
 from .stats import LiveStats
 from .urls import parse_sink, parse_source
 
 __all__ = [
-    "AudioChannel", "BroadcastSink", "ClockSource", "DeviceMap", "LiveEngine", "LiveStats", "OscOutSink",
-    "OscSource", "OutFrame", "PlayerSdk1Sink", "PlayerSdk2Sink", "RecorderSink", "ReplaySource", "Sink",
-    "SkeletonFrame", "Source", "WsSource", "build_sink", "build_source", "live", "parse_sink", "parse_source",
-    "run_live",
+    "BroadcastSink", "ClockSource", "DeviceMap", "LiveEngine", "LiveStats", "OscOutSink", "OscSource", "OutFrame",
+    "PlayerSdk1Sink", "PlayerSdk2Sink", "RecorderSink", "RenderedSkeleton", "ReplaySource", "Session",
+    "SinkContext", "Sink", "SkeletonFrame", "Source", "Upstream", "WsSource", "build_sink", "build_source", "live",
+    "parse_sink", "parse_source", "run_live",
 ]

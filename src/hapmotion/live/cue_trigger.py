@@ -18,17 +18,15 @@ import asyncio
 import logging
 import math
 import time
-from typing import TYPE_CHECKING, Any, Optional
+from typing import Any, Optional
 
 from pythonosc.osc_packet import OscPacket
 
+from ..show.cue_layer import LiveCues
 from ..show.cues import MAX_GAIN
 from ..errors import UsageError
 from .access import MAX_SENDERS, SenderAllowList, SenderBudgets, exposure_line, is_loopback, reach
 from .hygiene import Faults, is_number
-
-if TYPE_CHECKING:
-    from ..show.cue_layer import LiveCues
 
 log = logging.getLogger("hapmotion.live")
 
@@ -165,37 +163,16 @@ class CueTrigger:
             self._transport = None
 
 
-def live_cues(cues: Any, *, fps: float, layout: Any, actuators: Any, cue_port: "str | int | None" = None,
-              allow_senders: Optional[SenderAllowList] = None) -> "Optional[LiveCues]":
-    """The cue layer of a session from ``--cues`` (a cue list file or a :class:`~hapmotion.show.cues.CueList`) and
-    ``--cue-port``, or None without cues. The trigger, when asked for, is :attr:`LiveCues.trigger` (not yet
-    listening: :func:`run_with_cues` starts it)."""
-    from ..show.cues import CueList, load_cues
-    from ..show.cue_layer import LiveCues
-
+def attach_cue_trigger(cues: Optional[LiveCues], cue_port: "str | int | None",
+                       allow_senders: Optional[SenderAllowList] = None) -> None:
+    """Let ``--cue-port`` (``PORT`` or ``HOST:PORT``) fire the named cues of ``cues``, a show stage's cue layer:
+    the trigger becomes :attr:`LiveCues.trigger` (not yet listening: ``Session.run`` starts it). Nothing to
+    do without a port; :class:`UsageError` for a port without cues, or cues without a name to fire them by."""
+    if cue_port is None:
+        return
     if cues is None:
-        if cue_port is not None:
-            raise UsageError("--cue-port fires the named cues of a cue list: give --cues too")
-        return None
-    cue_list = cues if isinstance(cues, CueList) else load_cues(cues)
-    layer = LiveCues(cue_list, fps=fps, actuators=actuators, mirror_map=layout.mirror_map())
-    if cue_port is not None:
-        if not layer.names:
-            raise UsageError(f"--cue-port: no cue in {cue_list.source} has a name to fire it by (name=...)")
-        host, port = parse_cue_port(str(cue_port))
-        layer.trigger = CueTrigger(layer, host, port, allow_senders=allow_senders)
-    return layer
-
-
-async def run_with_cues(engine: Any, source: Any) -> Any:
-    """``engine.run(source)`` with the engine's cue trigger (if any) listening for the whole session."""
-    trigger = getattr(engine.cues, "trigger", None)
-    if trigger is None:
-        return await engine.run(source)
-    await trigger.start(engine.faults)
-    try:
-        return await engine.run(source)
-    finally:
-        await trigger.close()
-        log.info("cues: %d fired by OSC on %s%s", engine.cues.fired, trigger.describe(),
-                 f", {engine.cues.dropped} dropped in a stall" if engine.cues.dropped else "")
+        raise UsageError("--cue-port fires the named cues of a cue list: give --cues too")
+    if not cues.names:
+        raise UsageError(f"--cue-port: no cue in {cues.cue_list.source} has a name to fire it by (name=...)")
+    host, port = parse_cue_port(str(cue_port))
+    cues.trigger = CueTrigger(cues, host, port, allow_senders=allow_senders)

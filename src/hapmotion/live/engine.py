@@ -26,6 +26,9 @@ from typing import Any, Callable, Optional, Protocol, Sequence
 
 import numpy as np
 
+from ..show.cue_layer import LiveCues
+from ..show.stage import OutputStage
+from ..skeleton.joints import JOINT_INDEX, RENDER_JOINTS
 from . import steady_heap
 from .frames import OutFrame, SkeletonFrame
 from .hygiene import MAX_ABS_M, Faults, FrameOrder, RateLimiter, sanitize
@@ -43,7 +46,7 @@ default action they would kill the process with the motors still playing and the
 
 
 class StepRenderer(Protocol):
-    """What the engine needs from a renderer (``hapmotion.Renderer`` fits)."""
+    """What the engine needs from a skeleton renderer (``hapmotion.Renderer`` fits)."""
 
     def step(self, frame: np.ndarray) -> np.ndarray: ...
 
@@ -53,37 +56,45 @@ class StepRenderer(Protocol):
     def reset(self) -> None: ...
 
 
-class AudioChannel:
-    """The music's haptic channel for live use: a precomputed audio track read at the show time and mixed with
-    each rendered motion row (``hapmotion.audio.mix``).
+class Upstream(Protocol):
+    """What turns each incoming frame into the row the output stage takes.
 
-    Parameters
-    ----------
-    rows:
-        ``(T, N)`` audio-track intensities 0..100 in the session's actuator order, at ``fps``.
-    mix:
-        ``mix(motion_row, audio_row) -> row`` (both ``(N,)`` 0..100).
-    """
+    ``reads_skeleton`` says whether frames carry a skeleton to check and render (a clock's ticks do not);
+    ``row(frame, t)`` returns ``(N,)`` 0..100 for the frame at show time ``t``; ``last_skeleton`` and
+    ``last_debug`` describe that row for viewers (``None`` when there is nothing to show); ``reset()`` starts
+    afresh after a stall."""
 
-    def __init__(self, rows: np.ndarray, fps: float, mix: Callable[[np.ndarray, np.ndarray], np.ndarray]):
-        self.rows = np.asarray(rows, dtype=np.float64)
-        self.fps = float(fps)
-        self._mix = mix
-        self._zeros = np.zeros(self.rows.shape[1])
+    reads_skeleton: bool
+    last_skeleton: Optional[np.ndarray]
+    last_debug: Optional[dict[str, np.ndarray]]
 
-    @property
-    def duration_s(self) -> float:
-        return self.rows.shape[0] / self.fps
+    def row(self, frame: SkeletonFrame, t: float) -> np.ndarray: ...
 
-    def row(self, t: float) -> np.ndarray:
-        """Audio row at show time ``t`` seconds (zeros outside the song)."""
-        k = int(math.floor(t * self.fps + 1e-6))  # t = k / fps must give row k despite rounding
-        if 0 <= k < self.rows.shape[0]:
-            return self.rows[k]
-        return self._zeros
+    def reset(self) -> None: ...
 
-    def mixed(self, motion_row: np.ndarray, t: float) -> np.ndarray:
-        return np.asarray(self._mix(motion_row, self.row(t)), dtype=np.float64)
+
+class RenderedSkeleton:
+    """The :class:`Upstream` of a live show: each frame's skeleton rendered by a :class:`StepRenderer`."""
+
+    reads_skeleton = True
+
+    def __init__(self, renderer: StepRenderer):
+        self.renderer = renderer
+        self.last_skeleton: Optional[np.ndarray] = None
+        self.last_debug: Optional[dict[str, np.ndarray]] = None
+
+    def row(self, frame: SkeletonFrame, t: float) -> np.ndarray:
+        out = np.asarray(self.renderer.step(frame.positions), dtype=np.float64)
+        self.last_skeleton, self.last_debug = frame.positions, self.renderer.last_debug
+        return out
+
+    def warm_up(self) -> None:
+        """Step the renderer once so its first real frame is not delayed by JIT compilation."""
+        self.renderer.step(np.full((32, 3), np.nan))
+        self.renderer.reset()
+
+    def reset(self) -> None:
+        self.renderer.reset()
 
 
 class LiveEngine:
@@ -91,11 +102,15 @@ class LiveEngine:
 
     Parameters
     ----------
-    renderer:
-        Object with ``step((32, 3)) -> (N,)``, ``last_debug`` and ``reset()`` (``hapmotion.Renderer``); may be None
-        in ``mode="audio"``.
+    upstream:
+        What turns each frame into a row: an :class:`Upstream`, or a skeleton renderer (``step((32, 3)) -> (N,)``,
+        ``last_debug``, ``reset()``: ``hapmotion.Renderer``), which is wrapped in :class:`RenderedSkeleton`;
+        ``None`` when frames are only clock ticks (the music played alone).
     sinks:
         Where rows go.
+    stage:
+        The show's :class:`~hapmotion.show.stage.OutputStage` (mode, music, cues, comfort), stepped with each
+        incoming row at its show time; ``None`` sends the incoming rows as they are.
     n_actuators:
         N, the row length.
     fps:
@@ -105,9 +120,6 @@ class LiveEngine:
         runs at most ``render_cap * rate`` times a second; frames arriving faster replace each other.
     stall_s:
         Seconds after the last usable frame by which every actuator has faded to zero.
-    audio, mode:
-        ``"motion"`` (renderer only), ``"multimodal"`` (renderer mixed with ``audio``), ``"audio"`` (``audio`` only,
-        frames are clock ticks).
     max_abs:
         Coordinates beyond this (metres) are absurd: the joint is dropped.
     flood_rate:
@@ -121,29 +133,23 @@ class LiveEngine:
         Called with the engine once the source listens (the CLI prints the addresses).
     stats_interval, on_stats:
         Every ``stats_interval`` seconds, a one-line progress report goes to ``on_stats`` (default: the log).
-    cues:
-        Object with ``layer(row, t) -> row`` (:class:`~hapmotion.show.cue_layer.LiveCues`): authored cues layered
-        onto each rendered row at its show time.
-    comfort:
-        Object with ``step(row) -> row`` (:class:`~hapmotion.show.comfort.Limiter`): the wearer's gain and comfort limits,
-        the last stage of every rendered row, as offline.
     """
 
-    def __init__(self, renderer: Optional[StepRenderer], sinks: Sequence[Sink], *, n_actuators: int,
-                 fps: float = 60.0, rate: Optional[float] = None, stall_s: float = 0.25,
-                 audio: Optional[AudioChannel] = None, mode: str = "motion", max_abs: float = MAX_ABS_M,
+    def __init__(self, upstream: "Upstream | StepRenderer | None", sinks: Sequence[Sink], *, n_actuators: int,
+                 stage: Optional[OutputStage] = None,
+                 fps: float = 60.0, rate: Optional[float] = None, stall_s: float = 0.25, max_abs: float = MAX_ABS_M,
                  render_cap: float = 1.5, flood_rate: Optional[float] = None, stop_timeout: float = 2.0,
                  handle_signals: bool = True, stats_interval: Optional[float] = None,
                  on_ready: Optional[Callable[["LiveEngine"], None]] = None,
-                 on_stats: Optional[Callable[[str], None]] = None, source_name: str = "source",
-                 cues: Any = None, comfort: Any = None):
-        if mode not in ("motion", "multimodal", "audio"):
-            raise ValueError(f"mode must be motion, multimodal or audio, got {mode!r}")
-        if mode != "motion" and audio is None:
-            raise ValueError(f"mode {mode} needs an audio channel")
-        if mode != "audio" and renderer is None:
-            raise ValueError("a renderer is needed unless mode is audio")
-        self.renderer = renderer
+                 on_stats: Optional[Callable[[str], None]] = None, source_name: str = "source"):
+        if upstream is not None and not hasattr(upstream, "reads_skeleton"):
+            upstream = RenderedSkeleton(upstream)
+        if upstream is None and (stage is None or stage.mode != "audio"):
+            raise ValueError("frames need an upstream (a renderer or stored rows) unless the music plays alone")
+        if stage is not None and stage.n != int(n_actuators):
+            raise ValueError(f"the output stage has {stage.n} actuators, the session {n_actuators}")
+        self.upstream: Optional[Upstream] = upstream
+        self.stage = stage
         self.sinks = list(sinks)
         self.n = int(n_actuators)
         self.fps = float(fps)
@@ -152,10 +158,6 @@ class LiveEngine:
         self.stall_s = float(stall_s)
         # The fade starts when a frame is overdue by half an interval, and never later than half the stall time.
         self.grace_s = min(1.5 / self.rate, 0.5 * self.stall_s)
-        self.audio = audio
-        self.mode = mode
-        self.cues = cues
-        self.comfort = comfort
         self.max_abs = max_abs
         self.min_gap = 1.0 / (render_cap * self.rate)
         self.stop_timeout = stop_timeout
@@ -163,11 +165,7 @@ class LiveEngine:
         self.stats_interval = stats_interval
         self.on_ready = on_ready
         self.on_stats = on_stats or (lambda text: log.info("stats: %s", text))
-        self._required: Optional[np.ndarray] = None
-        if mode != "audio":
-            from ..skeleton.joints import JOINT_INDEX, RENDER_JOINTS
-
-            self._required = np.array([JOINT_INDEX[j] for j in RENDER_JOINTS], dtype=np.intp)
+        self._required = np.array([JOINT_INDEX[j] for j in RENDER_JOINTS], dtype=np.intp)
         self.faults = Faults(source_name, log)
         self.stats = LiveStats(self.faults, fps=self.fps)
         for s in self.sinks:
@@ -193,6 +191,16 @@ class LiveEngine:
         self._faded = True  # nothing is playing yet
         self.source: Optional[Source] = None
 
+    @property
+    def reads_skeleton(self) -> bool:
+        """Whether incoming frames carry a skeleton (checked and rendered) rather than only a show time."""
+        return self.upstream is not None and self.upstream.reads_skeleton
+
+    @property
+    def cues(self) -> Optional[LiveCues]:
+        """The show's live cue layer (fired by name, announced to an audience), if it has cues."""
+        return self.stage.cues if self.stage is not None else None
+
     # ------------------------------------------------------------------ called by sources (synchronous, cheap)
     def admit(self, now: float) -> bool:
         """Flood limit on raw messages, checked before decoding."""
@@ -210,7 +218,7 @@ class LiveEngine:
     def submit(self, frame: SkeletonFrame) -> None:
         """Take a decoded frame: clean it, drop it if it is older than the last one, put it in the slot."""
         self.stats.frames_in += 1
-        if self.mode != "audio" and not sanitize(frame.positions, self.faults, max_abs=self.max_abs,
+        if self.reads_skeleton and not sanitize(frame.positions, self.faults, max_abs=self.max_abs,
                                                  required=self._required):
             self.stats.empty += 1
             return
@@ -321,9 +329,8 @@ class LiveEngine:
 
     def _warm_up(self) -> None:
         """Step the renderer once before the show so its first real frame is not delayed by JIT compilation."""
-        if self.renderer is not None:
-            self.renderer.step(np.full((32, 3), np.nan))
-            self.renderer.reset()
+        if isinstance(self.upstream, RenderedSkeleton):
+            self.upstream.warm_up()
 
     def _install_signals(self, loop: asyncio.AbstractEventLoop) -> list[int]:
         if not self.handle_signals or threading.current_thread() is not threading.main_thread():
@@ -397,22 +404,13 @@ class LiveEngine:
             if self._t0 is None:
                 self._t0 = frame.received
             t = frame.received - self._t0
-        skeleton = debug = None
-        if self.mode == "audio":
-            assert self.audio is not None
-            row = self.audio.row(t).copy()
-        else:
-            assert self.renderer is not None
-            row = np.asarray(self.renderer.step(frame.positions), dtype=np.float64)
-            debug = self.renderer.last_debug
-            skeleton = frame.positions
-            if self.mode == "multimodal":
-                assert self.audio is not None
-                row = self.audio.mixed(row, t)
-        if self.cues is not None:
-            row = self.cues.layer(row, t)
-        if self.comfort is not None:
-            row = self.comfort.step(row)
+        skeleton = debug = row = None
+        if self.upstream is not None:
+            row = self.upstream.row(frame, t)
+            skeleton, debug = self.upstream.last_skeleton, self.upstream.last_debug
+        if self.stage is not None:
+            row = self.stage.step(row, t)
+        assert row is not None  # the constructor refuses an engine with neither
         if row.shape != (self.n,):
             raise ValueError(f"the renderer returned shape {row.shape}, expected ({self.n},)")
         if not np.isfinite(row).all():
@@ -446,8 +444,8 @@ class LiveEngine:
             self._faded = True
             self.stats.stalls += 1
             log.info("source stalled for %.0f ms: all actuators off; waiting for frames", since * 1e3)
-            if self.renderer is not None:
-                self.renderer.reset()
+            if self.upstream is not None:
+                self.upstream.reset()
             self.order.reset()
             self._emit(np.zeros(self.n), None, None, None, "off")
             return

@@ -1,9 +1,9 @@
 """Playing a stored track or pattern in real time through the live engine (``hapmotion play``, ``check``).
 
 Nothing here is a second loop: a :class:`TrackSource` ticks at the track's rate (times ``speed``) and stamps each
-tick with its show time, and the engine reads the stored row of that time from a stored-row channel (the engine's
-``"audio"`` mode, whose channel is any ``(T, N)`` rows read at the show time) in place of the renderer. So playback
-gets everything live mode has: the same sinks (Player SDK1/SDK2, OSC, broadcast, recorder), the Player's 20 ms
+tick with its show time, and the engine takes the stored row of that time (:class:`StoredRows`, in place of the
+renderer) through an identity output stage (cues only), assembled by :class:`~hapmotion.live.session.Session` as
+every live session is. So playback gets everything live mode has: the same sinks (Player SDK1/SDK2, OSC, broadcast, recorder), the Player's 20 ms
 pacing, reconnection, the stall watchdog, and turn-off on every exit (end of the track, SIGINT, SIGTERM, SIGHUP,
 SIGQUIT, an error).
 
@@ -25,15 +25,17 @@ from typing import Any, Callable, Mapping, Optional, Sequence, Union
 import numpy as np
 
 from ..errors import InputError, UsageError
+from ..limits import LimitsArg
+from ..show.cues import Cue, pattern_rows
+from ..show.settings import Show
+from ..show.stage import OutputStage
+from ..show.timeline import RowTimeline
 from ..track import HapticTrack, parse_actuator_id
-from .cue_trigger import live_cues, run_with_cues
-from ..bhaptics.device_map import DeviceMap
-from .engine import AudioChannel, LiveEngine
+from ..track_files import load_track
 from .frames import SkeletonFrame
-from .sinks import Sink
+from .session import Session, SinkContext, SinkSpec
 from .sources import Source
 from .stats import LiveStats
-from .urls import parse_sink
 
 log = logging.getLogger("hapmotion.live")
 
@@ -58,8 +60,6 @@ def layout_rows(track: HapticTrack, actuators: Sequence[str], name: str = "track
     """The track's rows ``(T, N)`` 0..100 in the session's actuator order, matched by actuator id (columns of the
     session that the track lacks are 0). Devices of the track the session lacks are logged once; a track of which
     nothing maps is an :class:`~hapmotion.errors.InputError`."""
-    from ..show.cues import Cue, pattern_rows
-
     index = {a: i for i, a in enumerate(actuators)}
     present = sorted({parse_actuator_id(a)[0] for a in track.actuators if a in index})
     if not present:
@@ -136,74 +136,73 @@ class TrackSource(Source):
             self.on_mark(label)
 
 
-def _passthrough(show_row: np.ndarray, stored_row: np.ndarray) -> np.ndarray:
-    return stored_row
+class StoredRows:
+    """The :class:`~hapmotion.live.engine.Upstream` of ``play``: the stored row at each tick's show time."""
+
+    reads_skeleton = False
+    last_skeleton = None
+    last_debug = None
+
+    def __init__(self, timeline: RowTimeline):
+        self.timeline = timeline
+
+    def row(self, frame: SkeletonFrame, t: float) -> np.ndarray:
+        return self.timeline.row(t)
+
+    def reset(self) -> None:
+        """Stored rows have no state."""
 
 
 async def play(
     track: Union[str, "os.PathLike[str]", HapticTrack],
-    sinks: Sequence[Union[str, Sink]],
+    sinks: Sequence[SinkSpec],
     *,
+    show: Show = Show(),
     speed: float = 1.0,
     loop: bool = False,
-    layout: Any = None,
     workspace_id: Optional[str] = None,
     api_key: Optional[str] = None,
-    handle_signals: bool = True,
-    on_ready: Optional[Callable[[LiveEngine], None]] = None,
-    stats_interval: Optional[float] = None,
-    on_stats: Optional[Callable[[str], None]] = None,
     marks: Optional[Mapping[int, str]] = None,
     on_mark: Optional[Callable[[str], None]] = None,
-    cues: Any = None,
-    limits: Any = None,
+    limits: LimitsArg = None,
     cue_port: "str | int | None" = None,
     **engine_options: Any,
 ) -> LiveStats:
     """Play ``track`` (a path :func:`hapmotion.load_track` reads, or a :class:`HapticTrack`) in real time to
     ``sinks`` (SINK strings as for ``hapmotion live``, or :class:`Sink` objects); return the session statistics.
 
-    ``layout`` is the session layout (a :class:`~hapmotion.layout.Layout`, a layout file, or None for the default
-    X40 + shoulder sleeves). ``cues`` and ``cue_port`` layer a cue list over the track and fire its named cues by
-    OSC, as in :func:`hapmotion.live.live`. ``limits`` (:class:`~hapmotion.limits.InputLimits` or a mapping of
-    raised limits) bound the track file read. Every sink is sent turn-off before this returns or raises.
+    Of ``show`` only what applies to stored rows is used: its ``layout`` (the session layout; ``None``: the
+    default X40 + shoulder sleeves), ``cues`` (layered over the track; ``cue_port`` also fires its named cues by
+    OSC, as in :func:`hapmotion.live.live`) and ``comfort`` (the wearer's gain and limits). The stored rows pass an
+    identity output stage: they are sent as they are, with the cues and comfort on top. ``limits``
+    (:class:`~hapmotion.limits.InputLimits` or a mapping of raised limits) bound the track file read. ``engine_options`` go to the engine (``handle_signals``, ``on_ready``,
+    ``stats_interval``, ``on_stats`` ...). Every sink is sent turn-off before this returns or raises.
     """
-    from ..show import Show
-    from .session import build_sink
-
     if not sinks:
         raise UsageError("at least one --sink is required")
     if isinstance(track, HapticTrack):
         name = str(track.meta.get("source") or track.meta.get("path") or "track")
     else:
-        from ..track_files import load_track
-
         name = os.fspath(track)
         track = load_track(track, limits=limits)
-    session_layout = Show(layout=layout).load_layout()
+    session_layout = show.load_layout()
     fps = play_rate(track.fps)
     if fps != track.fps:
         log.info("%s: %g rows/s played at %g rows/s (%s)", name, track.fps, fps,
                  "each row repeated" if fps > track.fps else "resampled, peaks kept")
         track = track.resample(fps)
-    dmap = DeviceMap.from_layout(session_layout)
-    rows = layout_rows(track, dmap.actuators, name)
-    cue_layer = live_cues(cues, fps=fps, layout=session_layout, actuators=dmap.actuators, cue_port=cue_port)
+    rows = layout_rows(track, session_layout.actuators, name)
+    stage = OutputStage.identity(session_layout.actuators, fps, mirror_map=session_layout.mirror_map(),
+                                 comfort=show.comfort, cues=show.load_cues(limits))
     source = TrackSource(rows.shape[0], fps, speed=speed, loop=loop, name=name, marks=marks, on_mark=on_mark)
-    channel = AudioChannel(rows, fps, _passthrough)
     meta = {"mode": "playback", "source": source.describe(), "track": name, "fps": fps}
-    sink_objs = [s if isinstance(s, Sink) else
-                 build_sink(parse_sink(s), dmap=dmap, layout_name=session_layout.name, fps=fps,
-                            workspace_id=workspace_id, api_key=api_key, meta=meta, time_scale=speed)
-                 for s in sinks]
     # The source is this process's own clock: the stall watchdog only has to see through a late wake-up, so its
     # time covers three rows whatever the rate.
     engine_options.setdefault("stall_s", max(0.25, 3.0 / source.rate))
-    engine = LiveEngine(None, sink_objs, n_actuators=dmap.n, fps=fps, rate=source.rate, audio=channel,
-                        mode="audio", handle_signals=handle_signals, stats_interval=stats_interval,
-                        on_ready=on_ready, on_stats=on_stats, source_name=source.describe(), cues=cue_layer,
-                        **engine_options)
-    return await run_with_cues(engine, source)
+    session = Session(source, StoredRows(RowTimeline(rows, fps)), stage, session_layout, sinks, fps=fps,
+                      rate=source.rate, context=SinkContext(workspace_id, api_key, meta, speed), cue_port=cue_port,
+                      **engine_options)
+    return await session.run()
 
 
 def run_play(*args: Any, **kwargs: Any) -> LiveStats:
@@ -211,4 +210,4 @@ def run_play(*args: Any, **kwargs: Any) -> LiveStats:
     return asyncio.run(play(*args, **kwargs))
 
 
-__all__ = ["MAX_PLAY_FPS", "MIN_PLAY_FPS", "TrackSource", "layout_rows", "play", "play_rate", "run_play"]
+__all__ = ["MAX_PLAY_FPS", "MIN_PLAY_FPS", "StoredRows", "TrackSource", "layout_rows", "play", "play_rate", "run_play"]

@@ -1,9 +1,13 @@
-"""Putting a live session together from SOURCE/SINK strings and options: the Python face of ``hapmotion live``.
+"""Putting a live session together: the one assembly of ``hapmotion live``, ``play``, ``check`` and ``listen``.
 
-::
+A :class:`Session` takes a source, what turns its frames into rows (a renderer, stored rows, or nothing when the
+music plays alone), the show's :class:`~hapmotion.show.stage.OutputStage`, the layout and the sinks, and builds the
+device map, the sinks, the cue trigger and the engine; :meth:`Session.run` plays it. :func:`live` is the Python
+face of ``hapmotion live``::
 
     from hapmotion.live import run_live
-    stats = run_live("osc://0.0.0.0:9000", ["player", "ws-broadcast://127.0.0.1:8766", "record:show.tact"])
+    from hapmotion.show import Show
+    stats = run_live(Show(audio="song.ogg"), "osc://0.0.0.0:9000", ["player", "record:show.tact"])
     print(stats.summary_lines())
 """
 
@@ -11,131 +15,126 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import math
 import os
-from pathlib import Path
+from dataclasses import dataclass, field
 from typing import Any, Callable, Optional, Sequence, Union
 
-
-from ..show.comfort import Comfort
-from ..errors import UsageError
-from ..limits import checked_json_text
-from ..renderer.params import DEFAULT_PRESET
-from ..show import Show, live_music
-from .cue_trigger import live_cues, run_with_cues
-from .engine import AudioChannel, LiveEngine
 from ..bhaptics.device_map import DeviceMap
-from ..bhaptics.sdk1 import tact_project
-from .sinks import BroadcastSink, OscOutSink, PlayerSdk1Sink, PlayerSdk2Sink, RecorderSink, Sink
-from .sources import ClockSource, ReplaySource, Source, network_source
+from ..body.model import BodyModel
+from ..errors import UsageError
+from ..layout import Layout
+from ..show.music import song_timeline
+from ..show.settings import Show
+from ..show.stage import OutputStage
+from .cue_trigger import attach_cue_trigger
+from .engine import LiveEngine, RenderedSkeleton, StepRenderer, Upstream
+from .sinks import Sink
+from .sources import ClockSource, ReplaySource, Source
 from .stats import LiveStats
-from .urls import Endpoint, parse_sink, parse_source
+from .builders import build_sink, build_source
+from .urls import parse_sink, parse_source
 
 log = logging.getLogger("hapmotion.live")
 
-def build_source(ep: Endpoint, *, fps: Optional[float], speed: float, loop: bool,
-                 reader_options: Optional[dict[str, Any]] = None, **access: Any) -> Source:
-    """A source object for a parsed ``--source``: a replay read with ``reader_options``, or a network source with
-    the ``access`` rules of :func:`~hapmotion.live.sources.network_source` (default: only this machine may send)."""
-    if ep.kind == "replay":
-        return ReplaySource.from_path(ep.path, fps=fps, speed=speed, loop=loop, reader_options=reader_options)
-    return network_source(ep, **access)
+SinkSpec = Union[str, Sink, Callable[[DeviceMap, float], Sink]]
+"""A sink as a SINK string (``player``, ``record:show.tact`` ...), a ready :class:`Sink`, or a factory
+``(device_map, fps) -> Sink``."""
 
 
-def _registrations(ep: Endpoint) -> dict[str, Any]:
-    regs = {}
-    for path in ep.options.get("register", []):
-        # the same guard as the .tact reader: size, nesting, parsed size and number length before parsing
-        regs[Path(path).stem] = tact_project(checked_json_text(path, what=".tact pattern"), path)
-    return regs
+@dataclass
+class SinkContext:
+    """What building a sink from a SINK string needs beyond the device map and the rate: the Player's SDK2
+    credentials, the session's description for recorders and viewers, the replay speed a recording undoes, and
+    what a ``nats://`` publisher describes to its seats (``None``: no audience from this session)."""
+
+    workspace_id: Optional[str] = None
+    api_key: Optional[str] = None
+    meta: dict[str, Any] = field(default_factory=dict)
+    time_scale: float = 1.0
+    audience: Optional[dict[str, Any]] = None
 
 
-NATS_ONLY_LIVE = ("--sink {sink}: an audience show carries the performer's skeleton and the music for each seat to "
-                  "render; only 'hapmotion live' publishes one")
+class Session:
+    """One live session, assembled: ``source`` -> ``upstream`` -> ``stage`` -> every sink.
 
-
-def build_sink(ep: Endpoint, *, dmap: DeviceMap, layout_name: str, fps: float,
-               workspace_id: Optional[str] = None, api_key: Optional[str] = None, version: int = 1,
-               meta: Optional[dict[str, Any]] = None, time_scale: float = 1.0,
-               audience: Optional[dict[str, Any]] = None) -> Sink:
-    """A sink object for a parsed ``--sink``; ``audience`` holds what a ``nats://`` sink describes to its seats
-    (:func:`hapmotion.audience.publisher.publisher_sink`)."""
-    if ep.kind == "player":
-        return PlayerSdk1Sink(dmap, host=ep.host, port=ep.port, path=ep.path or "/v2/feedbacks",
-                            app_id=ep.option("app_id"), app_name=ep.option("app_name"),
-                            duration_ms=ep.int_option("duration"), key_prefix=ep.option("key") or "hapmotion",
-                            registrations=_registrations(ep), fps=fps)
-    if ep.kind == "player-v3":
-        wid = ep.option("workspace_id") or workspace_id or ""
-        key = ep.option("api_key") or api_key or ""
-        if not (wid and key):
-            log.warning("player-v3: no workspace id / API key given (--workspace-id, --api-key or "
-                        "BHAPTICS_WORKSPACE_ID / BHAPTICS_API_KEY); the Player may refuse the connection")
-        return PlayerSdk2Sink(dmap, workspace_id=wid or "hapmotion", api_key=key,
-                            version=ep.option("version") or version, host=ep.host, port=ep.port,
-                            path=ep.path or "/v3/feedback", duration_ms=ep.int_option("duration"), fps=fps)
-    if ep.kind == "osc":
-        return OscOutSink(dmap, host=ep.host, port=ep.port, prefix=ep.path.rstrip("/") or "/hapmotion",
-                          per_actuator=ep.flag("actuators"), per_device=ep.flag("devices"), fps=fps)
-    if ep.kind == "ws-broadcast":
-        return BroadcastSink(dmap.actuators, layout_name, host=ep.host, port=ep.port, fps=fps, render_info=meta)
-    if ep.kind == "record":
-        return RecorderSink(ep.path, dmap.actuators, layout_name, fps=fps, meta=meta, time_scale=time_scale)
-    if ep.kind == "nats":
-        if audience is None:
-            raise UsageError(NATS_ONLY_LIVE.format(sink=ep.text))
-        from ..audience.publisher import publisher_sink
-
-        return publisher_sink(ep, fps=fps, **audience)
-    raise UsageError(f"--sink {ep.text!r}: unknown kind {ep.kind}")  # pragma: no cover
-
-
-async def live(
-    source: Union[str, Source, None],
-    sinks: Sequence[Union[str, Sink]],
-    *,
-    method: str = "mst",
-    preset: str = DEFAULT_PRESET,
-    mirror: Optional[bool] = None,
-    fps: Optional[float] = None,
-    speed: float = 1.0,
-    loop: bool = False,
-    audio: "str | os.PathLike[str] | None" = None,
-    audio_offset: float = 0.0,
-    mode: Optional[str] = None,
-    ratio: tuple[float, float] = (2, 3),
-    domain: Optional[str] = None,
-    mix_rule: Optional[str] = None,
-    comfort: Optional[Comfort] = None,
-    stall_ms: float = 250.0,
-    stats_interval: Optional[float] = None,
-    workspace_id: Optional[str] = None,
-    api_key: Optional[str] = None,
-    renderer: Any = None,
-    handle_signals: bool = True,
-    on_ready: Optional[Callable[[LiveEngine], None]] = None,
-    show: Optional[Show] = None,
-    cues: Any = None,
-    cue_port: "str | int | None" = None,
-    **engine_options: Any,
-) -> LiveStats:
-    """Run a live session until the source ends or a stop signal; return its statistics.
-
-    ``source`` and ``sinks`` are SOURCE/SINK strings (see :mod:`hapmotion.live.urls`) or ready-made objects.
-    How the show is rendered and mixed is ``show`` (:class:`hapmotion.show.Show`); without it one is made from
-    ``method``, ``preset``, ``mirror``, ``audio``, ``audio_offset``, ``mode``, ``ratio``, ``domain``, ``mix_rule``
-    and ``comfort`` (the wearer's gain and limits, the last stage of every row). The mode
-    defaults to ``"multimodal"`` with music and ``"motion"`` without; ``"audio"`` plays the song's channel alone
-    (no source). ``renderer`` replaces the show's ``Renderer``. ``cues`` (a cue list file or
-    :class:`~hapmotion.show.cues.CueList`) are layered onto the rows at their show times; ``cue_port`` (``PORT`` or
-    ``HOST:PORT``, loopback by default) also fires them by name by OSC (:mod:`~hapmotion.live.cue_trigger`). Every
-    sink is sent turn-off before this returns or raises.
+    ``sinks`` are :data:`SinkSpec`; ``wrap`` (if given) wraps each built sink (an audience seat's zones);
+    ``cue_port`` lets an OSC port fire the stage's named cues; ``engine_options`` go to
+    :class:`~hapmotion.live.engine.LiveEngine` (``stall_s``, ``handle_signals``, ``on_ready``, ...).
     """
-    if show is None:
-        show = Show(method=method, preset=preset, mirror=mirror, mode=mode, audio=audio, audio_offset_s=audio_offset,
-                    mix_ratio=ratio, mix_domain=domain, mix_rule=mix_rule, comfort=comfort or Comfort(), cues=cues)
-    elif cues is not None:
-        show = show.replace(cues=cues)
+
+    def __init__(self, source: Source, upstream: "Upstream | StepRenderer | None", stage: OutputStage,
+                 layout: Layout, sinks: Sequence[SinkSpec], *, fps: float, rate: Optional[float] = None,
+                 context: Optional[SinkContext] = None, cue_port: "str | int | None" = None,
+                 wrap: Optional[Callable[[Sink], Sink]] = None, **engine_options: Any):
+        if not sinks:
+            raise UsageError("at least one --sink is required")
+        context = context or SinkContext()
+        self.source = source
+        self.stage = stage
+        self.dmap = DeviceMap.from_layout(layout)
+        built = [self._build(s, layout, fps, context) for s in sinks]
+        self.sinks = [wrap(s) for s in built] if wrap is not None else built
+        attach_cue_trigger(stage.cues, cue_port)
+        if stage.cues is not None:
+            _announce_cues(stage, self.sinks)
+        self.engine = LiveEngine(upstream, self.sinks, stage=stage, n_actuators=self.dmap.n, fps=fps, rate=rate,
+                                 source_name=source.describe(), **engine_options)
+
+    def _build(self, spec: SinkSpec, layout: Layout, fps: float, context: SinkContext) -> Sink:
+        if isinstance(spec, Sink):
+            return spec
+        if callable(spec):
+            return spec(self.dmap, fps)
+        return build_sink(parse_sink(spec), dmap=self.dmap, layout_name=layout.name, fps=fps,
+                          workspace_id=context.workspace_id, api_key=context.api_key, meta=context.meta,
+                          time_scale=context.time_scale, audience=context.audience)
+
+    async def run(self) -> LiveStats:
+        """Play the session until the source ends or a stop; every sink is sent turn-off before this returns or
+        raises. The cue trigger (if any) listens for the whole session."""
+        cues = self.stage.cues
+        trigger = cues.trigger if cues is not None else None
+        if trigger is None:
+            return await self.engine.run(self.source)
+        await trigger.start(self.engine.faults)
+        try:
+            return await self.engine.run(self.source)
+        finally:
+            await trigger.close()
+            log.info("cues: %d fired by OSC on %s%s", cues.fired, trigger.describe(),
+                     f", {cues.dropped} dropped in a stall" if cues.dropped else "")
+
+
+def _announce_cues(stage: OutputStage, sinks: Sequence[Sink]) -> None:
+    """Fired cues are announced to an audience by every NATS publisher among ``sinks`` (each seat plays them at
+    their show time plus its own delay)."""
+    publishers = [s for s in sinks if hasattr(s, "publish_cue")]
+    pending: set[asyncio.Task] = set()  # the announcing tasks, kept until done
+
+    def announce(name: str, gain: float, show_t: float) -> None:
+        for sink in publishers:
+            task = asyncio.get_running_loop().create_task(sink.publish_cue(name, show_t, gain))
+            pending.add(task)
+            task.add_done_callback(pending.discard)
+
+    if publishers and stage.cues is not None:
+        stage.cues.on_fire.append(announce)
+
+
+async def live(show: Show, source: Union[str, Source, None], sinks: Sequence[SinkSpec], *, speed: float = 1.0,
+               loop: bool = False, stall_ms: float = 250.0, workspace_id: Optional[str] = None,
+               api_key: Optional[str] = None, renderer: Optional[StepRenderer] = None,
+               cue_port: "str | int | None" = None, **engine_options: Any) -> LiveStats:
+    """Run a live session of ``show`` until the source ends or a stop signal; return its statistics.
+
+    ``source`` is a SOURCE string (see :mod:`hapmotion.live.urls`; ``speed`` and ``loop`` pace a ``replay:``) or a
+    ready :class:`Source`, or ``None`` when the show plays the music alone (``mode="audio"``). ``sinks`` are
+    :data:`SinkSpec`. The show's mode defaults to ``"multimodal"`` with music and ``"motion"`` without; its
+    ``fps`` (default: a replay's own rate, else 60) is the render rate. ``renderer`` replaces the show's
+    ``Renderer``; ``cue_port`` (``PORT`` or ``HOST:PORT``, loopback by default) fires the show's named cues by
+    OSC. ``workspace_id``/``api_key`` are the Player's SDK2 credentials. Every sink is sent turn-off before this
+    returns or raises.
+    """
     mode = show.resolved_mode(has_motion=source is not None or show.mode != "audio")
     if mode == "audio" and source is not None:
         raise UsageError("--mode audio plays the song's haptic channel alone: leave out --source")
@@ -145,70 +144,37 @@ async def live(
         raise UsageError("at least one --sink is required")
     if not (stall_ms > 0):
         raise UsageError(f"--stall-ms must be positive, got {stall_ms}")
-    if fps is not None and not (math.isfinite(fps) and 1.0 <= fps <= 1000.0):
-        raise UsageError(f"--fps must be a finite number of frames per second from 1 to 1000, got {fps}")
 
-    src: Optional[Source]
+    src = build_source(parse_source(source), fps=show.fps, speed=speed, loop=loop) \
+        if isinstance(source, str) else source
     body = None
-    if isinstance(source, str):
-        src = build_source(parse_source(source), fps=fps, speed=speed, loop=loop)
-    else:
-        src = source
+    fps = show.fps
     if isinstance(src, ReplaySource):
         fps = src.motion.fps
-        from ..body.model import BodyModel
-
         body = BodyModel.from_motion(src.motion)
     fps = float(fps or 60.0)
     rate = src.rate if isinstance(src, ReplaySource) else fps
 
-    if renderer is None and mode != "audio":
-        renderer = show.renderer(fps, body=body)
     layout = getattr(renderer, "layout", None) or show.load_layout()
-    dmap = DeviceMap.from_layout(layout)
-    channel = None
-    if mode != "motion":
-        music = live_music(show, mode, fps=fps, layout=layout, actuators=dmap.actuators)
-        channel = AudioChannel(music.rows, music.fps, music.mix_row)
+    upstream = None
+    if mode != "audio":
+        upstream = RenderedSkeleton(renderer if renderer is not None else show.renderer(fps, body=body))
+    music = song_timeline(show, fps=fps, layout=layout) if mode != "motion" else None
+    stage = OutputStage.for_show(show, mode, layout=layout, fps=fps, music=music)
     if src is None:
-        assert channel is not None
-        src = ClockSource(fps, channel.duration_s, loop=loop)
-    cue_layer = live_cues(show.cues, fps=fps, layout=layout, actuators=dmap.actuators, cue_port=cue_port)
-    limiter = None if show.comfort.is_neutral else show.limiter(fps, dmap.n)
+        assert music is not None  # the audio mode has music
+        src = ClockSource(fps, music.duration_s, loop=loop)
 
-    meta = {**show.describe(mode), "source": src.describe(), "audio": os.fspath(show.audio) if show.audio else None}
-    if renderer is not None and getattr(renderer, "params", None) is not None:
-        meta["mirror"] = renderer.params.mirror
-    audience = {"show": show, "mode": mode, "layout": layout, "body": body, "music": channel,
-                "stall_ms": stall_ms, "mirror": meta.get("mirror", show.params().mirror)}
-    sink_objs = [s if isinstance(s, Sink) else
-                 build_sink(parse_sink(s), dmap=dmap, layout_name=layout.name, fps=fps, workspace_id=workspace_id,
-                            api_key=api_key, meta=meta,
-                            time_scale=src.speed if isinstance(src, ReplaySource) else 1.0, audience=audience)
-                 for s in sinks]
-    if cue_layer is not None:
-        _announce_cues(cue_layer, sink_objs)
-    engine = LiveEngine(renderer, sink_objs, n_actuators=dmap.n, fps=fps, rate=rate, stall_s=stall_ms / 1000.0,
-                        audio=channel, mode=mode, handle_signals=handle_signals, stats_interval=stats_interval,
-                        on_ready=on_ready, source_name=src.describe(), cues=cue_layer, comfort=limiter,
-                        **engine_options)
-    return await run_with_cues(engine, src)
-
-
-def _announce_cues(cue_layer: Any, sinks: Sequence[Sink]) -> None:
-    """Fired cues are announced to an audience by every NATS publisher among ``sinks`` (each seat plays them at
-    their show time plus its own delay)."""
-    publishers = [s for s in sinks if hasattr(s, "publish_cue")]
-    pending: set = set()  # the announcing tasks, kept until done
-
-    def announce(name: str, gain: float, show_t: float) -> None:
-        for sink in publishers:
-            task = asyncio.get_running_loop().create_task(sink.publish_cue(name, show_t, gain))
-            pending.add(task)
-            task.add_done_callback(pending.discard)
-
-    if publishers:
-        cue_layer.on_fire.append(announce)
+    mirror = renderer.params.mirror if getattr(renderer, "params", None) is not None else show.params().mirror
+    meta = {**show.describe(mode), "mirror": mirror, "source": src.describe(),
+            "audio": os.fspath(show.audio) if show.audio else None}
+    audience = {"show": show, "stage": stage, "layout": layout, "body": body, "music": music,
+                "stall_ms": stall_ms, "mirror": mirror}
+    context = SinkContext(workspace_id, api_key, meta, src.speed if isinstance(src, ReplaySource) else 1.0,
+                          audience)
+    session = Session(src, upstream, stage, layout, sinks, fps=fps, rate=rate, context=context, cue_port=cue_port,
+                      stall_s=stall_ms / 1000.0, **engine_options)
+    return await session.run()
 
 
 def run_live(*args: Any, **kwargs: Any) -> LiveStats:

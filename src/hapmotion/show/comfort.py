@@ -33,6 +33,11 @@ MAX_GAIN = 5.0
 """Largest accepted gain (the bHaptics SDKs' scale options go up to a few times the original)."""
 
 
+COMFORT_RANGES: dict[str, tuple[float, float]] = {
+    "gain": (0.0, MAX_GAIN), "max_level": (0.0, 100.0), "max_duty": (0.0, 1.0), "window_s": (1e-3, 3600.0)}
+"""The accepted range of each :class:`Comfort` field (inclusive); the CLI's options read it from here."""
+
+
 @dataclass(frozen=True)
 class Comfort:
     """The strength control and comfort limits (units in each field's comment). The defaults change nothing."""
@@ -47,8 +52,7 @@ class Comfort:
     """Seconds. Time constant of the per-motor moving average the duty limit watches."""
 
     def __post_init__(self) -> None:
-        for name, lo, hi in (("gain", 0.0, MAX_GAIN), ("max_level", 0.0, 100.0), ("max_duty", 0.0, 1.0),
-                             ("window_s", 1e-3, 3600.0)):
+        for name, (lo, hi) in COMFORT_RANGES.items():
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and lo <= value <= hi):
                 raise UsageError(f"comfort {name} must be a number in {lo:g}..{hi:g}, not {value!r}")

@@ -1,5 +1,5 @@
 """Cues in a live show: a cue list's patterns layered onto each output row at the show time, and cues fired by
-name (an OSC message from a lighting desk or Unity, :mod:`.cue_trigger`), with the offline layering rule.
+name (an OSC message from a lighting desk or Unity, :mod:`hapmotion.live.cue_trigger`), with the offline layering rule.
 
 Each row the engine sends at show time ``t`` (frame ``j = floor(t * fps)``) gets the energy of every cue playing
 then, added by :func:`hapmotion.show.cues.layer` under the show's power limit, exactly as offline:
@@ -26,6 +26,7 @@ import numpy as np
 
 from .cues import MAX_GAIN, Cue, CueList, layer, pattern_rows
 from ..track import HapticTrack
+from ..track_files import load_track
 
 log = logging.getLogger("hapmotion.live")
 
@@ -48,19 +49,17 @@ class LiveCues:
     actuators, mirror_map:
         The session's actuator ids and its left/right mirror map (``Layout.mirror_map()``, for ``side=swap``).
     power_limit:
-        Total power limit of the layered rows (default :func:`hapmotion.show.show_power_limit`).
+        Total power limit of the layered rows (:func:`hapmotion.show.show_power_limit` in a show's stage), or
+        ``None``.
     """
 
     def __init__(self, cue_list: CueList, *, fps: float, actuators: Sequence[str], mirror_map: np.ndarray,
-                 power_limit: Any = "show"):
-        from . import show_power_limit
-        from ..track_files import load_track
-
+                 power_limit: Optional[float]):
         self.cue_list = cue_list
         self.fps = float(fps)
         self.actuators = tuple(actuators)
         self.mirror_map = np.asarray(mirror_map)
-        self.power_limit = show_power_limit(len(self.actuators)) if power_limit == "show" else power_limit
+        self.power_limit = power_limit
         self._tracks: dict[Path, HapticTrack] = {}
         self._energy: dict[tuple, np.ndarray] = {}
         for cue in cue_list.cues:

@@ -1,0 +1,214 @@
+"""The output stage: what turns the rows that come in (rendered motion, a stored track) into the rows that are sent.
+
+One :class:`OutputStage` is built per show, layout and frame rate, and every way of playing a show drives it:
+
+* files: :meth:`OutputStage.rows` on whole ``(T, N)`` arrays (:func:`hapmotion.show.render_show`);
+* live, an audience seat and ``play``: :meth:`OutputStage.step`, one ``(N,)`` row at its show time (the live
+  engine knows nothing of modes, music or cues);
+* an audience: :meth:`OutputStage.to_dict` is what the show's description carries, :meth:`OutputStage.from_dict`
+  builds the same stage on each seat, with the seat's own comfort and cues.
+
+Per row, in this order (the batch and per-row drivers run the same functions, so they send the same numbers):
+
+1. **mode** (the paper's study-2 condition): ``motion`` passes the incoming row, ``audio`` the music's row,
+   ``multimodal`` mixes both (:func:`hapmotion.audio.mix.mix` with the show's ratio and rule); all three are
+   clipped to 0..100 and held to the show's power limit. ``rows`` (playing a stored track) passes the row as it is.
+2. **cues**: authored cues layered on (:func:`hapmotion.show.cues.layer`), under the same power limit.
+3. **comfort**: the wearer's gain and limits (:mod:`hapmotion.show.comfort`), the last word on every row.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Optional, Sequence
+
+import numpy as np
+
+from ..audio.mix import check_ratio, limit_power, mix
+from ..audio.params import MIX_RULES, AudioParams, params_for_preset
+from ..errors import UsageError
+from ..layout import Layout
+from ..renderer.params import PRESETS
+from .comfort import Comfort, Limiter, limit_rows
+from .cue_layer import LiveCues
+from .cues import CueList, cue_layer, layer
+from .settings import MODES, Show, check_choice
+from .timeline import RowTimeline
+
+POWER_LIMIT_FRACTION = 0.75
+"""Total power limit of every row a show sends, as a fraction of all actuators at full drive:
+``sum((I / 100) ** 2) <= fraction * N``, the whole row scaled down together (Google's audio-to-tactile
+post-processor, GitHub ``google/audio-to-tactile``, limits the summed power x_c^2 across channels the same way; the
+value is ours: the loudest continuous music on all 52 actuators, power 52 * 0.6^2 = 18.7, passes untouched, a
+whole-suit kick, power 52, is scaled to 87 %)."""
+
+STAGE_MODES = MODES + ("rows",)
+"""The study-2 conditions, and ``rows``: a stored track played as it is."""
+
+
+def power_limit_for(n_actuators: int, fraction: Optional[float] = POWER_LIMIT_FRACTION) -> Optional[float]:
+    """The total power limit ``sum (I/100)^2`` for ``n_actuators`` (``fraction`` ``None``: no limit)."""
+    return None if fraction is None else float(fraction) * n_actuators
+
+
+def show_power_limit(n_actuators: int) -> Optional[float]:
+    """The power limit every show's rows keep to, cues included: :data:`POWER_LIMIT_FRACTION` of
+    ``n_actuators`` at full drive."""
+    return power_limit_for(n_actuators)
+
+
+class OutputStage:
+    """The last stages of every row a show sends: mode, cues, comfort (see the module docstring).
+
+    Parameters
+    ----------
+    mode:
+        ``"motion"``, ``"audio"``, ``"multimodal"`` or ``"rows"``.
+    actuators:
+        The ``N`` actuator ids of the rows, in column order.
+    fps:
+        Rows per second (the cue patterns' rate and the comfort limiter's clock).
+    ratio, rule, audio_preset:
+        The mix: ``(audio, motion)`` weights, ``duck``/``paper``/``energy``, and the preset whose
+        :class:`~hapmotion.audio.AudioParams` hold the ``duck`` rule's depths and start level.
+    power_limit:
+        Total power ``sum (I/100)^2`` every row keeps to (``None``: none); cues keep to it too.
+    positions:
+        ``(N, 3)`` actuator positions in metres (the ``duck`` rule finds the motion's neighbours by them), or
+        ``None``.
+    mirror_map:
+        ``(N,)`` left/right mirror map of the layout (cues with ``side=swap``).
+    comfort:
+        The wearer's gain and limits.
+    cues:
+        The cue list layered on, or ``None``.
+    music:
+        The music's rows (``audio`` and ``multimodal``), read at each row's show time by :meth:`step`.
+    """
+
+    def __init__(self, mode: str, actuators: Sequence[str], fps: float, *, ratio: tuple[float, float] = (2.0, 3.0),
+                 rule: str = "duck", audio_preset: str = "felt", power_limit: Optional[float] = None,
+                 positions: Optional[np.ndarray] = None, mirror_map: Optional[np.ndarray] = None,
+                 comfort: Comfort = Comfort(), cues: Optional[CueList] = None,
+                 music: Optional[RowTimeline] = None):
+        check_choice(mode, STAGE_MODES, "mode")
+        check_choice(rule, MIX_RULES, "mix rule")
+        check_choice(audio_preset, tuple(PRESETS), "preset")
+        if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
+            raise UsageError(f"fps must be a positive number, not {fps!r}")
+        if power_limit is not None and not (math.isfinite(power_limit) and power_limit > 0):
+            raise UsageError(f"power limit {power_limit!r}: expected a positive number or None")
+        self.mode = mode
+        self.actuators = tuple(actuators)
+        self.n = len(self.actuators)
+        self.fps = float(fps)
+        self.ratio = check_ratio(ratio)
+        self.rule = rule
+        self.audio_preset = audio_preset
+        self.audio_params: AudioParams = params_for_preset(audio_preset)
+        self.power_limit = power_limit
+        self.positions = positions
+        self.mirror_map = np.arange(self.n) if mirror_map is None else np.asarray(mirror_map)
+        self.comfort = comfort
+        self.cue_list = cues
+        self.music = music
+        self._cues: Optional[LiveCues] = None
+        self._limiter = None if comfort.is_neutral else Limiter(comfort, self.n, self.fps)
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def for_show(cls, show: Show, mode: str, *, layout: Layout, fps: float,
+                 music: Optional[RowTimeline] = None, cues: Optional[CueList] = None) -> "OutputStage":
+        """The stage of ``show`` played in ``mode`` on ``layout`` at ``fps``; ``cues`` is the show's cue list when
+        already read (default: :meth:`Show.load_cues`)."""
+        return cls(mode, layout.actuators, fps, ratio=show.mix_ratio, rule=show.resolved_rule(),
+                   audio_preset=show.preset, power_limit=show_power_limit(len(layout.actuators)),
+                   positions=layout.positions(), mirror_map=layout.mirror_map(), comfort=show.comfort,
+                   cues=cues if cues is not None else show.load_cues(), music=music)
+
+    @classmethod
+    def identity(cls, actuators: Sequence[str], fps: float, *, mirror_map: Optional[np.ndarray] = None,
+                 comfort: Comfort = Comfort(), cues: Optional[CueList] = None) -> "OutputStage":
+        """A stage that sends the incoming rows as they are (``play``), with cues (under the show's power limit)
+        and comfort if given."""
+        return cls("rows", actuators, fps, power_limit=show_power_limit(len(actuators)), mirror_map=mirror_map,
+                   comfort=comfort, cues=cues)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The mix settings a seat needs to build the same stage (:meth:`from_dict`): JSON-friendly."""
+        return {"mix_ratio": [self.ratio[0], self.ratio[1]], "mix_rule": self.rule,
+                "params_preset": self.audio_preset, "power_limit": self.power_limit}
+
+    @classmethod
+    def from_dict(cls, settings: dict[str, Any], mode: str, *, layout: Layout, fps: float,
+                  comfort: Comfort = Comfort(), cues: Optional[CueList] = None,
+                  music: Optional[RowTimeline] = None) -> "OutputStage":
+        """The stage :meth:`to_dict` describes, on ``layout`` at ``fps``, with a seat's own ``comfort`` and
+        ``cues``. ``settings`` ``None`` or empty: a motion-only show (no mix; the show's power limit)."""
+        settings = settings or {"power_limit": show_power_limit(len(layout.actuators))}
+        ratio = settings.get("mix_ratio", (2.0, 3.0))
+        return cls(mode, layout.actuators, fps, ratio=(float(ratio[0]), float(ratio[1])),
+                   rule=settings.get("mix_rule", "duck"), audio_preset=settings.get("params_preset", "felt"),
+                   power_limit=settings.get("power_limit"), positions=layout.positions(),
+                   mirror_map=layout.mirror_map(), comfort=comfort, cues=cues, music=music)
+
+    # ------------------------------------------------------------------ the mode stage (stateless)
+    def condition(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray]) -> np.ndarray:
+        """Step 1 on ``(N,)`` or ``(T, N)`` rows 0..100: the incoming rows (``None``: silence) and the music's
+        rows (``None``: silence) in this stage's mode."""
+        if self.mode == "rows":
+            return np.asarray(incoming, dtype=np.float64)
+        if self.mode == "multimodal":
+            return mix(incoming, music, ratio=self.ratio, power_limit=self.power_limit, rule=self.rule,
+                       positions=self.positions, params=self.audio_params)
+        chosen = incoming if self.mode == "motion" else music
+        return limit_power(np.clip(chosen, 0.0, 100.0), self.power_limit)
+
+    # ------------------------------------------------------------------ files: whole arrays
+    def rows(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray]) -> np.ndarray:
+        """The ``(T, N)`` rows sent for ``(T, N)`` incoming and music rows (either ``None``: silence), from a fresh
+        state: mode, every cue of the list on the timeline, comfort."""
+        shape = (incoming if incoming is not None else music).shape
+        out = self.condition(incoming if incoming is not None else np.zeros(shape),
+                             music if music is not None else np.zeros(shape))
+        if self.cue_list is not None:
+            energy = cue_layer(self.cue_list, fps=self.fps, n_frames=out.shape[0], actuators=self.actuators,
+                               mirror_map=self.mirror_map)
+            out = layer(out, energy, self.power_limit)
+        if not self.comfort.is_neutral:
+            out, _ = limit_rows(out, self.comfort, self.fps)
+        return out
+
+    # ------------------------------------------------------------------ live: one row at a time
+    @property
+    def cues(self) -> Optional[LiveCues]:
+        """The per-row cue layer (``None`` without cues), built on first use: :meth:`step` layers it on, a live
+        session fires its cues by name and announces them to an audience."""
+        if self._cues is None and self.cue_list is not None:
+            self._cues = LiveCues(self.cue_list, fps=self.fps, actuators=self.actuators, mirror_map=self.mirror_map,
+                                  power_limit=self.power_limit)
+        return self._cues
+
+    def step(self, incoming: Optional[np.ndarray], t: float) -> np.ndarray:
+        """The ``(N,)`` row sent at show time ``t`` seconds for the ``(N,)`` incoming row (``None``: none, as
+        when the music plays alone); the cue layer and the comfort limiter move on by one row."""
+        music = self.music.row(t) if self.music is not None else None
+        if self.mode == "rows":
+            row = np.array(incoming, dtype=np.float64)
+        elif self.mode == "audio":
+            row = self.condition(None, music)
+        else:
+            if incoming is None:
+                raise ValueError(f"mode {self.mode} needs an incoming row")
+            row = self.condition(incoming, music if music is not None else np.zeros(self.n))
+        cues = self.cues
+        if cues is not None:
+            row = cues.layer(row, t)
+        if self._limiter is not None:
+            row = self._limiter.step(row)
+        return row
+
+    def describe(self) -> dict[str, Any]:
+        """The stage's settings for a recording's metadata."""
+        return {"mode": self.mode, **self.to_dict(), "comfort": self.comfort.to_dict(),
+                "cues": str(self.cue_list.source) if self.cue_list is not None else None}
