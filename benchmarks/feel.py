@@ -447,7 +447,7 @@ def evaluate(preset: str | None, clips: list[Clip], song_list, layout, verbose: 
         for a, b, h in pieces:
             sub = m.slice(a, b)
             sub_track = render(sub, "mst", preset)
-            for sname, spath in song_list:
+            for _, spath in song_list:
                 mm = combine_default(sub_track, spath, "multimodal", preset).intensities
                 au = combine_default(sub_track, spath, "audio", preset).intensities
                 c, w = lateral(mm, h, left, right)

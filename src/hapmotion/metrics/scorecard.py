@@ -133,8 +133,8 @@ def _body(track: HapticTrack, motion: Motion | None) -> BodyModel:
     dims = track.meta.get("body")
     if isinstance(dims, dict):
         try:
-            return BodyModel(**{k: float(dims[k]) for k in ("shoulder_width", "shoulder_height", "pelvis_height")})
-        except (KeyError, TypeError, ValueError):
+            return BodyModel.from_dict(dims)
+        except ValueError:  # a hand-edited or foreign track: measure the body instead
             pass
     if motion is not None:
         return BodyModel.from_motion(motion)
