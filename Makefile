@@ -17,4 +17,4 @@ test:
 	$(PY) -m pytest -q
 
 bench: install
-	for b in render readers audio live viewer metrics; do $(PY) benchmarks/bench_$$b.py || exit 1; done
+	for b in render readers audio live viewer metrics; do $(PY) -m benchmarks.bench_$$b || exit 1; done

@@ -6,7 +6,7 @@ every variant is rendered with both methods on every recording and scored
 for the lags), so one line per knob setting answers "what did this change do". The numbers quoted in
 docs/metrics.md come from::
 
-    python benchmarks/ablation.py ../shared/data/motion/*.bvh ../shared/data/motion/*.pkl
+    python -m benchmarks.ablation ../shared/data/motion/*.bvh ../shared/data/motion/*.pkl
 """
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ def _parse(spec: str) -> tuple[str, dict[str, Any]]:
 
 
 def main(argv: Sequence[str] | None = None) -> None:
-    """``python benchmarks/ablation.py MOTION... [-- NAME=VALUE,...]...``: print the ablation table."""
+    """``python -m benchmarks.ablation MOTION... [-- NAME=VALUE,...]...``: print the ablation table."""
     from hapmotion.motion_files import load_motion
 
     args = list(sys.argv[1:] if argv is None else argv)

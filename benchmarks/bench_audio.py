@@ -1,8 +1,8 @@
 """Benchmark of the audio channel: speed, memory on an hour-long file, onset/beat agreement.
 
-Run:  python benchmarks/bench_audio.py                (about 30 s; writes ~250 MB of test files to /tmp)
-      python benchmarks/bench_audio.py --no-hour      (skips the one-hour memory test)
-      python benchmarks/bench_audio.py --onset-sweep  (only the sweep behind the onset defaults)
+Run:  python -m benchmarks.bench_audio                (about 30 s; writes ~250 MB of test files to /tmp)
+      python -m benchmarks.bench_audio --no-hour      (skips the one-hour memory test)
+      python -m benchmarks.bench_audio --onset-sweep  (only the sweep behind the onset defaults)
 
 Prints each figure beside its target:
 - analysis speed (x real time) for a 3-minute synthetic song, analysis alone and from files of each format
@@ -37,15 +37,15 @@ import soundfile as sf  # noqa: E402
 from hapmotion.audio import analyze_file, analyze_signal, audio_track  # noqa: E402
 from hapmotion.metrics.events import match_events  # noqa: E402
 from hapmotion.audio.io import mono_blocks, probe  # noqa: E402
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from support.beats import beat_grid, track_beats  # noqa: E402
-from support.audio_synth import drum_hit, place_hits, song_beats, song_blocks, write_blocks  # noqa: E402
+from tests.support.audio_synth import drum_hit, place_hits, song_beats, song_blocks, write_blocks  # noqa: E402
+from tests.support.beats import beat_grid, track_beats  # noqa: E402
+from tests.support.data import AUDIO as DATA  # noqa: E402
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "audio"
 SONGS = ("vibe_ace.ogg", "lets_go_fishin.ogg")
 TARGET_X = 500.0
 MEMORY_BOUND_MB = 100.0
 TMP = Path("/tmp/hapmotion_bench_audio")
+ROOT = Path(__file__).resolve().parents[1]  # the memory child runs as `python -m benchmarks.bench_audio` from here
 
 
 def pin_one_core() -> str:
@@ -142,8 +142,8 @@ def memory_child(path: str, trace: bool) -> None:
 
 
 def run_child(path: Path, trace: bool) -> dict:
-    args = [sys.executable, __file__, "--memory-child", str(path)] + (["--trace"] if trace else [])
-    out = subprocess.run(args, capture_output=True, text=True, check=True)
+    args = [sys.executable, "-m", "benchmarks.bench_audio", "--memory-child", str(path)] + (["--trace"] if trace else [])
+    out = subprocess.run(args, capture_output=True, text=True, check=True, cwd=ROOT)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 

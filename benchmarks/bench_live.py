@@ -1,7 +1,7 @@
 """Live mode benchmark: latency, memory under a flood, many viewers. Prints each figure beside its target.
 
-    python benchmarks/bench_live.py            # about 80 s
-    python benchmarks/bench_live.py --quick    # shorter runs, same figures
+    python -m benchmarks.bench_live            # about 80 s
+    python -m benchmarks.bench_live --quick    # shorter runs, same figures
 
 ``hapmotion live`` runs as a real subprocess (the ``hapmotion`` entry point) pinned to CPU 0; this harness (OSC
 sender, a recording bHaptics Player, WebSocket viewers) is pinned to CPU 1, so the session has one core to itself.
@@ -49,8 +49,7 @@ from websockets.asyncio.server import serve
 import hapmotion
 from hapmotion.skeleton.joints import JOINT_INDEX
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from support.data import MOTION  # noqa: E402  (the one place that says where the real recordings are)
+from tests.support.data import MOTION  # the one place that says where the real recordings are
 
 BVH = MOTION / "dataset-1_byebye_happy_001.bvh"
 STAMP = JOINT_INDEX["FOOT_LEFT"]  # the renderer never reads the feet: frame numbers ride there, x = (k % 2000) / 100
@@ -174,7 +173,7 @@ class PlayerV3(Player):
         super().__init__()
         import ssl
 
-        from support.live_fakes import self_signed_cert
+        from tests.support.live_fakes import self_signed_cert
 
         cert, key = self_signed_cert(tmp)
         self.ctx = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)
@@ -372,7 +371,7 @@ async def _player_session(frames: np.ndarray, seconds: float, tmp: Path, stuck: 
     port = _free_port()
     session = await Session([f"player://127.0.0.1:{player.port}", f"ws-broadcast://127.0.0.1:{port}"],
                             tmp / f"stuck{stuck}.json").start()
-    from support.live_fakes import stuck_viewers  # the test helpers are on the path (see PlayerV3)
+    from tests.support.live_fakes import stuck_viewers
 
     socks = await stuck_viewers(port, stuck)
     await asyncio.sleep(1.0)

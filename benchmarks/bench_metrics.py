@@ -1,7 +1,7 @@
 """Evaluation speed: ``hapmotion evaluate`` on every bundled clip x 2 methods x every preset, with figures and the
 sweep bench, printed beside the one-minute target; plus the cost of scoring one track.
 
-Run: python benchmarks/bench_metrics.py [MOTION_DIR]      (default ../shared/data/motion)
+Run: python -m benchmarks.bench_metrics [MOTION_DIR]      (default ../shared/data/motion)
 
 The first figure includes everything a user waits for in a fresh process (imports, numba compilation or cache load,
 reading the files, rendering, scoring, the bench, the tables and the PNGs).
@@ -16,8 +16,8 @@ import time
 from pathlib import Path
 
 from hapmotion.renderer.params import PRESETS
+from tests.support.data import MOTION
 
-ROOT = Path(__file__).resolve().parents[1]
 MOTION_EXT = (".bvh", ".json", ".pkl", ".csv", ".npz")
 
 
@@ -26,7 +26,7 @@ def clips(folder: Path) -> list[Path]:
 
 
 def main() -> None:
-    folder = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT.parent / "shared" / "data" / "motion"
+    folder = Path(sys.argv[1]) if len(sys.argv) > 1 else MOTION
     files = clips(folder)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:

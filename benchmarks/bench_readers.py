@@ -1,6 +1,6 @@
 """Reader speed: frames per second read by ``hapmotion.load_motion`` (parse + forward kinematics + mapping).
 
-Run: ``python benchmarks/bench_readers.py``. Builds long BVH files by repeating the MOTION rows of the real clips
+Run: ``python -m benchmarks.bench_readers``. Builds long BVH files by repeating the MOTION rows of the real clips
 in shared/data/motion (about 100,000 frames each) in a temporary folder, warms the parser up once (numba loads its
 compiled kernel from the cache), then times whole ``load_motion`` calls, best of 5 (the figure is what the code can
 do, not what a busy machine lets it do; the load average is printed too). Also times the table round trip
@@ -18,8 +18,8 @@ import numpy as np
 
 import hapmotion
 from hapmotion.motion_files import save_motion_table
+from tests.support.data import MOTION as DATA
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "motion"
 TARGET_BVH_FPS = 100_000.0  # frames/s: an hour of 120 fps motion read in about 4 s
 
 

@@ -1,24 +1,21 @@
 """Renderer speed: batch frames per second and Renderer.step latency, each printed beside its target.
 
-Run: python benchmarks/bench_render.py
+Run: python -m benchmarks.bench_render
 """
 
 from __future__ import annotations
 
 import os
 import statistics
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import hapmotion  # noqa: E402
 from hapmotion.body.model import BodyModel  # noqa: E402
-from support.synthetic import motion_from_frames, waving  # noqa: E402
+from tests.support.synthetic import motion_from_frames, waving  # noqa: E402
 
 
 def one_hour_motion(fps: float = 60.0):

@@ -4,7 +4,7 @@ Builds a synthetic one-hour 60 fps recording (all 32 joints, smooth multi-freque
 sensor jitter, travelling on the floor), renders it with the real renderer (mst, paper), writes the viewer page and
 opens it in headless Chromium (Debian's /usr/bin/chromium via Playwright). Prints each figure beside its target.
 
-    python benchmarks/bench_viewer.py [--minutes 60] [--fps 60] [--keep out.html]
+    python -m benchmarks.bench_viewer [--minutes 60] [--fps 60] [--keep out.html]
 
 Figures:
 - page size (MB) and its largest parts;

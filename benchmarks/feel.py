@@ -25,9 +25,9 @@ Targets (defaults; mirrored):
 
 Run::
 
-    PYTHONPATH=src python3 benchmarks/feel.py                      # the default preset
-    PYTHONPATH=src python3 benchmarks/feel.py --preset paper --preset energy --preset felt
-    PYTHONPATH=src python3 benchmarks/feel.py --motion-dir DIR --audio-dir DIR --seed 7
+    PYTHONPATH=src python3 -m benchmarks.feel                      # the default preset
+    PYTHONPATH=src python3 -m benchmarks.feel --preset paper --preset energy --preset felt
+    PYTHONPATH=src python3 -m benchmarks.feel --motion-dir DIR --audio-dir DIR --seed 7
 """
 
 from __future__ import annotations
@@ -47,11 +47,9 @@ import soundfile as sf
 import hapmotion
 import hapmotion.audio
 import hapmotion.show as hshow
+from tests.support.data import SHARED_DATA
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-SHARED = os.path.normpath(os.path.join(HERE, "..", "..", "shared", "data"))
-if not os.path.isdir(SHARED):
-    SHARED = "/work/shared/data"
+SHARED = str(SHARED_DATA)
 
 FELT_SPEED = 0.5        # m/s, a hand "moves"
 FELT_LEVEL = 15.0       # a motor at 15 or more is felt (ERMs barely start below 10)
@@ -447,7 +445,7 @@ def evaluate(preset: str | None, clips: list[Clip], song_list, layout, verbose: 
         for a, b, h in pieces:
             sub = m.slice(a, b)
             sub_track = render(sub, "mst", preset)
-            for sname, spath in song_list:
+            for _, spath in song_list:
                 mm = combine_default(sub_track, spath, "multimodal", preset).intensities
                 au = combine_default(sub_track, spath, "audio", preset).intensities
                 c, w = lateral(mm, h, left, right)

@@ -1,6 +1,6 @@
 """Fuzz every file reader with mutated inputs; count internal errors, hangs, stray stderr lines and peak memory.
 
-Run: ``PYTHONPATH=src python benchmarks/fuzz_inputs.py [--count 3000] [--seed 1] [--keep DIR]``.
+Run: ``PYTHONPATH=src python -m benchmarks.fuzz_inputs [--count 3000] [--seed 1] [--keep DIR]``.
 
 Readers covered, each the way a user reaches it:
 
@@ -45,14 +45,11 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared" / "data"
-sys.path.insert(0, str(ROOT / "tests"))  # the synthetic file generators of the test support
-
-import hapmotion  # noqa: E402
-from hapmotion.errors import HapMotionError  # noqa: E402
-from hapmotion.motion_files import save_motion_table  # noqa: E402
-from hapmotion.track_files import save_track  # noqa: E402
+import hapmotion
+from hapmotion.errors import HapMotionError
+from hapmotion.motion_files import save_motion_table
+from hapmotion.track_files import save_track
+from tests.support.data import SHARED_DATA as SHARED
 
 TARGET_PEAK_MB = 1000.0
 
@@ -71,7 +68,7 @@ def make_seeds(folder: Path) -> dict[str, list[Path]]:
     """Seed files per reader kind ("motion", "track", "audio")."""
     import soundfile as sf
 
-    from support.motion_files import SCHEMES, kinect_document, synthetic_bvh
+    from tests.support.motion_files import SCHEMES, kinect_document, synthetic_bvh
 
     seeds: dict[str, list[Path]] = defaultdict(list)
 

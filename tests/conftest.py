@@ -4,28 +4,17 @@ from __future__ import annotations
 
 import logging
 
+import numpy as np
 import pytest
 
 import hapmotion
-from support.data import AUDIO, MOTION, SHARED_DATA, TACT
-
-
-@pytest.fixture(scope="session")
-def shared_data():
-    """The folder of real recordings, music and pattern files beside the repository."""
-    return SHARED_DATA
+from support.data import AUDIO, MOTION
 
 
 @pytest.fixture(scope="session")
 def song():
     """A real song: "Vibe Ace" by Kevin MacLeod (CC BY 3.0), Ogg Vorbis."""
     return AUDIO / "vibe_ace.ogg"
-
-
-@pytest.fixture(scope="session")
-def bandai_clips():
-    """The Bandai Namco Research Motion Dataset clips (BVH, 30 fps, one performer each)."""
-    return sorted(MOTION.glob("dataset-*.bvh"))
 
 
 @pytest.fixture(scope="session")
@@ -41,12 +30,6 @@ def load_clip():
     return load
 
 
-@pytest.fixture(scope="session")
-def tact_dir():
-    """Real bHaptics pattern files (.tact) and their SOURCES.md."""
-    return TACT
-
-
 @pytest.fixture(scope="session", autouse=True)
 def compiled_renderer():
     """Compile the numba loops a live stream runs (the renderer's frame loop, the comfort limiter: seconds each on a
@@ -60,7 +43,7 @@ def compiled_renderer():
         hapmotion.render(motion, preset=preset)
     hapmotion.Renderer().step(motion.positions[0])
     limiter = Show(comfort=Comfort(gain=0.5, max_duty=0.5)).limiter(60.0, 52)
-    limiter.step(hapmotion.Renderer().turn_off_row())
+    limiter.step(np.zeros(52))
 
 
 @pytest.fixture

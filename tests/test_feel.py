@@ -11,12 +11,12 @@ from support.synthetic import motion_from_frames, pose, still, waving
 import hapmotion
 from hapmotion.body.model import BodyModel
 from hapmotion.errors import UsageError
-from hapmotion.renderer.params import DEFAULT_PRESET, PRESETS, Params
+from hapmotion.renderer.params import PRESETS, Params
+from hapmotion.renderer.packed import CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, ST_PREV_VEL, ST_SPEED, new_state
 from hapmotion.renderer.steps.choice import moving_only, update_speeds
-from hapmotion.renderer.packed import ST_PREV_VEL, ST_SPEED, new_state
 from hapmotion.renderer.steps.intensity import speed_reach_drive
 from hapmotion.renderer.steps.triangle import speed_weighted
-from hapmotion.renderer.packed import CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT
+from hapmotion.show import Show
 
 LAYOUT = hapmotion.load_layout()
 X = LAYOUT.positions()[:, 0]
@@ -29,11 +29,9 @@ def hand_speed(motion, hand="HAND_LEFT"):
 
 
 def test_felt_is_the_default_everywhere():
-    assert DEFAULT_PRESET == "felt"
     m = motion_from_frames(waving(n=120))
     assert np.array_equal(hapmotion.render(m).intensities, hapmotion.render(m, preset="felt").intensities)
     assert hapmotion.Renderer().params == PRESETS["felt"]
-    from hapmotion.show import Show
     assert Show().preset == "felt"
     # paper and energy stay selectable and differ from it
     assert not np.array_equal(hapmotion.render(m, preset="paper").intensities, hapmotion.render(m).intensities)

@@ -1,4 +1,4 @@
-"""Broadcast out: the hello / frame / stop messages of the viewer contract."""
+"""Broadcast out: the hello and frame messages of the viewer contract (the stop message: test_live_broadcast.py)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 
 from hapmotion.skeleton.joints import BONES, JOINTS
 from hapmotion.layout import load_layout
-from hapmotion.live.wire.broadcast import broadcast_frame, broadcast_hello, broadcast_stop
+from hapmotion.live.wire.broadcast import broadcast_frame, broadcast_hello
 
 LAYOUT = load_layout()
 
@@ -35,4 +35,3 @@ def test_broadcast_messages_follow_the_contract():
     assert f["active"] == [1, 0] and f["level"] == 6.5
     bare = json.loads(broadcast_frame(0, 0.0, np.zeros(52), None, None))
     assert bare["skeleton"] is None and bare["dynamic_point"] is None and bare["active"] == [0, 0]
-    assert json.loads(broadcast_stop()) == {"type": "stop"}

@@ -13,7 +13,7 @@ from hapmotion.cli import main
 from hapmotion.layout import load_layout
 from hapmotion.track import HapticTrack
 from hapmotion.viewer.colors import plot_cmap, scale_top
-from hapmotion.viewer.plot import _groups, _row_ticks, plot_track, pool_max
+from hapmotion.viewer.plot import actuator_groups, plot_track, pool_max, row_ticks
 from support.data import SHARED_DATA
 
 PUNCH = SHARED_DATA / "motion" / "dataset-1_punch_normal_001.bvh"    # Bandai Namco (CC BY-NC), test use only
@@ -91,10 +91,10 @@ def test_odd_actuator_ids_are_grouped_by_one_parse_and_do_not_crash(tmp_path):
     # into the device whose name they start with, and "$" in a name is text, not matplotlib math.
     ids = ("Vest", "Vest_a", "X_1", "Y_", "VestFront_3", "VestFront_4", "$\\bad$_0", "$\\bad$_1")
     track = HapticTrack(np.full((60, len(ids)), 30.0), 30.0, ids)
-    groups = _groups(track)
+    groups = actuator_groups(track.actuators)
     assert groups == [("Vest", 0, 1), ("Vest_a", 1, 1), ("X", 2, 1), ("Y_", 3, 1), ("VestFront", 4, 2),
                       ("$\\bad$", 6, 2)]
-    _, labels = _row_ticks(track, groups)
+    _, labels = row_ticks(track.actuators, groups)
     assert labels[4] == "3-4"                         # the ids' own indices, not their position in the group
     assert labels[:4] == ["", "", "1", ""]            # no index to show for ids without one
     out = plot_track(track, tmp_path / "odd.png", dpi=60)

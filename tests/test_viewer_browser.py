@@ -181,7 +181,6 @@ class Broadcast:
         self.frames = [self.frame(k) for k in range(3)]
         self.port = None
         self._ready = threading.Event()
-        self._loop = None
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._thread.start()
         assert self._ready.wait(10)

@@ -38,8 +38,8 @@ def free_port() -> int:
 class LocalNatsServer:
     """``nats-server -js`` on ``127.0.0.1:port`` (a free port by default), JetStream data in a temporary folder.
 
-    Use as a context manager, or :meth:`start` / :meth:`stop`; :meth:`restart` keeps the port (a server restart
-    as seats see it)."""
+    Use as a context manager, or :meth:`start` / :meth:`stop` (a second :meth:`start` keeps the port: a server
+    restart as seats see it)."""
 
     def __init__(self, port: Optional[int] = None, extra_args: tuple[str, ...] = ()):
         self.port = port or free_port()
@@ -76,10 +76,6 @@ class LocalNatsServer:
                 self.proc.kill()
                 self.proc.wait()
         self.proc = None
-
-    def restart(self) -> None:
-        self.stop()
-        self.start()
 
     def close(self) -> None:
         self.stop()

@@ -15,7 +15,10 @@ These proportions are this project's choice (the paper gives no surface model; s
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, fields
+from numbers import Real
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -26,6 +29,9 @@ HALF_DEPTH_PER_SHOULDER_WIDTH = 0.30
 COLLAR_BELOW_SHOULDERS = 0.08  # row 0 sits this fraction of the torso length below the shoulder line
 BELLY_ABOVE_PELVIS = 0.12  # row 4 sits this fraction of the torso length above the pelvis
 SLEEVE_ZONE_DROP = 0.20  # side hits within this fraction of the torso length below the shoulder line reach a sleeve
+
+# A dimension read from a file or the network beyond this many metres (either sign) is not a person's.
+MAX_DIMENSION_M = 5.0
 
 
 @dataclass(frozen=True)
@@ -67,6 +73,37 @@ class BodyModel:
         if not (sh - ph > 0.1):  # a broken skeleton: keep the proportions of the default body
             sh, ph = cls.shoulder_height, cls.pelvis_height
         return cls(shoulder_width=width, shoulder_height=sh, pelvis_height=ph)
+
+    # ------------------------------------------------------------------ as written in tracks and show descriptions
+    def to_dict(self) -> dict[str, float]:
+        """``{"shoulder_width", "shoulder_height", "pelvis_height"}`` in metres: the ``body`` of a track's meta
+        and of an audience show description."""
+        return {f.name: float(getattr(self, f.name)) for f in fields(self)}
+
+    @classmethod
+    def from_dict(cls, dims: Mapping[str, Any]) -> "BodyModel":
+        """The body :meth:`to_dict` wrote (other keys are ignored).
+
+        Raises ``ValueError`` (one line, naming the key) unless every dimension is a finite number of metres
+        within +-``MAX_DIMENSION_M``, the shoulder width is positive and the shoulders are above the pelvis.
+        """
+        if not isinstance(dims, Mapping):
+            raise ValueError(f"body: expected an object of dimensions, found {type(dims).__name__}")
+        values = {}
+        for f in fields(cls):
+            if f.name not in dims:
+                raise ValueError(f"body.{f.name}: missing")
+            v = dims[f.name]
+            if not isinstance(v, Real) or isinstance(v, bool) or not math.isfinite(v) or abs(v) > MAX_DIMENSION_M:
+                raise ValueError(f"body.{f.name}: expected metres (a finite number within +-{MAX_DIMENSION_M:g}), "
+                                 f"found {v!r}")
+            values[f.name] = float(v)
+        if not values["shoulder_width"] > 0:
+            raise ValueError(f"body.shoulder_width: expected a positive width, found {values['shoulder_width']!r}")
+        if not values["shoulder_height"] > values["pelvis_height"]:
+            raise ValueError(f"body.shoulder_height: expected the shoulders above the pelvis "
+                             f"({values['pelvis_height']!r}), found {values['shoulder_height']!r}")
+        return cls(**values)
 
     # ------------------------------------------------------------------ surface
     @property

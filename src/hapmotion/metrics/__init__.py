@@ -6,7 +6,7 @@ evaluation behind ``hapmotion evaluate``.
   speed and reach, and how late), :mod:`.felt` (is it felt while the performer moves, quieter while still),
   :mod:`.locus` (where it is: centroid error, target jumps, the side of the vest), :mod:`.constancy` (does its
   strength hold between motors), :mod:`.smoothness` (jerk, SPARC, toggles, power above the motors' bandwidth),
-  :mod:`.limits` (saturation, commands under the motors' start), :mod:`.events` (tactile kicks, onset agreement).
+  :mod:`.saturation` (commands pinned at full scale, commands under the motors' start), :mod:`.events` (tactile kicks, onset agreement).
 * :mod:`.scorecard` -- every metric of one rendered track (a row of the table) and the column definitions.
 * :mod:`.sweep` -- synthetic motions of a hand tracing known paths, with metric values that can be reasoned out.
 * :mod:`.evaluation` -- the evaluation run; :mod:`.tables`, :mod:`.figures` and :mod:`.verdict` its outputs.

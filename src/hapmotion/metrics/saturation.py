@@ -1,4 +1,4 @@
-"""Limits of the device: commands pinned at full scale, and commands too weak to start a motor.
+"""Motor saturation and the start threshold: commands pinned at full scale, and commands too weak to start a motor.
 
 ERMs have a start threshold: a motor at rest does not spin up below a minimum drive, and once spinning it runs on
 at a lower one (for example, a pager motor rated 3.6 V needs up to 2.8 V to start: DOOCO DEV-3408E03 data sheet).

@@ -1,7 +1,7 @@
 """All metrics of one rendered track in one dict: the row of the evaluation table.
 
 :func:`score_track` ties the metric functions (:mod:`.coupling`, :mod:`.felt`, :mod:`.locus`, :mod:`.constancy`,
-:mod:`.smoothness`, :mod:`.limits`) to a :class:`HapticTrack` (its debug arrays, its layout and its mirroring), the
+:mod:`.smoothness`, :mod:`.saturation`) to a :class:`HapticTrack` (its debug arrays, its layout and its mirroring), the
 motion it came from and the ERM motor model; :func:`score_audio` scores a track mixed with music (:mod:`.events`).
 :data:`COLUMNS` and :data:`AUDIO_COLUMNS` name, explain and give the unit of every value, for the report tables,
 the CSV keys and docs/metrics.md.
@@ -133,8 +133,8 @@ def _body(track: HapticTrack, motion: Motion | None) -> BodyModel:
     dims = track.meta.get("body")
     if isinstance(dims, dict):
         try:
-            return BodyModel(**{k: float(dims[k]) for k in ("shoulder_width", "shoulder_height", "pelvis_height")})
-        except (KeyError, TypeError, ValueError):
+            return BodyModel.from_dict(dims)
+        except ValueError:  # a hand-edited or foreign track: measure the body instead
             pass
     if motion is not None:
         return BodyModel.from_motion(motion)
@@ -281,7 +281,7 @@ def score_track(
     out["toggles_s"] = toggles_per_s(running, fps)
     out["hf_power"] = power_above(cmd, fps, motor.bandwidth_hz)
 
-    # limits
+    # saturation and the motors' start threshold
     out["saturation"] = saturation_rate(track.intensities)
     out["dead_zone"] = dead_zone_rate(track.intensities, 100.0 * motor.dead_zone)
     out["skin_rms"] = float(np.mean(np.sqrt(e_skin))) if track.n_frames else None

@@ -152,10 +152,6 @@ class Renderer:
         """Forget all history: the next frame is rendered as a first frame."""
         self._state = packed.new_state(self.layout.n_actuators)
 
-    def turn_off_row(self) -> np.ndarray:
-        """``(N,)`` zeros: what sinks get when the stream stops."""
-        return np.zeros(self.layout.n_actuators)
-
     def step(self, frame: np.ndarray) -> np.ndarray:
         """Render one frame.
 
@@ -231,8 +227,7 @@ def render(
         "preset": preset if isinstance(preset, str) else "custom",
         "mirror": r.params.mirror,
         "params": r.params.to_dict(),
-        "body": {"shoulder_width": body.shoulder_width, "shoulder_height": body.shoulder_height,
-                 "pelvis_height": body.pelvis_height},
+        "body": body.to_dict(),
         "source": motion.meta.get("path"),
         "mode": "motion",
     }

@@ -2,7 +2,7 @@
 
     from hapmotion.viewer import write_page, plot_track
     write_page("show.html", [track], motion, audio=load_audio_part("song.ogg"))
-    plot_track(track, "figure.png", motion=motion)
+    plot_track(track, "figure.png")
 """
 
 from __future__ import annotations

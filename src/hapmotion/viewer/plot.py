@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
 from ..errors import UsageError
-from ..track import HapticTrack, parse_actuator_id
 from ..filesafety import atomic_path
+from ..layout import load_layout
+from ..track import HapticTrack, parse_actuator_id
 from .colors import plot_cmap, scale_top
 from .curves import ENERGY_UNITS, total_intensity, track_motion_energy
 
@@ -43,11 +45,15 @@ def pool_max(values: np.ndarray, max_columns: int = MAX_COLUMNS) -> tuple[np.nda
     return values.reshape(-1, k, *values.shape[1:]).max(axis=1), k
 
 
-def _groups(track: HapticTrack) -> list[tuple[str, int, int]]:
-    """``(device, first column, count)`` in column order; an id not shaped ``<Device>_<index>`` is its own device
-    (:func:`hapmotion.track.parse_actuator_id`), so ``Vest_a`` is never merged into a device ``Vest``."""
+def actuator_groups(actuators: Sequence[str]) -> list[tuple[str, int, int]]:
+    """The heat map's groups: ``(device, first column, count)`` for each run of ids of one device, in column
+    order.
+
+    An id not shaped ``<Device>_<index>`` is its own device (:func:`hapmotion.track.parse_actuator_id`), so
+    ``Vest_a`` is never merged into a device ``Vest``.
+    """
     out: list[tuple[str, int, int]] = []
-    for i, a in enumerate(track.actuators):
+    for i, a in enumerate(actuators):
         dev = parse_actuator_id(a)[0]
         if out and out[-1][0] == dev:
             out[-1] = (dev, out[-1][1], out[-1][2] + 1)
@@ -56,11 +62,13 @@ def _groups(track: HapticTrack) -> list[tuple[str, int, int]]:
     return out
 
 
-def _row_ticks(track: HapticTrack, groups) -> tuple[list[float], list[str]]:
-    """One tick per grid row of each device, labelled with that row's actuator indices ("0-3"), as the ids give them
-    (empty for ids without an index)."""
-    from ..layout import load_layout
+def row_ticks(actuators: Sequence[str], groups: Sequence[tuple[str, int, int]]) -> tuple[list[float], list[str]]:
+    """The heat map's row labels: one tick per grid row of each group of :func:`actuator_groups`.
 
+    Returns the tick positions (column index, the middle of the row) and their labels: the actuator indices of
+    that row as the ids give them (``"0-3"``, or ``"5"`` for a one-actuator row; ``""`` for ids without an
+    index). A device of the default layout is cut into rows of its grid width; any other device is one row.
+    """
     cols = {}
     try:
         cols = {d.name: d.cols for d in load_layout().devices}
@@ -73,7 +81,7 @@ def _row_ticks(track: HapticTrack, groups) -> tuple[list[float], list[str]]:
         for r0 in range(0, count, step):
             r1 = min(count, r0 + step) - 1
             pos.append(start + (r0 + r1) / 2)
-            first, last = (parse_actuator_id(track.actuators[start + r])[1] for r in (r0, r1))
+            first, last = (parse_actuator_id(actuators[start + r])[1] for r in (r0, r1))
             if min(first, last) < 0:
                 labels.append("")
             else:
@@ -107,6 +115,7 @@ def plot_track(
         :data:`~hapmotion.viewer.colors.SCALE_TOPS` at or above the drawn peak, so weak tracks stay readable
         (the colour bar always says which scale is used).
     """
+    # matplotlib is imported when a figure is drawn, not when the CLI starts (it takes a second to import).
     import matplotlib
     from matplotlib.figure import Figure  # object API: no pyplot state, no backend switch for the caller
 
@@ -128,7 +137,7 @@ def plot_track(
     t = t_all[sel]
     x0, x1 = f0 / track.fps, f1 / track.fps
     inten = track.intensities[sel]
-    groups = _groups(track)
+    groups = actuator_groups(track.actuators)
     if vmax == "auto":
         top = scale_top(float(inten.max()))
     else:
@@ -162,7 +171,7 @@ def _draw(fig, axes, track, sel, t, x0, x1, inten, groups, audio, title, top) ->
         ax_heat.text(-0.075, start + (count - 1) / 2, GROUP_NAMES.get(dev, dev), ha="right", va="center",
                      transform=ax_heat.get_yaxis_transform(), fontsize=9, fontweight="bold",
                      parse_math=False)  # a "$" in a saved track's id is text, not a formula to typeset
-    ticks, labels = _row_ticks(track, groups)
+    ticks, labels = row_ticks(track.actuators, groups)
     ax_heat.set_yticks(ticks, labels, fontsize=8)
     pool_note = f"; max over {k} frames per column" if k > 1 else ""
     ax_heat.set_title(f"actuator intensity (white = off; rows labelled with their actuator indices, first row at the "

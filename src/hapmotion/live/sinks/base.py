@@ -88,10 +88,6 @@ class Sink:
             if frame is not None:
                 return frame
 
-    def take_pending(self) -> Optional[OutFrame]:
-        frame, self._slot = self._slot, None
-        return frame
-
     async def deliver(self, frame: OutFrame) -> None:
         raise NotImplementedError
 

@@ -1,4 +1,7 @@
-"""Broadcast out: the ``hello`` / ``frame`` / ``stop`` JSON messages viewers receive (docs/CONTRACTS.md)."""
+"""Broadcast out: the ``hello`` and ``frame`` JSON messages viewers receive (docs/CONTRACTS.md).
+
+The third message, ``{"type": "stop"}``, is written by the viewers' server itself
+(``live/sinks/broadcast_server.py``, which imports nothing from hapmotion so that it starts fast)."""
 
 from __future__ import annotations
 
@@ -58,7 +61,3 @@ def broadcast_frame(seq: int, t: float, row: np.ndarray, skeleton: Optional[np.n
     return json.dumps({"type": "frame", "seq": int(seq), "t": round(float(t), 4), "intensities": inten,
                        "skeleton": skel, "dynamic_point": dp, "hit_point": hit, "active": active, "level": level},
                       separators=(",", ":"))
-
-
-def broadcast_stop() -> str:
-    return json.dumps({"type": "stop"})
