@@ -34,16 +34,14 @@ def load_clip():
 def compiled_renderer():
     """Compile the numba loops a live stream runs (the renderer's frame loop, the comfort limiter: seconds each on a
     cold cache) before any test runs, so tests that stream against the clock never wait for the compiler."""
-    from hapmotion.show.comfort import Comfort
-    from hapmotion.show import Show
+    from hapmotion.show.comfort import Comfort, Limiter
     from support.synthetic import motion_from_frames, waving
 
     motion = motion_from_frames(waving(n=8))
     for preset in hapmotion.PRESETS:
         hapmotion.render(motion, preset=preset)
     hapmotion.Renderer().step(motion.positions[0])
-    limiter = Show(comfort=Comfort(gain=0.5, max_duty=0.5)).limiter(60.0, 52)
-    limiter.step(np.zeros(52))
+    Limiter(Comfort(gain=0.5, max_duty=0.5), 52, 60.0).step(np.zeros(52))
 
 
 @pytest.fixture

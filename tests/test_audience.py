@@ -13,6 +13,7 @@ from support.live_fakes import BVH, FakePlayerSdk1, is_tick_max_sequence, start_
 
 import hapmotion
 from hapmotion.audience import Seat
+from hapmotion.show.comfort import Comfort
 from support.audience import DelayedReplay, Tap, reference_rows, start_seat, stop
 
 SONG = BVH.parents[1] / "audio" / "vibe_ace.ogg"
@@ -26,8 +27,8 @@ def motion():
 def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_server, motion):
     seats = {
         "venue": Seat(delay_s=0.08),
-        "home": Seat(mirror=False, zones_off=("VestBack",), gain=0.5, delay_s=0.2),
-        "motion-only": Seat(method="baseline", mode="motion", max_intensity=60.0, delay_s=0.1),
+        "home": Seat(mirror=False, zones_off=("VestBack",), comfort=Comfort(gain=0.5), delay_s=0.2),
+        "motion-only": Seat(method="baseline", mode="motion", comfort=Comfort(max_level=60.0), delay_s=0.1),
     }
     url = f"{nats_server.url}/done"
 

@@ -21,7 +21,8 @@ from hapmotion.audience.server import LocalNatsServer
 from hapmotion.audience.wire import encode_frame, subject
 from hapmotion.layout import load_layout
 from hapmotion.live import ReplaySource
-from hapmotion.show import Show
+from hapmotion.show import OutputStage, Show
+from hapmotion.show.comfort import Comfort
 
 
 @pytest.fixture(scope="module")
@@ -34,8 +35,9 @@ class ManualShow:
 
     def __init__(self, server, show: str, motion, epoch: int = 11, method: str = "mst"):
         self.server, self.show, self.motion = server, show, motion
-        self.desc = describe_show(show, show=Show(method=method), mode="motion", fps=motion.fps,
-                                  layout=load_layout(), body=None, stall_ms=250.0, mirror=True, epoch=epoch)
+        s, layout = Show(method=method), load_layout()
+        self.desc = describe_show(show, show=s, stage=OutputStage.for_show(s, "motion", layout=layout, fps=motion.fps),
+                                  layout=layout, body=None, stall_ms=250.0, mirror=True, epoch=epoch)
 
     async def __aenter__(self):
         self.nc = await connect(self.server.url, name="manual")
@@ -167,7 +169,7 @@ def test_a_slow_player_does_not_hold_up_its_seat_or_the_others(nats_server, moti
         show_task, _ = await start_session(DelayedReplay(motion, wait=1.2), [f"{nats_server.url}/slow"])
         a, sa = await start_seat(f"{nats_server.url}/slow", [slow.url(), lambda d, f: tap_slow], Seat(delay_s=0.1))
         b, sb = await start_seat(f"{nats_server.url}/slow", [fine.url(), lambda d, f: tap_fine],
-                                 Seat(gain=0.5, delay_s=0.1))
+                                 Seat(comfort=Comfort(gain=0.5), delay_s=0.1))
         await show_task
         await asyncio.sleep(0.5)
         await stop(a)
@@ -220,9 +222,10 @@ def test_lost_server_fades_to_zero_and_the_show_comes_back(motion):
 def test_publisher_announces_cues_to_the_seat(nats_server, motion):
     async def scenario():
         tap, heard = Tap(), []
+        layout = load_layout()
         sink = NatsPublisherSink(nats_server.url, describe_show(
-            "cues", show=Show(), mode="motion", fps=30.0, layout=load_layout(), body=None, stall_ms=250.0,
-            mirror=True))
+            "cues", show=Show(), stage=OutputStage.for_show(Show(), "motion", layout=layout, fps=30.0),
+            layout=layout, body=None, stall_ms=250.0, mirror=True))
         await sink.start()
         task, sessions = await start_seat(f"{nats_server.url}/cues", [lambda d, f: tap], Seat(delay_s=0.05),
                                           on_cue=lambda event, due: heard.append(event))

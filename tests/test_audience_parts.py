@@ -16,7 +16,8 @@ from hapmotion.audience.seat import Seat, SeatStage
 from hapmotion.audience.wire import HEADER, decode_event, decode_frame, encode_event, encode_frame, parse_description
 from hapmotion.errors import InputError, UsageError
 from hapmotion.layout import load_layout
-from hapmotion.show import Show
+from hapmotion.show import OutputStage, Show
+from hapmotion.show.comfort import Comfort
 
 
 def test_frame_layout_is_the_documented_one():
@@ -86,8 +87,9 @@ def test_clock_jumps_reanchor_at_once():
 
 def test_description_round_trip_and_checks():
     layout = load_layout()
-    desc = describe_show("concert", show=Show(audio=None), mode="motion", fps=60.0, layout=layout, body=None,
-                         stall_ms=250.0, mirror=True, epoch=5)
+    stage = OutputStage.for_show(Show(), "motion", layout=layout, fps=60.0)
+    desc = describe_show("concert", show=Show(), stage=stage, layout=layout, body=None, stall_ms=250.0,
+                         mirror=True, epoch=5)
     back = parse_description(desc.to_json(), "concert")
     assert back == desc and back.rendering_facts() == desc.rendering_facts()
     obj = json.loads(desc.to_json())
@@ -109,14 +111,16 @@ def test_seat_stage_zones_and_comfort():
     out = SeatStage(Seat(zones_off=("VestBack", "VestFront_5")), layout)(row)
     assert out[5] == 0 and (out[20:40] == 0).all() and out[0] == 80.0 and out[45] == 80.0
     assert SeatStage(Seat(), layout).identity
-    comfort = Seat(gain=1.5, max_intensity=90.0).comfort()
-    assert (comfort.gain, comfort.max_level, comfort.is_neutral) == (1.5, 90.0, False) and Seat().comfort().is_neutral
+    comfort = Seat(comfort=Comfort(gain=1.5, max_level=90.0)).comfort
+    assert (comfort.gain, comfort.max_level, comfort.is_neutral) == (1.5, 90.0, False) and Seat().comfort.is_neutral
     with pytest.raises(UsageError, match="zone-off 'Helmet'"):
         SeatStage(Seat(zones_off=("Helmet",)), layout)
     with pytest.raises(UsageError, match="--delay"):
         Seat(delay_s=-0.1)
-    with pytest.raises(UsageError, match="gain"):
-        Seat(gain=-1)
+    with pytest.raises(UsageError, match="comfort"):
+        Seat(comfort={"gain": 0.5})
+    with pytest.raises(UsageError, match="--mode"):
+        Seat(mode="both")
 
 
 def test_show_urls():

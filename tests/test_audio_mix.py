@@ -18,16 +18,15 @@ def test_linear_mix_is_the_papers_weighted_sum():
     motion = np.array([0.0, 50.0, 100.0, 30.0])
     audio = np.array([100.0, 50.0, 0.0, 80.0])
     np.testing.assert_allclose(mix(motion, audio, rule="paper"), [40.0, 50.0, 60.0, 0.4 * 80 + 0.6 * 30])
-    np.testing.assert_array_equal(mix(motion, audio, domain="linear"), mix(motion, audio, rule="paper"))
 
 
 def test_energy_mix_adds_powers():
     motion = np.array([0.0, 50.0, 100.0, 60.0])
     audio = np.array([100.0, 50.0, 0.0, 80.0])
     expected = np.sqrt(0.4 * audio ** 2 + 0.6 * motion ** 2)
-    np.testing.assert_allclose(mix(motion, audio, domain="energy"), expected)
+    np.testing.assert_allclose(mix(motion, audio, rule="energy"), expected)
     # never below the weighted sum (power mean >= arithmetic mean)
-    assert np.all(mix(motion, audio, domain="energy") >= mix(motion, audio, rule="paper") - 1e-12)
+    assert np.all(mix(motion, audio, rule="energy") >= mix(motion, audio, rule="paper") - 1e-12)
 
 
 def test_ratio_is_audio_to_motion():
@@ -85,12 +84,12 @@ def test_duck_gives_way_near_the_motion_on_the_layout():
         np.testing.assert_allclose(whole[t], mix(rows[t], audio_rows[t], positions=pos))
 
 
-def test_rule_names_and_the_older_domain_spelling():
-    assert resolve_rule() == "duck" and resolve_rule(domain="linear") == "paper"
-    assert resolve_rule(domain="energy") == "energy" and resolve_rule("paper", "linear") == "paper"
+def test_rule_names():
+    assert resolve_rule() == "duck" and resolve_rule("paper") == "paper" and resolve_rule("energy") == "energy"
     assert resolve_rule(params=AudioParams(mix_rule="energy")) == "energy"
-    with pytest.raises(UsageError, match="disagree"):
-        resolve_rule("duck", "linear")
+    assert resolve_rule("paper", AudioParams(mix_rule="energy")) == "paper"     # an explicit rule wins
+    with pytest.raises(UsageError, match="mix rule"):
+        resolve_rule("linear")
     with pytest.raises(UsageError, match="mix rule"):
         mix(np.zeros(3), np.zeros(3), rule="loudest")
 
@@ -141,8 +140,8 @@ def test_parse_mix_ratio_rejects_bad_text(text):
     assert "AUDIO:MOTION" in str(err.value) or "not both 0" in str(err.value)
 
 
-def test_bad_domain_and_ratio():
-    with pytest.raises(UsageError, match="domain"):
-        mix(np.zeros(3), np.zeros(3), domain="log")
+def test_bad_rule_and_ratio():
+    with pytest.raises(UsageError, match="mix rule"):
+        mix(np.zeros(3), np.zeros(3), rule="log")
     with pytest.raises(UsageError, match="ratio"):
         mix(np.zeros(3), np.zeros(3), ratio=(-1, 2))

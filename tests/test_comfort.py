@@ -13,7 +13,8 @@ from support.synthetic import motion_from_frames, waving
 
 from hapmotion.show.comfort import Comfort, Limiter, limit_rows
 from hapmotion.errors import UsageError
-from hapmotion.show import Show, render_show
+from hapmotion.layout import load_layout
+from hapmotion.show import OutputStage, Show, render_show
 
 
 def test_neutral_comfort_changes_nothing():
@@ -81,6 +82,8 @@ def test_the_show_applies_comfort_once_to_files():
     soft = render_show(Show(comfort=Comfort(gain=0.5, max_level=30.0)), motion)
     np.testing.assert_allclose(soft.intensities, np.minimum(plain.intensities * 0.5, 30.0))
     assert soft.meta["comfort"]["gain"] == 0.5 and "comfort" not in plain.meta
-    # live gets the same numbers from the show's limiter
-    lim = Show(comfort=Comfort(gain=0.5, max_level=30.0)).limiter(plain.fps, plain.intensities.shape[1])
-    np.testing.assert_array_equal(np.array([lim.step(r) for r in plain.intensities]), soft.intensities)
+    # live gets the same numbers from the show's output stage, stepped row by row
+    stage = OutputStage.for_show(Show(comfort=Comfort(gain=0.5, max_level=30.0)), "motion", layout=load_layout(),
+                                 fps=plain.fps)
+    np.testing.assert_array_equal(np.array([stage.step(r, k / plain.fps) for k, r in enumerate(plain.intensities)]),
+                                  soft.intensities)

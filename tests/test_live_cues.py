@@ -18,7 +18,7 @@ from support.live_fakes import BVH, FakePlayerSdk1, Tap, is_tick_max_sequence, s
 from hapmotion.cli import main
 from hapmotion.show.cues import cue_layer, layer, load_cues
 from hapmotion.layout import load_layout
-from hapmotion.show import show_power_limit
+from hapmotion.show import Show, show_power_limit
 from hapmotion.live.cue_trigger import decode_cue_messages, parse_cue_port
 from hapmotion.live.hygiene import Faults
 
@@ -205,7 +205,7 @@ def test_cues_over_a_played_track_match_the_offline_timeline(tmp_path):
 
     async def run():
         tap = Tap()
-        await play(track, [tap], cues=str(tmp_path / "show.cues"), handle_signals=False)
+        await play(track, [tap], show=Show(cues=tmp_path / "show.cues"), handle_signals=False)
         return tap
 
     tap = asyncio.run(run())
@@ -222,12 +222,14 @@ def test_a_cue_fired_while_nothing_is_sent_is_dropped_not_played_late(tmp_path, 
     from hapmotion.show.cue_layer import FIRE_WAIT_S, LiveCues
 
     (tmp_path / "show.cues").write_text(f"3600 {HEARTBEAT} name=beat\n")
-    cues = LiveCues(load_cues(tmp_path / "show.cues"), fps=50.0, actuators=IDS, mirror_map=LAYOUT.mirror_map())
+    cues = LiveCues(load_cues(tmp_path / "show.cues"), fps=50.0, actuators=IDS, mirror_map=LAYOUT.mirror_map(),
+                    power_limit=show_power_limit(N))
     base = np.full(N, BASE)
     assert cues.fire("beat") and not cues.fire("other")
     assert np.array_equal(cues.layer(base, 0.0), base)      # it starts here; the pattern's first row is silent
     assert cues.layer(base, 0.02).max() > BASE               # its second row plays on the next one
-    fresh = LiveCues(load_cues(tmp_path / "show.cues"), fps=50.0, actuators=IDS, mirror_map=LAYOUT.mirror_map())
+    fresh = LiveCues(load_cues(tmp_path / "show.cues"), fps=50.0, actuators=IDS, mirror_map=LAYOUT.mirror_map(),
+                    power_limit=show_power_limit(N))
     fresh.fire("beat")
     fresh._pending = [(t - FIRE_WAIT_S - 0.1, e) for t, e in fresh._pending]   # fired before a long stall
     assert np.array_equal(fresh.layer(base, 5.0), base) and np.array_equal(fresh.layer(base, 5.5), base)

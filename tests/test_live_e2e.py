@@ -420,7 +420,7 @@ def test_multimodal_replay_mixes_the_song_at_show_time():
     async def scenario():
         tap = Tap()
         task, engine = await start_session(ReplaySource(motion), [tap], audio=SONG, renderer=renderer,
-                                           preset="paper", domain="linear")
+                                           preset="paper", mix_rule="paper")
         stats = await task
         return stats, tap
 
@@ -434,7 +434,7 @@ def test_multimodal_replay_mixes_the_song_at_show_time():
         np.testing.assert_array_equal(np.array(motion_rows), hapmotion.render(motion).intensities)
     for f, m in zip(frames, motion_rows):
         k = round(f.t * motion.fps)                          # show time = the recording's time
-        # the same output stage as offline rendering: power limit 0.75 x N (audio.params.power_limit_fraction)
+        # the same output stage as offline rendering: power limit 0.75 x N (show.stage.POWER_LIMIT_FRACTION)
         np.testing.assert_allclose(f.row, mix(m, audio_rows[k], ratio=(2, 3), power_limit=0.75 * 52, rule="paper"))
     assert max(audio_rows[:40].max(axis=1)) > 10
 

@@ -13,7 +13,9 @@ from support.synthetic import pose, waving
 
 import hapmotion
 from hapmotion.audio import mix
-from hapmotion.live import AudioChannel, ClockSource, LiveEngine, SkeletonFrame, Source
+from hapmotion.layout import load_layout
+from hapmotion.live import ClockSource, LiveEngine, SkeletonFrame, Source
+from hapmotion.show import OutputStage, RowTimeline
 from hapmotion.live.sinks import Sink
 
 N = 52
@@ -239,13 +241,15 @@ def test_multimodal_rows_are_the_audio_mix_at_show_time():
     frames = np.repeat(pose(HAND_LEFT=(0.9, 1.45, 0.1))[None], 30, axis=0)
     audio_rows = np.zeros((600, N))
     audio_rows[:, 0] = np.linspace(0, 99.9, 600)      # a ramp, so the row used tells the time used
-    channel = AudioChannel(audio_rows, FPS, lambda m, a: mix(m, a, ratio=(2, 3)))
+    channel = RowTimeline(audio_rows, FPS)
+    layout = load_layout()
+    stage = OutputStage("multimodal", layout.actuators, FPS, rule="paper", music=channel)
     sink = MemorySink()
-    engine = make([sink], audio=channel, mode="multimodal")
+    engine = make([sink], stage=stage)
     run(engine, ScriptSource(frames))
     motion, _ = hapmotion.Renderer(fps=FPS).run(frames)
     for (_, f), m in zip([g for g in sink.got if g[1].kind == "frame"], motion):
-        np.testing.assert_allclose(f.row, mix(m, channel.row(f.t), ratio=(2, 3)))
+        np.testing.assert_allclose(f.row, mix(m, channel.row(f.t), ratio=(2, 3), rule="paper"))
     got = [f for _, f in sink.got if f.kind == "frame"]
     assert got[0].t == 0.0 and got[-1].t > 0.4
     assert all(f.t == f.received - got[0].received for f in got)   # show time = seconds since the first frame
@@ -254,9 +258,10 @@ def test_multimodal_rows_are_the_audio_mix_at_show_time():
 
 def test_audio_only_mode_plays_the_song_rows_on_the_clock():
     audio_rows = np.tile(np.linspace(0, 90, 12)[:, None], (1, N))
-    channel = AudioChannel(audio_rows, FPS, lambda m, a: a)
+    channel = RowTimeline(audio_rows, FPS)
+    stage = OutputStage("audio", load_layout().actuators, FPS, music=channel)
     sink = MemorySink()
-    engine = LiveEngine(None, [sink], n_actuators=N, fps=FPS, audio=channel, mode="audio", handle_signals=False)
+    engine = LiveEngine(None, [sink], stage=stage, n_actuators=N, fps=FPS, handle_signals=False)
     stats = run(engine, ClockSource(FPS, channel.duration_s))
     rows = sink.rows()
     assert stats.rendered == len(rows) and 6 <= len(rows) <= 12   # 12 ticks; a late tick is skipped, not queued

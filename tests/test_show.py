@@ -6,12 +6,14 @@ import numpy as np
 import pytest
 
 import hapmotion
-from hapmotion import show as show_module
+from hapmotion.audio.mix import mix
 from hapmotion.errors import UsageError
 from hapmotion.layout import load_layout
-from hapmotion.live.engine import AudioChannel
-from hapmotion.show import Show, combine, live_music, render_show, render_variants
-from support.data import AUDIO, MOTION
+from hapmotion.show import (OutputStage, RowTimeline, Show, render_show, render_variants, show_power_limit,
+                            song_timeline, song_track)
+from hapmotion.show.comfort import Comfort
+from hapmotion.show.offline import fit_rows
+from support.data import AUDIO, MOTION, TACT
 
 SONG = AUDIO / "vibe_ace.ogg"
 PUNCH = MOTION / "dataset-1_punch_normal_001.bvh"
@@ -23,7 +25,7 @@ def punch():
 
 
 def test_show_validates_every_choice():
-    for bad in ({"method": "nope"}, {"preset": "nope"}, {"mode": "both"}, {"mix_domain": "log"},
+    for bad in ({"method": "nope"}, {"preset": "nope"}, {"mode": "both"}, {"mix_rule": "log"},
                 {"length": "shorter"}, {"audio_offset_s": float("nan")}, {"audio_offset_s": 1e6}, {"fps": 0.5},
                 {"mix_ratio": (0, 0)}):
         with pytest.raises(UsageError):
@@ -40,15 +42,30 @@ def test_mode_follows_the_inputs():
         Show(mode="motion", audio=SONG).resolved_mode(False)
 
 
-def test_render_show_equals_render_then_combine(punch):
-    """The show pipeline composes exactly what the parts give: render, then the paper's study-2 mix."""
-    show = Show(method="baseline", preset="energy", audio=SONG, audio_offset_s=0.5, mix_domain="energy",
+def test_render_show_equals_render_then_mix(punch):
+    """The show pipeline composes exactly what the parts give: render, the song's channel, then the paper's
+    study-2 mix under the show's power limit."""
+    show = Show(method="baseline", preset="energy", audio=SONG, audio_offset_s=0.5, mix_rule="energy",
                 length="motion")
     got = render_show(show, punch)
+    layout = load_layout()
     motion_track = hapmotion.render(punch, method="baseline", preset="energy")
-    want = combine(motion_track, SONG, mode="multimodal", offset_s=0.5, domain="energy", length="motion")
-    np.testing.assert_array_equal(got.intensities, want.intensities)
+    music = song_track(show, fps=punch.fps, layout=layout)
+    want = mix(motion_track.intensities, fit_rows(music.intensities, punch.n_frames), ratio=(2, 3), rule="energy",
+               power_limit=0.75 * len(layout.actuators), positions=layout.positions(), params=show.audio_params())
+    np.testing.assert_array_equal(got.intensities, want)
     assert got.n_frames == punch.n_frames and got.meta["preset"] == "energy" and got.meta["mode"] == "multimodal"
+    assert got.meta["mix_rule"] == "energy" and got.meta["power_limit"] == 0.75 * 52
+
+
+def test_music_alone_takes_the_presets_audio_parameters():
+    """``--preset paper`` with the music alone plays the paper's whole-suit pattern, as live does."""
+    felt = render_show(Show(audio=SONG)).intensities
+    paper = render_show(Show(audio=SONG, preset="paper")).intensities
+    assert not np.array_equal(felt, paper)
+    # the whole suit pulses together: at any frame, every motor that runs runs at one level
+    busy = paper[paper.max(axis=1) > 0]
+    assert np.allclose(busy.min(axis=1), busy.max(axis=1))
 
 
 def test_overrides_and_mirror_reach_the_renderer(punch):
@@ -70,33 +87,64 @@ def test_variants_render_every_method_and_preset_and_the_music_once(punch):
         render_variants(Show(), punch, ["mst"], ["paper"], ["audio"])
 
 
-def test_live_music_goes_through_the_offline_output_stage(monkeypatch):
-    """``live_music`` uses ``show.output_stage`` / ``power_limit_for`` (no copy of them), so the song alone equals
-    offline ``combine(mode="audio")`` and each mixed row equals the offline stage on the same rows."""
+def _stage_rows_one_by_one(stage: OutputStage, incoming, times):
+    return np.array([stage.step(None if incoming is None else incoming[k], t) for k, t in enumerate(times)])
+
+
+@pytest.mark.parametrize("mode", ["motion", "multimodal", "audio"])
+def test_the_stage_row_by_row_equals_the_stage_on_arrays(punch, tmp_path, mode):
+    """Live, a seat and play step the same :class:`OutputStage` that files run on whole arrays: the same numbers,
+    cues and comfort included."""
     layout = load_layout()
-    n = len(layout.actuators)
-    real_stage, calls = show_module.output_stage, []
+    cues = tmp_path / "show.cues"
+    cues.write_text(f"0.5 {TACT / 'FeedbackFiles_Vest_Heartbeat.tact'} gain=0.8\n"
+                    f"1.0 {TACT / 'FeedbackFiles_Vest_Wave.tact'} side=swap name=wave\n")
+    show = Show(audio=SONG, mix_ratio=(1, 1), cues=cues, comfort=Comfort(gain=0.9, max_duty=0.3))
+    fps = punch.fps
+    motion = hapmotion.render(punch).intensities
+    music = song_timeline(show, fps=fps, layout=layout)
+    n = motion.shape[0]
+    times = np.arange(n) / fps
+    music_rows = np.array([music.row(t) for t in times])
+    batch = OutputStage.for_show(show, mode, layout=layout, fps=fps).rows(motion if mode != "audio" else None,
+                                                                         music_rows)
+    stepped = _stage_rows_one_by_one(OutputStage.for_show(show, mode, layout=layout, fps=fps, music=music),
+                                     motion if mode != "audio" else None, times)
+    np.testing.assert_allclose(stepped, batch, rtol=0, atol=1e-9)
+    assert batch.max() > 0 and np.isfinite(batch).all()
 
-    def spy(motion_rows, audio_rows, **kw):
-        calls.append(kw)
-        return real_stage(motion_rows, audio_rows, **kw)
 
-    monkeypatch.setattr(show_module, "output_stage", spy)
-    limit = show_module.power_limit_for(hapmotion.audio.DEFAULT_PARAMS.power_limit_fraction, n)
-    solo = live_music(Show(audio=SONG), "audio", fps=60.0, layout=layout, actuators=layout.actuators)
-    assert calls[0] == {"mode": "audio", "ratio": (2, 3), "power_limit": limit, "rule": "duck"}
-    offline = combine(None, SONG, mode="audio", fps=60.0, actuators=layout)
-    np.testing.assert_array_equal(solo.rows, offline.intensities)
+def test_the_stage_serialised_is_the_same_stage():
+    """What an audience description carries rebuilds the venue's stage on a seat."""
+    layout = load_layout()
+    show = Show(audio=SONG, preset="paper", mix_ratio=(1, 2))
+    venue = OutputStage.for_show(show, "multimodal", layout=layout, fps=60.0)
+    seat = OutputStage.from_dict(venue.to_dict(), "multimodal", layout=layout, fps=60.0)
+    assert (seat.ratio, seat.rule, seat.audio_preset, seat.power_limit) == ((1.0, 2.0), "paper", "paper",
+                                                                             show_power_limit(52))
+    rng = np.random.default_rng(3)
+    a, b = rng.uniform(0, 100, (40, 52)), rng.uniform(0, 100, (40, 52))
+    np.testing.assert_array_equal(seat.rows(a, b), venue.rows(a, b))
 
-    music = live_music(Show(audio=SONG, mix_ratio=(1, 1), mix_domain="energy"), "multimodal", fps=60.0,
-                       layout=layout, actuators=layout.actuators)
-    channel = AudioChannel(music.rows, music.fps, music.mix_row)
-    calls.clear()
-    motion_row = np.linspace(0, 100, n)
-    got = channel.mixed(motion_row, 2.0)
-    assert len(calls) == 1
-    kw = calls[0]
-    assert {k: kw[k] for k in ("mode", "ratio", "power_limit", "rule")} == {
-        "mode": "multimodal", "ratio": (1, 1), "power_limit": limit, "rule": "energy"}
-    np.testing.assert_array_equal(kw["positions"], layout.positions())
-    np.testing.assert_array_equal(got, real_stage(motion_row, channel.row(2.0), **kw))
+
+def test_an_identity_stage_sends_stored_rows_as_they_are():
+    layout = load_layout()
+    stage = OutputStage.identity(layout.actuators, 50.0)
+    rows = np.random.default_rng(1).uniform(0, 100, (30, 52))
+    rows[0, :] = 100.0  # a whole-suit row far over the power limit: stored rows are not the show's to limit
+    np.testing.assert_array_equal(_stage_rows_one_by_one(stage, rows, np.arange(30) / 50.0), rows)
+
+
+def test_a_row_timeline_reads_rows_by_show_time():
+    rows = np.arange(12, dtype=float).reshape(4, 3)
+    timeline = RowTimeline(rows, 10.0)
+    assert timeline.row(0.3).tolist() == [9.0, 10.0, 11.0]  # 0.3 * 10 = 2.9999...: still row 3
+    assert timeline.row(-0.1).tolist() == [0.0] * 3 and timeline.row(0.4).tolist() == [0.0] * 3
+    streamed = RowTimeline.streamed(3, 10.0, keep=2)
+    streamed.put(0.1, np.ones(3))
+    streamed.put(0.2, None)
+    streamed.put(0.3, np.full(3, 2.0))
+    assert streamed.row(0.1).tolist() == [0.0] * 3  # only the newest two are kept
+    assert streamed.row(0.2).tolist() == [0.0] * 3 and streamed.row(0.3).tolist() == [2.0] * 3
+    with pytest.raises(TypeError):
+        timeline.put(0.0, np.ones(3))

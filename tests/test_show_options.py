@@ -12,7 +12,7 @@ import pytest
 import hapmotion
 from hapmotion.cli import main
 from hapmotion.show.comfort import Comfort
-from hapmotion.show import Show, render_show
+from hapmotion.show import OutputStage, Show, render_show
 from support.data import AUDIO, MOTION, TACT
 
 PUNCH = MOTION / "dataset-1_punch_normal_001.bvh"
@@ -99,8 +99,9 @@ def test_live_applies_the_same_comfort_as_files():
 
     tap = Tap()
     renderer = hapmotion.Renderer(fps=60.0)
-    engine = LiveEngine(renderer, [tap], n_actuators=len(renderer.layout.actuators), fps=60.0,
-                        handle_signals=False, comfort=Show(comfort=comfort).limiter(60.0, 52))
+    stage = OutputStage.for_show(Show(comfort=comfort), "motion", layout=renderer.layout, fps=60.0)
+    engine = LiveEngine(renderer, [tap], stage=stage, n_actuators=len(renderer.layout.actuators), fps=60.0,
+                        handle_signals=False)
     stats = asyncio.run(asyncio.wait_for(engine.run(Script()), 20))
     assert stats.rendered == len(frames)
     plain, _ = hapmotion.Renderer(fps=60.0).run(frames)

@@ -77,23 +77,26 @@ class DelayedReplay(ReplaySource):
 def reference_rows(motion, seat: Seat, mode: str, ks) -> np.ndarray:
     """Frames ``ks`` of the recording (in that order, the frames a seat rendered) rendered here with the seat's
     settings, from the numbers on the wire (float32 skeleton and music), through the venue's own live mix
-    (``live_music``), the seat's comfort stage and zones: with every frame from the first on, the rendering of the
-    recording itself."""
+    (the song's channel mixed by the duck rule under the show's power limit), the seat's comfort and zones: with
+    every frame from the first on, the rendering of the recording itself."""
     from hapmotion.audience.seat import SeatStage
+    from hapmotion.audio.mix import mix
+    from hapmotion.show import song_track
     from hapmotion.show.comfort import Limiter
-    from hapmotion.show import live_music
 
     show = Show(method=seat.method or "mst", preset=seat.preset or Show().preset, mirror=seat.mirror)
     layout = show.load_layout()
     wire = motion.positions.astype(np.float32).astype(np.float64)
     rows, _ = show.renderer(motion.fps, body=BodyModel.from_motion(motion)).run(wire[ks])
     if mode == "multimodal":
-        music = live_music(Show(audio=SONG), "multimodal", fps=motion.fps, layout=layout, actuators=layout.actuators)
-        audio = music.rows.astype(np.float32).astype(np.float64)
-        rows = np.array([music.mix_row(r, audio[k]) for r, k in zip(rows, ks)])
+        venue = Show(audio=SONG)
+        music = song_track(venue, fps=motion.fps, layout=layout).intensities
+        audio = music.astype(np.float32).astype(np.float64)
+        rows = mix(rows, audio[list(ks)], ratio=(2, 3), power_limit=0.75 * len(layout.actuators), rule="duck",
+                   positions=layout.positions(), params=venue.audio_params())
     rows = np.clip(rows, 0.0, 100.0)
-    if not seat.comfort().is_neutral:
-        rows = Limiter(seat.comfort(), len(layout.actuators), motion.fps).run(rows)
+    if not seat.comfort.is_neutral:
+        rows = Limiter(seat.comfort, len(layout.actuators), motion.fps).run(rows)
     stage = SeatStage(seat, layout)
     return np.array([stage(r) for r in rows])
 

@@ -378,12 +378,19 @@ class Tap:
 
 
 async def start_session(source: Any, sinks: list, timeout: float = 20.0, **kwargs: Any):
-    """Start ``hapmotion.live.live`` as a task; return ``(task, engine)`` once it listens."""
-    from hapmotion.live import live
+    """Start ``hapmotion.live.live`` as a task; return ``(task, engine)`` once it listens. Keyword arguments that
+    are :class:`~hapmotion.show.Show` fields (``audio``, ``mode``, ``fps``, ``cues`` ...) make the show; the others
+    go to ``live``."""
+    import dataclasses
 
+    from hapmotion.live import live
+    from hapmotion.show import Show
+
+    show_fields = {f.name for f in dataclasses.fields(Show)}
+    show = Show(**{k: kwargs.pop(k) for k in list(kwargs) if k in show_fields})
     ready: asyncio.Future = asyncio.get_running_loop().create_future()
     kwargs.setdefault("handle_signals", False)
-    task = asyncio.create_task(live(source, sinks, on_ready=lambda e: ready.done() or ready.set_result(e),
+    task = asyncio.create_task(live(show, source, sinks, on_ready=lambda e: ready.done() or ready.set_result(e),
                                     **kwargs))
     done, _ = await asyncio.wait({task, ready}, timeout=timeout, return_when=asyncio.FIRST_COMPLETED)
     if task in done:

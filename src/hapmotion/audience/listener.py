@@ -292,7 +292,7 @@ def seat_show(desc: ShowDescription, seat: Seat, cues: Optional[CueList] = None)
     if tuple(layout.actuators) != desc.actuators:
         raise InputError(src, "actuators", f"the show's {len(desc.actuators)} actuators ({desc.layout}) are not "
                                            f"this seat's layout {layout.name}")
-    renderer = None if mode == "audio" else show.renderer(desc.fps, body=BodyModel(**desc.body))
+    renderer = None if mode == "audio" else show.renderer(desc.fps, body=BodyModel.from_dict(desc.body))
     music = None if mode == "motion" else RowTimeline.streamed(len(desc.actuators), desc.fps)
     stage = OutputStage.from_dict(desc.music or {}, mode, layout=layout, fps=desc.fps, comfort=seat.comfort,
                                   cues=cues, music=music)

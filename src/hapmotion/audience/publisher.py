@@ -98,8 +98,7 @@ def describe_show(show_name: str, *, show: Show, stage: OutputStage, layout: Lay
         layout=layout.name, actuators=tuple(layout.actuators),
         render={"method": show.method, "preset": show.preset, "mirror": bool(mirror), "mode": stage.mode,
                 "overrides": dict(show.overrides)},
-        body={"shoulder_width": body.shoulder_width, "shoulder_height": body.shoulder_height,
-              "pelvis_height": body.pelvis_height}, music=music, stall_ms=float(stall_ms))
+        body=body.to_dict(), music=music, stall_ms=float(stall_ms))
 
 
 class NatsPublisherSink(Sink):

@@ -39,7 +39,11 @@ from typing import Any, Optional
 
 import numpy as np
 
+from ..audio.params import MIX_RULES
+from ..body.model import BodyModel
 from ..errors import InputError, UsageError
+from ..renderer.params import PRESETS
+from ..show.settings import MODES
 from ..skeleton.joints import JOINTS
 
 PROTOCOL = "hapmotion-audience"
@@ -227,15 +231,15 @@ def parse_description(data: bytes, show: str) -> ShowDescription:
     for key, kind in (("method", str), ("preset", str), ("mirror", bool), ("mode", str)):
         if not isinstance(render.get(key), kind):
             raise InputError(src, f"render.{key}", f"expected a {kind.__name__}, found {render.get(key)!r}")
-    if render["mode"] not in ("motion", "audio", "multimodal"):
-        raise InputError(src, "render.mode", f"expected motion, audio or multimodal, found {render['mode']!r}")
+    if render["mode"] not in MODES:
+        raise InputError(src, "render.mode", f"expected one of {', '.join(MODES)}, found {render['mode']!r}")
     if not isinstance(render.get("overrides", {}), dict):
         raise InputError(src, "render.overrides", "expected an object")
-    body = need("body", dict, "an object")
-    for key in ("shoulder_width", "shoulder_height", "pelvis_height"):
-        v = body.get(key)
-        if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) or abs(v) > 5:
-            raise InputError(src, f"body.{key}", f"expected metres, found {v!r}")
+    try:
+        body = BodyModel.from_dict(need("body", dict, "an object")).to_dict()
+    except ValueError as exc:
+        key, _, problem = str(exc).partition(": ")
+        raise InputError(src, key, problem[:200]) from None
     music = obj.get("music")
     if render["mode"] != "motion":
         if not isinstance(music, dict):
@@ -243,9 +247,6 @@ def parse_description(data: bytes, show: str) -> ShowDescription:
         ratio = music.get("mix_ratio")
         if not (isinstance(ratio, list) and len(ratio) == 2 and all(isinstance(r, (int, float)) for r in ratio)):
             raise InputError(src, "music.mix_ratio", "expected [audio, motion] weights")
-        from ..audio.params import MIX_RULES
-        from ..renderer.params import PRESETS
-
         if music.get("mix_rule") not in MIX_RULES:
             raise InputError(src, "music.mix_rule", f"expected one of {', '.join(MIX_RULES)}")
         if music.get("params_preset") not in PRESETS:
@@ -257,5 +258,5 @@ def parse_description(data: bytes, show: str) -> ShowDescription:
     if not (0 < stall_ms <= 60_000):
         raise InputError(src, "stall_ms", "expected 1..60000 ms")
     return ShowDescription(show, epoch, fps, str(obj.get("layout", "")), tuple(actuators), render,
-                           {k: float(body[k]) for k in ("shoulder_width", "shoulder_height", "pelvis_height")},
+                           body,
                            music if render["mode"] != "motion" else None, stall_ms)

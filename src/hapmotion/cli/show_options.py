@@ -17,7 +17,7 @@ from ..errors import UsageError
 from ..renderer.params import DEFAULT_PRESET, METHODS, PRESETS, Params
 from ..show.comfort import COMFORT_RANGES, Comfort
 from ..show.cues import CueList, load_cues
-from ..show.settings import LENGTH_RULES, MODES, Show
+from ..show.settings import LENGTH_RULES, MODES, Show, check_fps
 from .motion_options import cli_limits
 
 PRESET_HELP = (f"Renderer preset: {', '.join(PRESETS)}. felt (default): calibrated for ERM vests, the wearer feels "
@@ -40,8 +40,8 @@ def preset_option(default: Optional[str] = DEFAULT_PRESET, help_suffix: str = ""
 
 mirror_option = click.option(
     "--mirror/--no-mirror", default=None,
-    help="Mirror the performer left/right, so the wearer feels the performer's right hand on the left, as when "
-         "facing them (default: the preset's, on).")
+    help="Mirror the performer left/right, as when facing them: the performer's right hand is felt on the "
+         "wearer's left (default: the preset's, on). --no-mirror feels the performer's left on the wearer's left.")
 
 mode_option = click.option(
     "--mode", type=click.Choice(MODES), default=None,
@@ -126,9 +126,11 @@ def show_options(*names: str, comfort: bool = True) -> Callable[[Callable[..., A
 
 def _build_show(given: dict[str, Any], comfort: Comfort, limits: Optional[Sequence[str]]) -> Show:
     fields: dict[str, Any] = {"comfort": comfort}
-    for name in ("method", "preset", "mirror", "mode", "mix_rule", "length", "fps"):
+    for name in ("method", "preset", "mirror", "mode", "mix_rule", "length"):
         if name in given:
             fields[name] = given[name]
+    if given.get("fps") is not None:
+        fields["fps"] = check_fps(given["fps"], "--fps")
     if "param" in given:
         fields["overrides"] = parse_param_overrides(given["param"])
     if "layout" in given:

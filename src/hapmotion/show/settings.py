@@ -46,9 +46,9 @@ def check_fps(fps: Any, what: str = "fps") -> float:
     try:
         value = float(fps)
     except (TypeError, ValueError):
-        raise UsageError(f"{what} must be a number of frames per second in {lo:g}..{hi:g}, not {fps!r}") from None
+        value = math.nan
     if not (math.isfinite(value) and lo <= value <= hi):
-        raise UsageError(f"{what} must be a number of frames per second in {lo:g}..{hi:g}, not {fps}")
+        raise UsageError(f"{what} must be a finite number of frames per second from {lo:g} to {hi:g}, not {fps!r}")
     return value
 
 

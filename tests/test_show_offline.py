@@ -1,21 +1,23 @@
-"""combine(): the paper's three conditions, the length rule, the offset, meta and debug, on hand-made motion tracks,
-on a rendered synthetic motion and on the bundled music."""
+"""render_show(): the paper's three conditions, the length rule, the offset, meta and debug, on hand-made motion
+tracks, on a rendered synthetic motion and on the bundled music."""
 
 from __future__ import annotations
 
+import json
 
 import numpy as np
 import pytest
 import soundfile as sf
 
 import hapmotion
-from hapmotion.audio import PAPER_PARAMS, analyze_file, audio_track, mix
-from hapmotion.show import combine
-from support.audio_synth import drum_hit, place_hits
+from hapmotion.audio import analyze_file, mix
 from hapmotion.errors import InputError, UsageError
+from hapmotion.layout import load_layout
+from hapmotion.show import Show, render_show, song_track
 from hapmotion.track import HapticTrack
-from support.synthetic import motion_from_frames, waving
+from support.audio_synth import drum_hit, place_hits
 from support.data import AUDIO
+from support.synthetic import motion_from_frames, waving
 
 SONG = AUDIO / "vibe_ace.ogg"
 
@@ -26,6 +28,12 @@ def _motion_track(n_frames=120, fps=60.0, level=50.0) -> HapticTrack:
     debug = {"dynamic_point": np.tile([0.1, 1.2, 0.3], (n_frames, 1)), "active": np.ones((n_frames, 2), np.int8),
              "chart": np.zeros(n_frames, np.int8), "level": np.full(n_frames, 5.0)}
     return HapticTrack(rows, fps, hapmotion.load_layout().actuators, meta={"method": "mst", "preset": "paper"}, debug=debug)
+
+
+def _raw_music(song, fps=60.0, preset="paper", offset_s=0.0) -> np.ndarray:
+    """The song's channel alone, before the output stage (no power limit)."""
+    show = Show(audio=song, preset=preset, audio_offset_s=offset_s)
+    return song_track(show, fps=fps, layout=load_layout()).intensities
 
 
 @pytest.fixture(scope="module")
@@ -40,54 +48,57 @@ def clicks_wav(tmp_path_factory):
 # ------------------------------------------------------------------ the three conditions
 def test_multimodal_is_the_mix_of_the_two_channels(clicks_wav):
     motion = _motion_track(240)                                    # 4 s of motion, longer than the 3 s audio
-    out = combine(motion, clicks_wav, mode="multimodal")
-    # a paper-preset motion track gets the paper's audio: the whole-suit pattern and the 2:3 weighted sum
-    audio = audio_track(analyze_file(clicks_wav, fps=60.0, params=PAPER_PARAMS)).intensities
+    out = render_show(Show(audio=clicks_wav, preset="paper"), motion_track=motion)
+    # the paper preset's audio: the whole-suit pattern and the 2:3 weighted sum
+    audio = audio_track_rows = _raw_music(clicks_wav)
     expected = mix(motion.intensities, np.vstack([audio, np.zeros((240 - audio.shape[0], 52))]), power_limit=39.0,
                    rule="paper")
     np.testing.assert_allclose(out.intensities, expected)
     assert out.intensities.shape == (240, 52) and out.fps == 60.0 and out.actuators == hapmotion.load_layout().actuators
+    assert audio_track_rows.shape == (180, 52)
 
 
 def test_motion_mode_is_the_motion_track(clicks_wav):
     motion = _motion_track(240)
-    out = combine(motion, clicks_wav, mode="motion")
+    out = render_show(Show(audio=clicks_wav, mode="motion"), motion_track=motion)
     np.testing.assert_allclose(out.intensities, motion.intensities)      # one motor at 50 is far under the limit
-    out = combine(motion, None, mode="motion")
+    out = render_show(Show(mode="motion"), motion_track=motion)
     np.testing.assert_allclose(out.intensities, motion.intensities)
 
 
-def test_audio_mode_without_motion_uses_fps_and_the_default_actuators(clicks_wav):
-    out = combine(None, clicks_wav, mode="audio", fps=30.0, params=PAPER_PARAMS)
+def test_audio_mode_without_motion_uses_fps_and_the_layout(clicks_wav):
+    out = render_show(Show(audio=clicks_wav, preset="paper", fps=30.0))
     assert out.fps == 30.0 and out.n_frames == 90 and out.actuators == hapmotion.load_layout().actuators
-    assert out.layout == "x40_shoulders"
+    assert out.layout == "x40_shoulders" and out.meta["mode"] == "audio"
     kicks = np.flatnonzero(out.debug["audio_kick"])
     assert kicks.tolist() == [14, 29, 44, 59, 74]                   # 1 frame (33 ms) per kick at 30 fps, onsets
-    # a kick on all 52 motors is power 52: the default limit (0.75 of the suit at full drive) scales it to 87
+    # a kick on all 52 motors is power 52: the show's limit (0.75 of the suit at full drive) scales it to 87
     assert out.intensities[kicks].max() == pytest.approx(100 * np.sqrt(0.75))
-    full = combine(None, clicks_wav, mode="audio", fps=30.0, power_limit_fraction=None, params=PAPER_PARAMS)
-    assert full.intensities[kicks].max() == 100.0
+    assert _raw_music(clicks_wav, fps=30.0)[kicks].max() == 100.0
     # the default layered pattern kicks 8 motors (power 8): under the limit, at full drive
-    layered = combine(None, clicks_wav, mode="audio", fps=30.0)
+    layered = render_show(Show(audio=clicks_wav, fps=30.0))
     assert layered.intensities[kicks].max() == 100.0 and (layered.intensities[kicks[0]] == 100.0).sum() == 8
 
 
-def test_audio_mode_on_a_custom_layout(clicks_wav):
-    ids = ("VestFront_0", "VestBack_0", "ForearmL_0")
-    out = combine(None, clicks_wav, mode="audio", actuators=ids)
-    assert out.actuators == ids and out.intensities.shape[1] == 3 and out.layout == "custom"
+def test_audio_mode_on_a_custom_layout(clicks_wav, tmp_path):
+    doc = json.loads((hapmotion.layout.resources.files("hapmotion") / "data" / "x40_shoulders.json").read_text())
+    doc["name"] = "wide_vest"
+    for device in doc["devices"][:2]:
+        device["x_span"] = [-0.9, 0.9]
+    path = tmp_path / "wide_vest.json"
+    path.write_text(json.dumps(doc))
+    out = render_show(Show(audio=clicks_wav, layout=path))
+    assert out.layout == "wide_vest" and out.actuators == load_layout().actuators
+    assert out.meta["mode"] == "audio" and out.intensities.max() > 0
 
-    class Layout:
-        actuators = ids
-        name = "tiny"
-    assert combine(None, clicks_wav, mode="audio", actuators=Layout()).layout == "tiny"
 
-
-def test_energy_domain_and_ratio_are_passed_on(clicks_wav):
+def test_mix_rule_and_ratio_are_passed_on(clicks_wav):
     motion = _motion_track(180)
-    lin = combine(motion, clicks_wav, ratio=(1, 1), power_limit_fraction=None)
-    eng = combine(motion, clicks_wav, ratio=(1, 1), domain="energy", power_limit_fraction=None)
-    audio_only = combine(None, clicks_wav, mode="audio", power_limit_fraction=None, params=PAPER_PARAMS).intensities
+    lin = render_show(Show(audio=clicks_wav, preset="paper", mix_ratio=(1, 1)), motion_track=motion)
+    eng = render_show(Show(audio=clicks_wav, preset="paper", mix_ratio=(1, 1), mix_rule="energy"),
+                      motion_track=motion)
+    audio_only = _raw_music(clicks_wav)
+    # both stay under the power limit here (one motor of motion, the music at most at 0.5 of full drive)
     np.testing.assert_allclose(lin.intensities, 0.5 * audio_only + 0.5 * motion.intensities)
     np.testing.assert_allclose(eng.intensities, np.sqrt(0.5 * audio_only ** 2 + 0.5 * motion.intensities ** 2))
 
@@ -95,25 +106,25 @@ def test_energy_domain_and_ratio_are_passed_on(clicks_wav):
 # ------------------------------------------------------------------ length rule and offset
 def test_length_longer_and_motion(clicks_wav):
     short = _motion_track(60)                                      # 1 s of motion, 3 s of audio
-    longer = combine(short, clicks_wav, length="longer")
+    longer = render_show(Show(audio=clicks_wav, preset="paper"), motion_track=short)
     assert longer.n_frames == 180
     assert longer.meta["frames_motion"] == 60 and longer.meta["frames_audio"] == 180
-    cut = combine(short, clicks_wav, length="motion")
+    cut = render_show(Show(audio=clicks_wav, preset="paper", length="motion"), motion_track=short)
     assert cut.n_frames == 60
     np.testing.assert_allclose(cut.intensities, longer.intensities[:60])
     # the motion is silent after its end: only audio (at 0.4 of its level) from frame 60 on
-    audio = combine(None, clicks_wav, mode="audio", power_limit_fraction=None, params=PAPER_PARAMS).intensities
+    audio = _raw_music(clicks_wav)
     np.testing.assert_allclose(longer.intensities[60:, 5], np.minimum(0.4 * audio[60:, 5], 100), atol=1e-9)
 
 
 def test_offset_delays_the_music_on_the_track(clicks_wav):
     motion = _motion_track(300)
-    base = combine(None, clicks_wav, mode="audio", params=PAPER_PARAMS)
-    late = combine(motion, clicks_wav, mode="audio", offset_s=1.0)
+    base = render_show(Show(audio=clicks_wav, preset="paper"))
+    late = render_show(Show(audio=clicks_wav, preset="paper", mode="audio", audio_offset_s=1.0), motion_track=motion)
     assert late.n_frames == 300 and late.meta["frames_audio"] == 240
     np.testing.assert_allclose(late.intensities[60:240], base.intensities[0:180], atol=1e-9)
     assert not late.intensities[:60].any()
-    early = combine(None, clicks_wav, mode="audio", offset_s=-0.75)
+    early = render_show(Show(audio=clicks_wav, audio_offset_s=-0.75))
     assert early.n_frames == int(np.ceil(2.25 * 60))
     # the hit at 1.0 s lands at 0.25 s: 45 frames earlier than without the offset, the 0.5 s hit is gone
     base_kicks = np.flatnonzero(base.debug["audio_kick"])
@@ -122,9 +133,10 @@ def test_offset_delays_the_music_on_the_track(clicks_wav):
 
 def test_meta_and_debug(clicks_wav):
     motion = _motion_track(60)
-    out = combine(motion, clicks_wav, mode="multimodal", ratio=(2, 3), offset_s=0.25, domain="energy")
+    out = render_show(Show(audio=clicks_wav, mix_ratio=(2, 3), audio_offset_s=0.25, mix_rule="energy"),
+                      motion_track=motion)
     m = out.meta
-    assert m["mode"] == "multimodal" and m["mix_ratio"] == [2.0, 3.0] and m["mix_domain"] == "energy"
+    assert m["mode"] == "multimodal" and m["mix_ratio"] == [2.0, 3.0] and m["mix_rule"] == "energy"
     assert m["audio_path"] == str(clicks_wav) and m["audio_offset_s"] == 0.25 and m["length"] == "longer"
     assert m["power_limit"] == 39.0 and m["method"] == "mst"        # the motion track's meta is kept
     assert m["audio"]["sample_rate"] == 22050 and m["audio_params"]["kick_s"] == 0.03
@@ -139,27 +151,25 @@ def test_meta_and_debug(clicks_wav):
 # ------------------------------------------------------------------ errors
 def test_usage_errors(clicks_wav):
     motion = _motion_track(60)
-    with pytest.raises(UsageError, match="needs a motion file"):
-        combine(None, clicks_wav, mode="multimodal")
-    with pytest.raises(UsageError, match="needs an audio file"):
-        combine(motion, None, mode="audio")
+    with pytest.raises(UsageError, match="needs a MOTION_FILE"):
+        render_show(Show(audio=clicks_wav, mode="multimodal"))
+    with pytest.raises(UsageError, match="needs --audio"):
+        render_show(Show(mode="audio"), motion_track=motion)
     with pytest.raises(UsageError, match="mode"):
-        combine(motion, clicks_wav, mode="both")
+        Show(audio=clicks_wav, mode="both")
     with pytest.raises(UsageError, match="length"):
-        combine(motion, clicks_wav, length="shorter")
+        Show(audio=clicks_wav, length="shorter")
     with pytest.raises(UsageError, match="needs a motion file"):
-        combine(None, clicks_wav, mode="audio", length="motion")
-    with pytest.raises(UsageError, match="differ"):
-        combine(motion, clicks_wav, actuators=["VestFront_0"])
-    with pytest.raises(UsageError, match="domain"):
-        combine(motion, clicks_wav, domain="log")
+        render_show(Show(audio=clicks_wav, mode="audio", length="motion"))
+    with pytest.raises(UsageError, match="mix rule"):
+        Show(audio=clicks_wav, mix_rule="log")
 
 
 def test_bad_audio_file_is_an_input_error(tmp_path):
     bad = tmp_path / "song.ogg"
     bad.write_bytes(b"OggS garbage")
     with pytest.raises(InputError) as err:
-        combine(_motion_track(60), bad)
+        render_show(Show(audio=bad), motion_track=_motion_track(60))
     assert str(bad) in str(err.value) and "\n" not in str(err.value)
 
 
@@ -168,10 +178,10 @@ def test_rendered_motion_with_the_bundled_music_in_multimodal_mode():
     """The demo's combination: a rendered dance (here a synthetic wave of the hand) with "Vibe Ace"."""
     motion = motion_from_frames(waving(n=600, fps=60.0), fps=60.0)
     motion_track = hapmotion.render(motion, preset="paper")
-    out = combine(motion_track, SONG, mode="multimodal", length="motion")
+    out = render_show(Show(audio=SONG, preset="paper", length="motion"), motion_track=motion_track)
     assert out.n_frames == motion_track.n_frames and out.actuators == motion_track.actuators
     assert out.meta["mix_rule"] == "paper"
-    audio = combine(None, SONG, mode="audio", power_limit_fraction=None, params=PAPER_PARAMS).intensities[:600]
+    audio = _raw_music(SONG)[:600]
     expected = np.clip(0.4 * audio + 0.6 * motion_track.intensities, 0, 100)
     power = np.sum((expected / 100) ** 2, axis=1, keepdims=True)
     expected *= np.sqrt(np.minimum(1.0, 39.0 / power))
@@ -185,7 +195,7 @@ def test_rendered_motion_with_the_bundled_music_in_multimodal_mode():
 
 @pytest.mark.parametrize("name", ["vibe_ace.ogg", "lets_go_fishin.ogg"])
 def test_bundled_music_audio_only_track(name):
-    out = combine(None, AUDIO / name, mode="audio")
+    out = render_show(Show(audio=AUDIO / name))
     assert out.n_frames == int(np.ceil(sf.info(AUDIO / name).duration * 60))
     assert np.isfinite(out.intensities).all() and out.intensities.max() <= 100
     assert np.all(np.sum((out.intensities / 100) ** 2, axis=1) <= 39.0 + 1e-9)
@@ -194,16 +204,17 @@ def test_bundled_music_audio_only_track(name):
     assert 1.5 < kicks.sum() / out.meta["audio"]["onsets"] <= 2.0
 
 
-def test_combine_reuses_a_given_analysis(monkeypatch):
+def test_render_show_reuses_a_given_analysis(monkeypatch):
     """Several conditions of one song: pass the analysis and the song is not analysed again; same numbers."""
     song = AUDIO / "vibe_ace.ogg"
     motion = HapticTrack(np.full((120, 52), 30.0), 60.0, hapmotion.load_layout().actuators)
-    fresh = combine(motion, song, mode="multimodal", fps=60.0, length="motion")
-    an = analyze_file(song, fps=60.0)
+    show = Show(audio=song, length="motion")
+    fresh = render_show(show, motion_track=motion)
+    an = analyze_file(song, fps=60.0, params=show.audio_params())
 
     def no_second_analysis(*args, **kwargs):
         raise AssertionError("the song was analysed again")
 
-    monkeypatch.setattr("hapmotion.show.analyze_file", no_second_analysis)
-    reused = combine(motion, song, mode="multimodal", fps=60.0, length="motion", analysis=an)
+    monkeypatch.setattr("hapmotion.show.music.analyze_file", no_second_analysis)
+    reused = render_show(show, motion_track=motion, analysis=an)
     np.testing.assert_array_equal(reused.intensities, fresh.intensities)
