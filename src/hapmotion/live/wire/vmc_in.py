@@ -8,8 +8,10 @@ docs/marionette-spec; OSC over UDP, port 39539 by default, packets may be bundle
   (name ``"root"``); the spec recommends receivers take it as a local pose. The v2.1 MR scale and offset are
   ignored (they fit the avatar to a camera picture, not to the performer).
 * ``/VMC/Ext/Bone/Pos (s)name (f)p.x p.y p.z q.x q.y q.z q.w`` - one bone's *local* pose (relative to its parent
-  transform), named by Unity's ``HumanBodyBones`` (:mod:`hapmotion.skeleton.humanoid`); every bone is sent, ``LastBone``
-  included.
+  transform), named by Unity's ``HumanBodyBones`` (:mod:`hapmotion.skeleton.humanoid`); every bone is sent,
+  ``LastBone`` included. Which canonical joint a bone is comes from the naming table the BVH matcher reads too
+  (:data:`hapmotion.skeleton.naming.UNITY_HUMANOID`); the spine bones are placed by position
+  (:mod:`hapmotion.skeleton.spine`).
 * ``/VMC/Ext/OK (i)loaded [(i)calibration state (i)calibration mode [(i)tracking status]]`` - 0 before an avatar is
   loaded (no bone data is meaningful); calibration state 0 uncalibrated, 1 waiting for calibration,
   2 calibrating, 3 calibrated (v2.5); tracking status 1 good, 0 lost (v2.7).
@@ -43,7 +45,7 @@ Bad input is counted with the live fault kinds (:class:`hapmotion.live.hygiene.F
 (not OSC, too few arguments, wrong types, a zero quaternion), ``unknown_joint`` (a bone name that is not a
 ``HumanBodyBones`` name), ``nan`` (a non-finite number: the message is dropped and the bone keeps its last pose),
 ``missing_root`` (a frame before any ``/VMC/Ext/Root/Pos`` or ``Hips`` pose: skipped). Sans-I/O: the source
-(:class:`hapmotion.live.vmc.VmcSource`) moves the datagrams.
+(:class:`hapmotion.live.sources.VmcSource`) moves the datagrams.
 """
 
 from __future__ import annotations
@@ -57,9 +59,11 @@ import numpy as np
 from pythonosc.osc_bundle import OscBundle
 from pythonosc.osc_packet import OscPacket
 
-from ...skeleton.humanoid import (BONE_INDEX, CANONICAL_TO_BONE, HUMAN_BODY_BONES, LAST_BONE, N_BONES, SPINE_BONES,
-                         bone_name, present_parent)
+from ...skeleton.derived import derive_missing
+from ...skeleton.humanoid import BONE_INDEX, HUMAN_BODY_BONES, LAST_BONE, N_BONES, bone_name, present_parent
 from ...skeleton.joints import JOINT_INDEX, N_JOINTS, RENDER_JOINTS
+from ...skeleton.naming import UNITY_HUMANOID, UNITY_SPINE
+from ...skeleton.spine import assign_spine
 from ..frames import SkeletonFrame
 from ..hygiene import Faults, is_number
 
@@ -86,9 +90,9 @@ VMC_MESSAGES_PER_FRAME = 64
 LastBone), OK and the time."""
 
 _ROOT = N_BONES  # index of the avatar root in the pose lists (after the 55 bones)
-_MAPPED = tuple((JOINT_INDEX[j], BONE_INDEX[b]) for j, b in CANONICAL_TO_BONE.items())
+_MAPPED = tuple((JOINT_INDEX[j], BONE_INDEX[b]) for j, b in UNITY_HUMANOID.items())
 # Bones whose world pose is needed: the mapped ones and the spine candidates (their ancestors come along).
-_CHAINED = tuple(BONE_INDEX[b] for b in dict.fromkeys([*CANONICAL_TO_BONE.values(), *SPINE_BONES]))
+_CHAINED = tuple(BONE_INDEX[b] for b in dict.fromkeys([*UNITY_HUMANOID.values(), *UNITY_SPINE]))
 _NEEDED = np.array([JOINT_INDEX[j] for j in RENDER_JOINTS + ("SPINE_CHEST",)], dtype=np.intp)
 
 
@@ -332,8 +336,9 @@ class VmcDecoder:
 
     def skeleton(self) -> np.ndarray:
         """The current pose as canonical joints: ``(32, 3)`` float64 metres, right-handed +Y up, NaN where the
-        avatar has no bone; render joints the avatar lacks are derived as the readers derive them. Needs the root
-        and Hips poses."""
+        avatar has no bone; render joints the avatar lacks are derived by
+        :func:`~hapmotion.skeleton.derived.derive_missing`, the function every reader calls. Needs the root and
+        Hips poses."""
         if self._plan is None:
             self._plan, self._joints = self._make_plan()
             self._spine_placed = False
@@ -350,8 +355,6 @@ class VmcDecoder:
         pos = np.full((N_JOINTS, 3), np.nan)
         pos[joints] = unity_to_ours([world[b][0] for b in bones])  # type: ignore[index]
         if np.isnan(pos[_NEEDED]).any():
-            from ...skeleton.derived import derive_missing
-
             derive_missing(pos[None])
         return pos
 
@@ -378,12 +381,10 @@ class VmcDecoder:
         pairs = [(j, b) for j, b in _MAPPED if HUMAN_BODY_BONES[b] in have]
         return plan, (np.array([j for j, _ in pairs], dtype=np.intp), np.array([b for _, b in pairs], dtype=np.intp))
 
-    def _place_spine(self, world: list) -> None:
+    def _place_spine(self, world: list[Optional[tuple[Vec, Quat]]]) -> None:
         """Choose the SPINE_NAVEL and SPINE_CHEST bones by where they sit on Hips -> Neck in this pose (the first
-        after the avatar's bones arrived), as the readers place any spine; without a Neck bone the middle of the
-        upper arms stands for it. A point no bone sits near is left out and derived from PELVIS and NECK."""
-        from ...skeleton.naming import assign_spine
-
+        after the avatar's bones arrived) with :func:`~hapmotion.skeleton.spine.assign_spine`, the BVH matcher's
+        rule; without a Neck bone the middle of the upper arms stands for it. A point no bone sits near is left out and derived from PELVIS and NECK."""
         self._spine_placed = True
         self.spine = {}
         hips = world[BONE_INDEX["Hips"]]
@@ -395,7 +396,7 @@ class VmcDecoder:
             top = 0.5 * (np.array(arms[0][0]) + np.array(arms[1][0]))
         else:
             return
-        chain = {n: np.array(world[BONE_INDEX[n]][0]) for n in SPINE_BONES if world[BONE_INDEX[n]] is not None}
+        chain = {n: np.array(world[BONE_INDEX[n]][0]) for n in UNITY_SPINE if world[BONE_INDEX[n]] is not None}
         # Fractions along Hips -> Neck are the same in Unity's frame and in ours (a mirror keeps them).
         self.spine = assign_spine(np.array(hips[0]), top, chain)
         if self.spine:
