@@ -1,7 +1,7 @@
 """VMC protocol input (``hapmotion.live.sources.VmcSource``): the humanoid bone table, the bone chain and Unity's
 left-handed frame worked out by hand, real recordings sent as VMC by an independent sender
-(tests/support/vmc_sender.py) and rendered like the recordings themselves, the frame rules, the sender's OK/time messages, and every fault class,
-sans-I/O and over loopback."""
+(tests/support/vmc_sender.py) and rendered like the recordings themselves, the frame rules, the sender's OK/time
+messages, and every fault class, sans-I/O and over loopback."""
 
 from __future__ import annotations
 

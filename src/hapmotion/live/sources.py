@@ -2,9 +2,10 @@
 replay of a recording, and a plain clock for the audio-only mode).
 
 A source decodes messages with its :mod:`hapmotion.live.wire` module and hands each frame to its inlet's
-``submit`` (:class:`~hapmotion.live.frames.FrameInlet`, the engine) the moment it is read; it never queues. Before decoding, every raw message is checked against who may send and that
-sender's own message budget (:mod:`hapmotion.live.access`), so a stranger or a sender far above the frame rate
-costs little and cannot use up anyone else's budget.
+``submit`` (:class:`~hapmotion.live.frames.FrameInlet`, the engine) the moment it is read; it never queues.
+Before decoding, every raw message is checked against who may send and that sender's own message budget
+(:mod:`hapmotion.live.access`), so a stranger or a sender far above the frame rate costs little and cannot use up
+anyone else's budget.
 """
 
 from __future__ import annotations

@@ -11,7 +11,8 @@ from .spine import CHEST_FRACTION, NAVEL_FRACTION
 
 
 def missing_needed(names: Iterable[str]) -> list[str]:
-    """Render joints that are neither among ``names`` (canonical joint names, or a mapping keyed by them) nor derivable from them by :func:`derive_missing`.
+    """Render joints that are neither among ``names`` (canonical joint names, or a mapping keyed by them) nor
+    derivable from them by :func:`derive_missing`.
 
     Needed: HAND_* (or WRIST_*), SHOULDER_*, PELVIS (or both HIP_*); NECK derives from the shoulders and
     SPINE_NAVEL from PELVIS and NECK, so they follow.
