@@ -53,11 +53,9 @@ from __future__ import annotations
 import logging
 import math
 from collections import Counter
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
-from pythonosc.osc_bundle import OscBundle
-from pythonosc.osc_packet import OscPacket
 
 from ...skeleton.derived import derive_missing
 from ...skeleton.humanoid import BONE_INDEX, HUMAN_BODY_BONES, LAST_BONE, N_BONES, bone_name, present_parent
@@ -66,6 +64,7 @@ from ...skeleton.naming import UNITY_HUMANOID, UNITY_SPINE
 from ...skeleton.spine import assign_spine
 from ..frames import SkeletonFrame
 from ..hygiene import Faults, is_number
+from .osc_packet import read_osc
 
 log = logging.getLogger("hapmotion.live")
 
@@ -186,22 +185,11 @@ class VmcDecoder:
             else:
                 self.ignored += 1
             return []
-        try:
-            timed = OscPacket(dgram).messages
-        except Exception as exc:  # python-osc raises several types on garbage; all mean "not OSC"
-            self.faults.add("malformed", f"not an OSC packet ({exc.__class__.__name__})")
-            return []
-        if not timed:  # python-osc skips unreadable bundle elements; a bundle with nothing readable is bad
-            self.faults.add("malformed", "an OSC bundle without a readable message")
-            return []
-        bundle = OscBundle.dgram_is_bundle(dgram)
+        packet = read_osc(dgram, self.faults)
+        bundle = packet.bundle
         out: list[SkeletonFrame] = []
-        for tm in timed:
-            try:
-                address, params = tm.message.address, tm.message.params
-            except Exception as exc:
-                self.faults.add("malformed", f"unreadable OSC message ({exc.__class__.__name__})")
-                continue
+        for msg in packet.messages:
+            address, params = msg.address, msg.params
             if address == ADDR_BONE:
                 self._bone(params, received, out, loose=not bundle)
             elif address == ADDR_ROOT:
@@ -223,7 +211,7 @@ class VmcDecoder:
             log.info("VMC: ignoring OSC address %r (not a VMC message); further ones are ignored silently",
                      address[:60])
 
-    def _pose_args(self, params: list, address: str
+    def _pose_args(self, params: list[Any], address: str
                    ) -> Optional[tuple[str, tuple[float, ...], tuple[float, ...]]]:
         """``(name, position (x, y, z), unit quaternion (x, y, z, w))`` from ``name px py pz qx qy qz qw [...]``
         (plain floats: this runs for every bone of every frame, where small numpy arrays cost more than math)."""
@@ -242,7 +230,7 @@ class VmcDecoder:
             return None
         return params[0], (px, py, pz), (qx / norm, qy / norm, qz / norm, qw / norm)
 
-    def _bone(self, params: list, received: float, out: list[SkeletonFrame], loose: bool) -> None:
+    def _bone(self, params: list[Any], received: float, out: list[SkeletonFrame], loose: bool) -> None:
         if self.loaded is False:  # no avatar: its poses mean nothing (and the next avatar has its own bones)
             self.ignored += 1
             return
@@ -265,7 +253,7 @@ class VmcDecoder:
         self.local[b] = (pos, rot)
         self._pending.add(b)
 
-    def _root(self, params: list) -> None:
+    def _root(self, params: list[Any]) -> None:
         if self.loaded is False:
             self.ignored += 1
             return
@@ -274,7 +262,7 @@ class VmcDecoder:
             return
         self.local[_ROOT] = (pose[1], pose[2])
 
-    def _time(self, params: list, received: float, out: list[SkeletonFrame]) -> None:
+    def _time(self, params: list[Any], received: float, out: list[SkeletonFrame]) -> None:
         if not params or not is_number(params[0]):
             self.faults.add("malformed", f"{ADDR_TIME} needs a time in seconds, found {params[:1]!r}")
             return
@@ -285,7 +273,7 @@ class VmcDecoder:
         if self._pending:
             self._close(received, out)
 
-    def _ok(self, params: list) -> None:
+    def _ok(self, params: list[Any]) -> None:
         if not params or not is_number(params[0]):
             self.faults.add("malformed", f"{ADDR_OK} needs the loaded state (int), found {params[:1]!r}")
             return
