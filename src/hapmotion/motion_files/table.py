@@ -20,7 +20,7 @@ import os
 import re
 import zipfile
 import zlib
-from typing import Any, Optional
+from typing import BinaryIO, Optional
 
 import numpy as np
 import numpy.lib.format as npy_format
@@ -416,7 +416,7 @@ def save_motion_table(motion: Motion, path: str | os.PathLike[str]) -> None:
     pos = motion.positions[:, cols]
     conf = motion.confidence[:, cols].astype(np.float32)
 
-    def write(f: Any) -> None:
+    def write(f: BinaryIO) -> None:
         if ext == ".npz":
             np.savez_compressed(f, positions=pos, joints=np.array(names), fps=np.float64(motion.fps),
                                 confidence=conf, derived=motion.derived[cols])
