@@ -209,8 +209,8 @@ _GLUED_SIDE = (("left", "LEFT"), ("right", "RIGHT"), ("l", "LEFT"), ("r", "RIGHT
 
 def split_name(name: str) -> tuple[Optional[str], str]:
     """Split a joint name into (side, base): ``"LeftUpLeg" -> ("LEFT", "upleg")``, ``"Hand_L" -> ("LEFT", "hand")``,
-    ``"mixamorig:Spine1" -> (None, "spine1")``, ``"neck01" -> (None, "neck1")``, ``"l_wrist" -> ("LEFT", "wrist")``, ``"rhand" -> ("RIGHT",
-    "hand")``, ``"upper_arm.L" -> ("LEFT", "upperarm")``.
+    ``"mixamorig:Spine1" -> (None, "spine1")``, ``"neck01" -> (None, "neck1")``, ``"l_wrist" -> ("LEFT", "wrist")``,
+    ``"rhand" -> ("RIGHT", "hand")``, ``"upper_arm.L" -> ("LEFT", "upperarm")``.
 
     A side glued to a lower-case word ("rhand", "lshoulder", "lefteye") is split off only when the rest is a limb
     word we know, so "leg" and "lowerarm" stay whole.

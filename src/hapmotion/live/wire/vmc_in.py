@@ -347,8 +347,8 @@ class VmcDecoder:
         return pos
 
     def _make_plan(self) -> tuple[list[tuple[int, int]], tuple[np.ndarray, np.ndarray]]:
-        """The bones to chain: the mapped and spine bones the avatar has and their ancestors, each with its nearest present
-        ancestor as parent (``_ROOT`` for the top), parents first; and the (joint, bone) index pairs to read."""
+        """The bones to chain: the mapped and spine bones the avatar has and their ancestors, each with its nearest
+        present ancestor as parent (``_ROOT`` for the top), parents first; and the (joint, bone) index pairs to read."""
         have = {HUMAN_BODY_BONES[b] for b in range(N_BONES) if self.local[b] is not None}
         parent: dict[str, Optional[str]] = {}
         for b in _CHAINED:
@@ -372,7 +372,8 @@ class VmcDecoder:
     def _place_spine(self, world: list[Optional[tuple[Vec, Quat]]]) -> None:
         """Choose the SPINE_NAVEL and SPINE_CHEST bones by where they sit on Hips -> Neck in this pose (the first
         after the avatar's bones arrived) with :func:`~hapmotion.skeleton.spine.assign_spine`, the BVH matcher's
-        rule; without a Neck bone the middle of the upper arms stands for it. A point no bone sits near is left out and derived from PELVIS and NECK."""
+        rule; without a Neck bone the middle of the upper arms stands for it. A point no bone sits near is left out
+        and derived from PELVIS and NECK."""
         self._spine_placed = True
         self.spine = {}
         hips = world[BONE_INDEX["Hips"]]
