@@ -1,7 +1,7 @@
-"""VMC protocol input (``hapmotion.live.vmc``): the humanoid bone table, the bone chain and Unity's left-handed
-frame worked out by hand, real recordings sent as VMC by an independent sender (tests/support/vmc_sender.py) and
-rendered like the recordings themselves, the frame rules, the sender's OK/time messages, and every fault class,
-sans-I/O and over loopback."""
+"""VMC protocol input (``hapmotion.live.sources.VmcSource``): the humanoid bone table, the bone chain and Unity's
+left-handed frame worked out by hand, real recordings sent as VMC by an independent sender
+(tests/support/vmc_sender.py) and rendered like the recordings themselves, the frame rules, the sender's OK/time
+messages, and every fault class, sans-I/O and over loopback."""
 
 from __future__ import annotations
 
@@ -19,15 +19,16 @@ from support.vmc_sender import VmcSender, send_vmc
 
 import hapmotion
 from hapmotion.errors import UsageError
-from hapmotion.skeleton.humanoid import (BONE_INDEX, CANONICAL_TO_BONE, HUMAN_BODY_BONES, HUMANOID_PARENT, SPINE_BONES,
-                                ancestors, bone_name, present_parent)
-from hapmotion.skeleton.joints import JOINT_INDEX as J
-from hapmotion.skeleton.joints import JOINTS, RENDER_JOINTS
 from hapmotion.live.access import SenderAllowList
 from hapmotion.live.hygiene import Faults
-from hapmotion.live.vmc import VmcSource
+from hapmotion.live.sources import VmcSource
 from hapmotion.live.wire.vmc_in import VMC_PORT, VmcDecoder
 from hapmotion.skeleton.derived import derive_missing
+from hapmotion.skeleton.humanoid import (BONE_INDEX, HUMAN_BODY_BONES, HUMANOID_PARENT, ancestors, bone_name,
+                                         present_parent)
+from hapmotion.skeleton.joints import JOINT_INDEX as J
+from hapmotion.skeleton.joints import JOINTS, RENDER_JOINTS
+from hapmotion.skeleton.naming import UNITY_HUMANOID, UNITY_SPINE, match_generic
 
 BYEBYE = MOTION / "dataset-1_byebye_happy_001.bvh"
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
@@ -115,14 +116,18 @@ def test_humanoid_table_is_unitys_hierarchy():
 
 
 def test_bones_map_onto_canonical_joints_like_the_readers():
-    assert set(CANONICAL_TO_BONE.values()) <= set(HUMAN_BODY_BONES)
-    assert set(RENDER_JOINTS) - {"SPINE_NAVEL"} <= set(CANONICAL_TO_BONE)
-    assert SPINE_BONES == ("Spine", "Chest", "UpperChest")  # SPINE_NAVEL and SPINE_CHEST: by position
-    assert CANONICAL_TO_BONE["HAND_LEFT"] == CANONICAL_TO_BONE["WRIST_LEFT"] == "LeftHand"  # Unity's wrist
-    assert CANONICAL_TO_BONE["SHOULDER_RIGHT"] == "RightUpperArm" and CANONICAL_TO_BONE["CLAVICLE_RIGHT"] == \
+    assert set(UNITY_HUMANOID.values()) <= set(HUMAN_BODY_BONES)
+    assert set(RENDER_JOINTS) - {"SPINE_NAVEL"} <= set(UNITY_HUMANOID)
+    assert UNITY_SPINE == ("Spine", "Chest", "UpperChest")  # SPINE_NAVEL and SPINE_CHEST: by position
+    assert UNITY_HUMANOID["HAND_LEFT"] == UNITY_HUMANOID["WRIST_LEFT"] == "LeftHand"  # Unity's wrist
+    assert UNITY_HUMANOID["SHOULDER_RIGHT"] == "RightUpperArm" and UNITY_HUMANOID["CLAVICLE_RIGHT"] == \
         "RightShoulder"
-    for joint, b in CANONICAL_TO_BONE.items():  # sides agree
+    for joint, b in UNITY_HUMANOID.items():  # sides agree
         assert ("LEFT" in joint) == b.startswith("Left") and ("RIGHT" in joint) == b.startswith("Right")
+    # the BVH matcher reads the same table: a skeleton named with every HumanBodyBones name matches it exactly
+    matched = match_generic(HUMAN_BODY_BONES)
+    assert {j: b for j, b in matched.items() if j not in ("SPINE_NAVEL", "SPINE_CHEST")} == UNITY_HUMANOID
+    assert {matched["SPINE_NAVEL"], matched["SPINE_CHEST"]} <= set(UNITY_SPINE)
 
 
 # ----------------------------------------------------------------------------------------------- chain and axes
@@ -485,7 +490,7 @@ def test_vmc_source_defaults_and_a_busy_port():
 
 def test_joint_names_cover_the_canonical_set():
     # What a VMC frame can carry: every canonical joint but the fingertips, thumbs, nose and ears.
-    assert sorted(set(JOINTS) - set(CANONICAL_TO_BONE) - {"SPINE_NAVEL", "SPINE_CHEST"}) == sorted(
+    assert sorted(set(JOINTS) - set(UNITY_HUMANOID) - {"SPINE_NAVEL", "SPINE_CHEST"}) == sorted(
         ["HANDTIP_LEFT", "THUMB_LEFT", "HANDTIP_RIGHT", "THUMB_RIGHT", "NOSE", "EAR_LEFT", "EAR_RIGHT"])
 
 
@@ -513,7 +518,6 @@ def test_vmc_source_url_builds_a_loopback_vmc_source():
     from hapmotion.errors import UsageError
     from hapmotion.live.sources import network_source
     from hapmotion.live.urls import parse_source
-    from hapmotion.live.vmc import VmcSource
 
     src = network_source(parse_source("vmc://"))
     assert isinstance(src, VmcSource) and (src.host, src.port) == ("127.0.0.1", 39539)

@@ -1,4 +1,5 @@
-"""OSC in: skeleton frames from OSC messages and bundles; bad datagrams are counted faults. No sockets."""
+"""OSC in: datagrams read into messages (osc_packet), skeleton frames from OSC messages and bundles; bad datagrams
+are counted faults. No sockets."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from pythonosc.osc_packet import OscPacket
 from hapmotion.skeleton.joints import JOINT_INDEX
 from hapmotion.live.hygiene import Faults
 from hapmotion.live.wire.osc_in import OscSkeletonDecoder
+from hapmotion.live.wire.osc_packet import OscMessageIn, read_osc
 
 HL = JOINT_INDEX["HAND_LEFT"]
 
@@ -105,6 +107,21 @@ def test_osc_bad_messages_are_counted_and_skipped(faults, dgram, kind):
     dec = OscSkeletonDecoder(faults)
     assert dec.feed(dgram, 0.0) == []
     assert faults.counts == {kind: 1}
+
+
+@pytest.mark.parametrize("malformed", ["malformed", "cue_malformed"])
+def test_read_osc_gives_messages_in_order_and_counts_unreadable_datagrams(faults, malformed):
+    """One reader for every OSC input: a message, a bundle flattened in order, and the two unreadable datagrams,
+    each one fault of the kind the caller names."""
+    one = read_osc(osc("/a", 1, 2.5, "x"), faults, malformed)
+    assert one.messages == [OscMessageIn("/a", [1, 2.5, "x"])] and not one.bundle
+    two = read_osc(bundle(osc("/a", 1), osc("/b")), faults, malformed)
+    assert two.messages == [OscMessageIn("/a", [1]), OscMessageIn("/b", [])] and two.bundle
+    assert faults.total() == 0
+    garbage = read_osc(b"\x00\x01garbage", faults, malformed)
+    empty = read_osc(b"#bundle\x00" + b"\x00" * 8 + b"\x00\x00\x01\x00", faults, malformed)
+    assert garbage.messages == empty.messages == [] and not garbage.bundle and not empty.bundle
+    assert faults.counts == {malformed: 2}
 
 
 def test_osc_faults_logged_once_per_kind(faults, caplog):

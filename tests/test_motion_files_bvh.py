@@ -11,10 +11,12 @@ from hypothesis import strategies as st
 
 import hapmotion
 from hapmotion.errors import InputError, UsageError
-from hapmotion.skeleton.joints import JOINT_INDEX, RENDER_JOINTS
 from hapmotion.motion_files import bvh as bvh_mod
+from hapmotion.motion_files.bvh_kinematics import forward_kinematics
+from hapmotion.motion_files.bvh_text import parse_bvh
+from hapmotion.motion_files.number_table import OK, parse_table
 from hapmotion.skeleton import naming as skeletons
-from hapmotion.motion_files._floats import OK, parse_table
+from hapmotion.skeleton.joints import JOINT_INDEX, RENDER_JOINTS
 from support.data import MOTION
 from support.motion_files import assert_input_error
 
@@ -73,10 +75,10 @@ Frame Time: 0.5
 def test_tiny_bvh_forward_kinematics_by_hand(tmp_path):
     path = tmp_path / "tiny.bvh"
     path.write_text(TINY)
-    b = bvh_mod.parse_bvh(path)
+    b = parse_bvh(path)
     assert [j.name for j in b.joints] == ["Hips", "Chest", "Hand", "Hand_End"]
     assert b.frame_time == 0.5 and b.frames.shape == (2, 15)
-    world = bvh_mod.forward_kinematics(b, [0, 1, 2, 3])
+    world = forward_kinematics(b, [0, 1, 2, 3])
     # Frame 0: Hips at (1, 2, 3) turned +90 deg about Z (x -> y, y -> -x). Chest's position channels (0, 10, 0)
     # replace its OFFSET and are rotated to (-10, 0, 0); the hand offset (5, 0, 0) becomes (0, 5, 0); the End Site
     # (0, 3, 0) becomes (-3, 0, 0).
@@ -96,8 +98,8 @@ def test_channel_order_is_intrinsic_not_extrinsic(tmp_path):
     assert yxz != zxy
     (tmp_path / "a.bvh").write_text(zxy)
     (tmp_path / "b.bvh").write_text(yxz)
-    a = bvh_mod.forward_kinematics(bvh_mod.parse_bvh(tmp_path / "a.bvh"), [2])
-    b = bvh_mod.forward_kinematics(bvh_mod.parse_bvh(tmp_path / "b.bvh"), [2])
+    a = forward_kinematics(parse_bvh(tmp_path / "a.bvh"), [2])
+    b = forward_kinematics(parse_bvh(tmp_path / "b.bvh"), [2])
     # Frame 1 with Y X Z and channel values (Y=0, X=90, Z=90): R = Ry(0) Rx(90) Rz(90);
     # hand offset (5,0,0): Rz(90) -> (0,5,0), Rx(90) -> (0,0,5); chest at Rx(90)Rz(90)(0,20,0) = Rx(90)(-20,0,0)
     # = (-20,0,0) => hand at (-20, 0, 5).
@@ -110,9 +112,9 @@ def test_forward_kinematics_matches_per_frame_matrices_on_real_files():
     from scipy.spatial.transform import Rotation
 
     for path in (CMU, SALSA, PUNCH):
-        b = bvh_mod.parse_bvh(path)
+        b = parse_bvh(path)
         every = list(range(len(b.joints)))
-        world = bvh_mod.forward_kinematics(b, every)
+        world = forward_kinematics(b, every)
         for t in (0, 1, b.n_frames // 2, b.n_frames - 1):
             frame = b.frames[t]
             rot, pos = {}, {}
@@ -369,9 +371,9 @@ FIRST_ROW_LINE = HEAD_LINES + 4  # MOTION, Frames, Frame Time, then the first ro
 def test_malformed_bvh_one_line_errors(tmp_path, text, place, problem):
     if place == "line":  # no line number known in advance
         with pytest.raises(InputError, match=rf"^{write(tmp_path, text)}: line \d+: {problem}"):
-            bvh_mod.parse_bvh(tmp_path / "bad.bvh")
+            parse_bvh(tmp_path / "bad.bvh")
         return
-    assert_input_error(write(tmp_path, text), place, problem, loader=bvh_mod.parse_bvh)
+    assert_input_error(write(tmp_path, text), place, problem, loader=parse_bvh)
 
 
 def test_error_line_numbers_in_a_real_file(tmp_path):
@@ -401,7 +403,7 @@ def test_exact_float_parsing_and_crlf(tmp_path):
               "-7", ".5", "3.", "1E+2", "0.000000000000000000000000123", "98765.4321e-30", "2", "-3", "4"]
     text = rows(" ".join(values), GOOD1).replace("\n", "\r\n")
     text = text.replace(GOOD1, "\r\n" + GOOD1)  # a blank line between the rows
-    b = bvh_mod.parse_bvh(write(tmp_path, text))
+    b = parse_bvh(write(tmp_path, text))
     assert b.frames[0].tolist() == [float(v) for v in values]
     assert b.frames[1].tolist() == [float(v) for v in GOOD1.split()]
 
@@ -442,7 +444,7 @@ def test_many_long_numbers_take_the_slow_path(tmp_path):
     rng = np.random.default_rng(3)
     lines = [" ".join(f"{v:.19f}" for v in rng.normal(size=15) * 100) for _ in range(300)]
     text = TINY.split("Frames: 2")[0] + "Frames: 300\nFrame Time: 0.5\n" + "\n".join(lines) + "\n"
-    b = bvh_mod.parse_bvh(write(tmp_path, text))
+    b = parse_bvh(write(tmp_path, text))
     assert b.frames.tolist() == [[float(t) for t in ln.split()] for ln in lines]
 
 
@@ -456,12 +458,12 @@ def test_huge_frames_count_is_refused_before_allocating(tmp_path):
     most = left // (2 * 15) + 1  # each of the 15 values needs a digit and a separator
     msg = assert_input_error(write(tmp_path, text), f"line {HEAD_LINES + 2}",
                              f"Frames: says 99999999999 but the file holds at most {most} frames: truncated?",
-                             loader=bvh_mod.parse_bvh)
+                             loader=parse_bvh)
     assert most == 3 and msg.endswith("truncated?")
     # the bound itself is never too tight: a file of single-digit values with exactly that many rows still reads
     one_digit = " ".join(["0"] * 15)
     text = TINY.split("Frames: 2")[0] + "Frames: 3\nFrame Time: 0.5\n" + "\n".join([one_digit] * 3)  # no final \n
-    assert bvh_mod.parse_bvh(write(tmp_path, text, "tight.bvh")).n_frames == 3
+    assert parse_bvh(write(tmp_path, text, "tight.bvh")).n_frames == 3
     # a real file claiming more frames than its size allows
     head, rest = CMU.read_text().split("Frames: 2752", 1)
     path = write(tmp_path, head + "Frames: 1000000000" + rest, "01_01_big.bvh")
@@ -474,4 +476,4 @@ def test_huge_frames_count_is_refused_before_allocating(tmp_path):
     ("CHANNELS 3 Zrotation", "CHANNELS \u00b3 Zrotation", "line 13"),
 ])
 def test_non_ascii_digit_counts_are_input_errors(tmp_path, old, new, place):
-    assert_input_error(write(tmp_path, TINY.replace(old, new)), place, "expected", loader=bvh_mod.parse_bvh)
+    assert_input_error(write(tmp_path, TINY.replace(old, new)), place, "expected", loader=parse_bvh)

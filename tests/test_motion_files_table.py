@@ -18,6 +18,7 @@ from hapmotion.errors import InputError, UsageError
 from hapmotion.skeleton.joints import JOINT_INDEX, JOINTS, N_JOINTS, RENDER_JOINTS
 from hapmotion.motion import new_motion
 from hapmotion.motion_files import save_motion_table
+from hapmotion.motion_files.table import csv_values
 from support.data import MOTION
 from support.motion_files import HEADER, assert_input_error, row
 
@@ -314,10 +315,8 @@ def test_save_rejects_other_extensions(tmp_path):
 @pytest.mark.parametrize("cell", ["0.3", ""], ids=["fast path", "cell by cell"])
 def test_csv_line_numbers_skip_blank_lines_on_both_paths(cell):
     """Both ways of reading the rows report the same 1-based line numbers (blank lines skipped, not renumbered)."""
-    from hapmotion.motion_files.table import _csv_values
-
     header = ["time_s", "PELVIS_x"]
-    values, numbers = _csv_values("t.csv", ["0,0.1", "", "0.1," + cell, "  ", "0.2,0.5"], 2, header)
+    values, numbers = csv_values("t.csv", ["0,0.1", "", "0.1," + cell, "  ", "0.2,0.5"], 2, header)
     assert numbers == [2, 4, 6]
     np.testing.assert_array_equal(values[:, 0], [0, 0.1, 0.2])
     assert values[1, 1] == 0.3 if cell else np.isnan(values[1, 1])

@@ -29,13 +29,14 @@ from pythonosc.osc_message import OscMessage
 from pythonosc.osc_message_builder import OscMessageBuilder
 from scipy.spatial.transform import Rotation
 
-from hapmotion.skeleton.humanoid import CANONICAL_TO_BONE, HUMAN_BODY_BONES, LAST_BONE, present_parent
+from hapmotion.skeleton.humanoid import HUMAN_BODY_BONES, LAST_BONE, present_parent
 from hapmotion.skeleton.joints import JOINT_INDEX
+from hapmotion.skeleton.naming import UNITY_HUMANOID
 
 # The joint at each bone's origin (the *Hand bone is the wrist, HAND_* in the recordings; this avatar's Spine and
 # Chest bones sit at the recording's navel and chest joints) and the joint its Y axis aims at; a bone without a
 # child joint (head, hands, toes, eyes) takes its parent's orientation.
-BONE_JOINT: dict[str, str] = {**{b: j for j, b in CANONICAL_TO_BONE.items() if not j.startswith("WRIST")},
+BONE_JOINT: dict[str, str] = {**{b: j for j, b in UNITY_HUMANOID.items() if not j.startswith("WRIST")},
                               "Spine": "SPINE_NAVEL", "Chest": "SPINE_CHEST"}
 AIM: dict[str, str] = {
     "Hips": "SPINE_NAVEL", "Spine": "SPINE_CHEST", "Chest": "NECK", "Neck": "HEAD",

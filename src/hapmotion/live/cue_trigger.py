@@ -20,13 +20,12 @@ import math
 import time
 from typing import Any, Optional
 
-from pythonosc.osc_packet import OscPacket
-
 from ..show.cue_layer import LiveCues
 from ..show.cues import MAX_GAIN
 from ..errors import UsageError
 from .access import MAX_SENDERS, SenderAllowList, SenderBudgets, exposure_line, is_loopback, reach
 from .hygiene import Faults, is_number
+from .wire.osc_packet import read_osc
 
 log = logging.getLogger("hapmotion.live")
 
@@ -40,21 +39,9 @@ CUE_BURST = 20.0
 def decode_cue_messages(dgram: bytes, faults: Faults, address: str = CUE_ADDRESS) -> list[tuple[str, Optional[float]]]:
     """The ``(name, gain or None)`` of every well-formed cue message in one datagram (a message or a bundle);
     everything else is counted in ``faults`` and skipped. Sans-I/O."""
-    try:
-        messages = [tm.message for tm in OscPacket(dgram).messages]
-    except Exception as exc:  # python-osc raises several types on garbage; all mean "not OSC"
-        faults.add("cue_malformed", f"not an OSC packet ({exc.__class__.__name__})")
-        return []
-    if not messages:
-        faults.add("cue_malformed", "an OSC bundle without a readable message")
-        return []
     out = []
-    for msg in messages:
-        try:
-            addr, params = msg.address, list(msg.params)
-        except Exception as exc:
-            faults.add("cue_malformed", f"unreadable OSC message ({exc.__class__.__name__})")
-            continue
+    for msg in read_osc(dgram, faults, "cue_malformed").messages:
+        addr, params = msg.address, msg.params
         if addr != address:
             faults.add("cue_unknown_address", f"{addr[:80]!r}; cues are fired with {address} NAME [gain]")
             continue

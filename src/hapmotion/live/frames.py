@@ -1,14 +1,17 @@
-"""What travels through live mode: a decoded skeleton sample in (:class:`SkeletonFrame`) and a row of intensities
-out (:class:`OutFrame`), plus the joint-name lookup every skeleton wire format uses."""
+"""What travels through live mode: a decoded skeleton sample in (:class:`SkeletonFrame`), the inlet a source hands
+it to (:class:`FrameInlet`), and a row of intensities out (:class:`OutFrame`), plus the joint-name lookup every
+skeleton wire format uses."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Mapping, Optional
+from typing import Mapping, Optional, Protocol
 
 import numpy as np
 
 from ..skeleton.joints import JOINT_INDEX, canonical
+from .hygiene import Faults
+from .stats import LiveStats
 
 
 @dataclass(slots=True)
@@ -34,6 +37,31 @@ class SkeletonFrame:
     t: Optional[float]
     received: float
     show_t: Optional[float] = None
+
+
+class FrameInlet(Protocol):
+    """What a source needs of the engine it feeds (:class:`hapmotion.live.engine.LiveEngine` is one), so that the
+    sources depend on this, not on the engine.
+
+    Attributes
+    ----------
+    faults:
+        Where a source counts what it refuses (senders, floods, bad messages) and its decoders count bad input.
+    stats:
+        The session's figures; a source that drops messages before decoding adds them to ``stats.flood``.
+    rate:
+        Expected skeleton frames per second (sizes each sender's message budget).
+    """
+
+    faults: Faults
+    stats: LiveStats
+    rate: float
+
+    def submit(self, frame: SkeletonFrame) -> None:
+        """Take a decoded frame, at once (a source never queues)."""
+
+    def note_skipped(self, count: int) -> None:
+        """Count ``count`` frames a paced source skipped because they were already overdue."""
 
 
 @dataclass(slots=True)
@@ -67,7 +95,7 @@ class OutFrame:
     received: Optional[float]
     created: float
     skeleton: Optional[np.ndarray] = None
-    debug: Optional[Mapping[str, Any]] = None
+    debug: Optional[Mapping[str, np.ndarray]] = None
     kind: str = "frame"
 
 

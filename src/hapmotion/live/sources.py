@@ -1,10 +1,11 @@
-"""Live sources: where skeleton frames come from (OSC over UDP, WebSocket JSON, paced replay of a recording, and
-a plain clock for the audio-only mode).
+"""Live sources: where skeleton frames come from (OSC over UDP, the VMC protocol over UDP, WebSocket JSON, paced
+replay of a recording, and a plain clock for the audio-only mode).
 
-A source decodes messages with its :mod:`hapmotion.live.wire` module and hands each frame to ``engine.submit`` the
-moment it is read; it never queues. Before decoding, every raw message is checked against who may send and that
-sender's own message budget (:mod:`hapmotion.live.access`), so a stranger or a sender far above the frame rate
-costs little and cannot use up anyone else's budget.
+A source decodes messages with its :mod:`hapmotion.live.wire` module and hands each frame to its inlet's
+``submit`` (:class:`~hapmotion.live.frames.FrameInlet`, the engine) the moment it is read; it never queues.
+Before decoding, every raw message is checked against who may send and that sender's own message budget
+(:mod:`hapmotion.live.access`), so a stranger or a sender far above the frame rate costs little and cannot use up
+anyone else's budget.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import os
 import time
 import weakref
 from http import HTTPStatus
-from typing import TYPE_CHECKING, Any, Mapping, Optional, Sequence
+from typing import Any, Mapping, Optional, Protocol, Sequence
 from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
@@ -27,18 +28,17 @@ from websockets.http11 import Request, Response
 from websockets.protocol import State
 
 from ..errors import UsageError
+from ..motion import Motion
+from ..motion_files import load_motion
 from .access import (MAX_SENDERS, OSC_MESSAGE_BUDGET, TOKEN_HEADER, TOKEN_QUERY, WS_MESSAGE_BUDGET, SenderAllowList,
                      SenderBudgets, bearer_token, burst_for, exposure_line, is_loopback, reach, token_matches)
-from .frames import SkeletonFrame
+from .frames import FrameInlet, SkeletonFrame
 from .hygiene import RateLimiter
+from .urls import Endpoint
 from .wire.osc_address import OSC_PREFIX
 from .wire.osc_in import OscSkeletonDecoder
+from .wire.vmc_in import VMC_HOST, VMC_MESSAGES_PER_FRAME, VMC_PORT, VmcDecoder
 from .wire.ws_in import decode_ws_skeleton
-
-if TYPE_CHECKING:
-    from ..motion import Motion
-    from .engine import LiveEngine
-    from .urls import Endpoint
 
 log = logging.getLogger("hapmotion.live")
 
@@ -48,9 +48,9 @@ class Source:
     source ends (a replay without --loop) and runs for ever otherwise, :meth:`close` releases everything."""
 
     name = "source"
-    engine: "LiveEngine"
+    engine: FrameInlet
 
-    async def start(self, engine: "LiveEngine") -> None:
+    async def start(self, engine: FrameInlet) -> None:
         self.engine = engine
 
     async def run(self) -> None:
@@ -68,11 +68,19 @@ class Source:
 
 
 # ---------------------------------------------------------------------------------------------------- UDP
+class DatagramDecoder(Protocol):
+    """A sans-I/O wire format of :mod:`hapmotion.live.wire` that reads datagrams (:class:`OscSkeletonDecoder`,
+    :class:`VmcDecoder`)."""
+
+    def feed(self, dgram: bytes, received: float) -> list[SkeletonFrame]:
+        """Decode one datagram read at ``received`` (``perf_counter`` seconds); the frames it completes."""
+
+
 class _UdpProtocol(asyncio.DatagramProtocol):
     def __init__(self, source: "UdpSource"):
         self.source = source
 
-    def datagram_received(self, data: bytes, addr: Any) -> None:
+    def datagram_received(self, data: bytes, addr: "tuple[str, int] | tuple[str, int, int, int]") -> None:
         self.source.on_datagram(data, time.perf_counter(), addr[0])
 
     def error_received(self, exc: Exception) -> None:
@@ -104,11 +112,11 @@ class UdpSource(Source):
         self.allow_senders = allow_senders or SenderAllowList()
         self.max_senders = max_senders
         self.sender_rate = sender_rate
-        self.decoder: Any = None
+        self.decoder: Optional[DatagramDecoder] = None
         self._transport: Optional[asyncio.DatagramTransport] = None
         self._budgets: Optional[SenderBudgets] = None
 
-    def make_decoder(self, engine: "LiveEngine") -> Any:  # pragma: no cover (every wire format has its own)
+    def make_decoder(self, engine: FrameInlet) -> DatagramDecoder:  # pragma: no cover (every format has its own)
         raise NotImplementedError
 
     def default_budget(self, rate: float) -> tuple[float, float]:
@@ -119,7 +127,7 @@ class UdpSource(Source):
         """Whether a datagram is worth its budget (a format may drop what its decoder never reads, unparsed)."""
         return True
 
-    async def start(self, engine: "LiveEngine") -> None:
+    async def start(self, engine: FrameInlet) -> None:
         await super().start(engine)
         self.decoder = self.make_decoder(engine)
         rate, burst = self.default_budget(engine.rate)
@@ -172,11 +180,47 @@ class OscSource(UdpSource):
         super().__init__(host, port, **access)
         self.prefix = prefix
 
-    def make_decoder(self, engine: "LiveEngine") -> OscSkeletonDecoder:
+    def make_decoder(self, engine: FrameInlet) -> OscSkeletonDecoder:
         return OscSkeletonDecoder(engine.faults, self.prefix)
 
 
-def _count_refusal(engine: "LiveEngine", kind: str, sender: str, budgets: SenderBudgets) -> None:
+# ---------------------------------------------------------------------------------------------------- VMC
+VMC_MESSAGE_BUDGET = 2.0 * VMC_MESSAGES_PER_FRAME
+"""A VMC sender that does not bundle sends a datagram per bone: its budget is this many times the frame rate
+(7680 datagrams/s at 60 fps; a bundle counts as one). Messages the decoder does not read (blend shapes, devices)
+are dropped before the budget and cost nothing."""
+
+
+class VmcSource(UdpSource):
+    """Listens for a VMC protocol sender (VirtualMotionCapture, VSeeFace, XR Animator, Warudo, SlimeVR, mocopi
+    bridges) on UDP ``host:port`` (default 127.0.0.1:39539); the wire format and the decoding are in
+    :mod:`hapmotion.live.wire.vmc_in`, docs/vmc.md has the user's side. See :class:`UdpSource` for who may send.
+    Each sender's default budget is :data:`VMC_MESSAGE_BUDGET` x the frame rate, in bursts of four frames' worth;
+    datagrams the decoder never reads (blend shapes, devices) are dropped unparsed before the budget. Several
+    senders share one pose: stream one performer."""
+
+    scheme = "vmc"
+    decoder: Optional[VmcDecoder]
+
+    def __init__(self, host: str = VMC_HOST, port: int = VMC_PORT, *,
+                 allow_senders: Optional[SenderAllowList] = None, max_senders: int = MAX_SENDERS,
+                 sender_rate: Optional[float] = None):
+        super().__init__(host, port, allow_senders=allow_senders, max_senders=max_senders, sender_rate=sender_rate)
+
+    def make_decoder(self, engine: FrameInlet) -> VmcDecoder:
+        return VmcDecoder(engine.faults)
+
+    def default_budget(self, rate: float) -> tuple[float, float]:
+        return VMC_MESSAGE_BUDGET * rate, max(burst_for(rate), 4.0 * VMC_MESSAGES_PER_FRAME)
+
+    def wants(self, data: bytes) -> bool:
+        if self.decoder is not None and not self.decoder.wants(data):
+            self.decoder.ignored += 1
+            return False
+        return True
+
+
+def _count_refusal(engine: FrameInlet, kind: str, sender: str, budgets: SenderBudgets) -> None:
     """Count a message refused before decoding (``flood`` also counts in the session's flood figure)."""
     if kind == "flood":
         engine.stats.flood += 1
@@ -238,7 +282,7 @@ class WsSource(Source):
         self._slots: set[ServerConnection] = set()  # accepted or being accepted, not yet finished
         self._refused: "weakref.WeakSet[ServerConnection]" = weakref.WeakSet()  # refusals already counted
 
-    async def start(self, engine: "LiveEngine") -> None:
+    async def start(self, engine: FrameInlet) -> None:
         await super().start(engine)
         self._rate = self.sender_rate or WS_MESSAGE_BUDGET * engine.rate
         self._burst = burst_for(engine.rate)
@@ -352,7 +396,7 @@ def _query_value(path: str, name: str) -> Optional[str]:
     return values[-1] if values else None
 
 
-def network_source(ep: "Endpoint", *, allow_origins: Sequence[str] = (), token: Optional[str] = None,
+def network_source(ep: Endpoint, *, allow_origins: Sequence[str] = (), token: Optional[str] = None,
                    allow_senders: Optional[SenderAllowList] = None, max_senders: int = MAX_SENDERS) -> Source:
     """The source of a parsed network ``--source`` (``osc://``, ``ws://``) with who may send to it.
 
@@ -372,8 +416,6 @@ def network_source(ep: "Endpoint", *, allow_origins: Sequence[str] = (), token: 
         if token or allow_origins:
             raise UsageError("--token and --allow-origin apply to ws:// sources; VMC over UDP has no handshake to "
                              "check (use --allow-sender, and keep it on loopback unless the network is trusted)")
-        from .vmc import VmcSource  # imported here: hapmotion.live.vmc builds on this module
-
         return VmcSource(ep.host, ep.port, allow_senders=allow_senders, max_senders=max_senders)
     raise UsageError(f"--source {ep.text!r}: not a network source")
 
@@ -388,13 +430,13 @@ class ReplaySource(Source):
     again after its last frame (sequence numbers keep increasing; show time starts again at 0).
     """
 
-    def __init__(self, motion: "Motion", *, fps: Optional[float] = None, speed: float = 1.0, loop: bool = False,
+    def __init__(self, motion: Motion, *, fps: Optional[float] = None, speed: float = 1.0, loop: bool = False,
                  path: str = ""):
         if not (speed > 0 and math.isfinite(speed)):
             raise UsageError(f"--speed must be a positive number, got {speed}")
         self._recording = motion
         self._fps = fps
-        self._motion: Optional["Motion"] = None
+        self._motion: Optional[Motion] = None
         self.speed = float(speed)
         self.loop = loop
         self.name = f"replay:{path or motion.meta.get('path', '?')}"
@@ -405,13 +447,11 @@ class ReplaySource(Source):
                   loop: bool = False, reader_options: Optional[Mapping[str, Any]] = None) -> "ReplaySource":
         """Load with :func:`hapmotion.load_motion` and its ``reader_options`` (``units``, ``up``, ``skip_frames``,
         ``body_id``, the file's ``fps``, ...; InputError on a bad file), then resample to ``fps`` if given."""
-        from .. import load_motion
-
         motion = load_motion(path, **dict(reader_options or {}))
         return cls(motion, fps=fps, speed=speed, loop=loop, path=os.fspath(path))
 
     @property
-    def motion(self) -> "Motion":
+    def motion(self) -> Motion:
         """The recording at the session's ``fps`` (resampled on first use, so a session checks ``fps`` first)."""
         if self._motion is None:
             self._motion = self._recording if self._fps is None else self._recording.resample(self._fps)

@@ -25,6 +25,7 @@ from ..errors import InputError, UsageError
 from ..motion import Motion
 from ..limits import DEFAULT_LIMITS, InputLimits
 from .options import ReaderOptions
+from .table import save_motion_table
 
 _MOTION_OPTIONS = frozenset({"units", "scale", "skip_frames", "fps"})
 
@@ -102,6 +103,7 @@ def load_motion(path: "str | os.PathLike[str]", options: Optional[ReaderOptions]
     path = os.fspath(path)
     opts = check_options(path, reader_options(options, **kwargs))
     module, func, _, _ = _READERS[os.path.splitext(path)[1].lower()]
+    # Each reader is imported when a file of its format is read: the BVH reader compiles its number parser (numba).
     reader = getattr(importlib.import_module(f"{__name__}.{module}"), func)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -109,13 +111,6 @@ def load_motion(path: "str | os.PathLike[str]", options: Optional[ReaderOptions]
     for text in dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught):
         motion.meta.setdefault("notes", []).append(f"warning while reading: {text}")
     return motion
-
-
-def save_motion_table(motion: Motion, path: "str | os.PathLike[str]") -> None:
-    """Write a motion as hapmotion CSV or NPZ (by extension, atomically); see :mod:`hapmotion.motion_files.table`."""
-    from .table import save_motion_table as _save
-
-    _save(motion, path)
 
 
 __all__ = ["load_motion", "save_motion_table", "check_options", "reader_options", "ReaderOptions", "InputLimits",

@@ -18,6 +18,7 @@ from __future__ import annotations
 import difflib
 import json
 import os
+import tomllib
 from typing import Any, Mapping
 
 from ..errors import InputError, UsageError
@@ -50,8 +51,6 @@ def load_joint_map(source: "str | os.PathLike[str] | Mapping[str, str]") -> dict
         raise InputError(path, None, "expected a joint map of at most 1 MB")
     try:
         if ext == ".toml":
-            import tomllib
-
             doc: Any = tomllib.loads(raw.decode("utf-8"))
         else:
             doc = json.loads(raw)

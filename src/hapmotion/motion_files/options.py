@@ -103,8 +103,9 @@ def snap_rate(fps: float, tolerance: float) -> float:
     return float(whole) if whole > 0 and abs(fps - whole) <= tolerance * whole else float(fps)
 
 
-def fps_in_range(fps: Any) -> bool:
-    """``fps`` is a real number (not a bool) within :data:`MIN_FPS`..:data:`MAX_FPS` (so finite, not NaN)."""
+def fps_in_range(fps: object) -> bool:
+    """``fps`` (any value) is a real number (not a bool) within :data:`MIN_FPS`..:data:`MAX_FPS` (so finite, not
+    NaN)."""
     return isinstance(fps, (int, float, np.integer, np.floating)) and not isinstance(fps, (bool, np.bool_)) \
         and MIN_FPS <= float(fps) <= MAX_FPS
 

@@ -20,7 +20,7 @@ import os
 import re
 import zipfile
 import zlib
-from typing import Any, Optional
+from typing import BinaryIO, Optional
 
 import numpy as np
 import numpy.lib.format as npy_format
@@ -178,8 +178,11 @@ def _cell(path: str, line_no: int, column: str, text: str) -> float:
     return v
 
 
-def _csv_values(path: str, lines: list[str], first_line: int, header: list[str]) -> tuple[np.ndarray, list[int]]:
-    """``(R, C)`` values of the data lines and their 1-based line numbers; empty cells and ``nan`` are NaN.
+def csv_values(path: str, lines: list[str], first_line: int, header: list[str]) -> tuple[np.ndarray, list[int]]:
+    """``(R, C)`` float64 values of the data ``lines`` of a CSV table (``C = len(header)`` columns; ``lines[0]`` is
+    line ``first_line`` of ``path``, 1-based) and the 1-based line number of each of the ``R`` non-blank lines
+    (blank lines are skipped, not renumbered); empty cells and ``nan`` are NaN. InputError, naming ``path`` and the
+    line, for a ragged row, text or an infinite value.
 
     Well-formed tables go through ``np.loadtxt`` in one call; anything it refuses (empty cells, bad text, ragged
     rows) or an ``inf`` is read again cell by cell, which also finds the line and column to name in the error.
@@ -220,7 +223,7 @@ def read_csv(path: str | os.PathLike[str], options: ReaderOptions = ReaderOption
         raise InputError(path, "line 1", "expected a header line (time_s,<JOINT>_x,...), found an empty file")
     time_col, names, xyz_cols, conf_cols = _parse_header(path, lines[head], head + 1)
     header = [c.strip() for c in lines[head].split(",")]
-    values, line_numbers = _csv_values(path, lines[head + 1:], head + 2, header)
+    values, line_numbers = csv_values(path, lines[head + 1:], head + 2, header)
     if values.shape[0] == 0:
         raise InputError(path, f"line {head + 2}", "expected at least one data row, found none")
     notes: list[str] = []
@@ -413,7 +416,7 @@ def save_motion_table(motion: Motion, path: str | os.PathLike[str]) -> None:
     pos = motion.positions[:, cols]
     conf = motion.confidence[:, cols].astype(np.float32)
 
-    def write(f: Any) -> None:
+    def write(f: BinaryIO) -> None:
         if ext == ".npz":
             np.savez_compressed(f, positions=pos, joints=np.array(names), fps=np.float64(motion.fps),
                                 confidence=conf, derived=motion.derived[cols])

@@ -2,23 +2,17 @@
 
 from __future__ import annotations
 
-from typing import Any, Optional
+from typing import Iterable, Optional
 
 import numpy as np
 
 from .joints import JOINT_INDEX
-
-# Where the derived torso joints sit on the segment PELVIS -> NECK (0 = pelvis, 1 = neck). Measured on the three
-# BVH skeletons of the test recordings (median over each clip of the spine joint's projection on PELVIS -> NECK):
-# CMU MotionBuilder Spine 0.35 / Spine1 0.70, CMU Daz abdomen 0.38 / chest 0.59, Bandai Spine 0.38 / Chest 0.60.
-# We take the Daz/Bandai values: their joints are placed at the navel and the lower chest like the Azure Kinect
-# SPINE_NAVEL and SPINE_CHEST, while CMU's Spine1 is the thorax top.
-NAVEL_FRACTION = 0.38
-CHEST_FRACTION = 0.60
+from .spine import CHEST_FRACTION, NAVEL_FRACTION
 
 
-def missing_needed(names: "dict[str, Any] | set[str] | list[str]") -> list[str]:
-    """Render joints that are neither among ``names`` (canonical) nor derivable from them by :func:`derive_missing`.
+def missing_needed(names: Iterable[str]) -> list[str]:
+    """Render joints that are neither among ``names`` (canonical joint names, or a mapping keyed by them) nor
+    derivable from them by :func:`derive_missing`.
 
     Needed: HAND_* (or WRIST_*), SHOULDER_*, PELVIS (or both HIP_*); NECK derives from the shoulders and
     SPINE_NAVEL from PELVIS and NECK, so they follow.
@@ -47,7 +41,8 @@ def derive_missing(pos: np.ndarray, only: Optional[tuple[str, ...]] = None) -> t
 
     Rules, in order (each only when the joint has no finite value in any frame and its inputs exist):
     HAND_* = WRIST_*; PELVIS = mid(HIP_LEFT, HIP_RIGHT); NECK = mid(SHOULDER_LEFT, SHOULDER_RIGHT);
-    SPINE_NAVEL = PELVIS + 0.38 (NECK - PELVIS); SPINE_CHEST = PELVIS + 0.60 (NECK - PELVIS);
+    SPINE_NAVEL = PELVIS + 0.38 (NECK - PELVIS); SPINE_CHEST = PELVIS + 0.60 (NECK - PELVIS) (the fractions of
+    :mod:`.spine`);
     HEAD = mid(EAR_LEFT, EAR_RIGHT), or NOSE in frames where an ear is missing. NaN inputs in a frame give NaN
     there (a gap that ``new_motion`` fills). ``only`` limits the joints derived (the table readers derive only
     the render joints, so that writing and reading a table gives back the same joints).

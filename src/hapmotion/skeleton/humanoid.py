@@ -1,5 +1,4 @@
-"""Unity's humanoid skeleton (``UnityEngine.HumanBodyBones``): bone names, their parents, and which canonical joint
-each one is.
+"""Unity's humanoid skeleton (``UnityEngine.HumanBodyBones``): bone names and their parents.
 
 Unity names the bones of every humanoid avatar with the ``HumanBodyBones`` enumeration (Unity Scripting Reference,
 ``HumanBodyBones``); VRM avatars use the same names, and the VMC protocol sends bone poses under them
@@ -11,13 +10,10 @@ feet are required in a Unity humanoid; Chest, UpperChest, Neck, the shoulders, t
 missing, and then a bone hangs from its nearest ancestor that exists (:func:`present_parent`): an avatar without
 UpperChest has its shoulders and neck under Chest.
 
-Mapping onto the canonical (Azure Kinect) joints follows the readers' conventions
-(:mod:`hapmotion.skeleton.naming`): the ``*Hand`` bone, which Unity documents as the wrist, is both
-``WRIST_*`` and ``HAND_*``; ``*UpperArm`` (the humerus head) is ``SHOULDER_*`` and ``*Shoulder`` is the clavicle;
-SPINE_NAVEL and SPINE_CHEST are the Spine/Chest/UpperChest bones that sit nearest the navel and chest points of
-the Hips-Neck line (:data:`SPINE_BONES`), as the readers place any spine. Finger bones and the jaw are not mapped.
-Canonical joints without a bone (HANDTIP, THUMB, NOSE, EAR) are absent; the render joints missing from an avatar
-are derived as the readers derive them (``motion_files.derived_joints.derive_missing``).
+Which canonical joint each bone is, and which bones are the spine, is the Unity scheme of the naming tables,
+:data:`hapmotion.skeleton.naming.UNITY_HUMANOID` and :data:`~hapmotion.skeleton.naming.UNITY_SPINE`, which the BVH
+matcher reads too; the render joints missing from an avatar are derived by
+:func:`hapmotion.skeleton.derived.derive_missing`, as for every reader.
 """
 
 from __future__ import annotations
@@ -80,23 +76,6 @@ HUMANOID_PARENT: dict[str, Optional[str]] = {
     **_fingers("Left"), **_fingers("Right"),
 }
 """Parent of each bone in Unity's full humanoid hierarchy (None for Hips, whose parent is the avatar's root)."""
-
-CANONICAL_TO_BONE: dict[str, str] = {
-    "PELVIS": "Hips", "NECK": "Neck", "HEAD": "Head",
-    **{f"{stem}_{side.upper()}": f"{side}{bone}" for side in ("Left", "Right") for stem, bone in (
-        ("CLAVICLE", "Shoulder"), ("SHOULDER", "UpperArm"), ("ELBOW", "LowerArm"), ("WRIST", "Hand"),
-        ("HAND", "Hand"), ("HIP", "UpperLeg"), ("KNEE", "LowerLeg"), ("ANKLE", "Foot"), ("FOOT", "Toes"),
-        ("EYE", "Eye"))},
-}
-"""Canonical joint -> the bone whose origin it is (WRIST_* and HAND_* share the ``*Hand`` bone). SPINE_NAVEL and
-SPINE_CHEST are not here: they go to the :data:`SPINE_BONES` by position."""
-
-SPINE_BONES: tuple[str, ...] = ("Spine", "Chest", "UpperChest")
-"""The bones between Hips and Neck. Avatars place them very differently (one avatar's Spine sits just above the
-hips, another's at the navel), so, as the readers do for any skeleton
-(``motion_files.skeletons.assign_spine``), SPINE_NAVEL and SPINE_CHEST take the ones that sit nearest 0.38 and 0.60
-of the way from Hips to Neck."""
-
 
 def bone_name(name: str) -> str:
     """The ``HumanBodyBones`` spelling of ``name`` (case-insensitive); ``KeyError`` if it is not a bone."""

@@ -1,28 +1,35 @@
-"""Which BVH joint is which canonical (Azure Kinect) joint.
+"""Which joint of a skeleton is which canonical (Azure Kinect) joint, for every naming scheme we meet.
 
-Three skeletons are known exactly (the CMU MotionBuilder-friendly and Daz-friendly BVH conversions by B. Hahne
-(cgspeed), and the Bandai Namco Research Motion Dataset); any other BVH is matched by name with common synonyms and
-by its structure (:func:`match_generic`); a user joint map (:mod:`hapmotion.motion_files.joint_map`) names the rest.
+Schemes as data: three BVH skeletons known exactly (the CMU MotionBuilder-friendly and Daz-friendly BVH
+conversions by B. Hahne (cgspeed), and the Bandai Namco Research Motion Dataset), and Unity's humanoid
+(:data:`UNITY_HUMANOID`, the bones VMC senders and Unity/VRM exports name; read by the VMC decoder and, for its
+words, by the generic matcher). Any other skeleton is matched by name with common synonyms and by its structure
+(:func:`match_generic`); the spine joints are placed by position (:mod:`hapmotion.skeleton.spine`); a user joint
+map (:mod:`hapmotion.motion_files.joint_map`) names the rest.
 
 Conventions shared by every map:
 
 - ``HAND_*`` and ``WRIST_*`` both take the source's hand/wrist joint. BVH "hand" joints sit at the wrist (CMU
-  ``LeftHand`` is CMU's ``lwrist``; Bandai ``Hand_L`` and Daz ``lHand`` likewise), and the renderer's active joint
-  is ``HAND_*``; using the same point for every skeleton keeps renders comparable across formats.
-- ``SHOULDER_*`` is the humerus head (CMU ``LeftArm``, Daz ``lShldr``, Bandai ``UpperArm_L``); the joints named
-  "shoulder"/"collar" in those files are clavicles (``CLAVICLE_*``).
+  ``LeftHand`` is CMU's ``lwrist``; Bandai ``Hand_L`` and Daz ``lHand`` likewise; Unity documents its ``*Hand``
+  bone as the wrist), and the renderer's active joint is ``HAND_*``; using the same point for every skeleton keeps
+  renders comparable across formats.
+- ``SHOULDER_*`` is the humerus head (CMU ``LeftArm``, Daz ``lShldr``, Bandai ``UpperArm_L``, Unity
+  ``LeftUpperArm``); the joints named "shoulder"/"collar" in those files are clavicles (``CLAVICLE_*``).
 - Finger joints are not mapped: the CMU conversions carry no finger data (CMU did not capture fingers) and the
   renderer does not use them.
-- A name ending in ``_End`` is the End Site of that joint (see :mod:`hapmotion.motion_files.bvh`).
+- A name ending in ``_End`` is the End Site of that joint (see :mod:`hapmotion.motion_files.bvh_text`).
 """
 
 from __future__ import annotations
 
+import difflib
 import re
 from dataclasses import dataclass
 from typing import Iterable, Optional, Sequence
 
 import numpy as np
+
+from .spine import assign_spine
 
 # ---------------------------------------------------------------------------------------------- known skeletons
 
@@ -120,47 +127,77 @@ def identify(names: Iterable[str]) -> Optional[Skeleton]:
     return None
 
 
+# ---------------------------------------------------------------------------------------------- Unity humanoid
+
+UNITY_HUMANOID: dict[str, str] = {
+    "PELVIS": "Hips", "NECK": "Neck", "HEAD": "Head",
+    **_sided({
+        "CLAVICLE_LEFT": "LeftShoulder", "SHOULDER_LEFT": "LeftUpperArm", "ELBOW_LEFT": "LeftLowerArm",
+        "WRIST_LEFT": "LeftHand", "HAND_LEFT": "LeftHand",
+        "HIP_LEFT": "LeftUpperLeg", "KNEE_LEFT": "LeftLowerLeg", "ANKLE_LEFT": "LeftFoot", "FOOT_LEFT": "LeftToes",
+        "EYE_LEFT": "LeftEye",
+    }, ("Left", "Right")),
+}
+"""Canonical joint -> the Unity ``HumanBodyBones`` bone whose origin it is (:mod:`hapmotion.skeleton.humanoid`):
+``*Hand`` (Unity's wrist) is both WRIST_* and HAND_*, ``*UpperArm`` is SHOULDER_* and ``*Shoulder`` the clavicle.
+SPINE_NAVEL and SPINE_CHEST are not here: they go to the :data:`UNITY_SPINE` bones by position. Finger bones and
+the jaw are not mapped; HANDTIP, THUMB, NOSE and EAR have no bone. The VMC decoder reads this table, and the
+generic matcher takes its words for Unity-named skeletons from it (:func:`_unity`)."""
+
+UNITY_SPINE: tuple[str, ...] = ("Spine", "Chest", "UpperChest")
+"""Unity's bones between Hips and Neck. Avatars place them very differently (one avatar's Spine sits just above
+the hips, another's at the navel), so SPINE_NAVEL and SPINE_CHEST take the ones that sit nearest their points of
+the Hips-Neck line (:func:`hapmotion.skeleton.spine.assign_spine`), as for any skeleton."""
+
+
+def _unity(canon: str) -> str:
+    """The word of Unity's bone for a canonical joint (centre) or stem (left side), as :func:`split_name` gives it:
+    ``"SHOULDER"`` -> ``"upperarm"`` (LeftUpperArm), ``"PELVIS"`` -> ``"hips"``."""
+    return UNITY_HUMANOID.get(canon, UNITY_HUMANOID.get(f"{canon}_LEFT", "")).removeprefix("Left").lower()
+
+
 # ---------------------------------------------------------------------------------------------- generic matching
 #
 # Naming schemes this matches with no joint map (checked by tests/test_motion_files_skeletons.py on a synthetic
 # skeleton named each way, and on the real files for CMU, Daz and Bandai):
 #   CMU / Mixamo      LeftArm, LeftForeArm, LeftHand, LeftUpLeg, LeftLeg, Spine, Spine1, ("mixamorig:" prefix)
-#   Unity / VRM       LeftUpperArm, LeftLowerArm, LeftHand, LeftUpperLeg, Chest, UpperChest (also leftUpperArm)
+#   Unity / VRM       LeftUpperArm, LeftLowerArm, LeftHand, LeftUpperLeg, Chest, UpperChest (also leftUpperArm;
+#                     the words come from UNITY_HUMANOID)
 #   MakeHuman         clavicle.L, upperarm01.L, lowerarm01.L, wrist.L, upperleg01.L, spine05, neck01
 #   MocapNET / Daz    lcollar, lshoulder, lelbow, lhand, lhip, lknee, lfoot, abdomen, chest (l/r glued on)
 #   Blender           upper_arm.L, forearm.L, hand.L, thigh.L, shin.L, foot.L, spine.001
 #   Rokoko            LeftShoulder, LeftArm, LeftForeArm, LeftThigh, LeftShin, LeftToe, Spine1..Spine4
 #   Perfume / Xsens   RightCollar, RightShoulder, RightElbow, RightWrist, RightHip, RightKnee, Chest..Chest4
-# The spine joints between the pelvis and the neck are assigned by where they sit on that chain (see
-# :func:`assign_spine`), not by name: "Chest" is the lowest spine joint in the Perfume files but the upper one
-# in Unity's.
+# The spine joints between the pelvis and the neck are assigned by where they sit on that chain
+# (:mod:`hapmotion.skeleton.spine`), not by name.
 
 # Words that mark a side, after splitting a name into lower-case words.
 _LEFT_WORDS = {"left", "l", "lt"}
 _RIGHT_WORDS = {"right", "r", "rt"}
 
 # Base names (side words removed, remaining words joined) -> canonical stem, in order of preference: the first
-# base of a list that the file has wins. "shoulder" is special-cased below (clavicle or humerus head).
+# base of a list that the file has wins. "shoulder" is special-cased below (clavicle or humerus head). _unity(...)
+# is the word of Unity's bone for that joint (from UNITY_HUMANOID), at its place in the order.
 _SIDED: dict[str, tuple[str, ...]] = {
     "CLAVICLE": ("clavicle", "collar", "collarbone"),
-    "SHOULDER": ("upperarm", "arm", "shldr", "humerus", "shoulder"),
-    "ELBOW": ("elbow", "forearm", "lowerarm"),
-    "WRIST": ("wrist", "hand"),
-    "HAND": ("hand", "wrist"),
-    "HIP": ("upleg", "upperleg", "thigh", "femur", "hip"),
-    "KNEE": ("knee", "leg", "lowerleg", "shin", "calf", "tibia"),
+    "SHOULDER": (_unity("SHOULDER"), "arm", "shldr", "humerus", "shoulder"),
+    "ELBOW": ("elbow", "forearm", _unity("ELBOW")),
+    "WRIST": ("wrist", _unity("WRIST")),
+    "HAND": (_unity("HAND"), "wrist"),
+    "HIP": ("upleg", _unity("HIP"), "thigh", "femur", "hip"),
+    "KNEE": ("knee", "leg", _unity("KNEE"), "shin", "calf", "tibia"),
     # A file with both "ankle" and "foot" joints (Kinect-like naming) has its foot at the toes.
-    "ANKLE": ("ankle", "foot"),
-    "FOOT": ("toebase", "toe", "toes", "ball", "foot"),
-    "EYE": ("eye",),
+    "ANKLE": ("ankle", _unity("ANKLE")),
+    "FOOT": ("toebase", "toe", _unity("FOOT"), "ball", "foot"),
+    "EYE": (_unity("EYE"),),
     "EAR": ("ear",),
 }
 _CENTRE: dict[str, tuple[str, ...]] = {
-    "PELVIS": ("hips", "hip", "pelvis"),
+    "PELVIS": (_unity("PELVIS"), "hip", "pelvis"),
     "SPINE_NAVEL": ("spine", "abdomen", "spine0", "spine1", "lowerspine", "torso"),
     "SPINE_CHEST": ("chest", "spine2", "upperchest", "spine3", "spine1", "thorax"),
-    "NECK": ("neck1", "neck", "neck0"),
-    "HEAD": ("head",),
+    "NECK": ("neck1", _unity("NECK"), "neck0"),
+    "HEAD": (_unity("HEAD"),),
     "NOSE": ("nose",),
 }
 _SIDED_BASES = frozenset(b for bases in _SIDED.values() for b in bases) | {"shoulder", "collar"}
@@ -172,8 +209,8 @@ _GLUED_SIDE = (("left", "LEFT"), ("right", "RIGHT"), ("l", "LEFT"), ("r", "RIGHT
 
 def split_name(name: str) -> tuple[Optional[str], str]:
     """Split a joint name into (side, base): ``"LeftUpLeg" -> ("LEFT", "upleg")``, ``"Hand_L" -> ("LEFT", "hand")``,
-    ``"mixamorig:Spine1" -> (None, "spine1")``, ``"neck01" -> (None, "neck1")``, ``"l_wrist" -> ("LEFT", "wrist")``, ``"rhand" -> ("RIGHT",
-    "hand")``, ``"upper_arm.L" -> ("LEFT", "upperarm")``.
+    ``"mixamorig:Spine1" -> (None, "spine1")``, ``"neck01" -> (None, "neck1")``, ``"l_wrist" -> ("LEFT", "wrist")``,
+    ``"rhand" -> ("RIGHT", "hand")``, ``"upper_arm.L" -> ("LEFT", "upperarm")``.
 
     A side glued to a lower-case word ("rhand", "lshoulder", "lefteye") is split off only when the rest is a limb
     word we know, so "leg" and "lowerarm" stay whole.
@@ -218,7 +255,7 @@ def match_generic(names: Iterable[str], parents: Optional[Sequence[int]] = None,
 
     ``names`` are the joints in file order; ``parents`` (index into ``names``, -1 for a root) and ``rest``
     ((K, 3) rest-pose positions, e.g. summed BVH OFFSETs) let the pelvis be found as the joint where the legs meet
-    when no joint is called hips/pelvis, and the spine joints be placed by position (:func:`assign_spine`).
+    when no joint is called hips/pelvis, and the spine joints be placed by position.
 
     When a side has both a "shoulder" and an "arm"/"upperarm" joint (Mixamo, CMU style), "shoulder" is the clavicle;
     a lone "shoulder" is the humerus head. Joints not found are simply absent from the result.
@@ -242,7 +279,7 @@ def match_generic(names: Iterable[str], parents: Optional[Sequence[int]] = None,
     for canon, bases in _CENTRE.items():
         take(canon, None, bases)
     for side in ("LEFT", "RIGHT"):
-        has_arm = any((side, b) in by_key for b in ("upperarm", "arm", "shldr", "humerus"))
+        has_arm = any((side, b) in by_key for b in _SIDED["SHOULDER"] if b != "shoulder")
         for stem, bases in _SIDED.items():
             if stem == "CLAVICLE" and has_arm:
                 bases = bases + ("shoulder",)
@@ -289,38 +326,6 @@ def _structure(out: dict[str, str], names: list[str], parents: list[int], rest: 
             out[canon] = placed[canon]
 
 
-SPINE_TOLERANCE = 0.2
-"""Largest distance (as a fraction of pelvis-to-neck) between a spine joint and the navel or chest point for it to
-stand for that point; farther, the point is derived on the pelvis-neck line instead."""
-
-
-def assign_spine(pelvis: np.ndarray, neck: np.ndarray, chain: dict[str, np.ndarray]) -> dict[str, str]:
-    """SPINE_NAVEL and SPINE_CHEST among the spine joints ``chain`` (name -> rest position, pelvis to neck), by
-    where each sits along pelvis -> neck.
-
-    A joint's place is its rest position projected on the pelvis-to-neck segment (0 = pelvis, 1 = neck). Each of
-    the navel (0.38) and the chest (0.60) point takes the nearest joint within :data:`SPINE_TOLERANCE`; one joint
-    serves one point only (the nearer one); a point with no joint near enough is left out (and derived later).
-    """
-    from .derived import CHEST_FRACTION, NAVEL_FRACTION
-
-    axis = np.asarray(neck, dtype=float) - np.asarray(pelvis, dtype=float)
-    length2 = float(axis @ axis)
-    if not chain or not (length2 > 0 and np.isfinite(length2)):
-        return {}
-    where = {n: float((np.asarray(p) - pelvis) @ axis) / length2 for n, p in chain.items()}
-    options = []
-    for canon, target in (("SPINE_NAVEL", NAVEL_FRACTION), ("SPINE_CHEST", CHEST_FRACTION)):
-        for n, f in where.items():
-            if abs(f - target) <= SPINE_TOLERANCE:
-                options.append((abs(f - target), canon, n))
-    out: dict[str, str] = {}
-    for _, canon, n in sorted(options):
-        if canon not in out and n not in out.values():
-            out[canon] = n
-    return out
-
-
 # ---------------------------------------------------------------------------------------------- when nothing fits
 
 _SIDE_WORD = {"LEFT": "left", "RIGHT": "right"}
@@ -328,8 +333,6 @@ _SIDE_WORD = {"LEFT": "left", "RIGHT": "right"}
 
 def closest_names(canon: str, names: Iterable[str], n: int = 3) -> list[str]:
     """Up to ``n`` joint names that look most like the canonical joint ``canon`` (for an error message)."""
-    import difflib
-
     stem, _, side = canon.rpartition("_") if canon.endswith(("_LEFT", "_RIGHT")) else (canon, "", "")
     bases = _SIDED.get(stem) or _CENTRE.get(canon) or (canon.lower(),)
     wanted = [(_SIDE_WORD.get(side, "") + b) for b in bases]

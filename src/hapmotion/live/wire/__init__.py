@@ -7,5 +7,6 @@ every rule of a wire format is unit-tested without a network.
 
 In (skeletons): :mod:`.osc_in` (OSC over UDP), :mod:`.ws_in` (WebSocket JSON), :mod:`.vmc_in` (the VMC
 protocol). Out (rows): :mod:`.osc_out`, :mod:`.broadcast` (the viewer schema of docs/CONTRACTS.md); the bHaptics
-Player's SDK1 and SDK2 messages are in :mod:`hapmotion.bhaptics`. Shared conventions: :mod:`.osc_address`.
+Player's SDK1 and SDK2 messages are in :mod:`hapmotion.bhaptics`. Shared by the OSC formats: :mod:`.osc_address`
+(the address prefix), :mod:`.osc_packet` (a datagram read into messages, faults counted).
 """

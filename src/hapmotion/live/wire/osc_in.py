@@ -1,4 +1,4 @@
-"""OSC in: skeleton frames from OSC messages (python-osc parses the packets).
+"""OSC in: skeleton frames from OSC messages (:mod:`.osc_packet` reads the datagrams).
 
 Address scheme, prefix ``/hapmotion`` (settable; docs/live.md has the full description):
 
@@ -11,16 +11,15 @@ Address scheme, prefix ``/hapmotion`` (settable; docs/live.md has the full descr
 
 from __future__ import annotations
 
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
-from pythonosc.osc_bundle import OscBundle
-from pythonosc.osc_packet import OscPacket
 
 from ...skeleton.joints import N_JOINTS
 from ..frames import SkeletonFrame, joint_index
 from ..hygiene import Faults, is_number, seq_value, time_value
 from .osc_address import OSC_PREFIX, normalize_prefix
+from .osc_packet import read_osc
 
 
 class OscSkeletonDecoder:
@@ -42,22 +41,11 @@ class OscSkeletonDecoder:
 
     def feed(self, dgram: bytes, received: float) -> list[SkeletonFrame]:
         """Decode one datagram; return the frames it completes (usually zero or one)."""
-        try:
-            messages = [tm.message for tm in OscPacket(dgram).messages]
-        except Exception as exc:  # python-osc raises several types on garbage; all mean "not OSC"
-            self.faults.add("malformed", f"not an OSC packet ({exc.__class__.__name__})")
-            return []
-        if not messages:  # python-osc skips unreadable bundle elements; a bundle with nothing readable is bad
-            self.faults.add("malformed", "an OSC bundle without a readable message")
-            return []
+        packet = read_osc(dgram, self.faults)
         out: list[SkeletonFrame] = []
         joints_seen = False
-        for msg in messages:
-            try:
-                address, params = msg.address, msg.params
-            except Exception as exc:
-                self.faults.add("malformed", f"unreadable OSC message ({exc.__class__.__name__})")
-                continue
+        for msg in packet.messages:
+            address, params = msg.address, msg.params
             if address == self.addr_skeleton:
                 frame = self._skeleton(params, received)
                 if frame is not None:
@@ -71,11 +59,11 @@ class OscSkeletonDecoder:
                 self.faults.add("unknown_address", f"OSC address {address!r}, expected {self.addr_skeleton}, "
                                                    f"{self.addr_joint}<JOINT> or {self.addr_frame}")
         # A bundle of joint messages is one frame even without a closing /frame message.
-        if joints_seen and self._pending is not None and OscBundle.dgram_is_bundle(dgram):
+        if joints_seen and self._pending is not None and packet.bundle:
             self._close([], received, out)
         return out
 
-    def _skeleton(self, params: list, received: float) -> Optional[SkeletonFrame]:
+    def _skeleton(self, params: list[Any], received: float) -> Optional[SkeletonFrame]:
         n = len(params)
         if n not in (3 * N_JOINTS, 3 * N_JOINTS + 2):
             self.faults.add("wrong_joint_count", f"{self.addr_skeleton} with {n} arguments, expected "
@@ -91,7 +79,7 @@ class OscSkeletonDecoder:
         pos = np.array(params, dtype=np.float64).reshape(N_JOINTS, 3)
         return SkeletonFrame(pos, seq, t, received)
 
-    def _joint(self, name: str, params: list, received: float, out: list[SkeletonFrame]) -> None:
+    def _joint(self, name: str, params: list[Any], received: float, out: list[SkeletonFrame]) -> None:
         try:
             j = joint_index(name)
         except KeyError:
@@ -116,7 +104,7 @@ class OscSkeletonDecoder:
             self._pending_t = t
         self._pending[j] = params
 
-    def _close(self, params: list, received: float, out: list[SkeletonFrame]) -> None:
+    def _close(self, params: list[Any], received: float, out: list[SkeletonFrame]) -> None:
         if params:
             if len(params) != 2 or not all(is_number(v) for v in params):
                 self.faults.add("malformed", f"{self.addr_frame} takes seq and t, found {len(params)} arguments")

@@ -8,8 +8,10 @@ docs/marionette-spec; OSC over UDP, port 39539 by default, packets may be bundle
   (name ``"root"``); the spec recommends receivers take it as a local pose. The v2.1 MR scale and offset are
   ignored (they fit the avatar to a camera picture, not to the performer).
 * ``/VMC/Ext/Bone/Pos (s)name (f)p.x p.y p.z q.x q.y q.z q.w`` - one bone's *local* pose (relative to its parent
-  transform), named by Unity's ``HumanBodyBones`` (:mod:`hapmotion.skeleton.humanoid`); every bone is sent, ``LastBone``
-  included.
+  transform), named by Unity's ``HumanBodyBones`` (:mod:`hapmotion.skeleton.humanoid`); every bone is sent,
+  ``LastBone`` included. Which canonical joint a bone is comes from the naming table the BVH matcher reads too
+  (:data:`hapmotion.skeleton.naming.UNITY_HUMANOID`); the spine bones are placed by position
+  (:mod:`hapmotion.skeleton.spine`).
 * ``/VMC/Ext/OK (i)loaded [(i)calibration state (i)calibration mode [(i)tracking status]]`` - 0 before an avatar is
   loaded (no bone data is meaningful); calibration state 0 uncalibrated, 1 waiting for calibration,
   2 calibrating, 3 calibrated (v2.5); tracking status 1 good, 0 lost (v2.7).
@@ -43,7 +45,7 @@ Bad input is counted with the live fault kinds (:class:`hapmotion.live.hygiene.F
 (not OSC, too few arguments, wrong types, a zero quaternion), ``unknown_joint`` (a bone name that is not a
 ``HumanBodyBones`` name), ``nan`` (a non-finite number: the message is dropped and the bone keeps its last pose),
 ``missing_root`` (a frame before any ``/VMC/Ext/Root/Pos`` or ``Hips`` pose: skipped). Sans-I/O: the source
-(:class:`hapmotion.live.vmc.VmcSource`) moves the datagrams.
+(:class:`hapmotion.live.sources.VmcSource`) moves the datagrams.
 """
 
 from __future__ import annotations
@@ -51,17 +53,18 @@ from __future__ import annotations
 import logging
 import math
 from collections import Counter
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
-from pythonosc.osc_bundle import OscBundle
-from pythonosc.osc_packet import OscPacket
 
-from ...skeleton.humanoid import (BONE_INDEX, CANONICAL_TO_BONE, HUMAN_BODY_BONES, LAST_BONE, N_BONES, SPINE_BONES,
-                         bone_name, present_parent)
+from ...skeleton.derived import derive_missing
+from ...skeleton.humanoid import BONE_INDEX, HUMAN_BODY_BONES, LAST_BONE, N_BONES, bone_name, present_parent
 from ...skeleton.joints import JOINT_INDEX, N_JOINTS, RENDER_JOINTS
+from ...skeleton.naming import UNITY_HUMANOID, UNITY_SPINE
+from ...skeleton.spine import assign_spine
 from ..frames import SkeletonFrame
 from ..hygiene import Faults, is_number
+from .osc_packet import read_osc
 
 log = logging.getLogger("hapmotion.live")
 
@@ -86,9 +89,9 @@ VMC_MESSAGES_PER_FRAME = 64
 LastBone), OK and the time."""
 
 _ROOT = N_BONES  # index of the avatar root in the pose lists (after the 55 bones)
-_MAPPED = tuple((JOINT_INDEX[j], BONE_INDEX[b]) for j, b in CANONICAL_TO_BONE.items())
+_MAPPED = tuple((JOINT_INDEX[j], BONE_INDEX[b]) for j, b in UNITY_HUMANOID.items())
 # Bones whose world pose is needed: the mapped ones and the spine candidates (their ancestors come along).
-_CHAINED = tuple(BONE_INDEX[b] for b in dict.fromkeys([*CANONICAL_TO_BONE.values(), *SPINE_BONES]))
+_CHAINED = tuple(BONE_INDEX[b] for b in dict.fromkeys([*UNITY_HUMANOID.values(), *UNITY_SPINE]))
 _NEEDED = np.array([JOINT_INDEX[j] for j in RENDER_JOINTS + ("SPINE_CHEST",)], dtype=np.intp)
 
 
@@ -182,22 +185,11 @@ class VmcDecoder:
             else:
                 self.ignored += 1
             return []
-        try:
-            timed = OscPacket(dgram).messages
-        except Exception as exc:  # python-osc raises several types on garbage; all mean "not OSC"
-            self.faults.add("malformed", f"not an OSC packet ({exc.__class__.__name__})")
-            return []
-        if not timed:  # python-osc skips unreadable bundle elements; a bundle with nothing readable is bad
-            self.faults.add("malformed", "an OSC bundle without a readable message")
-            return []
-        bundle = OscBundle.dgram_is_bundle(dgram)
+        packet = read_osc(dgram, self.faults)
+        bundle = packet.bundle
         out: list[SkeletonFrame] = []
-        for tm in timed:
-            try:
-                address, params = tm.message.address, tm.message.params
-            except Exception as exc:
-                self.faults.add("malformed", f"unreadable OSC message ({exc.__class__.__name__})")
-                continue
+        for msg in packet.messages:
+            address, params = msg.address, msg.params
             if address == ADDR_BONE:
                 self._bone(params, received, out, loose=not bundle)
             elif address == ADDR_ROOT:
@@ -219,7 +211,7 @@ class VmcDecoder:
             log.info("VMC: ignoring OSC address %r (not a VMC message); further ones are ignored silently",
                      address[:60])
 
-    def _pose_args(self, params: list, address: str
+    def _pose_args(self, params: list[Any], address: str
                    ) -> Optional[tuple[str, tuple[float, ...], tuple[float, ...]]]:
         """``(name, position (x, y, z), unit quaternion (x, y, z, w))`` from ``name px py pz qx qy qz qw [...]``
         (plain floats: this runs for every bone of every frame, where small numpy arrays cost more than math)."""
@@ -238,7 +230,7 @@ class VmcDecoder:
             return None
         return params[0], (px, py, pz), (qx / norm, qy / norm, qz / norm, qw / norm)
 
-    def _bone(self, params: list, received: float, out: list[SkeletonFrame], loose: bool) -> None:
+    def _bone(self, params: list[Any], received: float, out: list[SkeletonFrame], loose: bool) -> None:
         if self.loaded is False:  # no avatar: its poses mean nothing (and the next avatar has its own bones)
             self.ignored += 1
             return
@@ -261,7 +253,7 @@ class VmcDecoder:
         self.local[b] = (pos, rot)
         self._pending.add(b)
 
-    def _root(self, params: list) -> None:
+    def _root(self, params: list[Any]) -> None:
         if self.loaded is False:
             self.ignored += 1
             return
@@ -270,7 +262,7 @@ class VmcDecoder:
             return
         self.local[_ROOT] = (pose[1], pose[2])
 
-    def _time(self, params: list, received: float, out: list[SkeletonFrame]) -> None:
+    def _time(self, params: list[Any], received: float, out: list[SkeletonFrame]) -> None:
         if not params or not is_number(params[0]):
             self.faults.add("malformed", f"{ADDR_TIME} needs a time in seconds, found {params[:1]!r}")
             return
@@ -281,7 +273,7 @@ class VmcDecoder:
         if self._pending:
             self._close(received, out)
 
-    def _ok(self, params: list) -> None:
+    def _ok(self, params: list[Any]) -> None:
         if not params or not is_number(params[0]):
             self.faults.add("malformed", f"{ADDR_OK} needs the loaded state (int), found {params[:1]!r}")
             return
@@ -332,8 +324,9 @@ class VmcDecoder:
 
     def skeleton(self) -> np.ndarray:
         """The current pose as canonical joints: ``(32, 3)`` float64 metres, right-handed +Y up, NaN where the
-        avatar has no bone; render joints the avatar lacks are derived as the readers derive them. Needs the root
-        and Hips poses."""
+        avatar has no bone; render joints the avatar lacks are derived by
+        :func:`~hapmotion.skeleton.derived.derive_missing`, the function every reader calls. Needs the root and
+        Hips poses."""
         if self._plan is None:
             self._plan, self._joints = self._make_plan()
             self._spine_placed = False
@@ -350,14 +343,12 @@ class VmcDecoder:
         pos = np.full((N_JOINTS, 3), np.nan)
         pos[joints] = unity_to_ours([world[b][0] for b in bones])  # type: ignore[index]
         if np.isnan(pos[_NEEDED]).any():
-            from ...skeleton.derived import derive_missing
-
             derive_missing(pos[None])
         return pos
 
     def _make_plan(self) -> tuple[list[tuple[int, int]], tuple[np.ndarray, np.ndarray]]:
-        """The bones to chain: the mapped and spine bones the avatar has and their ancestors, each with its nearest present
-        ancestor as parent (``_ROOT`` for the top), parents first; and the (joint, bone) index pairs to read."""
+        """The bones to chain: the mapped and spine bones the avatar has and their ancestors, each with its nearest
+        present ancestor as parent (``_ROOT`` for the top), parents first; and the (joint, bone) index pairs to read."""
         have = {HUMAN_BODY_BONES[b] for b in range(N_BONES) if self.local[b] is not None}
         parent: dict[str, Optional[str]] = {}
         for b in _CHAINED:
@@ -378,12 +369,11 @@ class VmcDecoder:
         pairs = [(j, b) for j, b in _MAPPED if HUMAN_BODY_BONES[b] in have]
         return plan, (np.array([j for j, _ in pairs], dtype=np.intp), np.array([b for _, b in pairs], dtype=np.intp))
 
-    def _place_spine(self, world: list) -> None:
+    def _place_spine(self, world: list[Optional[tuple[Vec, Quat]]]) -> None:
         """Choose the SPINE_NAVEL and SPINE_CHEST bones by where they sit on Hips -> Neck in this pose (the first
-        after the avatar's bones arrived), as the readers place any spine; without a Neck bone the middle of the
-        upper arms stands for it. A point no bone sits near is left out and derived from PELVIS and NECK."""
-        from ...skeleton.naming import assign_spine
-
+        after the avatar's bones arrived) with :func:`~hapmotion.skeleton.spine.assign_spine`, the BVH matcher's
+        rule; without a Neck bone the middle of the upper arms stands for it. A point no bone sits near is left out
+        and derived from PELVIS and NECK."""
         self._spine_placed = True
         self.spine = {}
         hips = world[BONE_INDEX["Hips"]]
@@ -395,7 +385,7 @@ class VmcDecoder:
             top = 0.5 * (np.array(arms[0][0]) + np.array(arms[1][0]))
         else:
             return
-        chain = {n: np.array(world[BONE_INDEX[n]][0]) for n in SPINE_BONES if world[BONE_INDEX[n]] is not None}
+        chain = {n: np.array(world[BONE_INDEX[n]][0]) for n in UNITY_SPINE if world[BONE_INDEX[n]] is not None}
         # Fractions along Hips -> Neck are the same in Unity's frame and in ours (a mirror keeps them).
         self.spine = assign_spine(np.array(hips[0]), top, chain)
         if self.spine:

@@ -1,4 +1,5 @@
-"""Bulk parser for whitespace-separated rows of numbers (the BVH MOTION block), compiled with numba.
+"""Bulk parser for whitespace-separated rows of numbers (the BVH MOTION block, :mod:`.bvh_text`), compiled with
+numba: :func:`parse_table` and its status codes.
 
 ``np.loadtxt`` reads the MOTION block of ``01_01.bvh`` at about 60,000 frames/s (45 MB/s) on the reference
 machine and does not release the GIL; the reader's target is 100,000 frames/s (benchmarks/bench_readers.py). This
@@ -18,7 +19,7 @@ import math
 import numba
 import numpy as np
 
-# Status codes returned by parse_rows.
+# Status codes returned by parse_table (and parse_rows).
 OK = 0
 WRONG_COUNT = 1  # a line holds a different number of values than the rows need
 EXTRA_ROWS = 2  # more non-empty lines than rows expected
