@@ -20,7 +20,8 @@ import numpy as np
 from hapmotion.renderer.params import PRESETS, Params
 from hapmotion.metrics.scorecard import COLUMNS, PERCENT_KEYS, motion_facts, score_track
 from hapmotion.metrics.sweep import run_bench
-from hapmotion.show import Show, parse_param_overrides, render_motion
+from hapmotion.cli.show_options import parse_param_overrides
+from hapmotion.show import Show, render_motion
 
 SHOWN = ("felt_moving", "speed_rho", "reach_rho", "reach_lag_ms", "lateral", "locus_cm", "locus_skin_cm",
          "constancy_db", "sparc", "toggles_s", "hf_power", "dead_zone", "skin_rms")

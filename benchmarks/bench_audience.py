@@ -57,6 +57,7 @@ async def read_line() -> str:
 async def role_publisher(url: str) -> dict:
     import hapmotion
     from hapmotion.live import ReplaySource, live
+    from hapmotion.show import Show
 
     source = ReplaySource(hapmotion.load_motion(BVH), fps=FPS, loop=True)
     marks = {}
@@ -65,7 +66,7 @@ async def role_publisher(url: str) -> dict:
         marks["engine"], marks["cpu0"], marks["t0"] = engine, time.process_time(), time.perf_counter()
         print("READY", flush=True)
 
-    task = asyncio.create_task(live(source, [f"{url}/{SHOW}"], handle_signals=False, on_ready=ready))
+    task = asyncio.create_task(live(Show(), source, [f"{url}/{SHOW}"], handle_signals=False, on_ready=ready))
     await read_line()  # STOP
     cpu = time.process_time() - marks["cpu0"]
     wall = time.perf_counter() - marks["t0"]

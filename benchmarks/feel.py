@@ -1,7 +1,7 @@
 """Would a wearer feel the performance? Every felt-by-default target, measured, printed beside its target.
 
 Self-contained on purpose: only the public API (``hapmotion.load_motion``, ``hapmotion.render``,
-``hapmotion.load_layout``, ``hapmotion.show.combine``) and numpy/soundfile, with each measure defined here as the target
+``hapmotion.load_layout``, ``hapmotion.show.render_show``) and numpy/soundfile, with each measure defined here as the target
 states it, so the figures do not depend on the code they judge.
 
 Clips: every recording in the motion folder (BVH, AIST++ pkl) and seeded synthetic gestures (one- and two-hand
@@ -398,14 +398,15 @@ MUSIC_OPTIONS: dict = {}
 
 
 def combine_default(track, song: str, mode: str, preset: str | None):
-    """``hapmotion.show.combine`` with its defaults (the motion track's preset picks its music pattern and mix)."""
-    kwargs = {}
-    if "spatial" in MUSIC_OPTIONS:
-        base = hapmotion.audio.params_for_preset(track.meta.get("preset"))
-        kwargs["params"] = dataclasses.replace(base, spatial=MUSIC_OPTIONS["spatial"])
-    if "mix_rule" in MUSIC_OPTIONS:
-        kwargs["mix_rule"] = MUSIC_OPTIONS["mix_rule"]
-    return hshow.combine(track, song, mode=mode, length="motion", **kwargs)
+    """``hapmotion.show.render_show`` of a rendered motion track with its defaults (the preset picks the music's
+    pattern and mix); ``MUSIC_OPTIONS`` change the pattern's spatial mapping or the mix rule."""
+    show = hshow.Show(audio=song, preset=track.meta.get("preset") or hshow.Show().preset, mode=mode,
+                      length="motion", mix_rule=MUSIC_OPTIONS.get("mix_rule"))
+    analysis = None
+    if "spatial" in MUSIC_OPTIONS:  # the song analysed with the changed parameters, as render_show reuses it
+        params = dataclasses.replace(show.audio_params(), spatial=MUSIC_OPTIONS["spatial"])
+        analysis = hapmotion.audio.analyze_file(song, fps=track.fps, params=params)
+    return hshow.render_show(show, motion_track=track, analysis=analysis)
 
 
 def evaluate(preset: str | None, clips: list[Clip], song_list, layout, verbose: bool) -> dict:

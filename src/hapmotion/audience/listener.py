@@ -39,7 +39,7 @@ from ..layout import Layout
 from ..live.builders import NATS_ONLY_LIVE
 from ..show.cue_layer import LiveCues
 from ..live.engine import LiveEngine
-from ..live.frames import SkeletonFrame
+from ..live.frames import FrameInlet, SkeletonFrame
 from ..live.session import Session, SinkSpec
 from ..live.sources import Source
 from ..live.stats import LiveStats
@@ -111,7 +111,7 @@ class AudienceSource(Source):
     def describe(self) -> str:
         return self.name
 
-    async def start(self, engine: LiveEngine) -> None:
+    async def start(self, engine: FrameInlet) -> None:
         await super().start(engine)
         show = self.desc.show
         limits = {"pending_msgs_limit": 4 * self.max_pending, "pending_bytes_limit": 8 << 20}
