@@ -7,8 +7,8 @@ The public API is as small as the CLI::
     track = hapmotion.render(motion, method="mst", preset="paper")
     track.save("dance.tact")
 
-``hapmotion.render`` is the function, not the subpackage of the same name (import the subpackage's modules
-with ``from hapmotion.render import params``). The other names are imported lazily.
+The renderer lives in the subpackage ``hapmotion.renderer``; ``hapmotion.render`` is its function. A whole show
+(music, cues, comfort) is a :class:`Show` rendered by :func:`render_show`. Every name is imported on first use.
 """
 
 from __future__ import annotations
@@ -24,12 +24,16 @@ _LAZY = {
     "load_layout": ("hapmotion.layout", "load_layout"),
     "HapticTrack": ("hapmotion.track", "HapticTrack"),
     "load_track": ("hapmotion.track_files", "load_track"),
+    "save_track": ("hapmotion.track_files", "save_track"),
+    "PRESETS": ("hapmotion.renderer", "PRESETS"),
+    "Params": ("hapmotion.renderer", "Params"),
+    "Renderer": ("hapmotion.renderer", "Renderer"),
+    "render": ("hapmotion.renderer", "render"),
+    "Show": ("hapmotion.show", "Show"),
+    "render_show": ("hapmotion.show", "render_show"),
 }
 
-# Imported eagerly: importing the subpackage ``hapmotion.render`` would otherwise bind the name to the module.
-from .renderer import PRESETS, Params, Renderer, render  # noqa: E402
-
-__all__ = sorted(_LAZY) + ["PRESETS", "Params", "Renderer", "render", "__version__"]
+__all__ = sorted(_LAZY) + ["__version__"]
 
 
 def __getattr__(name: str) -> Any:

@@ -24,10 +24,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
+from ..audio import analyze_file
 from ..errors import UsageError
 from ..filesafety import atomic_path
 from ..layout import Layout, load_layout
 from ..motion import Motion
+from ..motion_files import load_motion
+from ..renderer.params import PRESETS
+from ..show import Show, render_motion, render_show
 from ..track import HapticTrack
 from .motor import DEFAULT_MOTOR, MotorModel
 from .scorecard import AUDIO_COLUMNS, COLUMNS, Column, MotionFacts, motion_facts, score_audio, score_track
@@ -138,9 +142,6 @@ def evaluate(
     progress:
         Called with a short label after each rendered run (for progress bars).
     """
-    from ..renderer.params import PRESETS
-    from ..show import Show, render_motion, render_show
-
     t_start = time.perf_counter()
     if not inputs:
         raise UsageError("evaluate needs at least one motion file")
@@ -151,10 +152,8 @@ def evaluate(
                                         layout=layout)
              for m in methods for p in (PRESETS if presets is None else presets)}
     if load is None:
-        from ..motion_files import load_motion as load
-    analyze = None
-    if audio is not None:
-        from ..audio import analyze_file as analyze
+        load = load_motion
+    analyze = analyze_file if audio is not None else None
     report = Report(runs=[], audio=audio is not None)
     taken: set[str] = set()
     t_load = t_render = 0.0

@@ -38,9 +38,12 @@ from ..body.model import BodyModel
 from ..skeleton.joints import JOINT_INDEX, N_JOINTS
 from ..layout import Layout, load_layout
 from ..motion import Motion, new_motion
+from ..renderer import render
+from ..renderer.renderer import resolve_params
 from .constancy import energy_range_db
 from .coupling import energy
 from .locus import locus_errors, mean_finite
+from .motor import simulate
 from .smoothness import jerk_rms, toggles_per_s
 from .scorecard import aligned_commands
 
@@ -294,10 +297,6 @@ def run_bench(
     for the preset's phantom model, plus ``energy_db`` ``(T_sweep,)`` (dB re. the sweep's maximum: 0 where the
     energy is highest, the dips below) and ``progress`` ``(T_sweep, 2)`` (grid coordinates) for figures.
     """
-    from ..renderer import render
-    from ..renderer.renderer import resolve_params
-    from .motor import simulate
-
     layout = layout or load_layout()
     rows: list[dict[str, object]] = []
     for name in cases:

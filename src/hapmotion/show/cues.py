@@ -39,6 +39,7 @@ from ..audio.mix import limit_power
 from ..errors import InputError
 from ..limits import DEFAULT_LIMITS, InputLimits, LimitsArg, as_limits, loads_json
 from ..track import HapticTrack, parse_actuator_id
+from ..track_files import load_track
 
 MAX_CUE_FILE_BYTES = 4 << 20
 """A cue list is a small hand-written file; anything larger is refused before reading."""
@@ -215,8 +216,6 @@ def cue_layer(cue_list: CueList, *, fps: float, n_frames: int, actuators: Sequen
               mirror_map: np.ndarray) -> np.ndarray:
     """Every cue of ``cue_list`` on one timeline: ``(n_frames, N)`` cue *energy* ``sum_k (g_k I_k / 100)^2``
     (the quantity :func:`layer` adds), cues past the end cut off. Each pattern file is read once."""
-    from ..track_files import load_track
-
     energy = np.zeros((n_frames, len(actuators)))
     loaded: dict[Path, HapticTrack] = {}
     for cue in cue_list.cues:

@@ -35,7 +35,9 @@ from typing import Iterable, Sequence
 import numpy as np
 
 from .. import __version__
+from ..audio.analysis import analyze_file
 from ..errors import InputError, UsageError
+from ..layout import CHART_NAMES, load_layout
 from ..skeleton.joints import BONES, JOINTS
 from ..motion import Motion
 from ..track import HapticTrack
@@ -89,8 +91,6 @@ def load_audio_part(path: "str | os.PathLike[str]", *, fps: float = 60.0, offset
     ``until_s`` (track time, seconds) ends the music there on the page, when the show was rendered shorter than
     the music (length rule ``motion``): the page then lasts as long as the haptics, and the waveform and onsets
     stop with it."""
-    from ..audio.analysis import analyze_file
-
     p = Path(path)
     an = analyze_file(p, fps=fps, offset_s=offset_s)
     try:
@@ -143,8 +143,6 @@ def track_label(track: HapticTrack) -> str:
 
 def _device_panels(track: HapticTrack) -> list[dict]:
     """Grid and labels of each device of the track's layout, in track column order."""
-    from ..layout import CHART_NAMES, load_layout
-
     try:
         layout = load_layout() if track.layout in ("x40_shoulders", "", None) else load_layout(track.layout)
     except (InputError, OSError):
@@ -264,8 +262,6 @@ def page_data(
     if len(set(keys)) != len(keys):
         raise UsageError(f"two tracks of the page would have the same name: {', '.join(keys)}")
     if ref is None:
-        from ..layout import load_layout
-
         layout = load_layout()
         ref = HapticTrack(np.zeros((0, layout.n_actuators)), 60.0, layout.actuators, layout=layout.name)
     blobs = _Blobs()

@@ -29,6 +29,7 @@ import numpy as np
 
 from ...errors import InputError
 from ...track import HapticTrack
+from ...track_files import save_track
 
 PAGE = 4096
 """Bytes of a page-cache page: a SIGKILL can cut a write only at a multiple of this offset."""
@@ -177,7 +178,5 @@ def recover_journal(journal: "str | os.PathLike[str]", out: "str | os.PathLike[s
     track = HapticTrack(intensities=np.clip(np.nan_to_num(table[:, 1:]), 0.0, 100.0), fps=fps,
                         actuators=tuple(header[1:]), layout=layout, meta={"live": True, "recovered_from": str(path)})
     if out is not None:
-        from ...track_files import save_track
-
         save_track(track, out)
     return track
