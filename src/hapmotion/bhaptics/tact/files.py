@@ -1,6 +1,6 @@
 """bHaptics ``.tact`` files: any Designer / Player pattern in, Designer-shaped patterns out.
 
-Reading (:func:`read_tact`) renders the project the way the Player plays it (:mod:`.tact_render`): a track at the
+Reading (:func:`read_tact`) renders the project the way the Player plays it (:mod:`.render`): a track at the
 Player's 20 ms tick (50 fps) with one column per motor of every position the file's device type covers
 (``VestFront_0..19``, ``ForearmL_0..5``, ``Head_0..5`` ...), whole numbers 0..100.
 
@@ -32,9 +32,10 @@ import numpy as np
 
 from ...errors import InputError, UsageError
 from ...filesafety import atomic_path
-from ...layout import bhaptics_devices, load_layout, position_order, type_for_position
-from ...track import HapticTrack
+from ...layout import load_layout
 from ...limits import DEFAULT_LIMITS, InputLimits, check_frames, load_json
+from ...track import HapticTrack
+from ..devices import bhaptics_devices, position_order, type_for_position
 from .project import parse_project
 from .render import TICK_MS, render
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import InputError
-from ...layout import device_type, type_for_position
+from ..devices import device_type, type_for_position
 from .render import MOVING_PATTERNS, PLAYBACK_TYPES, DotFrame, Effect, PathPoint, PositionPart
 
 MAX_MOTORS = 64
