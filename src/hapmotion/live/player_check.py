@@ -32,9 +32,10 @@ from websockets.asyncio.client import connect
 from ..layout import CHART_BACK, CHART_FRONT, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, Layout
 from ..track import HapticTrack
 from .sinks import PlayerSdk1Sink, PlayerSdk2Sink, Sink
-from ..bhaptics.player_json import PLAYER_TICK_MS, get_ci
+from ..bhaptics.player_json import get_ci
+from ..bhaptics.tick import PLAYER_TICK_FPS
 
-CHECK_FPS = 1000.0 / PLAYER_TICK_MS
+CHECK_FPS = PLAYER_TICK_FPS
 """The test pattern is made on the Player's tick (50 rows per second)."""
 
 _DEVICE_WORDS = {CHART_FRONT: "vest front", CHART_BACK: "vest back", CHART_SHOULDER_LEFT: "left shoulder sleeve",

@@ -37,9 +37,9 @@ from ...limits import DEFAULT_LIMITS, InputLimits, check_frames, load_json
 from ...track import HapticTrack
 from ..devices import bhaptics_devices, position_order, type_for_position
 from .project import parse_project
-from .render import TICK_MS, render
-
-TICK_FPS = 1000.0 / TICK_MS
+from ..tick import PLAYER_TICK_FPS as TICK_FPS
+from ..tick import PLAYER_TICK_MS as TICK_MS
+from .render import render
 
 
 # ------------------------------------------------------------------------------------------------------ writing

@@ -36,8 +36,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-TICK_MS = 20
-"""The Player's tick: one row every 20 ms (``.tact`` ``intervalMillis``)."""
+from ..tick import PLAYER_TICK_MS as TICK_MS
+
 PATH_MOTORS = 3
 PATH_RADIUS = 1.0
 """Reach of a path point, in motor spacings."""

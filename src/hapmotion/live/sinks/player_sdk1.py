@@ -1,10 +1,10 @@
-"""bHaptics Player, SDK1 API: ``ws://127.0.0.1:15881/v2/feedbacks`` (the messages in :mod:`..wire.player_v2`).
+"""bHaptics Player, SDK1 API: ``ws://127.0.0.1:15881/v2/feedbacks`` (the messages in :mod:`hapmotion.bhaptics.sdk1`).
 
 Each rendered row becomes one request with a ``Submit`` ``frame`` per device (VestFront, VestBack, ForearmL,
 ForearmR), one Key per device so the panels play together and each new frame replaces the previous one under its
 key. At most one request per 20 ms Player tick, carrying the max of the rows of that tick
-(:mod:`~hapmotion.live.sinks.pacing`). ``durationMillis`` is a little longer than the send interval, so the Player keeps playing between frames and
-stops on its own shortly after the stream stops. Stop sends zero frames and ``turnOffAll``.
+(:mod:`~hapmotion.live.sinks.pacing`). ``durationMillis`` is a little longer than the send interval, so the Player
+keeps playing between frames and stops on its own shortly after the stream stops. Stop sends zero frames and ``turnOffAll``.
 """
 
 from __future__ import annotations
@@ -13,16 +13,13 @@ import math
 from typing import Any, Mapping, Optional
 from urllib.parse import urlencode
 
-from ...bhaptics.device_map import DeviceMap
-from ..frames import OutFrame
-from ...bhaptics.player_json import PLAYER_TICK_MS
-from ...bhaptics.sdk1 import parse_v2_status, v2_frame_message, v2_register_message, v2_turn_off_all
-from .ws_client import WebSocketClientSink
-
 import numpy as np
 
-
-PLAYER_TICK_S = PLAYER_TICK_MS / 1000.0
+from ...bhaptics.device_map import DeviceMap
+from ...bhaptics.sdk1 import parse_v2_status, v2_frame_message, v2_register_message, v2_turn_off_all
+from ...bhaptics.tick import PLAYER_TICK_MS, PLAYER_TICK_S
+from ..frames import OutFrame
+from .ws_client import WebSocketClientSink
 
 
 def default_duration_ms(fps: float) -> int:

@@ -1,4 +1,4 @@
-"""bHaptics Player, SDK2 API: ``wss://127.0.0.1:15882/v3/feedback`` (the messages in :mod:`..wire.player_v3`).
+"""bHaptics Player, SDK2 API: ``wss://127.0.0.1:15882/v3/feedback`` (the messages in :mod:`hapmotion.bhaptics.sdk2`).
 
 TLS with the Player's self-signed certificate (no verification, as every SDK2 client does), ``SdkRequestAuth``
 first on every connection, then per row ``SdkPlayDotMode`` for position 0 (the 40-value X40 array: front 0..19,
@@ -14,12 +14,13 @@ from urllib.parse import urlencode
 
 import numpy as np
 
-from ...errors import UsageError
 from ...bhaptics.device_map import DeviceMap
-from ..frames import OutFrame
 from ...bhaptics.sdk2 import parse_v3_message, v3_auth_message, v3_dot_messages, v3_stop_all
+from ...bhaptics.tick import PLAYER_TICK_S
+from ...errors import UsageError
+from ..frames import OutFrame
+from .player_sdk1 import _host, default_duration_ms
 from .ws_client import WebSocketClientSink
-from .player_sdk1 import PLAYER_TICK_S, _host, default_duration_ms
 
 
 def insecure_tls_context() -> ssl.SSLContext:
