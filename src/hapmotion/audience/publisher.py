@@ -19,6 +19,7 @@ from typing import Any, Optional
 
 from ..errors import UsageError
 from ..live.frames import OutFrame
+from ..live.kinds import register_sink_kind
 from ..live.sinks.base import Sink
 from .wire import BUCKET, ShowDescription, check_show_name, encode_event, encode_frame, subject
 
@@ -216,3 +217,6 @@ def publisher_sink(ep: Any, *, fps: float, show: Any, mode: str, layout: Any, bo
     desc = describe_show(name, show=show, mode=mode, fps=fps, layout=layout, body=body, stall_ms=stall_ms,
                          mirror=mirror)
     return NatsPublisherSink(f"nats://{ep.host}:{ep.port}", desc, music=music, fps=fps)
+
+
+register_sink_kind("nats", publisher_sink)
