@@ -9,7 +9,7 @@ import os
 import sys
 
 import numpy as np
-from support.live_fakes import FakePlayerSdk1, FakePlayerSdk2, self_signed_cert
+from support.live_fakes import FakePlayerSdk1, FakePlayerSdk2, free_port, self_signed_cert
 
 from hapmotion.layout import load_layout
 from hapmotion.live.player_check import PlayerReport, pattern_steps, pattern_track
@@ -115,8 +115,6 @@ def test_check_over_sdk2_reports_the_players_device_list(tmp_path):
 
 
 def test_an_absent_player_is_one_line_and_exit_1():
-    from support.live_fakes import free_port
-
     code, out, err = asyncio.run(run_check("--sink", f"player://127.0.0.1:{free_port()}"))
     assert code == 1
     lines = out.splitlines()

@@ -20,6 +20,7 @@ from hapmotion.live.kinds import registered_patterns
 from hapmotion.live.urls import Endpoint
 from hapmotion.track import HapticTrack
 from support.data import MOTION, TACT
+from support.motion_files import kinect_document
 
 
 def _track_csv(tmp_path, frames=120):
@@ -102,8 +103,6 @@ def test_every_json_reader_goes_through_the_one_guard(tmp_path, monkeypatch):
     HapticTrack(np.zeros((3, 52)), 60.0, load_layout().actuators).save(track)
     cues = tmp_path / "cues.json"
     cues.write_text(json.dumps([{"time": 0, "pattern": str(tact)}]))
-    from support.motion_files import kinect_document
-
     kinect = tmp_path / "body.json"
     clip = hapmotion.load_motion(MOTION / "dataset-1_punch_normal_001.bvh").slice(0, 8)
     kinect.write_text(json.dumps(kinect_document(clip, second_body=False, jitter=False)))
