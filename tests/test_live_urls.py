@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import re
+from pathlib import Path
 
 import pytest
 
@@ -81,6 +82,15 @@ def test_parsing_gives_the_table_defaults():
         if kind.address is not None and not kind.address_required:
             ep = parse_sink(kind.scheme)
             assert (ep.kind, ep.host, ep.port) == (kind.name, kind.address.host, kind.address.port)
+
+
+def test_the_docs_give_the_table_default_addresses():
+    rows = [line for line in (Path(__file__).parents[1] / "docs" / "live.md").read_text().splitlines()
+            if line.startswith("| `")]
+    for kind in [*SOURCE_KINDS.values(), *SINK_KINDS.values()]:
+        if kind.address is not None:
+            mine = [row for row in rows if row.startswith(f"| `{kind.scheme}")]
+            assert any(str(kind.address.port) in row for row in mine), kind.name
 
 
 @pytest.mark.parametrize("cls, address", [

@@ -3,8 +3,8 @@
 Each row (:class:`Kind`) says how a kind is written, where it listens or sends by default
 (:mod:`~hapmotion.live.addresses`), which query options it takes, its one-line help and the factory that builds
 it. The parser (:mod:`hapmotion.live.urls`), :func:`build_source` / :func:`build_sink`, the help texts
-(:data:`SOURCE_HELP`, :data:`SINK_HELP`) and docs/live.md all read this table, so a new kind is one row here and
-its factory.
+(:data:`SOURCE_HELP`, :data:`SINK_HELP`) all read this table (docs/live.md repeats it), so a new kind is one row
+here and its factory.
 
 A kind may be declared here and built by another package: ``nats`` (publish the show to an audience) is provided by
 :mod:`hapmotion.audience`, which registers its factory with :func:`register_sink_kind` when it is imported; until

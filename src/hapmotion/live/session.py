@@ -13,19 +13,17 @@ import asyncio
 import logging
 import math
 import os
-from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, Union
 
 
 from ..show.comfort import Comfort
 from ..errors import UsageError
-from ..limits import checked_json_text
 from ..renderer.params import DEFAULT_PRESET
 from ..show import Show, live_music
 from .cue_trigger import live_cues, run_with_cues
 from .engine import AudioChannel, LiveEngine
 from ..bhaptics.device_map import DeviceMap
-from .kinds import NATS_ONLY_LIVE, build_sink, build_source, registered_patterns  # noqa: F401 (re-exported)
+from .kinds import NATS_ONLY_LIVE, build_sink, build_source  # noqa: F401 (NATS_ONLY_LIVE: re-exported)
 from .sinks import Sink
 from .sources import ClockSource, ReplaySource, Source
 from .stats import LiveStats
