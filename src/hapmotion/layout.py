@@ -32,6 +32,10 @@ from .errors import InputError
 CHART_FRONT, CHART_BACK, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT = 0, 1, 2, 3
 CHART_NAMES = ("front", "back", "shoulder_left", "shoulder_right")
 
+DEFAULT_LAYOUT_NAME = "x40_shoulders"
+"""The bundled layout's name (``hapmotion/data/x40_shoulders.json``): what a track or sink is for when none is
+named."""
+
 
 @dataclass(frozen=True)
 class Device:
@@ -141,8 +145,8 @@ def load_layout(path: "str | os.PathLike[str] | None" = None) -> Layout:
     Raises :class:`~hapmotion.errors.InputError` naming the field when the file does not fit the schema.
     """
     if path is None:
-        text = resources.files("hapmotion").joinpath("data/x40_shoulders.json").read_text()
-        source = "x40_shoulders.json"
+        source = f"{DEFAULT_LAYOUT_NAME}.json"
+        text = resources.files("hapmotion").joinpath(f"data/{source}").read_text()
     else:
         source = os.fspath(path)
         try:

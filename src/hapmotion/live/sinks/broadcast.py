@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any, Optional, Sequence
 
 from ...errors import UsageError
+from ...layout import DEFAULT_LAYOUT_NAME
 from ..addresses import WS_BROADCAST
 from ..frames import OutFrame
 from ..wire.broadcast import broadcast_frame, broadcast_hello
@@ -50,7 +51,7 @@ class BroadcastSink(Sink):
         Bytes waiting in the pipe to the server process beyond which frames are skipped.
     """
 
-    def __init__(self, actuators: Sequence[str], layout: str = "x40_shoulders", *,
+    def __init__(self, actuators: Sequence[str], layout: str = DEFAULT_LAYOUT_NAME, *,
                  host: str = WS_BROADCAST.host, port: int = WS_BROADCAST.port, fps: float = 60.0,
                  client_buffer: int = 65536, slow_client_s: float = 5.0, sndbuf: Optional[int] = 65536,
                  name: Optional[str] = None, render_info: Optional[dict[str, Any]] = None, pipe_limit: int = 65536,
