@@ -9,10 +9,10 @@ import os
 import sys
 
 import numpy as np
-from support.live_fakes import FakePlayerSdk1, FakePlayerSdk2, self_signed_cert
+from support.live_fakes import FakePlayerSdk1, FakePlayerSdk2, free_port, self_signed_cert
 
 from hapmotion.layout import load_layout
-from hapmotion.live.player_check import PlayerReport, _v2_report, _v3_report, pattern_steps, pattern_track
+from hapmotion.live.player_check import PlayerReport, pattern_steps, pattern_track
 
 LAYOUT = load_layout()
 HAPMOTION = [sys.executable, "-c", "import sys; from hapmotion.cli import cli, main, check; "
@@ -115,8 +115,6 @@ def test_check_over_sdk2_reports_the_players_device_list(tmp_path):
 
 
 def test_an_absent_player_is_one_line_and_exit_1():
-    from support.live_fakes import free_port
-
     code, out, err = asyncio.run(run_check("--sink", f"player://127.0.0.1:{free_port()}"))
     assert code == 1
     lines = out.splitlines()
@@ -126,17 +124,17 @@ def test_an_absent_player_is_one_line_and_exit_1():
 
 def test_device_reports_name_what_is_missing():
     report = PlayerReport("player", reachable=True)
-    _v2_report(report, {"ConnectedPositions": ["Vest", "ForearmL"], "ConnectedDeviceCount": 2}, LAYOUT)
+    report.read_sdk1_status({"ConnectedPositions": ["Vest", "ForearmL"], "ConnectedDeviceCount": 2}, LAYOUT)
     assert report.layout_devices == {"VestFront": True, "VestBack": True, "ForearmL": True, "ForearmR": False}
     assert "  ForearmR: NOT connected: its steps will not be felt" in report.lines()
     v3 = PlayerReport("player-v3", reachable=True)
-    _v3_report(v3, [{"position": 0, "deviceName": "TactSuitX40", "connected": True, "battery": 80},
-                    {"position": 2, "deviceName": "Tactosy2_V3 (R)", "connected": False}], LAYOUT)
+    v3.read_sdk2_devices([{"position": 0, "deviceName": "TactSuitX40", "connected": True, "battery": 80},
+                          {"position": 2, "deviceName": "Tactosy2_V3 (R)", "connected": False}], LAYOUT)
     assert v3.connected == ["TactSuitX40"]
     assert v3.layout_devices == {"VestFront": True, "VestBack": True, "ForearmL": False, "ForearmR": False}
     assert "TactSuitX40: SDK2 position 0, connected, battery 80 %" in v3.details
     silent = PlayerReport("player", reachable=True)
-    _v2_report(silent, {"ConnectedPositions": None}, LAYOUT)
+    silent.read_sdk1_status({"ConnectedPositions": None}, LAYOUT)
     assert not silent.answered and "did not report its devices" in silent.lines()[0]
 
 

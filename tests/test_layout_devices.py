@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from hapmotion.layout import bhaptics_devices, device_type, load_layout, type_for_position
+from hapmotion.bhaptics.devices import bhaptics_devices, device_type, type_for_position
+from hapmotion.layout import load_layout
 
 
 def test_catalogue_covers_the_devices_patterns_use():

@@ -16,10 +16,11 @@ from hapmotion.errors import InputError, UsageError
 from hapmotion.json_scan import scan_json
 from hapmotion.layout import load_layout
 from hapmotion.limits import DEFAULT_LIMITS, InputLimits, as_limits
-from hapmotion.live.session import _registrations
+from hapmotion.live.kinds import registered_patterns
 from hapmotion.live.urls import Endpoint
 from hapmotion.track import HapticTrack
 from support.data import MOTION, TACT
+from support.motion_files import kinect_document
 
 
 def _track_csv(tmp_path, frames=120):
@@ -102,13 +103,11 @@ def test_every_json_reader_goes_through_the_one_guard(tmp_path, monkeypatch):
     HapticTrack(np.zeros((3, 52)), 60.0, load_layout().actuators).save(track)
     cues = tmp_path / "cues.json"
     cues.write_text(json.dumps([{"time": 0, "pattern": str(tact)}]))
-    from support.motion_files import kinect_document
-
     kinect = tmp_path / "body.json"
     clip = hapmotion.load_motion(MOTION / "dataset-1_punch_normal_001.bvh").slice(0, 8)
     kinect.write_text(json.dumps(kinect_document(clip, second_body=False, jitter=False)))
     readers = [lambda: hapmotion.load_track(tact), lambda: hapmotion.load_track(track), lambda: load_cues(cues),
-               lambda: _registrations(Endpoint("player", options={"register": [str(tact)]})),
+               lambda: registered_patterns(Endpoint("player", options={"register": [str(tact)]})),
                lambda: hapmotion.load_motion(kinect)]
     for read in readers:
         before = len(seen)
@@ -133,7 +132,7 @@ def test_cue_lists_and_registered_patterns_are_guarded(tmp_path, kind):
     path.write_text('{"cues": [{"time": 1' + "0" * 5000 + ', "pattern": "x.csv"}]}' if kind == "cues"
                     else '{"project": ' + "[" * 1000 + "]" * 1000 + "}")
     read = (lambda: load_cues(path)) if kind == "cues" else \
-        (lambda: _registrations(Endpoint("player", options={"register": [str(path)]})))
+        (lambda: registered_patterns(Endpoint("player", options={"register": [str(path)]})))
     with pytest.raises(InputError) as err:
         read()
     msg = str(err.value)

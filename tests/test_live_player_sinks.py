@@ -26,7 +26,7 @@ from hapmotion.bhaptics.device_map import DeviceMap
 from hapmotion.live.frames import OutFrame
 from hapmotion.live.sinks import PlayerSdk1Sink, PlayerSdk2Sink
 from hapmotion.live.sinks.pacing import TickPacer
-from hapmotion.bhaptics.player_json import PLAYER_TICK_MS
+from hapmotion.bhaptics.tick import PLAYER_TICK_MS
 
 DMAP = DeviceMap.from_layout(load_layout())
 

@@ -12,9 +12,9 @@ import hapmotion.layout
 from hapmotion.errors import InputError
 from hapmotion.layout import load_layout
 from hapmotion.bhaptics.device_map import DeviceMap
-from hapmotion.bhaptics.sdk1 import (parse_v2_status, tact_project, v2_frame_message, v2_register_message,
-                                           v2_turn_off_all)
+from hapmotion.bhaptics.sdk1 import parse_v2_status, v2_frame_message, v2_register_message, v2_turn_off_all
 from hapmotion.bhaptics.sdk2 import parse_v3_message, v3_auth_message, v3_dot_messages, v3_stop_all
+from hapmotion.bhaptics.tact.project import project_object
 
 LAYOUT = load_layout()
 DMAP = DeviceMap.from_layout(LAYOUT)
@@ -74,9 +74,9 @@ def test_v2_register_and_tact_project(tmp_path):
     project = {"tracks": [], "layout": {"type": "Tactot"}}
     msg = json.loads(v2_register_message({"intro": project}))
     assert msg == {"Register": [{"Key": "intro", "Project": project}]}
-    assert tact_project(json.dumps({"project": project}), "a.tact") == project
+    assert project_object(json.dumps({"project": project}), "a.tact") == project
     with pytest.raises(InputError, match="b.tact"):
-        tact_project("{}", "b.tact")
+        project_object("{}", "b.tact")
 
 
 def test_v3_messages_by_hand():

@@ -14,7 +14,7 @@ import pytest
 from support.data import TACT
 
 from hapmotion.errors import InputError
-from hapmotion.layout import bhaptics_devices
+from hapmotion.bhaptics.devices import bhaptics_devices
 from hapmotion.track_files import load_track
 from hapmotion.bhaptics.tact.render import PATH_RADIUS
 

@@ -228,12 +228,10 @@ def test_json_meta_never_holds_nan(tmp_path, track):
     ],
 )
 def test_bad_layout_files(tmp_path, doc, expect):
-    from hapmotion.layout import load_layout as load
-
     path = tmp_path / "layout.json"
     path.write_text(doc)
     with pytest.raises(InputError, match=expect):
-        load(path)
+        load_layout(path)
 
 
 def test_mirror_map_is_a_permutation():

@@ -1,16 +1,10 @@
-"""Device layouts as data: which devices, their grids, bHaptics addressing and where they sit on the body.
-
-Two kinds of data live here:
-
-- the **bHaptics device catalogue** (``hapmotion/data/bhaptics_devices.json``): every device type that bHaptics
-  patterns (``.tact``) name, the positions it covers (``VestFront``, ``ForearmL``, ``Head`` ...) and its motor points
-  in panel coordinates. :func:`bhaptics_devices` and :func:`device_type` read it; the ``.tact`` reader and writer use
-  nothing else for motor counts and points.
-- the **renderer layout**: which of those devices the motion renderer drives and where they sit on the body.
+"""The renderer layout as data: which bHaptics devices the motion renderer drives, their grids, their column order
+in a track and where they sit on the body.
 
 A renderer layout is a JSON file (``hapmotion/data/x40_shoulders.json`` is the default: TactSuit X40 + two Tactosy sleeves
 worn on the shoulders). Another vest with the same kinds of charts (a front grid, a back grid, shoulder grids) is a
-new file, not new code.
+new file, not new code. Each device's name is a bHaptics position with its motor count in the bHaptics device
+catalogue (:mod:`hapmotion.bhaptics.devices`).
 
 Each device is a grid of ``rows x cols`` actuators addressed ``index = row * cols + col`` (bHaptics), mapped onto
 one *chart* of the body surface:
@@ -26,17 +20,21 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass
-from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
+from .bhaptics.devices import bhaptics_devices
 from .body.model import BodyModel
 from .errors import InputError
 
 CHART_FRONT, CHART_BACK, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT = 0, 1, 2, 3
 CHART_NAMES = ("front", "back", "shoulder_left", "shoulder_right")
+
+DEFAULT_LAYOUT_NAME = "x40_shoulders"
+"""The bundled layout's name (``hapmotion/data/x40_shoulders.json``): what a track or sink is for when none is
+named."""
 
 
 @dataclass(frozen=True)
@@ -147,8 +145,8 @@ def load_layout(path: "str | os.PathLike[str] | None" = None) -> Layout:
     Raises :class:`~hapmotion.errors.InputError` naming the field when the file does not fit the schema.
     """
     if path is None:
-        text = resources.files("hapmotion").joinpath("data/x40_shoulders.json").read_text()
-        source = "x40_shoulders.json"
+        source = f"{DEFAULT_LAYOUT_NAME}.json"
+        text = resources.files("hapmotion").joinpath(f"data/{source}").read_text()
     else:
         source = os.fspath(path)
         try:
@@ -211,61 +209,3 @@ def load_layout(path: "str | os.PathLike[str] | None" = None) -> Layout:
             raise InputError(source, "field devices", f"expected {by_chart[a].name} and {by_chart[b].name} to have the "
                              "same grid (mirroring swaps them)")
     return Layout(name=str(doc.get("name", Path(source).stem)), devices=tuple(devices))
-
-
-# ---------------------------------------------------------------------------------------------- bHaptics catalogue
-@dataclass(frozen=True)
-class DeviceType:
-    """One bHaptics device type as ``.tact`` layouts name it (``Tactot``, ``Tactosy2``, ``Tactal`` ...).
-
-    ``points`` is ``(n_motors, 2)`` float64: motor ``i`` at ``(x, y)`` in 0..1 of the panel (x = 0 at the wearer's
-    left, y = 0 at the top), shared by every position in ``positions``; ``cols`` x ``rows`` is the grid it forms.
-    """
-
-    name: str
-    positions: tuple[str, ...]
-    points: np.ndarray
-    cols: int
-    rows: int
-    aliases: tuple[str, ...] = ()
-
-    @property
-    def n_motors(self) -> int:
-        return int(self.points.shape[0])
-
-
-@lru_cache(maxsize=1)
-def bhaptics_devices() -> dict[str, DeviceType]:
-    """The bundled catalogue, by type name, in file order (vest first)."""
-    doc = json.loads(resources.files("hapmotion").joinpath("data/bhaptics_devices.json").read_text())
-    out = {}
-    for name, d in doc["devices"].items():
-        pts = np.asarray(d["points"], dtype=np.float64).reshape(-1, 2)
-        pts.setflags(write=False)
-        out[name] = DeviceType(name=name, positions=tuple(d["positions"]), points=pts, cols=int(d["cols"]),
-                               rows=int(d["rows"]), aliases=tuple(d.get("aliases", ())))
-    return out
-
-
-@lru_cache(maxsize=1)
-def position_order() -> tuple[str, ...]:
-    """Every bHaptics position in the order tracks list them (vest, arms, head, hands, feet, gloves, racket)."""
-    doc = json.loads(resources.files("hapmotion").joinpath("data/bhaptics_devices.json").read_text())
-    return tuple(doc["position_order"])
-
-
-def device_type(name: str) -> "DeviceType | None":
-    """The catalogue entry a ``.tact`` ``layout.type`` / ``layout.name`` names (aliases and case tolerated)."""
-    key = str(name).strip().lower()
-    for t in bhaptics_devices().values():
-        if t.name.lower() == key or key in (a.lower() for a in t.aliases):
-            return t
-    return None
-
-
-def type_for_position(position: str, n_motors: int | None = None) -> "DeviceType | None":
-    """The first catalogue type covering ``position`` (with ``n_motors`` motors when given)."""
-    for t in bhaptics_devices().values():
-        if position in t.positions and (n_motors is None or t.n_motors == n_motors):
-            return t
-    return None

@@ -36,7 +36,7 @@ from nats.js.kv import KeyValue
 from ..body.model import BodyModel
 from ..errors import InputError, UsageError
 from ..layout import Layout
-from ..live.builders import NATS_ONLY_LIVE
+from ..live.kinds import NATS_ONLY_LIVE
 from ..show.cue_layer import LiveCues
 from ..live.engine import LiveEngine
 from ..live.frames import FrameInlet, SkeletonFrame

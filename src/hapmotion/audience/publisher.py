@@ -27,8 +27,9 @@ from ..body.model import BodyModel
 from ..errors import UsageError
 from ..layout import Layout
 from ..live.frames import OutFrame
+from ..live.kinds import register_sink_kind
 from ..live.sinks.base import Sink
-from ..live.urls import Endpoint
+from ..live.endpoint import Endpoint
 from ..show.settings import Show
 from ..show.stage import OutputStage
 from ..show.timeline import RowTimeline
@@ -214,3 +215,6 @@ def publisher_sink(ep: Endpoint, *, fps: float, show: Show, stage: OutputStage, 
         raise UsageError(f"--sink {ep.text!r}: expected nats://HOST:PORT/SHOW (the show's name)")
     desc = describe_show(name, show=show, stage=stage, layout=layout, body=body, stall_ms=stall_ms, mirror=mirror)
     return NatsPublisherSink(f"nats://{ep.host}:{ep.port}", desc, music=music, fps=fps)
+
+
+register_sink_kind("nats", publisher_sink)

@@ -10,9 +10,13 @@ from typing import Any, Mapping, Optional
 
 import numpy as np
 
-from ..errors import InputError
 from .device_map import DeviceMap
 from .player_json import get_ci, json_object, to_int_percent
+
+SDK1_PORT = 15881
+"""The Player's SDK1 WebSocket port on the machine it runs on (plain ``ws://``, no authentication)."""
+SDK1_PATH = "/v2/feedbacks"
+"""The SDK1 endpoint's path (tact-python ``better_haptic_player.py``, tact-js v1 ``PlayerSocket.ts``)."""
 
 # SDK1 frame positions (the position names of the clients above). "Vest" is deliberately absent: bHaptics staff say
 # frames go to VestFront and VestBack separately (bhaptics/haptic-library issue #216).
@@ -41,23 +45,12 @@ def v2_turn_off_all() -> str:
 
 
 def v2_register_message(registrations: Mapping[str, Any]) -> Optional[str]:
-    """``{"Register": [{"Key", "Project"}...]}`` for key -> .tact ``project`` object; None when there is none."""
+    """``{"Register": [{"Key", "Project"}...]}`` for key -> .tact ``project`` object
+    (:func:`hapmotion.bhaptics.tact.project.project_object`); None when there is none."""
     if not registrations:
         return None
     return json.dumps({"Register": [{"Key": k, "Project": p} for k, p in registrations.items()]},
                       separators=(",", ":"))
-
-
-def tact_project(text: str, source: str) -> dict:
-    """The ``project`` object of a ``.tact`` file's text (what SDK1 ``Register`` takes), or InputError."""
-    try:
-        obj = json.loads(text)
-    except ValueError as exc:
-        raise InputError(source, f"line {exc.lineno}", f"expected .tact JSON, {exc.msg}") from None
-    project = obj.get("project") if isinstance(obj, dict) else None
-    if not isinstance(project, dict) or "tracks" not in project:
-        raise InputError(source, "field project", "expected a .tact file with a 'project' holding 'tracks'")
-    return project
 
 
 def parse_v2_status(text: "str | bytes") -> Optional[dict]:

@@ -14,6 +14,11 @@ import numpy as np
 from .device_map import DeviceMap
 from .player_json import get_ci, json_object, to_int_percent
 
+SDK2_PORT = 15882
+"""The Player's SDK2 port on the machine it runs on (``wss://``, TLS with the Player's self-signed certificate)."""
+SDK2_PATH = "/v3/feedback"
+"""The SDK2 endpoint's path (tact-simhub ``BhapticsWebsocket.cs``; ``bhaptics_library.dll`` adds a trailing slash)."""
+
 
 def v3_envelope(kind: str, payload: Any) -> str:
     """SDK2 envelope with the lower-case keys and JSON-string payload that native SDKs send (the key strings in

@@ -45,7 +45,7 @@ def command(sinks: tuple[str, ...], step_ms: int, gap_ms: int, intensity: float,
     from ..bhaptics.device_map import DeviceMap
     from ..live.player_check import CHECK_FPS, pattern_steps, pattern_track, probe_player
     from ..live.playback import run_play
-    from ..live.builders import build_sink
+    from ..live.kinds import build_sink
     from ..live.urls import parse_sink
     from .session_report import setup_logging
 

@@ -82,6 +82,7 @@ def command(source: Optional[str], sinks: tuple[str, ...], speed: float, loop: b
             show_stats: bool, stats_json: Optional[str], workspace_id: Optional[str], api_key: Optional[str],
             allow_origins: tuple[str, ...], token: Optional[str], allow_senders: tuple[str, ...], max_senders: int,
             cue_port: Optional[str], quiet: bool, show: Show, motion_opts: dict) -> None:
+    from .. import audience  # noqa: F401 (registers the nats:// sink kind)
     from ..live import run_live
 
     setup_logging("live", quiet)

@@ -14,10 +14,10 @@ docs/live.md describes the address scheme, message schemas, SOURCE/SINK syntax, 
 """
 
 from ..bhaptics.device_map import DeviceMap
-from .builders import build_sink, build_source
+from .kinds import build_sink, build_source
 from .engine import LiveEngine, RenderedSkeleton, Upstream
 from .frames import OutFrame, SkeletonFrame
-from .session import Session, SinkContext, live, run_live
+from .session import Session, SinkOptions, live, run_live
 from .sinks import BroadcastSink, OscOutSink, PlayerSdk1Sink, PlayerSdk2Sink, RecorderSink, Sink
 from .sources import ClockSource, OscSource, ReplaySource, Source, WsSource
 from .stats import LiveStats
@@ -26,6 +26,6 @@ from .urls import parse_sink, parse_source
 __all__ = [
     "BroadcastSink", "ClockSource", "DeviceMap", "LiveEngine", "LiveStats", "OscOutSink", "OscSource", "OutFrame",
     "PlayerSdk1Sink", "PlayerSdk2Sink", "RecorderSink", "RenderedSkeleton", "ReplaySource", "Session",
-    "SinkContext", "Sink", "SkeletonFrame", "Source", "Upstream", "WsSource", "build_sink", "build_source", "live",
+    "SinkOptions", "Sink", "SkeletonFrame", "Source", "Upstream", "WsSource", "build_sink", "build_source", "live",
     "parse_sink", "parse_source", "run_live",
 ]

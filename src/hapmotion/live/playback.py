@@ -33,7 +33,7 @@ from ..show.timeline import RowTimeline
 from ..track import HapticTrack, parse_actuator_id
 from ..track_files import load_track
 from .frames import SkeletonFrame
-from .session import Session, SinkContext, SinkSpec
+from .session import Session, SinkOptions, SinkSpec
 from .sources import Source
 from .stats import LiveStats
 
@@ -200,7 +200,7 @@ async def play(
     # time covers three rows whatever the rate.
     engine_options.setdefault("stall_s", max(0.25, 3.0 / source.rate))
     session = Session(source, StoredRows(RowTimeline(rows, fps)), stage, session_layout, sinks, fps=fps,
-                      rate=source.rate, context=SinkContext(workspace_id, api_key, meta, speed), cue_port=cue_port,
+                      rate=source.rate, context=SinkOptions(workspace_id, api_key, meta, speed), cue_port=cue_port,
                       **engine_options)
     return await session.run()
 

@@ -32,9 +32,10 @@ from websockets.asyncio.client import connect
 from ..layout import CHART_BACK, CHART_FRONT, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, Layout
 from ..track import HapticTrack
 from .sinks import PlayerSdk1Sink, PlayerSdk2Sink, Sink
-from ..bhaptics.player_json import PLAYER_TICK_MS, get_ci
+from ..bhaptics.player_json import get_ci
+from ..bhaptics.tick import PLAYER_TICK_FPS
 
-CHECK_FPS = 1000.0 / PLAYER_TICK_MS
+CHECK_FPS = PLAYER_TICK_FPS
 """The test pattern is made on the Player's tick (50 rows per second)."""
 
 _DEVICE_WORDS = {CHART_FRONT: "vest front", CHART_BACK: "vest back", CHART_SHOULDER_LEFT: "left shoulder sleeve",
@@ -132,41 +133,45 @@ class PlayerReport:
             out.append(f"  {device}: " + ("connected" if ok else "NOT connected: its steps will not be felt"))
         return out
 
+    def read_sdk1_status(self, status: dict, layout: Layout) -> None:
+        """Take in the Player's SDK1 status object (:func:`~hapmotion.bhaptics.sdk1.parse_v2_status`): its
+        ``ConnectedPositions`` are the connected devices (the X40 is one position, ``Vest``, covering both panels).
+        A status without that list leaves the report unanswered."""
+        positions = status.get("ConnectedPositions")
+        if not isinstance(positions, list):
+            return
+        self.answered = True
+        self.connected = [str(p) for p in positions]
+        count = status.get("ConnectedDeviceCount")
+        if isinstance(count, int) and not isinstance(count, bool):
+            self.details.append(f"ConnectedDeviceCount {count}")
+        names = set(self.connected)
+        for d in layout.devices:
+            # the Player reports the X40 (both panels) as one position, "Vest"
+            self.layout_devices[d.name] = d.name in names or (d.name in ("VestFront", "VestBack") and "Vest" in names)
 
-def _v2_report(report: PlayerReport, status: dict, layout: Layout) -> None:
-    positions = status.get("ConnectedPositions")
-    if not isinstance(positions, list):
-        return
-    report.answered = True
-    report.connected = [str(p) for p in positions]
-    count = status.get("ConnectedDeviceCount")
-    if isinstance(count, int) and not isinstance(count, bool):
-        report.details.append(f"ConnectedDeviceCount {count}")
-    names = set(report.connected)
-    for d in layout.devices:
-        # the Player reports the X40 (both panels) as one position, "Vest"
-        report.layout_devices[d.name] = d.name in names or (d.name in ("VestFront", "VestBack") and "Vest" in names)
-
-
-def _v3_report(report: PlayerReport, devices: Any, layout: Layout) -> None:
-    if not isinstance(devices, list):
-        return
-    report.answered = True
-    by_position: dict[int, bool] = {}
-    for item in devices:
-        if not isinstance(item, dict):
-            continue
-        name, pos = get_ci(item, "deviceName"), get_ci(item, "position")
-        ok = get_ci(item, "connected") is True
-        battery = get_ci(item, "battery")
-        if ok:
-            report.connected.append(str(name))
-        report.details.append(f"{name}: SDK2 position {pos}, {'connected' if ok else 'not connected'}"
-                              + (f", battery {battery} %" if isinstance(battery, int) else ""))
-        if isinstance(pos, int):
-            by_position[pos] = by_position.get(pos, False) or ok
-    for d in layout.devices:
-        report.layout_devices[d.name] = by_position.get(d.sdk2_position, False)
+    def read_sdk2_devices(self, devices: Any, layout: Layout) -> None:
+        """Take in the Player's SDK2 ``ServerDevices`` list (``{position, deviceName, connected, battery}`` each): a
+        layout device is connected when a connected device sits at its SDK2 position. Anything but a list leaves the
+        report unanswered."""
+        if not isinstance(devices, list):
+            return
+        self.answered = True
+        by_position: dict[int, bool] = {}
+        for item in devices:
+            if not isinstance(item, dict):
+                continue
+            name, pos = get_ci(item, "deviceName"), get_ci(item, "position")
+            ok = get_ci(item, "connected") is True
+            battery = get_ci(item, "battery")
+            if ok:
+                self.connected.append(str(name))
+            self.details.append(f"{name}: SDK2 position {pos}, {'connected' if ok else 'not connected'}"
+                                + (f", battery {battery} %" if isinstance(battery, int) else ""))
+            if isinstance(pos, int):
+                by_position[pos] = by_position.get(pos, False) or ok
+        for d in layout.devices:
+            self.layout_devices[d.name] = by_position.get(d.sdk2_position, False)
 
 
 async def probe_player(sink: Sink, layout: Layout, timeout: float = 2.0) -> Optional[PlayerReport]:
@@ -195,9 +200,9 @@ async def probe_player(sink: Sink, layout: Layout, timeout: float = 2.0) -> Opti
                 break
             sink.on_message(message)
             if isinstance(sink, PlayerSdk1Sink) and sink.status is not None:
-                _v2_report(report, sink.status, layout)
+                report.read_sdk1_status(sink.status, layout)
             elif isinstance(sink, PlayerSdk2Sink) and "ServerDevices" in sink.server_messages:
-                _v3_report(report, sink.server_messages["ServerDevices"], layout)
+                report.read_sdk2_devices(sink.server_messages["ServerDevices"], layout)
     except Exception as exc:  # the connection dropped while asking: report what is known
         report.error = str(exc) or exc.__class__.__name__
     finally:

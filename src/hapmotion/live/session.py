@@ -31,7 +31,7 @@ from .engine import LiveEngine, RenderedSkeleton, StepRenderer, Upstream
 from .sinks import Sink
 from .sources import ClockSource, ReplaySource, Source
 from .stats import LiveStats
-from .builders import build_sink, build_source
+from .kinds import build_sink, build_source
 from .urls import parse_sink, parse_source
 
 log = logging.getLogger("hapmotion.live")
@@ -42,10 +42,11 @@ SinkSpec = Union[str, Sink, Callable[[DeviceMap, float], Sink]]
 
 
 @dataclass
-class SinkContext:
-    """What building a sink from a SINK string needs beyond the device map and the rate: the Player's SDK2
-    credentials, the session's description for recorders and viewers, the replay speed a recording undoes, and
-    what a ``nats://`` publisher describes to its seats (``None``: no audience from this session)."""
+class SinkOptions:
+    """What a session's SINK strings need besides the device map and the rate (the rest of
+    :class:`~hapmotion.live.kinds.SinkContext`): the Player's SDK2 credentials, the session's description for
+    recorders and viewers, the replay speed a recording undoes, and what a ``nats://`` publisher describes to its
+    seats (``None``: no audience from this session)."""
 
     workspace_id: Optional[str] = None
     api_key: Optional[str] = None
@@ -64,11 +65,11 @@ class Session:
 
     def __init__(self, source: Source, upstream: "Upstream | StepRenderer | None", stage: OutputStage,
                  layout: Layout, sinks: Sequence[SinkSpec], *, fps: float, rate: Optional[float] = None,
-                 context: Optional[SinkContext] = None, cue_port: "str | int | None" = None,
+                 context: Optional[SinkOptions] = None, cue_port: "str | int | None" = None,
                  wrap: Optional[Callable[[Sink], Sink]] = None, **engine_options: Any):
         if not sinks:
             raise UsageError("at least one --sink is required")
-        context = context or SinkContext()
+        context = context or SinkOptions()
         self.source = source
         self.stage = stage
         self.dmap = DeviceMap.from_layout(layout)
@@ -80,7 +81,7 @@ class Session:
         self.engine = LiveEngine(upstream, self.sinks, stage=stage, n_actuators=self.dmap.n, fps=fps, rate=rate,
                                  source_name=source.describe(), **engine_options)
 
-    def _build(self, spec: SinkSpec, layout: Layout, fps: float, context: SinkContext) -> Sink:
+    def _build(self, spec: SinkSpec, layout: Layout, fps: float, context: SinkOptions) -> Sink:
         if isinstance(spec, Sink):
             return spec
         if callable(spec):
@@ -170,7 +171,7 @@ async def live(show: Show, source: Union[str, Source, None], sinks: Sequence[Sin
             "audio": os.fspath(show.audio) if show.audio else None}
     audience = {"show": show, "stage": stage, "layout": layout, "body": body, "music": music,
                 "stall_ms": stall_ms, "mirror": mirror}
-    context = SinkContext(workspace_id, api_key, meta, src.speed if isinstance(src, ReplaySource) else 1.0,
+    context = SinkOptions(workspace_id, api_key, meta, src.speed if isinstance(src, ReplaySource) else 1.0,
                           audience)
     session = Session(src, upstream, stage, layout, sinks, fps=fps, rate=rate, context=context, cue_port=cue_port,
                       stall_s=stall_ms / 1000.0, **engine_options)

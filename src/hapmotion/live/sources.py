@@ -32,9 +32,10 @@ from ..motion import Motion
 from ..motion_files import load_motion
 from .access import (MAX_SENDERS, OSC_MESSAGE_BUDGET, TOKEN_HEADER, TOKEN_QUERY, WS_MESSAGE_BUDGET, SenderAllowList,
                      SenderBudgets, bearer_token, burst_for, exposure_line, is_loopback, reach, token_matches)
+from .addresses import OSC_IN, WS_IN
 from .frames import FrameInlet, SkeletonFrame
 from .hygiene import RateLimiter
-from .urls import Endpoint
+from .endpoint import Endpoint
 from .wire.osc_address import OSC_PREFIX
 from .wire.osc_in import OscSkeletonDecoder
 from .wire.vmc_in import VMC_HOST, VMC_MESSAGES_PER_FRAME, VMC_PORT, VmcDecoder
@@ -176,7 +177,7 @@ class OscSource(UdpSource):
 
     scheme = "osc"
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 9000, prefix: str = OSC_PREFIX, **access: Any):
+    def __init__(self, host: str = OSC_IN.host, port: int = OSC_IN.port, prefix: str = OSC_PREFIX, **access: Any):
         super().__init__(host, port, **access)
         self.prefix = prefix
 
@@ -263,7 +264,7 @@ class WsSource(Source):
         Messages over this many bytes close that sender's connection (code 1009); others are not affected.
     """
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 8765, max_size: int = 2 ** 16, *,
+    def __init__(self, host: str = WS_IN.host, port: int = WS_IN.port, max_size: int = 2 ** 16, *,
                  allow_origins: Sequence[str] = (), token: Optional[str] = None,
                  allow_senders: Optional[SenderAllowList] = None, max_senders: int = MAX_SENDERS,
                  sender_rate: Optional[float] = None):

@@ -1,6 +1,6 @@
 """bHaptics ``.tact`` files: any Designer / Player pattern in, Designer-shaped patterns out.
 
-Reading (:func:`read_tact`) renders the project the way the Player plays it (:mod:`.tact_render`): a track at the
+Reading (:func:`read_tact`) renders the project the way the Player plays it (:mod:`.render`): a track at the
 Player's 20 ms tick (50 fps) with one column per motor of every position the file's device type covers
 (``VestFront_0..19``, ``ForearmL_0..5``, ``Head_0..5`` ...), whole numbers 0..100.
 
@@ -32,13 +32,13 @@ import numpy as np
 
 from ...errors import InputError, UsageError
 from ...filesafety import atomic_path
-from ...layout import bhaptics_devices, load_layout, position_order, type_for_position
-from ...track import HapticTrack
+from ...layout import load_layout
 from ...limits import DEFAULT_LIMITS, InputLimits, check_frames, load_json
+from ...track import HapticTrack
+from ..devices import bhaptics_devices, position_order, type_for_position
 from .project import parse_project
-from .render import TICK_MS, render
-
-TICK_FPS = 1000.0 / TICK_MS
+from ..tick import PLAYER_TICK_FPS, PLAYER_TICK_MS
+from .render import render
 
 
 # ------------------------------------------------------------------------------------------------------ writing
@@ -76,7 +76,8 @@ def _feedback(rows: np.ndarray) -> list[dict]:
     for s, e in zip(starts, ends):
         idx = np.flatnonzero(q[s])
         if idx.size:
-            entries.append({"startTime": int(s) * TICK_MS, "endTime": int(e) * TICK_MS, "playbackType": "NONE",
+            entries.append({"startTime": int(s) * PLAYER_TICK_MS, "endTime": int(e) * PLAYER_TICK_MS,
+                            "playbackType": "NONE",
                             "pointList": [{"index": int(i), "intensity": round(q[s, i] / 100.0, 2)} for i in idx]})
     return entries
 
@@ -98,7 +99,7 @@ def _project(name: str, type_name: str, rows: dict[str, np.ndarray], duration_ms
                 {"name": name, "startTime": 0, "offsetTime": duration_ms, "modes": modes}]}],
         },
         "durationMillis": 0,
-        "intervalMillis": TICK_MS,
+        "intervalMillis": PLAYER_TICK_MS,
         "size": 20,
     }
 
@@ -106,8 +107,8 @@ def _project(name: str, type_name: str, rows: dict[str, np.ndarray], duration_ms
 def write_tact(track: HapticTrack, path: Path) -> list[Path]:
     """Write the vest file at ``path`` and one file per other device beside it; return the files, ``path`` first."""
     plan = _files(track, path)
-    ticked = track.resample(TICK_FPS)
-    duration_ms = ticked.n_frames * TICK_MS
+    ticked = track.resample(PLAYER_TICK_FPS)
+    duration_ms = ticked.n_frames * PLAYER_TICK_MS
     docs = {target: _project(path.stem, type_name, {d: ticked.intensities[:, ticked.device_columns(d)] for d in devs},
                              duration_ms)
             for target, (type_name, devs) in plan.items()}
@@ -122,11 +123,11 @@ def write_tact(track: HapticTrack, path: Path) -> list[Path]:
 # ------------------------------------------------------------------------------------------------------ reading
 def _read_one(path: Path, limits: InputLimits) -> tuple[str, dict[str, np.ndarray]]:
     type_name, layout, effects, end_ms = parse_project(path, load_json(path, limits, ".tact pattern"))
-    n_ticks = int(end_ms // TICK_MS) + 1
-    check_frames(path, "field project.mediaFileDuration / effects", n_ticks, TICK_FPS, limits,
+    n_ticks = int(end_ms // PLAYER_TICK_MS) + 1
+    check_frames(path, "field project.mediaFileDuration / effects", n_ticks, PLAYER_TICK_FPS, limits,
                  columns=sum(p.shape[0] for p in layout.values()), of="pattern")
     cols = render(effects, layout, n_ticks)
-    if n_ticks > 1 and (n_ticks - 1) * TICK_MS == end_ms and not any(r[-1].any() for r in cols.values()):
+    if n_ticks > 1 and (n_ticks - 1) * PLAYER_TICK_MS == end_ms and not any(r[-1].any() for r in cols.values()):
         # the end falls on a tick and nothing plays there (dot frames end exclusive): the track stops before it
         cols = {pos: r[:-1] for pos, r in cols.items()}
     return type_name, cols
@@ -158,5 +159,5 @@ def read_tact(path: Path, limits: InputLimits = DEFAULT_LIMITS) -> HapticTrack:
     default = load_layout()
     # our own vest + sleeve files come back on the renderer's layout; anything else is named by its device types
     layout = default.name if ids == default.actuators else "+".join(dict.fromkeys(types))
-    return HapticTrack(intensities=data, fps=TICK_FPS, actuators=ids, layout=layout,
+    return HapticTrack(intensities=data, fps=PLAYER_TICK_FPS, actuators=ids, layout=layout,
                        meta={"source": str(path), "files": [str(f) for f in files]})

@@ -1,22 +1,89 @@
 """Parse a ``.tact`` document (bHaptics Designer / Player project) into layout and effects, checking every field.
 
+What a project holds (bHaptics Designer export; field names as in the files): ``layout`` (a device type and the motor
+points of each position) and ``tracks`` (each with ``enable`` and ``effects``). An effect starts at ``startTime``
+(ms on the project timeline) and lasts ``offsetTime`` ms; for each position it names it holds a ``mode``,
+``DOT_MODE`` or ``PATH_MODE``, and only that mode's data plays (:mod:`.render` says how each mode plays).
+
 Numbers may be JSON numbers or strings (older exports write ``"0.700"``). Any field that does not fit raises an
 InputError naming it, e.g. ``project.tracks[1].effects[0].modes.VestFront.pathMode.feedback[2].pointList[0].x``.
 """
 
 from __future__ import annotations
 
+import json
 import math
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ...errors import InputError
-from ...layout import device_type, type_for_position
-from .render import MOVING_PATTERNS, PLAYBACK_TYPES, DotFrame, Effect, PathPoint, PositionPart
+from ..devices import device_type, type_for_position
 
 MAX_MOTORS = 64
 """Most motors one position may list."""
+
+PLAYBACK_TYPES = ("NONE", "FADE_IN", "FADE_OUT", "FADE_IN_OUT")
+MOVING_PATTERNS = ("CONST_SPEED", "CONST_TDM")
+
+
+@dataclass
+class DotFrame:
+    """One dot-mode frame: ``start``/``end`` ms from the effect's start (end excluded), ``values`` (n_motors,)
+    0..100."""
+
+    start: float
+    end: float
+    playback: str
+    values: np.ndarray  # (n_motors,) 0..100
+
+
+@dataclass
+class PathPoint:
+    """A moving point: key frames ``times`` (K,) ms, ``xy`` (K, 2), ``intensity`` (K,) 0..100."""
+
+    times: np.ndarray
+    xy: np.ndarray
+    intensity: np.ndarray
+    pattern: str
+    playback: str
+
+
+@dataclass
+class PositionPart:
+    """What one effect plays on one position."""
+
+    position: str
+    mode: str  # DOT_MODE | PATH_MODE
+    dots: list[DotFrame] = field(default_factory=list)
+    dot_connected: bool = False
+    paths: list[PathPoint] = field(default_factory=list)
+
+
+@dataclass
+class Effect:
+    """One effect of an enabled track: what it plays on each position it names."""
+
+    start: float  # ms on the project timeline
+    length: float  # ms
+    parts: list[PositionPart]
+
+
+def project_object(text: str, source: str) -> dict:
+    """The ``project`` object of a ``.tact`` file's text as the Player's SDK1 ``Register`` takes it, or InputError.
+
+    Only its outline is checked (an object holding ``tracks``): the Player reads the rest itself. What this package
+    plays from a project is checked field by field by :func:`parse_project`.
+    """
+    try:
+        obj = json.loads(text)
+    except ValueError as exc:
+        raise InputError(source, f"line {exc.lineno}", f"expected .tact JSON, {exc.msg}") from None
+    project = obj.get("project") if isinstance(obj, dict) else None
+    if not isinstance(project, dict) or "tracks" not in project:
+        raise InputError(source, "field project", "expected a .tact file with a 'project' holding 'tracks'")
+    return project
 
 
 class _Fields:

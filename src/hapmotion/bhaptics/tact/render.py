@@ -1,9 +1,6 @@
 """Render a bHaptics ``.tact`` project the way the Player plays it: one row of motor values every 20 ms.
 
-What a project holds (bHaptics Designer export; field names as in the files): ``layout`` (a device type and the motor
-points of each position) and ``tracks`` (each with ``enable`` and ``effects``). An effect starts at ``startTime``
-(ms on the project timeline) and lasts ``offsetTime`` ms; for each position it names it holds a ``mode``,
-``DOT_MODE`` or ``PATH_MODE``, and only that mode's data plays.
+The effects come parsed (:mod:`.project`, which also says what a project holds); how each mode plays:
 
 Dot mode
     ``dotMode.feedback`` is a list of frames ``{startTime, endTime, playbackType, pointList: [{index, intensity}]}``
@@ -32,55 +29,14 @@ path-mode samples, against 1.31 for the best panel radius, 0.3).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 
-TICK_MS = 20
-"""The Player's tick: one row every 20 ms (``.tact`` ``intervalMillis``)."""
+from ..tick import PLAYER_TICK_MS
+from .project import Effect, PathPoint, PositionPart
+
 PATH_MOTORS = 3
 PATH_RADIUS = 1.0
 """Reach of a path point, in motor spacings."""
-
-PLAYBACK_TYPES = ("NONE", "FADE_IN", "FADE_OUT", "FADE_IN_OUT")
-MOVING_PATTERNS = ("CONST_SPEED", "CONST_TDM")
-
-
-@dataclass
-class DotFrame:
-    start: float
-    end: float
-    playback: str
-    values: np.ndarray  # (n_motors,) 0..100
-
-
-@dataclass
-class PathPoint:
-    """A moving point: key frames ``times`` (K,) ms, ``xy`` (K, 2), ``intensity`` (K,) 0..100."""
-
-    times: np.ndarray
-    xy: np.ndarray
-    intensity: np.ndarray
-    pattern: str
-    playback: str
-
-
-@dataclass
-class PositionPart:
-    """What one effect plays on one position."""
-
-    position: str
-    mode: str  # DOT_MODE | PATH_MODE
-    dots: list[DotFrame] = field(default_factory=list)
-    dot_connected: bool = False
-    paths: list[PathPoint] = field(default_factory=list)
-
-
-@dataclass
-class Effect:
-    start: float  # ms on the project timeline
-    length: float  # ms
-    parts: list[PositionPart]
 
 
 def envelope(playback: str, u: np.ndarray) -> np.ndarray:
@@ -139,7 +95,7 @@ def _dots(part: PositionPart, t: np.ndarray, n: int) -> np.ndarray:
     frames = sorted(part.dots, key=lambda f: f.start)
     for k, f in enumerate(frames):
         # a frame that spans no time plays for the one tick that starts at it
-        on = (t >= f.start) & ((t < f.end) if f.end > f.start else (t < f.start + TICK_MS))
+        on = (t >= f.start) & ((t < f.end) if f.end > f.start else (t < f.start + PLAYER_TICK_MS))
         if not on.any():
             continue
         u = (t[on] - f.start) / max(f.end - f.start, 1e-9)
@@ -158,7 +114,7 @@ def _paths(part: PositionPart, t: np.ndarray, points: np.ndarray) -> np.ndarray:
     for p in part.paths:
         t0, t1 = p.times[0], p.times[-1]
         # a one-key-frame path spans no time: it plays for the one tick that starts at its key frame
-        on = (t >= t0) & (t <= t1) if t1 > t0 else (t >= t0) & (t < t0 + TICK_MS)
+        on = (t >= t0) & (t <= t1) if t1 > t0 else (t >= t0) & (t < t0 + PLAYER_TICK_MS)
         if not on.any():
             continue
         xy, inten = path_positions(p, t[on])
@@ -173,10 +129,10 @@ def render(effects: list[Effect], layout: dict[str, np.ndarray], n_ticks: int) -
     ``layout`` maps each position to its motor points ``(n_motors, 2)``.
     """
     out = {pos: np.zeros((n_ticks, pts.shape[0])) for pos, pts in layout.items()}
-    times = np.arange(n_ticks, dtype=np.float64) * TICK_MS
+    times = np.arange(n_ticks, dtype=np.float64) * PLAYER_TICK_MS
     for eff in effects:
-        lo = int(np.ceil(eff.start / TICK_MS))
-        hi = min(n_ticks, int(np.floor((eff.start + eff.length) / TICK_MS)) + 1)
+        lo = int(np.ceil(eff.start / PLAYER_TICK_MS))
+        hi = min(n_ticks, int(np.floor((eff.start + eff.length) / PLAYER_TICK_MS)) + 1)
         if hi <= lo:
             continue
         t = times[lo:hi] - eff.start

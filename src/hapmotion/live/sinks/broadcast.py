@@ -22,6 +22,8 @@ from pathlib import Path
 from typing import Any, Optional, Sequence
 
 from ...errors import UsageError
+from ...layout import DEFAULT_LAYOUT_NAME
+from ..addresses import WS_BROADCAST
 from ..frames import OutFrame
 from ..wire.broadcast import broadcast_frame, broadcast_hello
 from .base import Sink, log
@@ -49,10 +51,11 @@ class BroadcastSink(Sink):
         Bytes waiting in the pipe to the server process beyond which frames are skipped.
     """
 
-    def __init__(self, actuators: Sequence[str], layout: str = "x40_shoulders", *, host: str = "127.0.0.1",
-                 port: int = 8766, fps: float = 60.0, client_buffer: int = 65536, slow_client_s: float = 5.0,
-                 sndbuf: Optional[int] = 65536, name: Optional[str] = None,
-                 render_info: Optional[dict[str, Any]] = None, pipe_limit: int = 65536, **kwargs: Any):
+    def __init__(self, actuators: Sequence[str], layout: str = DEFAULT_LAYOUT_NAME, *,
+                 host: str = WS_BROADCAST.host, port: int = WS_BROADCAST.port, fps: float = 60.0,
+                 client_buffer: int = 65536, slow_client_s: float = 5.0, sndbuf: Optional[int] = 65536,
+                 name: Optional[str] = None, render_info: Optional[dict[str, Any]] = None, pipe_limit: int = 65536,
+                 **kwargs: Any):
         super().__init__(name or f"ws-broadcast ws://{host}:{port}", fps=fps, **kwargs)
         self.host, self.port = host, port
         self.hello = broadcast_hello(fps, actuators, layout, render_info)

@@ -13,10 +13,10 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ...errors import UsageError
 from ...bhaptics.device_map import DeviceMap
+from ...errors import UsageError
+from ..addresses import OSC_OUT
 from ..frames import OutFrame
-from ..wire.osc_address import OSC_PREFIX
 from ..wire.osc_out import OscOutEncoder
 from .base import Sink
 
@@ -43,8 +43,8 @@ class OscOutSink(Sink):
         Bytes waiting in the socket's user-space buffer beyond which a frame is skipped.
     """
 
-    def __init__(self, dmap: DeviceMap, *, host: str = "127.0.0.1", port: int = 9001, prefix: str = OSC_PREFIX,
-                 per_actuator: bool = True, per_device: bool = True, fps: float = 60.0,
+    def __init__(self, dmap: DeviceMap, *, host: str = OSC_OUT.host, port: int = OSC_OUT.port,
+                 prefix: str = OSC_OUT.path, per_actuator: bool = True, per_device: bool = True, fps: float = 60.0,
                  buffer_limit: int = 65536, name: Optional[str] = None, **kwargs: Any):
         super().__init__(name or f"osc osc://{host}:{port}{prefix}", fps=fps, **kwargs)
         self.host, self.port = host, port

@@ -1,7 +1,7 @@
 """Resampling a stream of rows to the Player's tick, without losing short peaks (sans-I/O: the caller passes the
 time).
 
-The bHaptics Player plays dot frames on a 20 ms tick (:data:`~hapmotion.bhaptics.player_json.PLAYER_TICK_MS`),
+The bHaptics Player plays dot frames on a 20 ms tick (:data:`~hapmotion.bhaptics.tick.PLAYER_TICK_MS`),
 so a render at 120 fps sent frame by frame would be 120 messages a second per device of which the Player can show
 50. :class:`TickPacer` lets at most one send through per tick, and what it sends is the element-wise maximum of
 every row that was playing during the tick: the row still current when the tick began and every row that arrived

@@ -1,10 +1,11 @@
-"""bHaptics Player, SDK1 API: ``ws://127.0.0.1:15881/v2/feedbacks`` (the messages in :mod:`..wire.player_v2`).
+"""bHaptics Player, SDK1 API over ``ws://`` (the messages in :mod:`hapmotion.bhaptics.sdk1`).
 
 Each rendered row becomes one request with a ``Submit`` ``frame`` per device (VestFront, VestBack, ForearmL,
 ForearmR), one Key per device so the panels play together and each new frame replaces the previous one under its
 key. At most one request per 20 ms Player tick, carrying the max of the rows of that tick
-(:mod:`~hapmotion.live.sinks.pacing`). ``durationMillis`` is a little longer than the send interval, so the Player keeps playing between frames and
-stops on its own shortly after the stream stops. Stop sends zero frames and ``turnOffAll``.
+(:mod:`~hapmotion.live.sinks.pacing`). ``durationMillis`` is a little longer than the send interval, so the Player
+keeps playing between frames and stops on its own shortly after the stream stops. Stop sends zero frames and
+``turnOffAll``.
 """
 
 from __future__ import annotations
@@ -13,16 +14,14 @@ import math
 from typing import Any, Mapping, Optional
 from urllib.parse import urlencode
 
-from ...bhaptics.device_map import DeviceMap
-from ..frames import OutFrame
-from ...bhaptics.player_json import PLAYER_TICK_MS
-from ...bhaptics.sdk1 import parse_v2_status, v2_frame_message, v2_register_message, v2_turn_off_all
-from .ws_client import WebSocketClientSink
-
 import numpy as np
 
-
-PLAYER_TICK_S = PLAYER_TICK_MS / 1000.0
+from ...bhaptics.device_map import DeviceMap
+from ...bhaptics.sdk1 import parse_v2_status, v2_frame_message, v2_register_message, v2_turn_off_all
+from ...bhaptics.tick import PLAYER_TICK_MS, PLAYER_TICK_S
+from ..addresses import PLAYER_SDK1
+from ..frames import OutFrame
+from .ws_client import WebSocketClientSink
 
 
 def default_duration_ms(fps: float) -> int:
@@ -39,7 +38,7 @@ class PlayerSdk1Sink(WebSocketClientSink):
     dmap:
         Columns of each device in a row.
     host, port, path:
-        Player address (default ``127.0.0.1:15881/v2/feedbacks``).
+        Player address (default :data:`~hapmotion.live.addresses.PLAYER_SDK1`, the Player on this machine).
     app_id, app_name:
         Optional query parameters some SDK1 clients send (bHaptics' tact-js v1 ``PlayerSocket.ts``).
     duration_ms:
@@ -51,10 +50,10 @@ class PlayerSdk1Sink(WebSocketClientSink):
         connection; bHaptics' C# ``WebSocketSender.cs`` re-sends them too).
     """
 
-    def __init__(self, dmap: DeviceMap, *, host: str = "127.0.0.1", port: int = 15881, path: str = "/v2/feedbacks",
-                 app_id: Optional[str] = None, app_name: Optional[str] = None, duration_ms: Optional[int] = None,
-                 key_prefix: str = "hapmotion", registrations: Optional[Mapping[str, Any]] = None,
-                 fps: float = 60.0, name: Optional[str] = None, **kwargs: Any):
+    def __init__(self, dmap: DeviceMap, *, host: str = PLAYER_SDK1.host, port: int = PLAYER_SDK1.port,
+                 path: str = PLAYER_SDK1.path, app_id: Optional[str] = None, app_name: Optional[str] = None,
+                 duration_ms: Optional[int] = None, key_prefix: str = "hapmotion",
+                 registrations: Optional[Mapping[str, Any]] = None, fps: float = 60.0, name: Optional[str] = None, **kwargs: Any):
         query = {k: v for k, v in (("app_id", app_id), ("app_name", app_name)) if v}
         url = f"ws://{_host(host)}:{port}{path}" + (f"?{urlencode(query)}" if query else "")
         kwargs.setdefault("tick_s", PLAYER_TICK_S)

@@ -1,4 +1,4 @@
-"""bHaptics Player, SDK2 API: ``wss://127.0.0.1:15882/v3/feedback`` (the messages in :mod:`..wire.player_v3`).
+"""bHaptics Player, SDK2 API over ``wss://`` (the messages in :mod:`hapmotion.bhaptics.sdk2`).
 
 TLS with the Player's self-signed certificate (no verification, as every SDK2 client does), ``SdkRequestAuth``
 first on every connection, then per row ``SdkPlayDotMode`` for position 0 (the 40-value X40 array: front 0..19,
@@ -14,12 +14,14 @@ from urllib.parse import urlencode
 
 import numpy as np
 
-from ...errors import UsageError
 from ...bhaptics.device_map import DeviceMap
-from ..frames import OutFrame
 from ...bhaptics.sdk2 import parse_v3_message, v3_auth_message, v3_dot_messages, v3_stop_all
+from ...bhaptics.tick import PLAYER_TICK_S
+from ...errors import UsageError
+from ..addresses import PLAYER_SDK2
+from ..frames import OutFrame
+from .player_sdk1 import _host, default_duration_ms
 from .ws_client import WebSocketClientSink
-from .player_sdk1 import PLAYER_TICK_S, _host, default_duration_ms
 
 
 def insecure_tls_context() -> ssl.SSLContext:
@@ -44,13 +46,14 @@ class PlayerSdk2Sink(WebSocketClientSink):
         message: an ``int`` or a string of digits (the SINK option ``version=``); anything else is a
         :class:`~hapmotion.errors.UsageError`.
     host, port, path, duration_ms:
-        As for :class:`~hapmotion.live.sinks.player_sdk1.PlayerSdk1Sink` (default ``127.0.0.1:15882/v3/feedback``).
+        As for :class:`~hapmotion.live.sinks.player_sdk1.PlayerSdk1Sink` (default
+        :data:`~hapmotion.live.addresses.PLAYER_SDK2`).
     """
 
     def __init__(self, dmap: DeviceMap, *, workspace_id: str = "hapmotion", api_key: str = "",
-                 version: "int | str" = 1, host: str = "127.0.0.1", port: int = 15882, path: str = "/v3/feedback",
-                 duration_ms: Optional[int] = None, fps: float = 60.0, name: Optional[str] = None,
-                 tls: bool = True, **kwargs: Any):
+                 version: "int | str" = 1, host: str = PLAYER_SDK2.host, port: int = PLAYER_SDK2.port,
+                 path: str = PLAYER_SDK2.path, duration_ms: Optional[int] = None, fps: float = 60.0,
+                 name: Optional[str] = None, tls: bool = True, **kwargs: Any):
         version = _version_number(version)
         query = urlencode({"workspace_id": workspace_id, "api_key": api_key, "version": version})
         scheme = "wss" if tls else "ws"

@@ -31,6 +31,7 @@ from ...errors import UsageError
 from ...track import HapticTrack
 from ...track_files import save_track
 from ...filesafety import check_writable
+from ...layout import DEFAULT_LAYOUT_NAME
 from ..frames import OutFrame
 from .base import Sink, log
 from .journal import TrackJournal, format_rows, journal_path
@@ -60,7 +61,7 @@ class RecorderSink(Sink):
 
     bounded_shutdown = False
 
-    def __init__(self, path: "str | os.PathLike[str]", actuators: Sequence[str], layout: str = "x40_shoulders", *,
+    def __init__(self, path: "str | os.PathLike[str]", actuators: Sequence[str], layout: str = DEFAULT_LAYOUT_NAME, *,
                  fps: float = 60.0, meta: Optional[dict[str, Any]] = None, name: Optional[str] = None,
                  time_scale: float = 1.0, flush_s: float = 0.1, **kwargs: Any):
         self.path = Path(path)
