@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+from hapmotion.track_files import save_track
 from hapmotion.show.cues import Cue, CueList, cue_layer, layer, load_cues, pattern_rows
 from hapmotion.errors import InputError
 from hapmotion.layout import load_layout
@@ -22,7 +23,7 @@ def pulse(tmp_path, name="pulse.csv", actuator="VestFront_0", level=100.0, frame
     """A pattern file: one motor at ``level`` for ``frames`` rows at ``fps``, then one silent row."""
     rows = np.zeros((frames + 1, 2))
     rows[:frames, 0] = level
-    HapticTrack(rows, fps, (actuator, "Head_0")).save(tmp_path / name)
+    save_track(HapticTrack(rows, fps, (actuator, "Head_0")), tmp_path / name)
     return tmp_path / name
 
 

@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 
+from hapmotion.track_files import save_track
 import hapmotion
 import hapmotion.limits as limits_module
 from hapmotion.cli import main
@@ -27,7 +28,7 @@ def _track_csv(tmp_path, frames=120):
     """A (frames, 52) track at 60 fps, as CSV: 52 columns, so ``frames * 52`` values."""
     track = HapticTrack(np.full((frames, 52), 25.0), 60.0, load_layout().actuators)
     path = tmp_path / "show.csv"
-    track.save(path)
+    save_track(track, path)
     return path
 
 
@@ -100,7 +101,7 @@ def test_every_json_reader_goes_through_the_one_guard(tmp_path, monkeypatch):
     monkeypatch.setattr(limits_module, "scan_json", lambda raw: seen.append(len(raw)) or real(raw))
     tact = TACT / "FeedbackFiles_Vest_ArrowHit.tact"
     track = tmp_path / "t.json"
-    HapticTrack(np.zeros((3, 52)), 60.0, load_layout().actuators).save(track)
+    save_track(HapticTrack(np.zeros((3, 52)), 60.0, load_layout().actuators), track)
     cues = tmp_path / "cues.json"
     cues.write_text(json.dumps([{"time": 0, "pattern": str(tact)}]))
     kinect = tmp_path / "body.json"

@@ -17,6 +17,7 @@ from support.data import TACT
 from support.live_fakes import FakePlayerSdk1, FakePlayerSdk2, Tap, free_port, is_tick_max_sequence, self_signed_cert, \
     wait_for
 
+from hapmotion.track_files import save_track
 import hapmotion
 from hapmotion.cli import cli, main
 from hapmotion.cli import play as play_cli
@@ -109,7 +110,7 @@ def synthetic_track() -> HapticTrack:
 def test_our_own_track_reaches_the_sdk2_player_with_its_numbers(tmp_path):
     track = synthetic_track()
     path = tmp_path / "own.csv"
-    track.save(path)
+    save_track(track, path)
     cert = self_signed_cert(tmp_path)
 
     async def run():

@@ -8,6 +8,7 @@ import matplotlib.image as mpimg
 import numpy as np
 import pytest
 
+from hapmotion.track_files import save_track
 import hapmotion
 from hapmotion.cli import main
 from hapmotion.layout import load_layout
@@ -106,7 +107,7 @@ def test_plot_saved_tracks_and_music(tmp_path, capsys):
     track = hapmotion.render(motion, preset="energy")
     for ext in ("csv", "npz"):
         saved = tmp_path / f"punch.{ext}"
-        track.save(saved)
+        save_track(track, saved)
         out = tmp_path / f"from_{ext}.png"
         code, _, err = run(["plot", saved, "--dpi", "75", "-o", out], capsys)
         assert code == 0, err

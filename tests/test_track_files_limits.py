@@ -9,6 +9,7 @@ import zipfile
 import numpy as np
 import pytest
 
+from hapmotion.track_files import save_track
 from hapmotion.errors import InputError
 from hapmotion.layout import load_layout
 from hapmotion.track import HapticTrack
@@ -82,7 +83,7 @@ def test_corrupt_npz_is_one_line(tmp_path):
 def test_npz_with_a_broken_deflate_stream_is_one_line(tmp_path):
     track = HapticTrack(np.random.default_rng(0).uniform(0, 100, (50, 52)), 60.0, load_layout().actuators)
     path = tmp_path / "z.npz"
-    track.save(path)
+    save_track(track, path)
     raw = bytearray(path.read_bytes())
     # the first member's data starts after its 30-byte local header, name and extra field
     name_len, extra_len = int.from_bytes(raw[26:28], "little"), int.from_bytes(raw[28:30], "little")

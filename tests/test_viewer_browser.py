@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hapmotion.track_files import save_track
 import hapmotion
 from hapmotion.cli import main
 from hapmotion.skeleton.joints import BONES, JOINTS
@@ -292,7 +293,7 @@ def test_saved_track_page_without_motion(page, tmp_path, capsys):
     # A track read back from CSV has no skeleton and no debug data: the vest and the timeline still work.
     motion = hapmotion.load_motion(SALSA)
     saved = tmp_path / "salsa.csv"
-    hapmotion.render(motion, preset="energy").save(saved)
+    save_track(hapmotion.render(motion, preset="energy"), saved)
     out = tmp_path / "saved.html"
     assert main(["view", str(saved), "-o", str(out)]) == 0
     assert "no dynamic point" in capsys.readouterr().err

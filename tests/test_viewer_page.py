@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hapmotion.track_files import save_track
 import hapmotion
 from hapmotion.cli import main
 from hapmotion.skeleton.joints import JOINT_INDEX
@@ -164,7 +165,7 @@ def test_track_files_are_told_from_motion_files(salsa, tmp_path):
     _, tracks = salsa
     for ext in ("csv", "json", "npz"):
         p = tmp_path / f"t.{ext}"
-        tracks[0].save(p)
+        save_track(tracks[0], p)
         assert is_track_file(p), ext
     assert not is_track_file(SALSA)
     other = tmp_path / "joints.csv"

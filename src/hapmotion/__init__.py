@@ -5,7 +5,7 @@ The public API is as small as the CLI::
     import hapmotion
     motion = hapmotion.load_motion("dance.bvh")
     track = hapmotion.render(motion, method="mst", preset="paper")
-    track.save("dance.tact")
+    hapmotion.save_track(track, "dance.tact")
 
 The renderer lives in the subpackage ``hapmotion.renderer``; ``hapmotion.render`` is its function. A whole show
 (music, cues, comfort) is a :class:`Show` rendered by :func:`render_show`. Every name is imported on first use.

@@ -7,9 +7,7 @@ columns follow the device layout's actuator order, which for the default layout 
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -124,14 +122,3 @@ class HapticTrack:
             for k in range(1, int((hi - lo).max(initial=1))):
                 out = np.maximum(out, self.intensities[np.minimum(lo + k, hi - 1)])
         return HapticTrack(out, fps, self.actuators, self.layout, meta)
-
-    # ------------------------------------------------------------------ files
-    def save(self, path: "str | os.PathLike[str]") -> "list[Path]":
-        """Write the track; the format follows the extension (``.csv``, ``.json``, ``.npz``, ``.tact``). Returns the
-        files written, ``path`` first: a ``.tact`` also writes one file per sleeve beside it.
-
-        Each file appears whole or not at all (written to a temporary file, then renamed).
-        """
-        from .track_files import save_track
-
-        return save_track(self, path)

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from ..track_files import save_track
 from ..show import MODES, Show, render_show
 from .show_options import preset_option
 
@@ -44,7 +45,7 @@ def command(out_dir, mode, preset):
                "Music: \"Vibe Ace\" by Kevin MacLeod, CC BY 3.0")
     written = []
     for name in ("demo.tact", "demo.csv"):
-        written.extend(track.save(out / name))
+        written.extend(save_track(track, out / name))
     title = f"{EXAMPLE_MOTION} + {EXAMPLE_AUDIO} ({mode}, mst/{preset})"
     audio_part = load_audio_part(audio, fps=track.fps, until_s=track.duration)  # the page ends with the dance
     plot_track(track, out / "demo.png", title=title, audio=audio_part)

@@ -8,6 +8,7 @@ from typing import Optional
 
 import click
 
+from ..track_files import save_track
 from ..errors import UsageError
 from ..show import Show, render_show
 from .motion_options import motion_options, read_motion
@@ -50,7 +51,7 @@ def command(motion_file: Optional[str], output: str, show: Show, motion_opts: di
         track = render_show(show, motion, progress=update)
     finally:
         close()
-    written = track.save(out_path)
+    written = save_track(track, out_path)
     peak = float(track.intensities.max()) if track.n_frames else 0.0
     also = f" and {', '.join(p.name for p in written[1:])}" if len(written) > 1 else ""
     click.echo(f"wrote {out_path}{also} ({track.n_frames} frames at {track.fps:g} fps, {track.duration:.2f} s, "

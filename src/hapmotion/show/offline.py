@@ -17,7 +17,6 @@ the music later than the motion, a negative one skips the start of the file.
 
 from __future__ import annotations
 
-import dataclasses
 import os
 from typing import Any, Callable, Optional, Sequence
 
