@@ -402,11 +402,15 @@ def combine_default(track, song: str, mode: str, preset: str | None):
     pattern and mix); ``MUSIC_OPTIONS`` change the pattern's spatial mapping or the mix rule."""
     show = hshow.Show(audio=song, preset=track.meta.get("preset") or hshow.Show().preset, mode=mode,
                       length="motion", mix_rule=MUSIC_OPTIONS.get("mix_rule"))
-    analysis = None
-    if "spatial" in MUSIC_OPTIONS:  # the song analysed with the changed parameters, as render_show reuses it
-        params = dataclasses.replace(show.audio_params(), spatial=MUSIC_OPTIONS["spatial"])
-        analysis = hapmotion.audio.analyze_file(song, fps=track.fps, params=params)
-    return hshow.render_show(show, motion_track=track, analysis=analysis)
+    if "spatial" not in MUSIC_OPTIONS:
+        return hshow.render_show(show, motion_track=track)
+    # another spatial mapping of the music: the song's channel built here, through the show's own output stage
+    params = dataclasses.replace(show.audio_params(), spatial=MUSIC_OPTIONS["spatial"])
+    layout = hapmotion.load_layout()
+    analysis = hapmotion.audio.analyze_file(song, fps=track.fps, params=params)
+    music = hshow.fit_rows(hapmotion.audio.audio_track(analysis, layout, params).intensities, track.n_frames)
+    stage = hshow.OutputStage.for_show(show, mode, layout=layout, fps=track.fps)
+    return dataclasses.replace(track, intensities=stage.rows(track.intensities, music))
 
 
 def evaluate(preset: str | None, clips: list[Clip], song_list, layout, verbose: bool) -> dict:

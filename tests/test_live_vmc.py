@@ -18,6 +18,7 @@ from support.live_fakes import Tap, start_session, wait_for
 from support.vmc_sender import VmcSender, send_vmc
 
 import hapmotion
+from hapmotion.show import Show
 from hapmotion.errors import UsageError
 from hapmotion.live.access import SenderAllowList
 from hapmotion.live.hygiene import Faults
@@ -482,7 +483,7 @@ def test_vmc_source_defaults_and_a_busy_port():
     busy.bind(("127.0.0.1", 0))
     try:
         with pytest.raises(UsageError, match="cannot listen"):
-            asyncio.run(hapmotion.live.live(VmcSource("127.0.0.1", busy.getsockname()[1]), [Tap()],
+            asyncio.run(hapmotion.live.live(Show(), VmcSource("127.0.0.1", busy.getsockname()[1]), [Tap()],
                                             handle_signals=False))
     finally:
         busy.close()

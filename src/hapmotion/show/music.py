@@ -21,12 +21,13 @@ from .timeline import RowTimeline
 def song_track(show: Show, *, fps: float, layout: "Layout | Sequence[str]", analysis: Optional[AudioAnalysis] = None) -> HapticTrack:
     """The show's song as the music channel alone: ``(T, N)`` rows 0..100 at ``fps`` on ``layout`` (or on bare actuator ids), with the
     preset's audio parameters and the show's offset. ``analysis`` is reused when it is of the same song at the same
-    rate and offset (several conditions of one song analyse it once), with the parameters it was made with."""
+    rate and offset (several conditions of one song analyse it once; the pattern is always the preset's)."""
     if show.audio is None:
         raise UsageError("this show has no music (--audio SONG)")
+    params = show.audio_params()
     if analysis is None or analysis.fps != fps or analysis.offset_s != show.audio_offset_s:
-        analysis = analyze_file(show.audio, fps=fps, offset_s=show.audio_offset_s, params=show.audio_params())
-    return audio_track(analysis, layout)
+        analysis = analyze_file(show.audio, fps=fps, offset_s=show.audio_offset_s, params=params)
+    return audio_track(analysis, layout, params)
 
 
 def song_timeline(show: Show, *, fps: float, layout: Layout) -> RowTimeline:
