@@ -180,6 +180,9 @@ def test_websocket_source_with_bad_messages(recording, expected):
                     await ws.send(json.dumps({"seq": 21, "joints": {"HAND_LEFT": [25.0, 1.0, 0.0]}}))  # absurd
                 await asyncio.sleep(1 / FPS)
         await wait_for(lambda: len(player.frames) >= 4 * 50, 3)
+        # the last rows may still wait for their tick: stop once the Player sink has sent every rendered row
+        player_stats = next(s.stats for s in engine.sinks if s.name.startswith("player"))
+        await wait_for(lambda: player_stats.sent >= engine.stats.rendered, 3)
         engine.request_stop("test over")
         stats = await task
         await player.stop()

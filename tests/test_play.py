@@ -185,7 +185,9 @@ def test_a_player_that_disappears_mid_play_is_reconnected_and_turned_off():
         await asyncio.sleep(0.5)
         assert not task.done() and len(tap.frames) > gone_at  # the show went on without it
         second = await FakePlayerSdk1(port=port).start()        # and it comes back
-        await wait_for(lambda: len(second.frames) >= 4 * 20, 10)
+        # a whole loop of the track (36 rows at 60 fps: 30 ticks of 20 ms, 4 positions each) and half another,
+        # wherever in the loop the Player came back
+        await wait_for(lambda: len(second.frames) >= 4 * 45, 10)
         task.cancel()
         with pytest.raises(asyncio.CancelledError):
             await task
