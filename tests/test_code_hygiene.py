@@ -1,9 +1,11 @@
-"""Two rules of the code base checked on every run: no module of the package is over 600 lines, and the tests use
-only public names of hapmotion (no ``from hapmotion.x import _name``, no ``hapmotion.x._module``)."""
+"""Rules of the code base checked on every run: no module of the package is over 600 lines, no module imports one
+of a higher layer (the layers of docs/CONTRACTS.md, so no import circles either), and the tests use only public
+names of hapmotion (no ``from hapmotion.x import _name``, no ``hapmotion.x._module``)."""
 
 from __future__ import annotations
 
 import ast
+import graphlib
 import importlib
 import importlib.util
 import inspect
@@ -67,6 +69,84 @@ def test_no_module_of_the_package_is_over_600_lines():
     assert len(sizes) > 50  # the package was found
     too_long = [f"{path}: {n} lines" for path, n in sizes.items() if n > MAX_MODULE_LINES]
     assert not too_long, f"modules over {MAX_MODULE_LINES} lines (split them by what they hold):\n" + "\n".join(too_long)
+
+
+LAYERS = ("errors", "json_scan", "limits", "filesafety", "skeleton", "motion", "motion_files", "body", "track",
+          "bhaptics.devices", "bhaptics.tick", "layout", "bhaptics", "renderer", "audio", "track_files", "show",
+          "live", "audience", "viewer", "metrics", "cli", "__main__")
+"""The package from the ground up (docs/CONTRACTS.md): a module may import its own layer and the ones before it.
+The bHaptics device catalogue and the Player's tick are vendor facts under the renderer layout; the rest of
+``bhaptics/`` (the Player's messages, ``.tact`` files named after the layout) stands on it."""
+
+
+def layer_of(module: str) -> str:
+    """The entry of :data:`LAYERS` a dotted module name ``hapmotion.x.y`` belongs to (the longest that fits)."""
+    rest = module.split(".", 1)[1] if "." in module else ""
+    return max((layer for layer in LAYERS if rest == layer or rest.startswith(layer + ".")), key=len, default="")
+
+
+def imports_of(path: Path) -> list[tuple[int, str]]:
+    """``(line, hapmotion.module)`` of every import of the package in a module of it (relative ones resolved)."""
+    module = ".".join(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+    package = module.removesuffix(".__init__") if path.name == "__init__.py" else module.rpartition(".")[0]
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), filename=str(path))):
+        if isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")
+                base = ".".join(parts[:len(parts) - node.level + 1] + ([node.module] if node.module else []))
+            targets = [base] if node.module else [f"{base}.{alias.name}" for alias in node.names]
+        elif isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        else:
+            continue
+        out.extend((node.lineno, t) for t in targets if t.split(".")[0] == "hapmotion")
+    return out
+
+
+def test_no_module_imports_a_higher_layer():
+    upward = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        here = layer_of(".".join(path.relative_to(PACKAGE.parent).with_suffix("").parts).removesuffix(".__init__"))
+        if not here:
+            continue  # hapmotion/__init__.py: the lazy public face over everything
+        for line, target in imports_of(path):
+            there = layer_of(target)
+            if there and LAYERS.index(there) > LAYERS.index(here):
+                upward.append(f"{path.relative_to(ROOT)}:{line}: {here} imports {target} ({there})")
+    assert not upward, "imports from a lower layer to a higher one:\n" + "\n".join(upward)
+
+
+def test_no_import_circles():
+    """No module imports one that (through others) imports it back, within a layer either."""
+    modules = {".".join(p.relative_to(PACKAGE.parent).with_suffix("").parts).removesuffix(".__init__"): p
+               for p in PACKAGE.rglob("*.py")}
+    graph = {}
+    for name, path in modules.items():
+        deps = set()
+        for _, target in imports_of(path):
+            while target and target not in modules:  # a name imported from a module: the module
+                target = target.rpartition(".")[0]
+            if target and target != name:
+                deps.add(target)
+        graph[name] = deps
+    try:
+        tuple(graphlib.TopologicalSorter(graph).static_order())
+    except graphlib.CycleError as exc:
+        pytest.fail(f"an import circle: {' -> '.join(exc.args[1])}")
+
+
+def test_the_layer_check_sees_an_upward_import(tmp_path, monkeypatch):
+    """The check reads relative imports the way Python does: a layout that imports the renderer is caught."""
+    fake = tmp_path / "hapmotion"
+    fake.mkdir()
+    (fake / "layout.py").write_text("from .renderer import Renderer\nfrom .errors import UsageError\n")
+    monkeypatch.setattr(__import__(__name__), "PACKAGE", fake)
+    assert imports_of(fake / "layout.py") == [(1, "hapmotion.renderer"), (2, "hapmotion.errors")]
+    assert layer_of("hapmotion.renderer") == "renderer" and layer_of("hapmotion.bhaptics.sdk1") == "bhaptics"
+    assert layer_of("hapmotion.bhaptics.devices") == "bhaptics.devices"
+    assert LAYERS.index(layer_of("hapmotion.renderer")) > LAYERS.index(layer_of("hapmotion.layout"))
 
 
 def test_tests_use_only_public_names_of_the_package():
