@@ -7,6 +7,7 @@ from typing import Optional
 import click
 
 from ..show import Show
+from .kinds_help import KindsHelpCommand
 from .motion_options import CLI_SPELLING, motion_options, read_motion
 from .show_options import cue_port_option, session_options, show_options, split_values
 from .session_report import finish_session, setup_logging
@@ -15,15 +16,11 @@ HELP = """Render a live skeleton stream frame by frame and drive haptic devices,
 
 \b
 SOURCE (one):
-  osc://HOST:PORT[/PREFIX]   OSC over UDP (default 127.0.0.1:9000: this machine only; prefix /hapmotion):
-                             /hapmotion/skeleton [seq t] x0 y0 z0 .. x31 y31 z31  (32 joints, metres, +Y up)
-                             /hapmotion/joint/HAND_LEFT [seq t] x y z  +  /hapmotion/frame [seq t]
-  ws://HOST:PORT             WebSocket server taking JSON text frames (default 127.0.0.1:8765):
-                             {"seq": 7, "t": 0.116, "joints": {"HAND_LEFT": [x, y, z], ...}}
-  vmc://HOST:PORT            VMC protocol (VSeeFace, XR Animator, VirtualMotionCapture, SlimeVR, ...;
-                             default 127.0.0.1:39539; docs/vmc.md)
-  replay:PATH                a recording (BVH, Kinect JSON, AIST++, CSV, NPZ) paced in real time (--speed, --loop;
-                             the reader options --units, --up, --skip-frames, ... as for render)
+{SOURCE KINDS}
+  OSC messages: /hapmotion/skeleton [seq t] x0 y0 z0 .. x31 y31 z31 (32 joints, metres, +Y up), or
+  /hapmotion/joint/HAND_LEFT [seq t] x y z + /hapmotion/frame [seq t]; WebSocket JSON text frames:
+  {"seq": 7, "t": 0.116, "joints": {"HAND_LEFT": [x, y, z], ...}}; replay: the reader options --units, --up,
+  --skip-frames, ... as for render; --speed, --loop (docs/live.md, docs/vmc.md)
 \b
 Who may send: sources listen on loopback unless SOURCE names another interface (osc://0.0.0.0:9000). Browser
 pages are refused unless --allow-origin lists them; --token makes WebSocket senders present a shared secret
@@ -31,15 +28,7 @@ pages are refused unless --allow-origin lists them; --token makes WebSocket send
 At most --max-senders senders at once, each with its own message budget. The startup line says what is exposed.
 \b
 SINK (one or more):
-  player[://HOST:PORT]       bHaptics Player SDK1, ws://127.0.0.1:15881/v2/feedbacks
-                             options ?app_id=&app_name=&duration=MS&key=PREFIX&register=FILE.tact
-  player-v3[://HOST:PORT]    bHaptics Player SDK2, wss://127.0.0.1:15882/v3/feedback (TLS, self-signed)
-                             options ?workspace_id=&api_key=&version=&duration=MS
-  osc://HOST:PORT[/PREFIX]   OSC out: /hapmotion/VestFront/5 f (0..1) and /hapmotion/VestFront f*20
-                             options ?actuators=0|1&devices=0|1
-  ws-broadcast[://HOST:PORT] WebSocket broadcast of frames, skeleton and dynamic point (default 127.0.0.1:8766)
-  record:PATH                the session as a track at stop (.csv .json .npz .tact)
-  nats://HOST:PORT/SHOW      publish the show to an audience (skeleton, music, cues; hapmotion listen)
+{SINK KINDS}
 \b
 Safety: a source silent for --stall-ms fades every actuator to zero; Ctrl-C, SIGTERM, the end of a replay or an
 error sends turn-off to every sink before exiting. A summary (frames in/out/dropped/late, p50/p99 latency) is
@@ -54,7 +43,7 @@ Examples:
 """
 
 
-@click.command("live", help=HELP)
+@click.command("live", help=HELP, cls=KindsHelpCommand)
 @click.option("--source", "source", metavar="SOURCE", help="Where the skeleton comes from (see above).")
 @click.option("--sink", "sinks", metavar="SINK", multiple=True, required=True,
               help="Where frames go; repeat for several sinks at once.")

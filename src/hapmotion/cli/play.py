@@ -6,6 +6,7 @@ from typing import Optional
 
 import click
 
+from .kinds_help import KindsHelpCommand
 from .motion_options import cli_limits, limit_option
 from ..show.settings import Show
 from .show_options import cue_port_option, session_options, show_options
@@ -18,12 +19,8 @@ ids in the session layout (X40 + two shoulder sleeves by default); devices the l
 noted once.
 
 \b
-SINK (one or more), as for 'hapmotion live':
-  player[://HOST:PORT]       bHaptics Player SDK1 (default ws://127.0.0.1:15881/v2/feedbacks)
-  player-v3[://HOST:PORT]    bHaptics Player SDK2 (wss://127.0.0.1:15882/v3/feedback; --workspace-id, --api-key)
-  osc://HOST:PORT[/PREFIX]   OSC out
-  ws-broadcast[://HOST:PORT] WebSocket broadcast to viewers
-  record:PATH                the session as a track at stop
+SINK (one or more), as for 'hapmotion live' (nats:// publishes a live show: 'hapmotion live' only):
+{SINK KINDS}
 \b
 Safety: the end of the track, Ctrl-C, SIGTERM, SIGHUP and errors all send turn-off to every sink before
 exiting.
@@ -34,7 +31,7 @@ Examples:
 """
 
 
-@click.command("play", help=HELP)
+@click.command("play", help=HELP, cls=KindsHelpCommand)
 @click.argument("track", type=click.Path(dir_okay=False))
 @click.option("--sink", "sinks", metavar="SINK", multiple=True, required=True,
               help="Where rows go; repeat for several sinks at once.")
