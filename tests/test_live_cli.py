@@ -32,7 +32,8 @@ HAPMOTION = [sys.executable, "-c", "import sys; from hapmotion.cli import main; 
     (["--sink", "player"], "--source is required"),
     (["--source", "osc://127.0.0.1:0", "--sink", "player", "--mode", "audio"], "--mode audio needs --audio"),
     (["--source", "replay:/nonexistent/dance.bvh", "--sink", "player"], "/nonexistent/dance.bvh"),
-    (["--source", "osc://127.0.0.1:0", "--sink", "player", "--stall-ms", "0"], "--stall-ms must be positive"),
+    (["--source", "osc://127.0.0.1:0", "--sink", "player", "--stall-ms", "0"], "--stall-ms must be a number of milliseconds above 0"),
+    (["--source", "osc://127.0.0.1:0", "--sink", "player", "--stall-ms", "inf"], "at most 60000"),
 ])
 def test_usage_errors_are_one_line(args, message, capsys):
     code = main(["live", *args])

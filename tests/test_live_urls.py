@@ -5,6 +5,8 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -13,6 +15,7 @@ from hapmotion.audience.publisher import publisher_sink
 from hapmotion.bhaptics.device_map import DeviceMap
 from hapmotion.errors import UsageError
 from hapmotion.layout import load_layout
+from support.data import MOTION
 from hapmotion.live import addresses
 from hapmotion.live.kinds import (SINK_HELP, SINK_KINDS, SINK_SYNTAX, SOURCE_HELP, SOURCE_KINDS, SOURCE_SYNTAX,
                                   build_sink, register_sink_kind)
@@ -128,3 +131,19 @@ def test_the_nats_kind_is_built_by_the_audience_package(monkeypatch):
         build_sink(ep, dmap=dmap, layout_name="x40_shoulders", fps=60.0, audience={})
     with pytest.raises(ValueError, match="no sink kind"):
         register_sink_kind("speaker", publisher_sink)
+
+
+def test_a_nats_sink_from_python_loads_its_provider(tmp_path):
+    """``live()`` from Python with a nats:// sink needs no import of hapmotion.audience first: the kinds table
+    loads the package that provides the kind (here it then fails to reach a server that is not there)."""
+    code = ("import asyncio, hapmotion\n"
+            "from hapmotion.live import live\n"
+            "from hapmotion.show import Show\n"
+            "from hapmotion.errors import UsageError\n"
+            "try:\n"
+            f"    asyncio.run(live(Show(), 'replay:{MOTION / '60_12_scaled.bvh'}', ['nats://127.0.0.1:1/show'], handle_signals=False))\n"
+            "except UsageError as e:\n"
+            "    print(e)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert "cannot reach the NATS server" in out.stdout, out.stdout + out.stderr
+    assert "import hapmotion.audience" not in out.stdout

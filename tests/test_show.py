@@ -148,3 +148,57 @@ def test_a_row_timeline_reads_rows_by_show_time():
     assert streamed.row(0.2).tolist() == [0.0] * 3 and streamed.row(0.3).tolist() == [2.0] * 3
     with pytest.raises(TypeError):
         timeline.put(0.0, np.ones(3))
+
+
+def test_variants_mix_each_preset_with_its_own_music_settings(punch):
+    """In a viewer's switch, the paper preset's variant gets the paper's music (whole-suit pattern, weighted sum),
+    whatever preset the page's show names."""
+    tracks = render_variants(Show(audio=SONG), punch, ["mst"], ["felt", "paper"], ["multimodal"])
+    for track, preset in zip(tracks, ["felt", "paper"]):
+        alone = render_show(Show(audio=SONG, preset=preset), punch)
+        np.testing.assert_array_equal(track.intensities, alone.intensities)
+    assert tracks[1].meta["mix_rule"] == "paper" and tracks[0].meta["mix_rule"] == "duck"
+
+
+def test_saved_tracks_are_shown_as_stored():
+    """A saved track (a pattern at full drive on every motor) is drawn as ``play`` sends it: rows as stored, with
+    the show's comfort on top, not held to the show's power limit."""
+    from hapmotion.track import HapticTrack
+
+    layout = load_layout()
+    full = HapticTrack(np.full((20, 52), 100.0), 50.0, layout.actuators, layout.name, meta={"preset": "paper"})
+    [shown] = render_variants(Show(), None, [], [], ["motion"], motion_tracks=[full])
+    np.testing.assert_array_equal(shown.intensities, full.intensities)
+    [soft] = render_variants(Show(comfort=Comfort(max_level=40.0)), None, [], [], ["motion"], motion_tracks=[full])
+    assert soft.intensities.max() == 40.0 and soft.meta["comfort"]["max_level"] == 40.0
+
+
+def test_show_refuses_wrong_types_in_one_line():
+    for bad in ({"mirror": "no"}, {"overrides": 5}, {"audio": 5}, {"layout": 5}, {"cues": 5}):
+        with pytest.raises(UsageError) as err:
+            Show(**bad)
+        assert "\n" not in str(err.value)
+
+
+def test_the_stage_and_timeline_refuse_what_does_not_fit():
+    layout = load_layout()
+    timeline = RowTimeline(np.ones((3, 52)), 10.0)
+    assert not timeline.row(float("nan")).any() and not timeline.row(float("inf")).any()
+    with pytest.raises(ValueError, match="fps"):
+        RowTimeline(np.ones((3, 52)), 0.0)
+    with pytest.raises(ValueError, match="columns"):
+        RowTimeline.streamed(52, 10.0).put(0.0, np.ones(3))
+    with pytest.raises(ValueError, match="keep"):
+        RowTimeline.streamed(52, 10.0, keep=0)
+    with pytest.raises(ValueError, match="mirror_map"):
+        OutputStage("motion", layout.actuators, 60.0, mirror_map=np.arange(3))
+    with pytest.raises(UsageError, match="comfort"):
+        OutputStage("motion", layout.actuators, 60.0, comfort=None)
+    with pytest.raises(UsageError, match="power limit"):
+        OutputStage("motion", layout.actuators, 60.0, power_limit=float("inf"))
+    with pytest.raises(ValueError, match="needs the incoming rows"):
+        OutputStage("motion", layout.actuators, 60.0).rows(None, None)
+    stage = OutputStage("audio", layout.actuators, 60.0)  # no music: silence, not a crash
+    assert not stage.step(None, 0.0).any()
+    with pytest.raises(ValueError, match="finite"):
+        stage.step(None, float("nan"))

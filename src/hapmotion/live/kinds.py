@@ -14,6 +14,7 @@ then a ``nats://`` sink can be parsed (and refused by ``play``, ``check`` and ``
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import logging
 from dataclasses import dataclass
 from pathlib import Path
@@ -227,6 +228,11 @@ def build_sink(ep: "Endpoint", *, dmap: DeviceMap, layout_name: str, fps: float,
         raise UsageError(f"--sink {ep.text!r}: unknown kind {ep.kind}")
     if kind.publishes_show and audience is None:
         raise UsageError(NATS_ONLY_LIVE.format(sink=ep.text))
+    if kind.factory is None and kind.provider:
+        # the provider sits above live/ (it builds on it), so it is loaded by name on first use, as a plugin is;
+        # importing it registers the factory in this table
+        importlib.import_module(kind.provider)
+        kind = SINK_KINDS[ep.kind]
     if kind.factory is None:
         raise UsageError(f"--sink {ep.text!r}: {kind.name} sinks are provided by the {kind.provider} package; "
                          f"import {kind.provider} before building one")

@@ -36,6 +36,9 @@ from .urls import parse_sink, parse_source
 
 log = logging.getLogger("hapmotion.live")
 
+MAX_STALL_MS = 60_000.0
+"""The longest a silent source may take to fade to zero: a minute (an audience seat accepts at most this too)."""
+
 SinkSpec = Union[str, Sink, Callable[[DeviceMap, float], Sink]]
 """A sink as a SINK string (``player``, ``record:show.tact`` ...), a ready :class:`Sink`, or a factory
 ``(device_map, fps) -> Sink``."""
@@ -86,6 +89,8 @@ class Session:
             return spec
         if callable(spec):
             return spec(self.dmap, fps)
+        if not isinstance(spec, str):
+            raise UsageError(f"a sink must be a SINK string, a Sink or a factory, not {type(spec).__name__}")
         return build_sink(parse_sink(spec), dmap=self.dmap, layout_name=layout.name, fps=fps,
                           workspace_id=context.workspace_id, api_key=context.api_key, meta=context.meta,
                           time_scale=context.time_scale, audience=context.audience)
@@ -136,6 +141,15 @@ async def live(show: Show, source: Union[str, Source, None], sinks: Sequence[Sin
     OSC. ``workspace_id``/``api_key`` are the Player's SDK2 credentials. Every sink is sent turn-off before this
     returns or raises.
     """
+    if not isinstance(show, Show):
+        raise UsageError(f"live() takes a hapmotion.show.Show first, not {type(show).__name__}")
+    if isinstance(sinks, (str, bytes)) or not isinstance(sinks, Sequence):
+        raise UsageError(f"sinks must be a list of SINK strings or Sink objects, not {type(sinks).__name__}")
+    if source is not None and not isinstance(source, (str, Source)):
+        raise UsageError(f"source must be a SOURCE string or a Source, not {type(source).__name__}")
+    if isinstance(stall_ms, bool) or not isinstance(stall_ms, (int, float)) or not 0 < stall_ms <= MAX_STALL_MS:
+        raise UsageError(f"--stall-ms must be a number of milliseconds above 0 and at most {MAX_STALL_MS:g}, "
+                         f"got {stall_ms!r}")
     mode = show.resolved_mode(has_motion=source is not None or show.mode != "audio")
     if mode == "audio" and source is not None:
         raise UsageError("--mode audio plays the song's haptic channel alone: leave out --source")
@@ -143,8 +157,6 @@ async def live(show: Show, source: Union[str, Source, None], sinks: Sequence[Sin
         raise UsageError("--source is required (osc://, ws://, vmc:// or replay:PATH)")
     if not sinks:
         raise UsageError("at least one --sink is required")
-    if not (stall_ms > 0):
-        raise UsageError(f"--stall-ms must be positive, got {stall_ms}")
 
     src = build_source(parse_source(source), fps=show.fps, speed=speed, loop=loop) \
         if isinstance(source, str) else source

@@ -17,6 +17,7 @@ the music later than the motion, a negative one skips the start of the file.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from typing import Any, Callable, Optional, Sequence
 
@@ -25,6 +26,7 @@ import numpy as np
 from ..audio.analysis import AudioAnalysis
 from ..errors import UsageError
 from ..motion import Motion
+from ..renderer.params import PRESETS
 from ..renderer.renderer import render
 from ..track import HapticTrack
 from .music import song_track
@@ -151,16 +153,41 @@ def render_variants(show: Show, motion: Optional[Motion], methods: Sequence[str]
     """
     if show.audio is None and set(modes) - {"motion"}:
         raise UsageError("modes multimodal and audio need music (--audio SONG)")
-    tracks = list(motion_tracks)
     if motion is not None:
-        tracks = [render_motion(show.replace(method=m, preset=s), motion, progress) for m in methods for s in presets]
+        variants = [show.replace(method=m, preset=s) for m in methods for s in presets]
+        tracks = [render_motion(v, motion, progress) for v in variants]
+    else:
+        # saved tracks keep their own preset (it picks the music's pattern and mix) where they name a known one
+        variants = [show.replace(preset=t.meta["preset"]) if t.meta.get("preset") in PRESETS else show
+                    for t in motion_tracks]
+        tracks = list(motion_tracks)
     if show.audio is None:
-        return [render_show(show, motion_track=t) for t in tracks]
+        if motion is None:  # saved rows are shown as they were stored, as `play` sends them: cues and comfort only
+            return [_as_stored(v, t) for v, t in zip(variants, tracks)]
+        return [render_show(v, motion_track=t) for v, t in zip(variants, tracks)]
     out: list[HapticTrack] = []
     for mode in modes:
-        played = tracks[:1] if mode == "audio" else tracks
+        played = list(zip(variants, tracks))[:1] if mode == "audio" else list(zip(variants, tracks))
         # an audio-only view without a motion track still plays (the music alone, at the show's rate)
-        out.extend(render_show(show.replace(mode=mode), motion_track=t) for t in played)
+        out.extend(render_show(v.replace(mode=mode), motion_track=t) for v, t in played)
         if mode == "audio" and not played:
             out.append(render_show(show.replace(mode="audio")))
     return out
+
+
+def _as_stored(show: Show, track: HapticTrack) -> HapticTrack:
+    """A saved track through an identity stage: its rows as stored, with the show's cues and comfort."""
+    layout = show.load_layout()
+    mirror = layout.mirror_map() if tuple(layout.actuators) == tuple(track.actuators) else None
+    if show.cues is not None and mirror is None:
+        raise UsageError("cues need the track on the show's layout")
+    stage = OutputStage.identity(track.actuators, track.fps, mirror_map=mirror, comfort=show.comfort,
+                                 cues=show.load_cues())
+    if stage.cue_list is None and show.comfort.is_neutral:
+        return track
+    meta = dict(track.meta)
+    if stage.cue_list is not None:
+        meta["cues"] = os.fspath(stage.cue_list.source)
+    if not show.comfort.is_neutral:
+        meta["comfort"] = show.comfort.to_dict()
+    return dataclasses.replace(track, intensities=stage.rows(track.intensities, None), meta=meta)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping, Optional, Sequence, Union
@@ -83,6 +84,15 @@ class Show:
 
     def __post_init__(self) -> None:
         check_choice(self.method, METHODS, "method")
+        if self.mirror is not None and not isinstance(self.mirror, bool):
+            raise UsageError(f"mirror must be True, False or None, not {self.mirror!r}")
+        if not isinstance(self.overrides, Mapping):
+            raise UsageError(f"overrides must be a mapping of renderer parameters, not {type(self.overrides).__name__}")
+        for name, value, kinds in (("audio", self.audio, (str, os.PathLike)),
+                                   ("layout", self.layout, (str, os.PathLike, Layout)),
+                                   ("cues", self.cues, (str, os.PathLike, CueList))):
+            if value is not None and not isinstance(value, kinds):
+                raise UsageError(f"{name} must be a file path (or None), not {type(value).__name__}")
         if not isinstance(self.preset, str) or self.preset not in PRESETS:
             raise UsageError(f"unknown preset {self.preset!r}; choose one of {', '.join(PRESETS)}")
         if self.mode is not None:

@@ -32,7 +32,7 @@ from ..renderer.params import PRESETS
 from .comfort import Comfort, Limiter, limit_rows
 from .cue_layer import LiveCues
 from .cues import CueList, cue_layer, layer
-from .settings import MODES, Show, check_choice
+from .settings import MODES, Show, check_choice, check_fps
 from .timeline import RowTimeline
 
 POWER_LIMIT_FRACTION = 0.75
@@ -94,10 +94,19 @@ class OutputStage:
         check_choice(mode, STAGE_MODES, "mode")
         check_choice(rule, MIX_RULES, "mix rule")
         check_choice(audio_preset, tuple(PRESETS), "preset")
-        if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
-            raise UsageError(f"fps must be a positive number, not {fps!r}")
-        if power_limit is not None and not (math.isfinite(power_limit) and power_limit > 0):
+        fps = check_fps(fps)
+        if power_limit is not None and (isinstance(power_limit, bool) or not isinstance(power_limit, (int, float))
+                                        or not (math.isfinite(power_limit) and power_limit > 0)):
             raise UsageError(f"power limit {power_limit!r}: expected a positive number or None")
+        if not isinstance(comfort, Comfort):
+            raise UsageError(f"comfort must be a hapmotion.show.comfort.Comfort, not {type(comfort).__name__}")
+        n = len(actuators)
+        if positions is not None and np.shape(positions) != (n, 3):
+            raise ValueError(f"positions must be ({n}, 3), not {np.shape(positions)}")
+        if mirror_map is not None and np.shape(mirror_map) != (n,):
+            raise ValueError(f"mirror_map must be ({n},), not {np.shape(mirror_map)}")
+        if music is not None and music.n != n:
+            raise ValueError(f"the music's rows have {music.n} columns, the stage {n}")
         self.mode = mode
         self.actuators = tuple(actuators)
         self.n = len(self.actuators)
@@ -168,6 +177,8 @@ class OutputStage:
     def rows(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray]) -> np.ndarray:
         """The ``(T, N)`` rows sent for ``(T, N)`` incoming and music rows (either ``None``: silence), from a fresh
         state: mode, every cue of the list on the timeline, comfort."""
+        if incoming is None and music is None:
+            raise ValueError("rows() needs the incoming rows, the music's rows, or both")
         shape = (incoming if incoming is not None else music).shape
         out = self.condition(incoming if incoming is not None else np.zeros(shape),
                              music if music is not None else np.zeros(shape))
@@ -192,7 +203,9 @@ class OutputStage:
     def step(self, incoming: Optional[np.ndarray], t: float) -> np.ndarray:
         """The ``(N,)`` row sent at show time ``t`` seconds for the ``(N,)`` incoming row (``None``: none, as
         when the music plays alone); the cue layer and the comfort limiter move on by one row."""
-        music = self.music.row(t) if self.music is not None else None
+        if not math.isfinite(t):
+            raise ValueError(f"show time must be a finite number of seconds, not {t!r}")
+        music = self.music.row(t) if self.music is not None else np.zeros(self.n)  # no music: silence
         if self.mode == "rows":
             row = np.array(incoming, dtype=np.float64)
         elif self.mode == "audio":
@@ -200,7 +213,7 @@ class OutputStage:
         else:
             if incoming is None:
                 raise ValueError(f"mode {self.mode} needs an incoming row")
-            row = self.condition(incoming, music if music is not None else np.zeros(self.n))
+            row = self.condition(incoming, music)
         cues = self.cues
         if cues is not None:
             row = cues.layer(row, t)
