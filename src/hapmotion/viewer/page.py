@@ -49,7 +49,7 @@ from .curves import ENERGY_UNITS, track_motion_energy, triangle_vertices
 PANEL_TEXT = {
     # Vest panels: col 0 is the wearer's left on BOTH panels (the layout stored in every bHaptics .tact file of type Tactot, e.g. GitHub bhaptics/tact-python CenterX.tact), so both are drawn with
     # the wearer's left on the left: the front as the wearer looks down at their chest, the back as seen from behind.
-    "front": dict(title="FRONT (wearer's left | right)", subtitle="",
+    "front": dict(title="FRONT (wearer's left | right)", subtitle="the chest as the wearer looks down at it",
                   left="wearer's LEFT", right="wearer's RIGHT", top="collar", bottom="belly"),
     "back": dict(title="BACK (wearer's left | right)", subtitle="seen from behind the wearer",
                  left="wearer's LEFT", right="wearer's RIGHT", top="collar", bottom="waist"),
