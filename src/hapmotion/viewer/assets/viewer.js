@@ -214,6 +214,14 @@
     for (const [name, panel] of panels) if (!["ForearmL", "VestFront", "ForearmR", "VestBack"].includes(name)) root.appendChild(panel);
   }
 
+  /* Back under the front when the vest panel has the height for it (a tall window), else beside it: the first
+   * arrangement whose content the panel shows without scrolling. Called at start and on every resize. */
+  function fitVest() {
+    const vest = $("vest"), side = $("side");
+    vest.classList.add("stacked");
+    if (side.scrollHeight > side.clientHeight || side.scrollWidth > side.clientWidth) vest.classList.remove("stacked");
+  }
+
   function showIntensities(values) {
     for (let i = 0; i < N_ACT; i++) {
       const c = CELLS[i];
@@ -783,13 +791,18 @@
 
   function setReadout(pairs) {
     const dl = $("readout");
-    if (dl.childElementCount !== pairs.length * 2) {
+    if (dl.childElementCount !== pairs.length) {
       dl.textContent = "";
       for (const [k] of pairs) {
+        const kv = document.createElement("div"); kv.className = "kv";
         const dt = document.createElement("dt"); dt.textContent = k;
         const dd = document.createElement("dd"); dd.dataset.key = k;
-        dl.append(dt, dd);
+        kv.append(dt, dd);
+        dl.append(kv);
       }
+      const dds = dl.querySelectorAll("dd");
+      pairs.forEach(([, v], i) => { dds[i].textContent = v; });
+      fitVest();   // the stats take room under the vest: choose the arrangement with them in place
     }
     const dds = dl.querySelectorAll("dd");
     pairs.forEach(([, v], i) => { if (dds[i].textContent !== v) dds[i].textContent = v; });
@@ -916,7 +929,7 @@
       S.live.hello = m;
       S.live.stopped = false;
       S.live.seq = -1;
-      if (m.actuators.join() !== ACT_IDS.join()) { ACT_IDS = m.actuators.slice(); N_ACT = ACT_IDS.length; buildVest(); }
+      if (m.actuators.join() !== ACT_IDS.join()) { ACT_IDS = m.actuators.slice(); N_ACT = ACT_IDS.length; buildVest(); fitVest(); }
       if (Array.isArray(m.joints)) JOINTS = m.joints.slice();
       if (Array.isArray(m.bones)) BONES = m.bones.filter((b) => Array.isArray(b) && b.length === 2);
       LIVE.hist = [];
@@ -1072,7 +1085,7 @@
       else if (e.code === "Home") seek(0);
       else if (e.code === "End") seek(duration());
     });
-    window.addEventListener("resize", () => { scene.dirty = true; timeline.dirty = true; });
+    window.addEventListener("resize", () => { fitVest(); scene.dirty = true; timeline.dirty = true; });
     updateMirrorNote();
   }
 
@@ -1099,6 +1112,7 @@
     if (S.mode === "file" && !DATA.tracks.length) throw new Error("this page holds no track and no live address (add ?live=ws://host:port)");
     await decodeAll();
     buildVest();
+    fitVest();
     drawColorbar();
     scene = new Scene($("scene"));
     timeline = new Timeline($("timeline"), $("timeline-head"));
