@@ -43,22 +43,9 @@ from ..motion import Motion
 from ..track import HapticTrack
 from ..filesafety import atomic_path
 from . import packing
+from .bodymap import PANEL_TEXT
 from .colors import SCALE_TOPS, bright_from, page_colors
 from .curves import ENERGY_UNITS, track_motion_energy, triangle_vertices
-
-PANEL_TEXT = {
-    # Vest panels: col 0 is the wearer's left on BOTH panels (the layout stored in every bHaptics .tact file of type Tactot, e.g. GitHub bhaptics/tact-python CenterX.tact), so both are drawn with
-    # the wearer's left on the left: the front as the wearer looks down at their chest, the back as seen from behind.
-    "front": dict(title="FRONT (wearer's left | right)", subtitle="the chest as the wearer looks down at it",
-                  left="wearer's LEFT", right="wearer's RIGHT", top="collar", bottom="belly"),
-    "back": dict(title="BACK (wearer's left | right)", subtitle="seen from behind the wearer",
-                 left="wearer's LEFT", right="wearer's RIGHT", top="collar", bottom="waist"),
-    # Sleeves on the shoulders: columns front (0) to back, row 0 nearer the neck (layout file x40_shoulders.json).
-    "shoulder_left": dict(title="LEFT SHOULDER", subtitle="sleeve ForearmL", left="front", right="back",
-                          top="neck side", bottom="arm side"),
-    "shoulder_right": dict(title="RIGHT SHOULDER", subtitle="sleeve ForearmR", left="front", right="back",
-                           top="neck side", bottom="arm side"),
-}
 
 AUDIO_MIME = {".ogg": "audio/ogg", ".oga": "audio/ogg", ".opus": "audio/ogg", ".mp3": "audio/mpeg", ".wav": "audio/wav",
               ".flac": "audio/flac", ".m4a": "audio/mp4", ".aac": "audio/aac", ".webm": "audio/webm"}
