@@ -388,7 +388,7 @@ def check_screen_fit(pg, width, height):
     return b
 
 
-@pytest.mark.parametrize("width,height", [(1280, 720), (1280, 800), (1400, 900), (1920, 1080)])
+@pytest.mark.parametrize("width,height", [(1280, 720), (1280, 800), (1366, 768), (1400, 900), (1920, 1080)])
 def test_page_fits_a_laptop_and_a_monitor_screen(browser, show, width, height):
     path, motion, tracks = show
     mst = tracks[0]

@@ -37,6 +37,10 @@ PANEL_TEXT = {
 BODY_ORDER = (CHART_SHOULDER_LEFT, CHART_FRONT, CHART_SHOULDER_RIGHT, CHART_BACK)
 """Panels from the wearer's left to the right: left shoulder, chest, right shoulder, then the back."""
 
+BODY_ROW = {CHART_SHOULDER_LEFT: "front", CHART_FRONT: "front", CHART_SHOULDER_RIGHT: "front", CHART_BACK: "back"}
+"""Which group each chart's panel joins: the front row (the chest with a shoulder on each side) or the back; the page
+puts the back beside the front row or under it (whichever fits the window), the figure beside it."""
+
 CELL_W, CELL_H, CELL_GAP = 1.0, 0.62, 0.1
 """Drawing units of one actuator cell (width, height) and the gap between cells."""
 EDGE_ROOM = 0.55

@@ -204,14 +204,15 @@
       }
       panel.appendChild(grid);
     }
-    // Where each part sits on the wearer: left shoulder, chest, right shoulder side by side (wearer's left on the
-    // left), then the back as seen from behind; any other device after them.
+    // Where each part sits on the wearer (page.py sends the panels in that order, hapmotion/viewer/bodymap.py):
+    // left shoulder, chest, right shoulder side by side (wearer's left on the left), then the back as seen from
+    // behind; any other device after them.
     const front = document.createElement("div");
     front.className = "body-front";
-    for (const name of ["ForearmL", "VestFront", "ForearmR"]) if (panels.has(name)) front.appendChild(panels.get(name));
+    for (const d of devices) if (d.place === "front") front.appendChild(panels.get(d.name));
     if (front.childElementCount) root.appendChild(front);
-    if (panels.has("VestBack")) root.appendChild(panels.get("VestBack"));
-    for (const [name, panel] of panels) if (!["ForearmL", "VestFront", "ForearmR", "VestBack"].includes(name)) root.appendChild(panel);
+    for (const d of devices) if (d.place === "back") root.appendChild(panels.get(d.name));
+    for (const d of devices) if (d.place !== "front" && d.place !== "back") root.appendChild(panels.get(d.name));
   }
 
   /* Back under the front when the vest panel has the height for it (a tall window), else beside it: the first
