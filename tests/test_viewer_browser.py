@@ -303,3 +303,141 @@ def test_saved_track_page_without_motion(page, tmp_path, capsys):
     assert st["shown"] == {"joints": 0, "triangle": False, "dynamicPoint": False, "hitPoint": False}
     check_frame_shown(page, track, data["colors"], frame=360)
     assert page.errors == []
+
+
+# ---------------------------------------------------------------------------------------------------- screen fit
+# Everything a user reads: each panel's title, subtitle and edge labels (the sleeves' "front", "back", "neck side",
+# "arm side" among them) as the boxes of their text, each actuator cell with its index and value, the stats under
+# the vest, the colour bar, the stage's buttons, legend and hint. Boxes are viewport CSS pixels [x, y, w, h].
+LAYOUT_BOXES = """() => {
+  const box = (r) => [r.left, r.top, r.width, r.height];
+  const text = (el) => { const r = document.createRange(); r.selectNodeContents(el); return box(r.getBoundingClientRect()); };
+  const out = { labels: [], cells: [], stats: [], controls: [], cellText: [] };
+  for (const p of document.querySelectorAll('#vest .panel')) {
+    const dev = p.dataset.device;
+    for (const el of p.querySelectorAll('.ptitle, .edge')) {
+      const own = [...el.childNodes].filter((n) => n.nodeType === 3 && n.textContent.trim());
+      for (const n of own) { const r = document.createRange(); r.selectNodeContents(n);
+        out.labels.push([dev + ': ' + n.textContent.trim(), box(r.getBoundingClientRect())]); }
+      for (const s of el.querySelectorAll('small')) if (s.textContent.trim()) out.labels.push([dev + ': ' + s.textContent.trim(), text(s)]);
+    }
+    for (const c of p.querySelectorAll('.act')) {
+      out.cells.push([c.dataset.id, box(c.getBoundingClientRect())]);
+      const v = c.querySelector('.val');
+      if (v.textContent) out.cellText.push([c.dataset.id, text(c.querySelector('.idx')), text(v), box(c.getBoundingClientRect())]);
+    }
+  }
+  for (const el of document.querySelectorAll('#readout dt, #readout dd')) out.stats.push(['stats: ' + el.textContent, text(el)]);
+  out.controls.push(['colour bar', box(document.getElementById('colorbar').getBoundingClientRect())]);
+  for (const el of document.querySelectorAll('#stage .overlay-top, #stage .legend3d, #stage .hint')) out.controls.push(['stage: ' + el.className, box(el.getBoundingClientRect())]);
+  out.stacked = document.getElementById('vest').classList.contains('stacked');
+  out.side = box(document.getElementById('side').getBoundingClientRect());
+  out.sideScroll = [document.getElementById('side').scrollWidth, document.getElementById('side').clientWidth,
+                    document.getElementById('side').scrollHeight, document.getElementById('side').clientHeight];
+  out.page = [document.documentElement.scrollWidth, document.documentElement.scrollHeight, innerWidth, innerHeight];
+  return out;
+}"""
+
+
+def _overlap(a, b, tol=0.5) -> bool:
+    return (min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]) > tol) and (min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]) > tol)
+
+
+def _inside(a, outer, tol=0.5) -> bool:
+    return (a[0] >= outer[0] - tol and a[1] >= outer[1] - tol and a[0] + a[2] <= outer[0] + outer[2] + tol
+            and a[1] + a[3] <= outer[1] + outer[3] + tol)
+
+
+def check_screen_fit(pg, width, height):
+    """Every label, cell, stat and control is on screen, inside its panel, with no two overlapping; returns the
+    boxes."""
+    b = pg.evaluate(LAYOUT_BOXES)
+    sw, sh, iw, ih = b["page"]
+    assert (sw, sh) == (iw, ih) == (width, height), f"the page scrolls: {sw}x{sh} in a {iw}x{ih} window"
+    assert b["sideScroll"][0] <= b["sideScroll"][1] and b["sideScroll"][2] <= b["sideScroll"][3], \
+        f"the vest panel scrolls (hides part of itself): {b['sideScroll']}"
+    screen = [0, 0, width, height]
+    vest_side = b["labels"] + b["cells"] + b["stats"] + b["controls"][:1]
+    for name, r in vest_side:
+        assert r[2] > 0 and r[3] > 0, f"{name} is not drawn"
+        assert _inside(r, screen), f"{name} {r} is outside the {width}x{height} window"
+        assert _inside(r, b["side"]), f"{name} {r} is outside the vest panel {b['side']}"
+    for name, r in b["controls"][1:]:
+        assert _inside(r, screen), f"{name} {r} is outside the window"
+    items = [(n, r) for n, r in vest_side if not n.startswith("stats")] + b["controls"][1:]
+    items += [("stats", [min(r[0] for _, r in b["stats"]), min(r[1] for _, r in b["stats"]),
+                         max(r[0] + r[2] for _, r in b["stats"]) - min(r[0] for _, r in b["stats"]),
+                         max(r[1] + r[3] for _, r in b["stats"]) - min(r[1] for _, r in b["stats"])])]
+    for i, (n1, r1) in enumerate(items):
+        for n2, r2 in items[i + 1:]:
+            assert not _overlap(r1, r2), f"{n1} {r1} overlaps {n2} {r2}"
+    stats = b["stats"]
+    for i, (n1, r1) in enumerate(stats):
+        for n2, r2 in stats[i + 1:]:
+            assert not _overlap(r1, r2), f"{n1} {r1} overlaps {n2} {r2}"
+    for aid, idx, val, cell in b["cellText"]:
+        assert not _overlap(idx, val), f"{aid}: index {idx} overlaps the value {val}"
+        assert _inside(idx, cell) and _inside(val, cell), f"{aid}: its text leaves the cell {cell}"
+    labels = pg.evaluate(STATE)["timelineLabels"]
+    assert {"vest front", "vest back", "L shoulder", "R shoulder", "total intensity", "audio"} <= {x["text"] for x in labels}
+    for i, x in enumerate(labels):
+        r1 = [x["x"], x["y"], x["w"], x["h"]]
+        assert _inside(r1, screen), f"timeline label {x['text']} {r1} is outside the window"
+        for y in labels[i + 1:]:
+            assert not _overlap(r1, [y["x"], y["y"], y["w"], y["h"]]), f"timeline labels {x['text']} and {y['text']} overlap"
+    return b
+
+
+@pytest.mark.parametrize("width,height", [(1280, 720), (1280, 800), (1366, 768), (1400, 900), (1920, 1080)])
+def test_page_fits_a_laptop_and_a_monitor_screen(browser, show, width, height):
+    path, motion, tracks = show
+    mst = tracks[0]
+    pg = browser.new_page(viewport={"width": width, "height": height})
+    errors = []
+    pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    try:
+        # While the recording plays with intensities showing.
+        open_ready(pg, path.as_uri())
+        pg.click("#play")
+        pg.wait_for_function(f"{STATE}.time > 1.0 && {STATE}.intensities.some(v => v > 0)", timeout=15_000)
+        b = check_screen_fit(pg, width, height)
+        assert b["cellText"], "no actuator shows a value"
+        side_while_playing = b["side"]
+        pg.click("#play")
+        # At the frame where the sleeves run hardest while the ray hits a shoulder: values in the sleeve cells and
+        # the longest stat ("performer-right shoulder").
+        sleeves = [k for k, a in enumerate(mst.actuators) if a.startswith("Forearm")]
+        chart = np.asarray(mst.debug["chart"])[: mst.n_frames]
+        score = np.where(np.isin(chart, [2, 3]), mst.intensities[:, sleeves].max(axis=1), -1)
+        f = int(np.argmax(score))
+        assert score[f] >= 1
+        pg.goto("about:blank")   # a new load: changing only the #t= of the open page would not reload it
+        open_ready(pg, path.as_uri() + f"#t={(f + 0.5) / mst.fps:.6f}")
+        st = pg.evaluate(STATE)
+        assert st["frame"] == f and max(st["intensities"][k] for k in sleeves) >= 1
+        b = check_screen_fit(pg, width, height)
+        assert b["side"] == side_while_playing, "the vest panel changed size with the values shown"
+        shown = {aid for aid, *_ in b["cellText"]}
+        assert any(a.startswith("Forearm") for a in shown), shown
+        assert {"ForearmL: LEFT SHOULDER", "ForearmL: front", "ForearmL: back", "ForearmL: neck side",
+                "ForearmL: arm side", "ForearmR: RIGHT SHOULDER", "ForearmR: back"} <= {n for n, _ in b["labels"]}
+        assert any("shoulder" in n for n, _ in b["stats"])
+        # The body as the wearer feels it: left sleeve, chest, right sleeve from left to right, the sleeves at the
+        # top of the chest; the back beside the right sleeve (laptop) or under the chest (tall window).
+        cells = dict(b["cells"])
+        x_of = lambda dev: np.mean([r[0] for k, r in cells.items() if k.startswith(dev + "_")])
+        assert x_of("ForearmL") < x_of("VestFront") < x_of("ForearmR")
+        assert cells["ForearmL_0"][1] < cells["VestFront_8"][1] and cells["ForearmR_0"][1] < cells["VestFront_8"][1]
+        assert cells["VestFront_0"][0] < cells["VestFront_3"][0] and cells["VestBack_0"][0] < cells["VestBack_3"][0]
+        if b["stacked"]:
+            assert cells["VestBack_0"][1] > cells["VestFront_19"][1]
+        else:
+            assert cells["VestBack_0"][0] > cells["ForearmR_2"][0]
+        # A 1080-line monitor has the height to put the back under the front; a 720-line laptop does not.
+        assert b["stacked"] == (height == 1080)
+        ARTIFACTS.mkdir(exist_ok=True)
+        pg.screenshot(path=str(ARTIFACTS / f"viewer_{width}x{height}.png"))
+        assert errors == []
+    finally:
+        pg.close()

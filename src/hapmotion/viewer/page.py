@@ -8,7 +8,7 @@ shows a running ``hapmotion live`` WebSocket broadcast (message schema: docs/CON
 Page data (the JSON in ``<script id="hm-data">``)::
 
     format, version, title, footer [str], colors [101 CSS colours], bright_from, scale_tops,
-    actuators [N ids], joints [32 names], bones [[parent, child]], devices [{name, rows, cols, title, ...}],
+    actuators [N ids], joints [32 names], bones [[parent, child]], devices [{name, rows, cols, place, title, ...}],
     motion: null | {fps, n_frames, joints [present joint indices], floor_y, positions blob (T, J, 3) int16 mm},
     energy_units,
     tracks: [{key, label, method, preset, mode, mirror, fps, n_frames, intensities blob (T, N) uint8,
@@ -43,22 +43,9 @@ from ..motion import Motion
 from ..track import HapticTrack
 from ..filesafety import atomic_path
 from . import packing
+from .bodymap import BODY_ORDER, BODY_ROW, PANEL_TEXT
 from .colors import SCALE_TOPS, bright_from, page_colors
 from .curves import ENERGY_UNITS, track_motion_energy, triangle_vertices
-
-PANEL_TEXT = {
-    # Vest panels: col 0 is the wearer's left on BOTH panels (the layout stored in every bHaptics .tact file of type Tactot, e.g. GitHub bhaptics/tact-python CenterX.tact), so both are drawn with
-    # the wearer's left on the left: the front as the wearer looks down at their chest, the back as seen from behind.
-    "front": dict(title="FRONT (wearer's left | right)", subtitle="",
-                  left="wearer's LEFT", right="wearer's RIGHT", top="collar", bottom="belly"),
-    "back": dict(title="BACK (wearer's left | right)", subtitle="seen from behind the wearer",
-                 left="wearer's LEFT", right="wearer's RIGHT", top="collar", bottom="waist"),
-    # Sleeves on the shoulders: columns front (0) to back, row 0 nearer the neck (layout file x40_shoulders.json).
-    "shoulder_left": dict(title="LEFT SHOULDER", subtitle="sleeve ForearmL", left="front", right="back",
-                          top="neck side", bottom="arm side"),
-    "shoulder_right": dict(title="RIGHT SHOULDER", subtitle="sleeve ForearmR", left="front", right="back",
-                           top="neck side", bottom="arm side"),
-}
 
 AUDIO_MIME = {".ogg": "audio/ogg", ".oga": "audio/ogg", ".opus": "audio/ogg", ".mp3": "audio/mpeg", ".wav": "audio/wav",
               ".flac": "audio/flac", ".m4a": "audio/mp4", ".aac": "audio/aac", ".webm": "audio/webm"}
@@ -149,10 +136,11 @@ def _device_panels(track: HapticTrack) -> list[dict]:
         layout = None
     out = []
     if layout is not None and tuple(layout.actuators) == tuple(track.actuators):
-        for d in layout.devices:
+        # In body order (bodymap.BODY_ORDER), each with the group it joins on the page ("front" row or "back").
+        for d in sorted(layout.devices, key=lambda d: BODY_ORDER.index(d.chart)):
             text = PANEL_TEXT.get(CHART_NAMES[d.chart], {})
-            out.append(dict(name=d.name, rows=d.rows, cols=d.cols, **{k: text.get(k, "") for k in
-                            ("title", "subtitle", "left", "right", "top", "bottom")}))
+            out.append(dict(name=d.name, rows=d.rows, cols=d.cols, place=BODY_ROW[d.chart],
+                            **{k: text.get(k, "") for k in ("title", "subtitle", "left", "right", "top", "bottom")}))
             if not text:
                 out[-1]["title"] = d.name
         return out

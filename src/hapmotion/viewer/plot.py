@@ -1,8 +1,11 @@
-"""Static figure of a track (matplotlib, Agg): actuator heat map over time, total intensity, motion energy.
+"""Static figure of a track (matplotlib, Agg): the body as the wearer feels it, the actuator heat map over time,
+total intensity, motion energy.
 
 Made to be printed: white background, "off" motors white, a colour scale monotonic in lightness (survives greyscale
 printing), group boundaries and names on the heat map (vest front, vest back, left and right shoulder), every
-vest row labelled with its actuator indices, and text no smaller than 8 pt at the default A4-landscape size.
+vest row labelled with its actuator indices, and text no smaller than 8 pt at the default A4-landscape size. The
+body drawing on top (:mod:`hapmotion.viewer.bodymap`, the page's picture) tells the wearer's left from right: each
+motor where it sits, coloured by its mean intensity over the drawn time.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from ..errors import UsageError
 from ..filesafety import atomic_path
 from ..layout import load_layout
 from ..track import HapticTrack, parse_actuator_id
+from .bodymap import draw_body
 from .colors import plot_cmap, scale_top
 from .curves import ENERGY_UNITS, total_intensity, track_motion_energy
 
@@ -102,6 +106,31 @@ def plot_track(
 ) -> Path:
     """Draw ``track`` to ``path`` (.png, .pdf or .svg; written atomically) and return the path.
 
+    The options are those of :func:`track_figure`, which makes the figure.
+    """
+    out = Path(path)
+    if out.suffix.lower() not in FORMATS:
+        raise UsageError(f"{out}: the figure format follows the extension; use one of {', '.join(FORMATS)}")
+    fig = track_figure(track, title=title, audio=audio, start_s=start_s, end_s=end_s, vmax=vmax)
+    with atomic_path(out) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=out.suffix.lower().lstrip("."), facecolor="white")
+    return out
+
+
+def track_figure(
+    track: HapticTrack,
+    *,
+    title: str | None = None,
+    audio=None,
+    start_s: float | None = None,
+    end_s: float | None = None,
+    vmax: "float | str" = "auto",
+):
+    """The figure of ``track`` (a matplotlib ``Figure``, A4 landscape; not saved).
+
+    Its first axes (label ``"body"``) hold the body drawing, whose rectangles carry their actuator ids as ``gid``;
+    then the heat map, the total intensity, the motion energy and, with ``audio``, the music.
+
     Parameters
     ----------
     track:
@@ -119,9 +148,6 @@ def plot_track(
     import matplotlib
     from matplotlib.figure import Figure  # object API: no pyplot state, no backend switch for the caller
 
-    out = Path(path)
-    if out.suffix.lower() not in FORMATS:
-        raise UsageError(f"{out}: the figure format follows the extension; use one of {', '.join(FORMATS)}")
     if track.n_frames == 0:
         raise UsageError("the track has no frames to plot")
     t_all = track.times
@@ -146,14 +172,40 @@ def plot_track(
             raise UsageError(f"the colour scale top must be in 0..100, got {vmax}")
 
     n_panels = 3 + (audio is not None)
-    ratios = [5.0, 1.3, 1.1] + ([1.1] if audio is not None else [])
+    ratios = [2.9, 4.0, 1.1, 1.0] + ([1.0] if audio is not None else [])
     with matplotlib.rc_context({"font.size": 9, "axes.titlesize": 10, "axes.labelsize": 9}):
         fig = Figure(figsize=FIGSIZE_IN, layout="constrained")
-        axes = fig.subplots(n_panels, 1, sharex=True, gridspec_kw=dict(height_ratios=ratios))
+        grid = fig.add_gridspec(n_panels + 1, 1, height_ratios=ratios)
+        ax_body = fig.add_subplot(grid[0], label="body")
+        axes = [fig.add_subplot(grid[1])]
+        axes += [fig.add_subplot(grid[k], sharex=axes[0]) for k in range(2, n_panels + 1)]
+        for ax in axes[:-1]:
+            ax.tick_params(labelbottom=False)
+        _draw_body(fig, ax_body, track, inten, x0, x1)
         _draw(fig, axes, track, sel, t, x0, x1, inten, groups, audio, title, top)
-        with atomic_path(out) as tmp:
-            fig.savefig(tmp, dpi=dpi, format=out.suffix.lower().lstrip("."), facecolor="white")
-    return out
+    return fig
+
+
+def _draw_body(fig, ax, track, inten, x0, x1) -> None:
+    """The body as the wearer feels it, coloured by each motor's mean intensity over the drawn frames."""
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+
+    mean = inten.mean(axis=0)
+    top = scale_top(float(mean.max()))
+    cmap, norm = plot_cmap(), Normalize(vmin=0.5 * top / 100, vmax=top)
+    cells = draw_body(ax, mean, track.actuators, cmap, norm)
+    mirror = (track.meta or {}).get("mirror")
+    note = {True: "\nmirrored: the performer's left hand is felt on the wearer's right",
+            False: "\nnot mirrored: the performer's left is the wearer's left"}.get(mirror, "")
+    ax.set_title(f"the body as the wearer feels it, wearer's left on the left: each motor's mean intensity over "
+                 f"{x0:.1f}-{x1:.1f} s{note}", loc="center")
+    if not cells:
+        ax.text(0.5, 0.5, "no body drawing: the track's actuators are not those of the bundled layout "
+                "(x40_shoulders)", transform=ax.transAxes, ha="center", va="center", color="0.35", parse_math=False)
+        return
+    bar = fig.colorbar(ScalarMappable(norm, cmap), ax=ax, pad=0.01, fraction=0.025, extend="min")
+    bar.set_label(f"mean (Player units, 0..{top:g})")
 
 
 def _draw(fig, axes, track, sel, t, x0, x1, inten, groups, audio, title, top) -> None:
@@ -174,8 +226,8 @@ def _draw(fig, axes, track, sel, t, x0, x1, inten, groups, audio, title, top) ->
     ticks, labels = row_ticks(track.actuators, groups)
     ax_heat.set_yticks(ticks, labels, fontsize=8)
     pool_note = f"; max over {k} frames per column" if k > 1 else ""
-    ax_heat.set_title(f"actuator intensity (white = off; rows labelled with their actuator indices, first row at the "
-                      f"collar / neck side{pool_note})", loc="left")
+    ax_heat.set_title(f"actuator intensity over time (one line per motor, white = off; labelled: each row's indices "
+                      f"from the wearer's left, top row at the collar{pool_note})", loc="left")
     over = bool(inten.max() > top)
     bar = fig.colorbar(img, ax=ax_heat, pad=0.01, fraction=0.025, extend="both" if over else "min")
     bar.set_label(f"intensity (Player units; colour scale 0..{top:g}{', darkest above' if over else ''})")

@@ -161,11 +161,12 @@
         known.add(name);
       }
     }
+    const panels = new Map();
     for (const d of devices) {
       const panel = document.createElement("div");
       panel.className = "panel";
       panel.dataset.device = d.name;
-      if (!["VestFront", "VestBack", "ForearmL", "ForearmR"].includes(d.name)) panel.style.gridArea = "extra";
+      panels.set(d.name, panel);
       const title = document.createElement("div");
       title.className = "ptitle";
       title.textContent = d.title;
@@ -202,8 +203,24 @@
         }
       }
       panel.appendChild(grid);
-      root.appendChild(panel);
     }
+    // Where each part sits on the wearer (page.py sends the panels in that order, hapmotion/viewer/bodymap.py):
+    // left shoulder, chest, right shoulder side by side (wearer's left on the left), then the back as seen from
+    // behind; any other device after them.
+    const front = document.createElement("div");
+    front.className = "body-front";
+    for (const d of devices) if (d.place === "front") front.appendChild(panels.get(d.name));
+    if (front.childElementCount) root.appendChild(front);
+    for (const d of devices) if (d.place === "back") root.appendChild(panels.get(d.name));
+    for (const d of devices) if (d.place !== "front" && d.place !== "back") root.appendChild(panels.get(d.name));
+  }
+
+  /* Back under the front when the vest panel has the height for it (a tall window), else beside it: the first
+   * arrangement whose content the panel shows without scrolling. Called at start and on every resize. */
+  function fitVest() {
+    const vest = $("vest"), side = $("side");
+    vest.classList.add("stacked");
+    if (side.scrollHeight > side.clientHeight || side.scrollWidth > side.clientWidth) vest.classList.remove("stacked");
   }
 
   function showIntensities(values) {
@@ -457,19 +474,26 @@
         if (w !== c.width || h !== c.height) { c.width = w; c.height = h; this.dirty = true; }
       }
     }
-    /* Lane geometry in device pixels: heat map, total intensity, motion energy, audio. */
+    /* Lane geometry in device pixels: heat map, total intensity, motion energy, audio. The lanes share the canvas
+     * height in fixed proportions (the canvas follows the window height, see --timeline-h) above a 16 px time axis. */
     layout() {
       const dpr = window.devicePixelRatio || 1, H = this.bg.height;
+      const parts = [["heat", "actuators", 80], ["total", "total intensity", 50], ["energy", "motion energy", 36], ["audio", "audio", 36]];
+      const GAP = 6, AXIS = 16;
+      const k = Math.max(0.5, (H / dpr - AXIS - GAP * parts.length) / parts.reduce((a, p) => a + p[2], 0));
       const lanes = [];
-      let y = 6 * dpr;
-      const add = (key, label, h) => { lanes.push({ key: key, label: label, y: y, h: h * dpr }); y += (h + 6) * dpr; };
-      add("heat", "actuators", 80);
-      add("total", "total intensity", 50);
-      add("energy", "motion energy", 36);
-      add("audio", "audio", 36);
+      let y = GAP * dpr;
+      for (const [key, label, h] of parts) { lanes.push({ key: key, label: label, y: y, h: Math.floor(h * k) * dpr }); y += (Math.floor(h * k) + GAP) * dpr; }
       this.axisY = Math.min(H - 2, y);
       this.lanes = lanes;
       return lanes;
+    }
+    /* Draw a label and remember its box (CSS pixels in the canvas) for the test hook's layout check. */
+    label(g, text, x, y, dpr) {
+      g.fillText(text, x, y);
+      const w = g.measureText(text).width / dpr, h = parseFloat(g.font) / dpr;
+      const left = g.textAlign === "right" ? x / dpr - w : g.textAlign === "center" ? x / dpr - w / 2 : x / dpr;
+      this.labels.push({ text: text, x: left, y: y / dpr - h / 2, w: w, h: h });
     }
     drawBackground() {
       this.resize();
@@ -477,6 +501,7 @@
       this.dirty = false;
       const g = this.bg.getContext("2d"), W = this.bg.width, H = this.bg.height, dpr = window.devicePixelRatio || 1;
       g.clearRect(0, 0, W, H);
+      this.labels = [];
       const x0 = this.gutterCss() * dpr, PW = Math.max(1, W - x0 - 4 * dpr);
       const src = timelineSource();
       const t0 = this.t0, t1 = this.t1;
@@ -484,7 +509,7 @@
       for (const lane of this.layout()) {
         g.fillStyle = "#14171d"; g.fillRect(x0, lane.y, PW, lane.h);
         g.fillStyle = "#9aa3b2"; g.textAlign = "right";
-        if (lane.key !== "heat") g.fillText(lane.label, x0 - 8 * dpr, lane.y + lane.h / 2);
+        if (lane.key !== "heat") this.label(g, lane.label, x0 - 8 * dpr, lane.y + lane.h / 2, dpr);
         if (lane.key === "heat") this.drawHeat(g, src, lane, x0, PW, t0, t1, dpr);
         else if (lane.key === "total") this.drawCurve(g, src.total, lane, x0, PW, t0, t1, "#80cbc4", true, dpr);
         else if (lane.key === "energy") this.drawCurve(g, src.energy, lane, x0, PW, t0, t1, "#ce93d8", false, dpr);
@@ -503,7 +528,7 @@
         g.beginPath(); g.moveTo(x, 0); g.lineTo(x, this.axisY); g.stroke();
         g.textAlign = x > x0 + PW - 20 * dpr ? "right" : "center";
         const label = live ? (Math.abs(t1 - t) < 1e-6 ? "now" : "-" + fmtTime(t1 - t, step < 1)) : fmtTime(t, step < 1);
-        g.fillText(label, x, this.axisY + 8 * dpr);
+        this.label(g, label, x, this.axisY + 8 * dpr, dpr);
       }
     }
     /* Max over the frames under each pixel column, so short pulses stay visible when zoomed out. */
@@ -528,15 +553,19 @@
       tmp.getContext("2d").putImageData(img, 0, 0);
       g.imageSmoothingEnabled = false;
       g.drawImage(tmp, x0, lane.y, PW, lane.h);
-      // Group boundaries and names (front, back, sleeves).
+      // Group boundaries and names (front, back, sleeves). The two sleeves have 6 rows each of the lane's 52:
+      // their names are spread to one line apart (kept inside the lane) so they never print over each other.
       g.textAlign = "left"; g.font = 10 * dpr + "px sans-serif";
-      for (const grp of groupsOf(ACT_IDS)) {
+      const groups = groupsOf(ACT_IDS), LINE = 11 * dpr, ys = [];
+      for (const grp of groups) {
         const ya = lane.y + (grp.start / nAct) * lane.h, yb = lane.y + ((grp.start + grp.count) / nAct) * lane.h;
         g.strokeStyle = "#e6e8ec"; g.lineWidth = 1;
         if (grp.start > 0) { g.beginPath(); g.moveTo(x0, ya); g.lineTo(x0 + PW, ya); g.stroke(); }
-        g.fillStyle = "#9aa3b2"; g.textAlign = "right";
-        g.fillText(grp.short, x0 - 4 * dpr, (ya + yb) / 2);
+        ys.push(Math.max((ya + yb) / 2, ys.length ? ys[ys.length - 1] + LINE : lane.y + LINE / 2));
       }
+      for (let i = ys.length - 1; i >= 0; i--) ys[i] = Math.min(ys[i], i + 1 < ys.length ? ys[i + 1] - LINE : lane.y + lane.h - LINE / 2);
+      g.fillStyle = "#9aa3b2"; g.textAlign = "right";
+      groups.forEach((grp, i) => this.label(g, grp.short, x0 - 4 * dpr, ys[i], dpr));
       g.font = 11 * dpr + "px sans-serif";
     }
     drawCurve(g, cur, lane, x0, PW, t0, t1, color, fill, dpr) {
@@ -763,13 +792,18 @@
 
   function setReadout(pairs) {
     const dl = $("readout");
-    if (dl.childElementCount !== pairs.length * 2) {
+    if (dl.childElementCount !== pairs.length) {
       dl.textContent = "";
       for (const [k] of pairs) {
+        const kv = document.createElement("div"); kv.className = "kv";
         const dt = document.createElement("dt"); dt.textContent = k;
         const dd = document.createElement("dd"); dd.dataset.key = k;
-        dl.append(dt, dd);
+        kv.append(dt, dd);
+        dl.append(kv);
       }
+      const dds = dl.querySelectorAll("dd");
+      pairs.forEach(([, v], i) => { dds[i].textContent = v; });
+      fitVest();   // the stats take room under the vest: choose the arrangement with them in place
     }
     const dds = dl.querySelectorAll("dd");
     pairs.forEach(([, v], i) => { if (dds[i].textContent !== v) dds[i].textContent = v; });
@@ -896,7 +930,7 @@
       S.live.hello = m;
       S.live.stopped = false;
       S.live.seq = -1;
-      if (m.actuators.join() !== ACT_IDS.join()) { ACT_IDS = m.actuators.slice(); N_ACT = ACT_IDS.length; buildVest(); }
+      if (m.actuators.join() !== ACT_IDS.join()) { ACT_IDS = m.actuators.slice(); N_ACT = ACT_IDS.length; buildVest(); fitVest(); }
       if (Array.isArray(m.joints)) JOINTS = m.joints.slice();
       if (Array.isArray(m.bones)) BONES = m.bones.filter((b) => Array.isArray(b) && b.length === 2);
       LIVE.hist = [];
@@ -1052,7 +1086,7 @@
       else if (e.code === "Home") seek(0);
       else if (e.code === "End") seek(duration());
     });
-    window.addEventListener("resize", () => { scene.dirty = true; timeline.dirty = true; });
+    window.addEventListener("resize", () => { fitVest(); scene.dirty = true; timeline.dirty = true; });
     updateMirrorNote();
   }
 
@@ -1079,6 +1113,7 @@
     if (S.mode === "file" && !DATA.tracks.length) throw new Error("this page holds no track and no live address (add ?live=ws://host:port)");
     await decodeAll();
     buildVest();
+    fitVest();
     drawColorbar();
     scene = new Scene($("scene"));
     timeline = new Timeline($("timeline"), $("timeline-head"));
@@ -1115,6 +1150,12 @@
     requestAnimationFrame(render);
   }
 
+  /* The timeline's drawn labels (lane names, sleeve and panel names, time ticks) as viewport boxes {text, x, y, w, h}. */
+  function timelineLabelBoxes() {
+    const r = timeline.bg.getBoundingClientRect();
+    return (timeline.labels || []).map((b) => ({ text: b.text, x: r.left + b.x, y: r.top + b.y, w: b.w, h: b.h }));
+  }
+
   const median = (a) => { if (!a.length) return null; const s = a.slice().sort((x, y) => x - y); return s[Math.floor(s.length / 2)]; };
   const pct = (a, q) => { if (!a.length) return null; const s = a.slice().sort((x, y) => x - y); return s[Math.min(s.length - 1, Math.floor(q * s.length))]; };
 
@@ -1130,6 +1171,7 @@
         audio: AUDIO ? { playing: !!(AUDIO.el && !AUDIO.el.paused), time: AUDIO.el ? AUDIO.el.currentTime : null, usable: audioOk } : null,
         live: { url: S.live.url, connected: S.live.connected, hello: !!S.live.hello, seq: S.live.seq, frames: S.live.frames,
           dropped: S.live.dropped, stopped: S.live.stopped, stalled: S.live.stalled, skipped: S.live.bad },
+        timelineLabels: timeline ? timelineLabelBoxes() : [],
         stats: { loadMs: S.stats.loadMs, firstDrawMs: S.stats.firstDrawMs, drawMsMedian: median(S.stats.drawMs), drawMsP95: pct(S.stats.drawMs, 0.95),
           frameGapMsMedian: median(S.stats.frameGapMs), frameGapMsP95: pct(S.stats.frameGapMs, 0.95), samples: S.stats.drawMs.length },
       }));

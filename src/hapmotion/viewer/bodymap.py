@@ -1,0 +1,168 @@
+"""The body as the wearer feels it: where each actuator of a track sits, for the page's vest panels and the plot's
+body drawing.
+
+Both draw the same picture, the wearer's left on the left: the left shoulder, the chest, the right shoulder side by
+side (each sleeve on its own side, at the top of the chest), then the back as someone standing behind the wearer
+sees it. This follows bHaptics addressing (the layout stored in every ``.tact`` file of type ``Tactot``, e.g.
+GitHub ``bhaptics/tact-python`` ``CenterX.tact``): vest ``index = row * 4 + col``, row 0 at the collar, col 0 at the
+wearer's left on *both* panels; the sleeves' columns run front to back, row 0 nearer the neck
+(``hapmotion/data/x40_shoulders.json``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..layout import CHART_BACK, CHART_FRONT, CHART_NAMES, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, Layout, load_layout
+
+PANEL_TEXT = {
+    # Vest panels: col 0 is the wearer's left on BOTH panels, so both are drawn with the wearer's left on the left:
+    # the front as the wearer looks down at their chest, the back as seen from behind.
+    "front": dict(title="FRONT (wearer's left | right)", subtitle="the chest as the wearer looks down at it",
+                  left="wearer's LEFT", right="wearer's RIGHT", top="collar", bottom="belly"),
+    "back": dict(title="BACK (wearer's left | right)", subtitle="seen from behind the wearer",
+                 left="wearer's LEFT", right="wearer's RIGHT", top="collar", bottom="waist"),
+    # Sleeves on the shoulders: columns front (0) to back, row 0 nearer the neck (layout file x40_shoulders.json).
+    "shoulder_left": dict(title="LEFT SHOULDER", subtitle="sleeve ForearmL", left="front", right="back",
+                          top="neck side", bottom="arm side"),
+    "shoulder_right": dict(title="RIGHT SHOULDER", subtitle="sleeve ForearmR", left="front", right="back",
+                           top="neck side", bottom="arm side"),
+}
+"""Title, subtitle and edge labels of each chart's panel (keys: :data:`hapmotion.layout.CHART_NAMES`)."""
+
+BODY_ORDER = (CHART_SHOULDER_LEFT, CHART_FRONT, CHART_SHOULDER_RIGHT, CHART_BACK)
+"""Panels from the wearer's left to the right: left shoulder, chest, right shoulder, then the back."""
+
+BODY_ROW = {CHART_SHOULDER_LEFT: "front", CHART_FRONT: "front", CHART_SHOULDER_RIGHT: "front", CHART_BACK: "back"}
+"""Which group each chart's panel joins: the front row (the chest with a shoulder on each side) or the back; the page
+puts the back beside the front row or under it (whichever fits the window), the figure beside it."""
+
+CELL_W, CELL_H, CELL_GAP = 1.0, 0.62, 0.1
+"""Drawing units of one actuator cell (width, height) and the gap between cells."""
+EDGE_ROOM = 0.55
+"""Room left and right of each grid for its vertical edge label (drawing units)."""
+PANEL_GAP = 0.35
+"""Between one panel's edge label and the next panel's."""
+
+
+@dataclass(frozen=True)
+class BodyCell:
+    """One actuator in the drawing: its track column and id, device, index, and its box (lower-left ``x, y``,
+    width ``w``, height ``h``; drawing units, y up, the grids' top edge at y = 0)."""
+
+    column: int
+    actuator: str
+    device: str
+    index: int
+    x: float
+    y: float
+    w: float
+    h: float
+
+    @property
+    def center(self) -> tuple[float, float]:
+        return self.x + self.w / 2, self.y + self.h / 2
+
+
+@dataclass(frozen=True)
+class BodyPanel:
+    """One device's grid in the drawing: ``x, y`` lower-left, ``w, h`` (drawing units) and its labels."""
+
+    device: str
+    chart: str
+    x: float
+    y: float
+    w: float
+    h: float
+    text: dict
+
+    @property
+    def center_x(self) -> float:
+        return self.x + self.w / 2
+
+
+def body_layout(actuators: Sequence[str], layout: Layout | None = None) -> tuple[list[BodyPanel], list[BodyCell]]:
+    """Panels and cells of the body drawing for a track whose columns are ``actuators``.
+
+    A device of ``layout`` (default: the bundled one) is drawn when all its ids are among the columns; columns of
+    other devices are left out. Returns ``([], [])`` when no device of the layout is in the track (a track of some
+    other layout: the caller says so instead of drawing).
+    """
+    if layout is None:
+        try:
+            layout = load_layout()
+        except (InputError, OSError):
+            return [], []
+    col_of = {a: i for i, a in enumerate(actuators)}
+    panels: list[BodyPanel] = []
+    cells: list[BodyCell] = []
+    x = 0.0
+    by_chart = {d.chart: d for d in layout.devices}
+    for chart in BODY_ORDER:
+        d = by_chart.get(chart)
+        if d is None:
+            continue
+        ids = [f"{d.name}_{k}" for k in range(d.size)]
+        if not all(i in col_of for i in ids):
+            continue
+        x0 = x + EDGE_ROOM
+        w = d.cols * (CELL_W + CELL_GAP) - CELL_GAP
+        h = d.rows * (CELL_H + CELL_GAP) - CELL_GAP
+        name = CHART_NAMES[chart]
+        panels.append(BodyPanel(d.name, name, x0, -h, w, h, PANEL_TEXT[name]))
+        for k, aid in enumerate(ids):
+            r, c = divmod(k, d.cols)
+            cells.append(BodyCell(col_of[aid], aid, d.name, k, x0 + c * (CELL_W + CELL_GAP),
+                                  -(r + 1) * (CELL_H + CELL_GAP) + CELL_GAP, CELL_W, CELL_H))
+        x = x0 + w + EDGE_ROOM + PANEL_GAP
+    return panels, cells
+
+
+def _value_text(v: float) -> str:
+    """A cell's number: one decimal below 10 (a motor that ran a moment shows "<0.1", never "0.0"), else whole."""
+    return "<0.1" if v < 0.05 else f"{v:.1f}" if v < 9.95 else f"{v:.0f}"
+
+
+def draw_body(ax, values: np.ndarray, actuators: Sequence[str], cmap, norm, *, fmt=None) -> list[BodyCell]:
+    """Draw the body on matplotlib axes ``ax``: one rectangle per actuator coloured by ``values`` (``(N,)``, Player
+    units, one per track column) through ``cmap``/``norm``, its index top left and its value bottom right, each
+    panel titled and its edges labelled. Each rectangle's ``gid`` is its actuator id. Returns the cells drawn
+    (``[]``, and nothing drawn, for a track of an unknown layout)."""
+    from matplotlib.patches import Rectangle
+
+    panels, cells = body_layout(actuators)
+    fmt = fmt or _value_text
+    ax.set_axis_off()
+    if not cells:
+        return []
+    for c in cells:
+        v = float(values[c.column])
+        face = cmap(norm(v)) if v > 0 else (1.0, 1.0, 1.0, 1.0)
+        ax.add_patch(Rectangle((c.x, c.y), c.w, c.h, facecolor=face, edgecolor="0.55", linewidth=0.6, gid=c.actuator))
+        dark = v > 0 and norm(v) > 0.5   # magma_r darkens with the value: light text from the middle of the scale
+        ink = "white" if dark else "0.15"
+        ax.text(c.x + 0.05, c.y + c.h - 0.05, str(c.index), ha="left", va="top", fontsize=8, color=ink, alpha=0.75)
+        if v > 0:
+            ax.text(c.x + c.w - 0.05, c.y + 0.05, fmt(v), ha="right", va="bottom", fontsize=8, fontweight="bold",
+                    color=ink)
+    for p in panels:
+        t = p.text
+        ax.text(p.center_x, 1.05, t["title"], ha="center", va="bottom", fontsize=8.5, fontweight="bold")
+        ax.text(p.center_x, 0.62, t["subtitle"], ha="center", va="bottom", fontsize=8, color="0.3")
+        ax.text(p.center_x, 0.12, t["top"], ha="center", va="bottom", fontsize=8, color="0.3")
+        ax.text(p.center_x, p.y - 0.12, t["bottom"], ha="center", va="top", fontsize=8, color="0.3")
+        bold = p.chart in ("front", "back")
+        for side, xx in (("left", p.x - 0.12), ("right", p.x + p.w + 0.12)):
+            ax.text(xx, p.y + p.h / 2, t[side], ha="right" if side == "left" else "left", va="center", rotation=90,
+                    fontsize=8, fontweight="bold" if bold else "normal")
+    left = min(p.x for p in panels) - EDGE_ROOM
+    right = max(p.x + p.w for p in panels) + EDGE_ROOM
+    bottom = min(p.y for p in panels) - 0.6
+    ax.set_xlim(left, right)
+    ax.set_ylim(bottom, 1.55)
+    ax.set_aspect("equal", adjustable="box")
+    return cells
