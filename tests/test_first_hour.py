@@ -7,7 +7,10 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import re
+import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -227,3 +230,79 @@ def test_a_player_that_drops_out_mid_show_lets_the_show_go_on_and_exit_0():
     code, err = asyncio.run(go())
     assert code == 0, err
     assert "stopped: source ended" in err and "no frame reached" not in err
+
+
+# ------------------------------------------------------------------------------- evaluate: progress and report
+def _evaluate_args(out) -> list[str]:
+    return ["evaluate", str(MOTION / "dataset-1_punch_normal_001.bvh"), "--methods", "mst", "--presets", "paper",
+            "--no-figures", "-o", str(out)]
+
+
+def test_evaluate_draws_a_progress_bar_on_a_terminal_and_keeps_the_report_to_its_inputs(tmp_path):
+    import pty
+
+    out = tmp_path / "report"
+    leader, follower = pty.openpty()
+    proc = subprocess.Popen([*HAPMOTION, *_evaluate_args(out)], stdin=follower, stdout=follower, stderr=follower,
+                            env=_env(), close_fds=True)
+    os.close(follower)
+    seen = b""
+    while True:
+        try:
+            chunk = os.read(leader, 4096)
+        except OSError:          # the terminal closed: the process is done
+            break
+        if not chunk:
+            break
+        seen += chunk
+    os.close(leader)
+    assert proc.wait(timeout=120) == 0, seen
+    text = seen.decode(errors="replace")
+    assert "evaluating" in text and "/2" in text                 # 2 steps: the one run, writing the files
+    assert "reading dataset-1_punch" in text and "writing the tables" in text   # the step it waits for is named
+    assert "scored 1 runs" in text
+    assert not (out / "bench.csv").exists() and "bench" not in (out / "metrics.md").read_text().lower()
+
+
+def test_evaluate_off_a_terminal_prints_only_its_result_lines(tmp_path):
+    res = subprocess.run([*HAPMOTION, *_evaluate_args(tmp_path / "r")], capture_output=True, text=True, env=_env(),
+                         timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert res.stderr == ""
+    assert res.stdout.splitlines()[0].startswith("scored 1 runs")
+
+
+def test_evaluate_counts_one_progress_step_per_run_plus_bench_and_files(tmp_path):
+    from hapmotion.metrics.evaluation import evaluate, steps
+
+    done, doing = [], []
+    evaluate([MOTION / "dataset-1_punch_normal_001.bvh"], ["mst", "baseline"], ["paper"], out_dir=tmp_path,
+             figures=False, bench=False, progress=done.append, status=doing.append)
+    assert len(done) == steps(1, 2, 1, bench=False, write=True) == 3
+    assert doing == ["reading dataset-1_punch_normal_001.bvh", "dataset-1_punch_normal_001 mst/paper",
+                     "dataset-1_punch_normal_001 baseline/paper", "writing the tables"]
+
+
+# ----------------------------------------------------------------------------------- set-up: a held apt lock
+def test_setup_waits_for_a_held_apt_lock_instead_of_failing(tmp_path):
+    """scripts/setup-env's apt helper against a fake apt-get that reports the lock held twice, then succeeds."""
+    root = Path(__file__).resolve().parents[1]
+    script = (root / "scripts" / "setup-env").read_text()
+    helper = re.search(r"^apt_get_waiting\(\) \{.*?^\}\n", script, re.S | re.M).group(0)
+    fake = tmp_path / "apt-get"
+    fake.write_text("#!/bin/sh\nn=$(cat \"$0.count\" 2>/dev/null || echo 0); echo $((n + 1)) > \"$0.count\"\n"
+                    "if [ \"$n\" -lt 2 ]; then echo 'E: Could not get lock /var/lib/apt/lists/lock. It is held by "
+                    "process 4242 (apt-get)' >&2; exit 100; fi\necho \"ran: $*\"\n")
+    fake.chmod(0o755)
+    prelude = "say() { printf 'setup: %s\\n' \"$*\" >&2; }\nas_root() { \"$@\"; }\n"
+    env = {**_env(), "PATH": f"{tmp_path}:{os.environ['PATH']}", "APT_LOCK_POLL": "0"}
+    res = subprocess.run(["bash", "-c", prelude + helper + "apt_get_waiting update -qq"], capture_output=True,
+                         text=True, env=env, timeout=60)
+    assert res.returncode == 0, res.stderr
+    assert (tmp_path / "apt-get.count").read_text().strip() == "3"
+    assert res.stderr.count("waiting for it") == 1 and "will fail" not in res.stderr
+    # another error is not waited for: it is shown and the helper fails at once
+    fake.write_text("#!/bin/sh\necho 'E: Unable to locate package nosuch' >&2; exit 100\n")
+    res = subprocess.run(["bash", "-c", prelude + helper + "apt_get_waiting install nosuch"], capture_output=True,
+                         text=True, env=env, timeout=60)
+    assert res.returncode == 1 and "Unable to locate package nosuch" in res.stderr and "waiting" not in res.stderr

@@ -3,6 +3,7 @@ and figures."""
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -12,6 +13,16 @@ from ..errors import UsageError
 from ..renderer.params import METHODS, PRESETS
 from .motion_options import motion_options, read_motion
 from .show_options import param_option, parse_param_overrides, split_list
+
+
+def _unsized_terminal() -> dict[str, int]:
+    """tqdm's size for a terminal on stderr that reports 0 columns or rows (a serial console, a pseudo-terminal
+    nobody sized): tqdm would draw nothing there, so the bar takes 80 x 24; {} for a sized terminal."""
+    try:
+        size = os.get_terminal_size(sys.stderr.fileno())
+    except (OSError, ValueError):
+        return {}
+    return {} if size.columns and size.lines else {"ncols": 80, "nrows": 24}
 
 
 def _names(text: str, what: str, allowed) -> list[str]:
@@ -66,7 +77,7 @@ def command(inputs, output, methods, presets, params, audio_file, no_figures, be
     # the bar is drawn at once and names the step it waits for (reading a clip, the first run's compilation, the
     # figures), so a long evaluation never sits silent; off a terminal (a log, a pipe) nothing is drawn
     bar = tqdm(total=total, desc="evaluating", unit="step", disable=not sys.stderr.isatty(), file=sys.stderr,
-               leave=False, mininterval=0.2)
+               leave=False, mininterval=0.2, **_unsized_terminal())
 
     def status(label: str) -> None:
         bar.set_postfix_str(label, refresh=True)
