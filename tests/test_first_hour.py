@@ -306,3 +306,19 @@ def test_setup_waits_for_a_held_apt_lock_instead_of_failing(tmp_path):
     res = subprocess.run(["bash", "-c", prelude + helper + "apt_get_waiting install nosuch"], capture_output=True,
                          text=True, env=env, timeout=60)
     assert res.returncode == 1 and "Unable to locate package nosuch" in res.stderr and "waiting" not in res.stderr
+
+
+@pytest.mark.parametrize("ext", [".tact", ".csv", ".json", ".npz"])
+def test_every_track_format_is_described_and_converted_with_the_same_numbers(tmp_path, ext):
+    """A Designer pattern converted to each track format, then described by info and converted back to CSV."""
+    src = TACT / "FeedbackFiles_Vest_Heartbeat.tact"
+    orig = load_track(src)
+    copy = tmp_path / f"hb{ext}"
+    assert run("render", str(src), "-o", str(copy)).exit_code == 0
+    facts = json.loads(run("info", str(copy), "--json").output)
+    assert facts["rows"] == orig.n_frames and facts["fps"] == 50
+    assert facts["peak"] == orig.intensities.max()
+    assert sorted(facts["devices"]) == ["VestBack", "VestFront"]
+    back = tmp_path / "back.csv"
+    assert run("render", str(copy), "-o", str(back)).exit_code == 0
+    np.testing.assert_allclose(load_track(back).intensities, orig.intensities, atol=1e-6)
