@@ -70,9 +70,10 @@ def finish_session(engine, stats_json: Optional[str], command: str) -> list[str]
     for sink in silent_devices(engine.sinks):
         # a script must be able to tell that nothing reached the vest; a Player that dropped out mid-show after
         # taking frames is not this case (the show went on, and the summary counts what was not delivered)
-        message = (f"{sink.name}: no frame reached the device ({sink.stats.undelivered} written but never "
-                   "confirmed, " if sink.stats.undelivered else f"{sink.name}: no frame reached the device (")
-        message += "is the bHaptics Player running and reachable? see docs/player.md)"
+        unconfirmed = sink.stats.undelivered
+        why = f"{unconfirmed} written but never confirmed; " if unconfirmed else ""
+        message = (f"{sink.name}: no frame reached the device ({why}is the bHaptics Player running and reachable? "
+                   "see docs/player.md)")
         log.error("%s", message)
         lost.append(message)
     if stats_json:
