@@ -75,7 +75,7 @@ def test_from_a_fresh_clone_the_set_up_lines_give_a_working_hapmotion_command(tm
     demo = shell(lines[0])
     assert demo.returncode == 0, demo.stdout + demo.stderr
     assert (clone / "out" / "demo.tact").stat().st_size > 1000 and (clone / "out" / "demo.html").is_file()
-    assert "'. .venv/bin/activate' puts the hapmotion command on PATH" in demo.stdout
+    assert "'. .venv/bin/activate' puts the hapmotion command on PATH in this shell" in demo.stdout
 
     # the README's lines, then the Use section's commands as written, on the bundled files
     use = shell(" && ".join(lines[1:]) + " && command -v hapmotion && hapmotion --version"
