@@ -60,7 +60,9 @@ def command(inputs, output, methods, presets, params, audio_file, no_figures, be
     error (cm), intensity constancy (dB), smoothness, saturation and commands
     under the motors' start. Felt values run the commands through an ERM motor
     model. With --audio: onsets as the motors render them, and the mix.
-    On a terminal a progress bar says what is being done.
+
+    On a terminal a progress bar counts the steps and names the one under way.
+    The synthetic sweep bench is added only with --bench.
 
     \b
     Example:
