@@ -11,6 +11,7 @@ install:
 demo:
 	bash scripts/setup-env
 	$(PY) -m hapmotion demo -o out
+	@echo "hapmotion is installed in $(VENV): '. $(VENV)/bin/activate' puts the hapmotion command on PATH in this shell (see the first lines of README.md)"
 
 test:
 	bash scripts/setup-env --test

@@ -271,13 +271,14 @@ def test_cli_with_audio_adds_onset_columns(tmp_path):
 
 @pytest.mark.slow
 def test_cli_default_presets_with_figures_and_bench(tmp_path):
-    """With no --presets every preset is scored, figures and bench included (a preset whose sweep goes silent in
+    """With no --presets every preset is scored, figures and (asked for) the bench included (a preset whose sweep goes silent in
     part has no energy range: the bench figure says so instead of failing)."""
     from hapmotion.cli.evaluate import command
     from hapmotion.renderer.params import PRESETS
 
     clip = str(SHARED_DATA / "motion" / "dataset-1_punch_normal_001.bvh")
-    res = CliRunner().invoke(command, [clip, "--methods", "mst", "-o", str(tmp_path / "r")])
+    res = CliRunner().invoke(command, [clip, "--methods", "mst", "--bench", "-o", str(tmp_path / "r")])
     assert res.exit_code == 0, res.output
     assert f"scored {len(PRESETS)} runs" in res.output
     assert (tmp_path / "r" / "bench.png").stat().st_size > 10_000
+    assert "Synthetic sweep bench" in (tmp_path / "r" / "metrics.md").read_text()

@@ -3,6 +3,7 @@ and figures."""
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -12,6 +13,16 @@ from ..errors import UsageError
 from ..renderer.params import METHODS, PRESETS
 from .motion_options import motion_options, read_motion
 from .show_options import param_option, parse_param_overrides, split_list
+
+
+def _unsized_terminal() -> dict[str, int]:
+    """tqdm's size for a terminal on stderr that reports 0 columns or rows (a serial console, a pseudo-terminal
+    nobody sized): tqdm would draw nothing there, so the bar takes 80 x 24; {} for a sized terminal."""
+    try:
+        size = os.get_terminal_size(sys.stderr.fileno())
+    except (OSError, ValueError):
+        return {}
+    return {} if size.columns and size.lines else {"ncols": 80, "nrows": 24}
 
 
 def _names(text: str, what: str, allowed) -> list[str]:
@@ -24,7 +35,7 @@ def _names(text: str, what: str, allowed) -> list[str]:
 @click.command()
 @click.argument("inputs", nargs=-1, required=True, type=click.Path(exists=True, dir_okay=False))
 @click.option("-o", "--output", required=True, type=click.Path(file_okay=False),
-              help="Report folder (created): metrics.md, metrics.csv, bench.csv and PNG figures.")
+              help="Report folder (created): metrics.md, metrics.csv and PNG figures (bench.csv with --bench).")
 @click.option("--methods", default="mst,baseline", show_default=True,
               help="Comma-separated renderer methods to compare.")
 @click.option("--presets", default=None,
@@ -34,9 +45,11 @@ def _names(text: str, what: str, allowed) -> list[str]:
               help="Song to mix with every track (the multimodal show): adds onset agreement, lateral accuracy "
                    "with music, how the mix follows the music.")
 @click.option("--no-figures", is_flag=True, help="Tables only (faster).")
-@click.option("--no-bench", is_flag=True, help="Skip the synthetic sweep bench.")
+@click.option("--bench/--no-bench", default=False, show_default=True,
+              help="Also run the synthetic sweep bench (hand tracing known paths, not the INPUT recordings) and "
+                   "add it to the report.")
 @motion_options
-def command(inputs, output, methods, presets, params, audio_file, no_figures, no_bench, motion_opts=None):
+def command(inputs, output, methods, presets, params, audio_file, no_figures, bench, motion_opts=None):
     """Measure the feel: render each INPUT motion file with each method and preset and score the tracks.
 
     \b
@@ -48,30 +61,37 @@ def command(inputs, output, methods, presets, params, audio_file, no_figures, no
     under the motors' start. Felt values run the commands through an ERM motor
     model. With --audio: onsets as the motors render them, and the mix.
 
+    On a terminal a progress bar counts the steps and names the one under way.
+    The synthetic sweep bench is added only with --bench.
+
     \b
     Example:
       hapmotion evaluate ../shared/data/motion/*.bvh -o report/
     """
     from tqdm import tqdm
 
-    from ..metrics.evaluation import evaluate
+    from ..metrics.evaluation import evaluate, steps
 
     method_list = _names(methods, "method", METHODS)
     preset_list = _names(presets, "preset", PRESETS) if presets is not None else list(PRESETS)
     overrides = parse_param_overrides(params)
-    total = len(inputs) * len(method_list) * len(preset_list)
-    bar = tqdm(total=total, desc="evaluating", unit="run", disable=not sys.stderr.isatty(), file=sys.stderr,
-               leave=False)
+    total = steps(len(inputs), len(method_list), len(preset_list), bench=bench, write=True)
+    # the bar is drawn at once and names the step it waits for (reading a clip, the first run's compilation, the
+    # figures), so a long evaluation never sits silent; off a terminal (a log, a pipe) nothing is drawn
+    bar = tqdm(total=total, desc="evaluating", unit="step", disable=not sys.stderr.isatty(), file=sys.stderr,
+               leave=False, mininterval=0.2, **_unsized_terminal())
+
+    def status(label: str) -> None:
+        bar.set_postfix_str(label, refresh=True)
 
     def progress(label: str) -> None:
-        bar.set_postfix_str(label, refresh=False)
         bar.update(1)
 
     try:
         report = evaluate(
             list(inputs), method_list, preset_list, out_dir=Path(output), audio=audio_file, overrides=overrides,
-            figures=not no_figures, bench=not no_bench, load=lambda p: read_motion(p, **motion_opts),
-            progress=progress,
+            figures=not no_figures, bench=bench, load=lambda p: read_motion(p, **motion_opts),
+            progress=progress, status=status,
         )
     finally:
         bar.close()

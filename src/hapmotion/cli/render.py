@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from pathlib import Path
 from typing import Optional
@@ -11,7 +12,8 @@ import click
 from ..track_files import save_track
 from ..errors import UsageError
 from ..show import Show, render_show
-from .motion_options import motion_options, read_motion
+from ..track_files.sniff import is_track_file
+from .motion_options import CLI_SPELLING, motion_options, read_motion, read_track
 from .show_options import show_options
 
 
@@ -33,6 +35,9 @@ def progress_bar(total: int, label: str):
 def command(motion_file: Optional[str], output: str, show: Show, motion_opts: dict) -> None:
     """Render MOTION_FILE (BVH, Azure Kinect JSON, AIST++ .pkl, CSV/NPZ joints) into a haptic track.
 
+    A track or pattern in place of MOTION_FILE (a bHaptics Designer .tact, or a track hapmotion wrote) is converted
+    to the format of -o, at its own rate or at --fps (resampled, every peak kept); no other option applies to it.
+
     With --audio the music is rendered too and mixed with the motion (audio:motion = 2:3; the default mix rule
     makes room for the motion, --mix-rule paper is the HapMotion paper's weighted sum); with --audio and no
     MOTION_FILE the track is the music alone. --cues layers authored patterns on top; --gain and the comfort limits
@@ -40,6 +45,9 @@ def command(motion_file: Optional[str], output: str, show: Show, motion_opts: di
     """
     if motion_file is None and show.audio is None:
         raise UsageError("give a MOTION_FILE to render, or --audio SONG for the music alone")
+    if motion_file is not None and is_track_file(motion_file):
+        convert_track(motion_file, output, show, motion_opts or {})
+        return
     mode = show.resolved_mode(motion_file is not None)
     out_path = Path(output)
     motion = None
@@ -56,3 +64,23 @@ def command(motion_file: Optional[str], output: str, show: Show, motion_opts: di
     also = f" and {', '.join(p.name for p in written[1:])}" if len(written) > 1 else ""
     click.echo(f"wrote {out_path}{also} ({track.n_frames} frames at {track.fps:g} fps, {track.duration:.2f} s, "
                f"mode {mode}, peak {peak:.0f}%)")
+
+
+def convert_track(path: str, output: str, show: Show, motion_opts: dict) -> None:
+    """Write the track or pattern at ``path`` in the format of ``output`` (``show.fps``: resampled to that rate, the
+    maximum of the rows each new row covers). Options that shape a render (method, music, cues, comfort) or read
+    motion are refused by name: a stored track is converted as it is, never re-rendered."""
+    given = [CLI_SPELLING.get(k if k != "fps_in" else "fps", k) for k, v in motion_opts.items()
+             if v is not None and k != "limits"]
+    if given:
+        raise UsageError(f"{given[0]} is a motion reader option; {path} is a haptic track or pattern")
+    if dataclasses.replace(show, fps=None) != Show():
+        raise UsageError(f"{path} is a haptic track or pattern: render converts it as it is (only -o, --fps and "
+                         "--limit apply); play it with cues or comfort limits with 'hapmotion play'")
+    track = read_track(path, **motion_opts)
+    if show.fps is not None:
+        track = track.resample(show.fps)
+    written = save_track(track, Path(output))
+    also = f" and {', '.join(p.name for p in written[1:])}" if len(written) > 1 else ""
+    click.echo(f"wrote {output}{also} ({track.n_frames} frames at {track.fps:g} fps, {track.duration:.2f} s, "
+               f"converted from {path})")

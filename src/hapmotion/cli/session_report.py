@@ -10,6 +10,8 @@ from typing import Optional
 
 import click
 
+from ..live.sinks.ws_client import WebSocketClientSink
+
 
 class _StderrHandler(logging.StreamHandler):
     """Writes to whatever ``sys.stderr`` is at the time of the message (tests and embedders swap it)."""
@@ -43,9 +45,16 @@ def _not_pythonosc(record: logging.LogRecord) -> bool:
     return "pythonosc" not in record.pathname
 
 
+def silent_devices(sinks) -> list:
+    """The device sinks (the bHaptics Player links, SDK1 and SDK2) that never delivered a single frame: the Player
+    was never reached, or it never confirmed reading what was written."""
+    return [s for s in sinks if isinstance(s, WebSocketClientSink) and s.stats.sent == 0]
+
+
 def finish_session(engine, stats_json: Optional[str], command: str) -> list[str]:
     """Print the summary (headed by ``command``), write ``--stats-json`` atomically; return the outputs that could
-    not be written. Raises nothing: a session error in flight stays the one reported."""
+    not be written, and the device sinks that never delivered a frame (the commands then exit with 1). Raises
+    nothing: a session error in flight stays the one reported."""
     if engine is None:
         return []
     from ..filesafety import atomic_path
@@ -58,6 +67,15 @@ def finish_session(engine, stats_json: Optional[str], command: str) -> list[str]
     except OSError:  # the terminal is gone (SIGHUP after an ssh session closed): the summary has nowhere to go
         pass
     lost = [f"{s.name}: {s.error}" for s in engine.sinks if getattr(s, "error", None)]
+    for sink in silent_devices(engine.sinks):
+        # a script must be able to tell that nothing reached the vest; a Player that dropped out mid-show after
+        # taking frames is not this case (the show went on, and the summary counts what was not delivered)
+        unconfirmed = sink.stats.undelivered
+        why = f"{unconfirmed} written but never confirmed; " if unconfirmed else ""
+        message = (f"{sink.name}: no frame reached the device ({why}is the bHaptics Player running and reachable? "
+                   "see docs/player.md)")
+        log.error("%s", message)
+        lost.append(message)
     if stats_json:
         try:
             with atomic_path(stats_json) as tmp:

@@ -1,1 +1,2 @@
-"""Bundled example recordings and music (see ATTRIBUTION.md beside this file)."""
+"""Bundled example recordings, music and patterns (see ATTRIBUTION.md beside this file; the patterns are built by
+:mod:`hapmotion.examples.patterns`)."""

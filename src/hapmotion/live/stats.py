@@ -14,6 +14,8 @@ Definitions used in the summary (docs/live.md repeats them):
   latency exceeded one frame interval (they reached the sink after the next frame was due);
 * **not delivered**: frames written to a device that never confirmed reading them (it stopped reading, or the
   connection was lost before it answered).
+
+When frames were superseded, the summary says so in a sentence of its own (:meth:`LiveStats.merged_line`).
 """
 
 from __future__ import annotations
@@ -155,6 +157,9 @@ class LiveStats:
             f"{self.fade_frames} fade frames, {self.stalls} stalls; latency {_fmt(lat)}"
             + (f"; stopped: {self.stop_reason}" if self.stop_reason else ""),
         ]
+        merged = self.merged_line(command)
+        if merged:
+            lines.append(merged)
         if self.faults.counts:
             lines.append("  faults: " + ", ".join(f"{k} {v}" for k, v in sorted(self.faults.counts.items())))
         interval_ms = 1e3 / self.fps
@@ -167,6 +172,24 @@ class LiveStats:
                 + (f"; held for the device's tick p50 {held['p50']:.1f} ms max {held['max']:.1f} ms" if held else "")
                 + "".join(f", {k.replace('_', ' ')} {v}" for k, v in s.extra.items()))
         return lines
+
+    def merged_line(self, command: str = "live") -> Optional[str]:
+        """One plain sentence when rows or frames were not played on their own (``superseded``), else None.
+
+        In ``play`` (and ``check``) every row of the file was meant to be felt: a row skipped because the process
+        woke late (CPU load) changes the pattern, so the count is said in words, with its share. In ``live`` and
+        ``listen`` the newest frame winning over an older one is the design (a source faster than the render rate,
+        or a busy machine), and it is said as such."""
+        n = self.superseded
+        if n <= 0:
+            return None
+        total = max(self.frames_in, n)
+        share = f"{n} of {total} {'rows' if command in ('play', 'check') else 'frames'} ({n / total:.0%})"
+        if command in ("play", "check"):
+            return (f"  {share} were not played on their own: the computer fell behind (CPU load) and skipped them "
+                    "rather than play them late, so the pattern was felt coarser than written (superseded)")
+        return (f"  {share} were replaced by a newer frame before they were rendered: the source sends faster "
+                "than the render rate or the computer fell behind (superseded; newest wins, never late)")
 
     def progress_line(self, marks: dict[str, int]) -> str:
         """One ``--stats`` line over the samples added since ``marks`` (updated in place)."""

@@ -8,10 +8,10 @@ alone with :func:`~hapmotion.show.render_show`, all on the motion's frames (leng
 Output folder:
 
 * ``metrics.md`` -- a verdict per recording (what a wearer would feel, :mod:`.verdict`), the key table, the full
-  table with a legend, and the synthetic sweep bench;
+  table with a legend, and the synthetic sweep bench when asked for;
 * ``metrics.csv`` -- one row per (recording, method, preset), every metric at full precision, units in the names;
-* ``bench.csv`` -- the synthetic sweep bench (:mod:`hapmotion.metrics.sweep`), measured beside reasoned;
-* ``summary.png``, ``<recording>.png``, ``bench.png`` -- the figures of :mod:`.figures`.
+* ``bench.csv`` -- (when asked for) the synthetic sweep bench (:mod:`hapmotion.metrics.sweep`), measured beside reasoned;
+* ``summary.png``, ``<recording>.png``, ``bench.png`` (with the bench) -- the figures of :mod:`.figures`.
 
 Every file appears whole or not at all (written beside its target, then renamed).
 """
@@ -104,6 +104,11 @@ def _stem(path: "str | os.PathLike[str]", taken: set[str]) -> str:
     return out
 
 
+def steps(n_inputs: int, n_methods: int, n_presets: int, *, bench: bool, write: bool) -> int:
+    """How many times :func:`evaluate` calls ``progress``: one per run, one for the bench, one for the files."""
+    return n_inputs * n_methods * n_presets + int(bench) + int(write)
+
+
 def evaluate(
     inputs: Sequence["str | os.PathLike[str]"],
     methods: Sequence[str] = ("mst", "baseline"),
@@ -117,6 +122,7 @@ def evaluate(
     bench: bool = True,
     load: Callable[[str], Motion] | None = None,
     progress: Callable[[str], None] | None = None,
+    status: Callable[[str], None] | None = None,
 ) -> Report:
     """Render every recording with every method and preset, score each track, and write the report.
 
@@ -140,7 +146,12 @@ def evaluate(
     load:
         Motion loader (default :func:`hapmotion.motion_files.load_motion`).
     progress:
-        Called with a short label after each rendered run (for progress bars).
+        Called with a short label after each step: each rendered and scored run, the bench (when run), writing the
+        report (when ``out_dir`` is given); :func:`steps` counts them, for a progress bar's total.
+    status:
+        Called with what is about to take time (reading a recording, a run, the bench, the figures), so a progress
+        bar can say what it waits for: the first run also compiles the renderer (numba), and a large recording
+        takes seconds to read.
     """
     t_start = time.perf_counter()
     if not inputs:
@@ -159,6 +170,8 @@ def evaluate(
     t_load = t_render = 0.0
     for path in inputs:
         t0 = time.perf_counter()
+        if status is not None:
+            status(f"reading {Path(path).name}")
         motion = load(os.fspath(path))
         clip = Clip(_stem(path, taken), motion, motion_facts(motion))
         analysis = music = None
@@ -169,6 +182,8 @@ def evaluate(
         t_load += time.perf_counter() - t0
         for (method, label), show in shows.items():
             t0 = time.perf_counter()
+            if status is not None:
+                status(f"{clip.name} {method}/{label}")
             track = render_motion(show, motion)
             scores = score_track(track, motion, motor=motor, layout=layout, facts=clip.facts)
             mixed = None
@@ -188,13 +203,21 @@ def evaluate(
         from .sweep import run_bench
 
         t0 = time.perf_counter()
+        if status is not None:
+            status("synthetic sweep bench")
         presets_used = {label: show.params() for (_, label), show in shows.items()}
         report.bench = run_bench(presets_used, layout=layout)
         report.timings["bench"] = time.perf_counter() - t0
+        if progress is not None:
+            progress("bench")
     if out_dir is not None:
         t0 = time.perf_counter()
+        if status is not None:
+            status("writing the tables" + (" and figures" if figures else ""))
         _write(report, Path(out_dir), layout, motor, figures)
         report.timings["write"] = time.perf_counter() - t0
+        if progress is not None:
+            progress("written")
     report.timings["total"] = time.perf_counter() - t_start
     return report
 

@@ -112,5 +112,14 @@ def detect_up_axis(world: np.ndarray, canon: list[str], max_frames: int = 2000) 
     sign = "-" if best.startswith("-") else "+"
     reason = (f"head above the pelvis along {sign}{best[-1].upper()} in {upright:.0%} of frames"
               + (f", a foot the lowest joint in {feet_low:.0%}" if feet else ", no foot joints"))
-    weak = total < STRONG_SCORE or total - scores[second][0] < 0.5 or not feet
+    close_second = total - scores[second][0] < 0.5
+    weak = total < STRONG_SCORE or close_second or not feet
+    if close_second:
+        # the best axis can score 100 % / 100 % and still be in doubt: a body leaning about 45 degrees (or a clip
+        # whose axes are tilted) looks almost as upright along a neighbouring axis; say which, so the user can
+        # judge the clip (and settle it with the up option) instead of doubting a perfect-looking score
+        _, up2, feet2 = scores[second]
+        s2 = "-" if second.startswith("-") else "+"
+        reason += (f"; but {s2}{second[-1].upper()} fits almost as well (head above the pelvis in {up2:.0%}"
+                   + (f", a foot the lowest joint in {feet2:.0%}" if feet else "") + ")")
     return UpAxisEvidence(best, weak, reason)

@@ -8,6 +8,7 @@ and, as the output stage's serialised form, to every seat of an audience.
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 import os
 from dataclasses import dataclass, field
@@ -39,6 +40,16 @@ def check_choice(value: Any, allowed: Sequence[str], what: str) -> None:
     """:class:`UsageError` unless ``value`` is one of ``allowed``."""
     if value not in allowed:
         raise UsageError(f"{what} {value!r}: expected one of {', '.join(allowed)}")
+
+
+def closest_preset(value: Any) -> Optional[str]:
+    """The preset a mistyped ``value`` most likely meant (case and small typos forgiven: ``Felt`` and ``fetl`` give
+    ``felt``), or None when nothing is close."""
+    if not isinstance(value, str):
+        return None
+    folded = {p.lower(): p for p in PRESETS}
+    match = difflib.get_close_matches(value.strip().lower(), list(folded), n=1, cutoff=0.6)
+    return folded[match[0]] if match else None
 
 
 def check_fps(fps: Any, what: str = "fps") -> float:
@@ -94,7 +105,9 @@ class Show:
             if value is not None and not isinstance(value, kinds):
                 raise UsageError(f"{name} must be a file path (or None), not {type(value).__name__}")
         if not isinstance(self.preset, str) or self.preset not in PRESETS:
-            raise UsageError(f"unknown preset {self.preset!r}; choose one of {', '.join(PRESETS)}")
+            hint = closest_preset(self.preset)
+            raise UsageError(f"unknown preset {self.preset!r}" + (f" (did you mean {hint}?)" if hint else "")
+                             + f"; choose one of {', '.join(PRESETS)}")
         if self.mode is not None:
             check_choice(self.mode, MODES, "mode")
         if self.mix_rule is not None:
