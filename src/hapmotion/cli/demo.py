@@ -33,11 +33,12 @@ def command(out_dir, mode, preset):
     OUT_DIR/demo.tact (+ sleeve files), demo.csv, a plot demo.png and a viewer page demo.html."""
     from ..motion_files import load_motion
 
+    audio = example_path(EXAMPLE_AUDIO)
+    show = Show(method="mst", preset=preset, mode=mode, audio=audio, length="motion")  # checked before any folder
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     motion = load_motion(example_path(EXAMPLE_MOTION))
-    audio = example_path(EXAMPLE_AUDIO)
-    track = render_show(Show(method="mst", preset=preset, mode=mode, audio=audio, length="motion"), motion)
+    track = render_show(show, motion)
     from ..viewer.page import load_audio_part, write_page
     from ..viewer.plot import plot_track
 

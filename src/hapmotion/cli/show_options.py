@@ -143,7 +143,21 @@ def _build_show(given: dict[str, Any], comfort: Comfort, limits: Optional[Sequen
         fields["mix_ratio"] = parse_mix_ratio(given["mix"])
     if given.get("cues") is not None:
         fields["cues"] = load_cues(given["cues"], limits=cli_limits(limits))
-    return Show(**fields)
+    if given.get("audio") is None:
+        music_only = [option for option, name, default in (("--mix", "mix", "2:3"), ("--mix-rule", "mix_rule", None),
+                                                           ("--audio-offset", "audio_offset", 0.0))
+                      if name in given and given[name] != default]
+        if music_only:
+            raise UsageError(f"{music_only[0]} sets how the music plays: give --audio SONG too")
+    overrides = fields.get("overrides", {})
+    if "mirror" in overrides and fields.get("mirror") is not None and overrides["mirror"] != fields["mirror"]:
+        raise UsageError("--param mirror=... and --mirror/--no-mirror disagree: give one of them")
+    try:
+        return Show(**fields)
+    except UsageError as exc:
+        if str(exc).startswith("unknown preset"):
+            raise UsageError(f"--preset: {exc}") from None
+        raise
 
 
 def parse_param_overrides(items: Sequence[str]) -> dict[str, Any]:
@@ -218,6 +232,8 @@ def session_options(f: Callable[..., Any]) -> Callable[..., Any]:
 
 
 COMFORT_OPTION_NAMES = ("gain", "max_level", "max_duty", "duty_window")
+COMFORT_SPELLING = {"gain": "--gain", "max_level": "--max-level", "max_duty": "--max-duty", "window_s": "--duty-window"}
+"""Each :class:`Comfort` field's option, for the one-line errors."""
 
 
 def comfort_options(f: Callable[..., Any]) -> Callable[..., Any]:
@@ -227,7 +243,13 @@ def comfort_options(f: Callable[..., Any]) -> Callable[..., Any]:
     @functools.wraps(f)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         gain, max_level, max_duty, window = (kwargs.pop(name) for name in COMFORT_OPTION_NAMES)
-        kwargs["comfort"] = Comfort(gain=gain, max_level=max_level, max_duty=max_duty, window_s=window)
+        try:
+            kwargs["comfort"] = Comfort(gain=gain, max_level=max_level, max_duty=max_duty, window_s=window)
+        except UsageError as exc:  # the field's name in the user's spelling: --gain, --max-level, ...
+            text = str(exc)
+            for field, option in COMFORT_SPELLING.items():
+                text = text.replace(f"comfort {field} ", f"{option} ")
+            raise UsageError(text) from None
         return f(*args, **kwargs)
 
     # functools.wraps copied f's click params (a shared list); give the wrapper its own before adding ours.
