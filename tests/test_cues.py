@@ -172,3 +172,9 @@ def test_a_real_pattern_cued_many_times_stays_within_the_limits(tmp_path):
     assert len(cues.patterns) == 1 and len(cues.cues) == 300
     energy = cue_layer(cues, fps=50.0, n_frames=50 * 600, actuators=IDS, mirror_map=MIRROR)
     assert energy.any() and np.isfinite(energy).all()
+
+
+def test_a_pattern_name_too_long_for_the_file_system_is_a_one_line_error(tmp_path):
+    (tmp_path / "long.cues").write_text(f"0 {'p' * 5000}.csv\n")
+    with pytest.raises(InputError, match=r"line 1: expected a pattern file name, found one the system refuses"):
+        load_cues(tmp_path / "long.cues")

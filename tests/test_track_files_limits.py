@@ -162,3 +162,17 @@ def test_the_viewer_page_is_made_from_a_checked_npz(tmp_path):
 
     data, blobs, _ = page_data([load_track(_npz_track(tmp_path))])
     assert set(data["tracks"][0]["debug"]) == {"active", "level"} and blobs
+
+
+def test_an_npz_of_an_unknown_zip_version_is_a_one_line_error_in_view(tmp_path):
+    """A byte edit that makes the archive claim zip version 22.8: the sniffing before ``view`` reads it and the
+    reader both say so in one line (zipfile raises NotImplementedError)."""
+    from hapmotion.cli import main
+
+    path = _npz_track(tmp_path)
+    data = bytearray(path.read_bytes())
+    central = data.index(b"PK\x01\x02")
+    data[central + 6] = 228                          # "version needed to extract" of the first member: 22.8
+    path.write_bytes(bytes(data))
+    assert main(["view", str(path), "-o", str(tmp_path / "page.html")]) == 2
+    assert not (tmp_path / "page.html").exists()

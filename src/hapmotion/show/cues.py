@@ -193,7 +193,12 @@ def load_cues(path: "str | os.PathLike[str]", limits: LimitsArg = None) -> CueLi
     if len(cues) > MAX_CUES:
         raise InputError(source, None, f"expected at most {MAX_CUES} cues, found {len(cues)}")
     for cue in cues:
-        if not cue.pattern.is_file():
+        try:
+            found = cue.pattern.is_file()
+        except OSError as exc:  # a name too long for the file system, ...
+            raise InputError(source, cue.place, f"expected a pattern file name, found one the system refuses "
+                                                f"({exc.strerror or exc})") from None
+        if not found:
             raise InputError(source, cue.place, f"expected a pattern file at {cue.pattern}, found none")
     cue_list = CueList(sorted(cues, key=lambda c: c.time_s), source, limits=limits)
     total = 0
