@@ -30,7 +30,7 @@ from websockets.protocol import State
 from ..errors import UsageError
 from ..motion import Motion
 from ..motion_files import load_motion
-from .access import (MAX_SENDERS, OSC_MESSAGE_BUDGET, TOKEN_HEADER, TOKEN_QUERY, WS_MESSAGE_BUDGET, SenderAllowList,
+from .access import (IDLE_SENDER_S, MAX_SENDERS, OSC_MESSAGE_BUDGET, TOKEN_HEADER, TOKEN_QUERY, WS_MESSAGE_BUDGET, SenderAllowList,
                      SenderBudgets, bearer_token, burst_for, exposure_line, is_loopback, reach, token_matches)
 from .addresses import OSC_IN, WS_IN
 from .frames import FrameInlet, SkeletonFrame
@@ -128,6 +128,10 @@ class UdpSource(Source):
         """Whether a datagram is worth its budget (a format may drop what its decoder never reads, unparsed)."""
         return True
 
+    def cost(self, data: bytes) -> float:
+        """What a datagram counts in its sender's budget, in messages (a format with bundles counts what they hold)."""
+        return 1.0
+
     async def start(self, engine: FrameInlet) -> None:
         await super().start(engine)
         self.decoder = self.make_decoder(engine)
@@ -157,12 +161,20 @@ class UdpSource(Source):
             return
         if not self.wants(data):
             return
-        assert self._budgets is not None and self.decoder is not None
-        refused = self._budgets.admit(sender, now)
+        budgets = self._budgets
+        assert budgets is not None and self.decoder is not None
+        evicted = budgets.evicted
+        refused = budgets.admit(sender, now, self.cost(data))
         if refused is not None:
-            _count_refusal(engine, refused, sender, self._budgets)
+            _count_refusal(engine, refused, sender, budgets)
             return
-        for frame in self.decoder.feed(data, now):
+        if budgets.evicted > evicted:
+            _count_replaced(engine, sender, budgets.evicted - evicted, budgets.idle_s)
+        faults = engine.faults.total()
+        frames = self.decoder.feed(data, now)
+        if frames or engine.faults.total() == faults:  # usable: keeps the sender's place
+            budgets.useful(sender, now)
+        for frame in frames:
             engine.submit(frame)
 
     async def close(self) -> None:
@@ -188,15 +200,21 @@ class OscSource(UdpSource):
 # ---------------------------------------------------------------------------------------------------- VMC
 VMC_MESSAGE_BUDGET = 2.0 * VMC_MESSAGES_PER_FRAME
 """A VMC sender that does not bundle sends a datagram per bone: its budget is this many times the frame rate
-(7680 datagrams/s at 60 fps; a bundle counts as one). Messages the decoder does not read (blend shapes, devices)
-are dropped before the budget and cost nothing."""
+(7680 messages/s at 60 fps). A bundle counts for what it holds, one message per
+:data:`~hapmotion.live.wire.vmc_in.VMC_BYTES_PER_MESSAGE` bytes (a frame's bundle of 55 bones about 64), so a
+sender cannot pass 900 messages off as one datagram (a stream of 60 KB bundles gets about 8 a second through).
+Messages the decoder does not read (blend shapes, devices) are dropped before the budget and cost nothing."""
+VMC_BURST_FRAMES = 16.0
+"""A VMC sender's burst, in frames of :data:`~hapmotion.live.wire.vmc_in.VMC_MESSAGES_PER_FRAME` messages (1024
+messages): a quarter of a second of bundles at 60 fps that a busy machine read late all at once still passes."""
 
 
 class VmcSource(UdpSource):
     """Listens for a VMC protocol sender (VirtualMotionCapture, VSeeFace, XR Animator, Warudo, SlimeVR, mocopi
     bridges) on UDP ``host:port`` (default 127.0.0.1:39539); the wire format and the decoding are in
     :mod:`hapmotion.live.wire.vmc_in`, docs/vmc.md has the user's side. See :class:`UdpSource` for who may send.
-    Each sender's default budget is :data:`VMC_MESSAGE_BUDGET` x the frame rate, in bursts of four frames' worth;
+    Each sender's default budget is :data:`VMC_MESSAGE_BUDGET` x the frame rate, in bursts of
+    :data:`VMC_BURST_FRAMES` frames' worth (a bundle counts for the messages it holds);
     datagrams the decoder never reads (blend shapes, devices) are dropped unparsed before the budget. Several
     senders share one pose: stream one performer."""
 
@@ -212,13 +230,23 @@ class VmcSource(UdpSource):
         return VmcDecoder(engine.faults)
 
     def default_budget(self, rate: float) -> tuple[float, float]:
-        return VMC_MESSAGE_BUDGET * rate, max(burst_for(rate), 4.0 * VMC_MESSAGES_PER_FRAME)
+        return VMC_MESSAGE_BUDGET * rate, max(burst_for(rate), VMC_BURST_FRAMES * VMC_MESSAGES_PER_FRAME)
+
+    def cost(self, data: bytes) -> float:
+        return VmcDecoder.cost(data)
 
     def wants(self, data: bytes) -> bool:
         if self.decoder is not None and not self.decoder.wants(data):
             self.decoder.ignored += 1
             return False
         return True
+
+
+def _count_replaced(engine: FrameInlet, sender: str, n: int, idle_s: float) -> None:
+    """Count senders that gave their place to ``sender`` after sending nothing usable for ``idle_s`` seconds."""
+    for _ in range(n):
+        engine.faults.add("sender_replaced", f"a sender that sent nothing usable for {idle_s:g} s gave its place to "
+                                             f"{sender}")
 
 
 def _count_refusal(engine: FrameInlet, kind: str, sender: str, budgets: SenderBudgets) -> None:
@@ -235,6 +263,7 @@ def _count_refusal(engine: FrameInlet, kind: str, sender: str, budgets: SenderBu
 # messages go to a quiet child of the live logger (warnings and errors only).
 _WS_LOG = logging.getLogger("hapmotion.live.websockets")
 _WS_LOG.setLevel(logging.WARNING)
+_ACCEPT_FAILED = "socket.accept() out of system resource"  # asyncio's message for EMFILE, ENFILE, ENOBUFS, ENOMEM
 
 
 class WsSource(Source):
@@ -256,10 +285,17 @@ class WsSource(Source):
     allow_senders:
         Sender addresses allowed to connect (empty: any); others are refused with HTTP 403.
     max_senders, sender_rate:
-        At most ``max_senders`` connections at once (others are refused with HTTP 503), each within
-        ``sender_rate`` messages per second (default :data:`~hapmotion.live.access.WS_MESSAGE_BUDGET` x the frame
-        rate; the excess is counted as ``flood`` and never decoded). A sender that is streaming keeps its place and
+        At most ``max_senders`` connections at once, each within ``sender_rate`` messages per second (default
+        :data:`~hapmotion.live.access.WS_MESSAGE_BUDGET` x the frame rate; the excess is counted as ``flood`` and
+        never decoded). When every place is taken, a new connection takes the place of the one that has sent no
+        usable frame for longest, if that is over :data:`~hapmotion.live.access.IDLE_SENDER_S` seconds (it is
+        closed with code 1008, counted as ``sender_replaced``): idle connections and senders of junk cannot lock the
+        performer out. Otherwise it is refused with HTTP 503. A sender that is streaming keeps its place and
         budget however many others try to connect.
+
+    A request with two ``Origin`` or two ``Authorization`` headers is refused (HTTP 400, ``handshake``). When the
+    process runs out of file descriptors (a flood of slow connections under a low ``ulimit -n``), the failing
+    accepts are counted as ``accept`` faults (logged once) instead of a log line each.
     max_size:
         Messages over this many bytes close that sender's connection (code 1009); others are not affected.
     """
@@ -281,7 +317,10 @@ class WsSource(Source):
         self._rate = 0.0
         self._burst = 0.0
         self._slots: set[ServerConnection] = set()  # accepted or being accepted, not yet finished
+        self._useful: dict[ServerConnection, float] = {}  # slot -> when it was admitted or last sent a frame
         self._refused: "weakref.WeakSet[ServerConnection]" = weakref.WeakSet()  # refusals already counted
+        self._loop: Optional[asyncio.AbstractEventLoop] = None
+        self._previous_handler: Any = None
 
     async def start(self, engine: FrameInlet) -> None:
         await super().start(engine)
@@ -296,6 +335,9 @@ class WsSource(Source):
             raise UsageError(f"--source {self.name}: cannot listen ({exc.strerror or exc})") from None
         self.port = self._server.sockets[0].getsockname()[1]
         self.name = f"ws://{self.host}:{self.port}"
+        self._loop = asyncio.get_running_loop()
+        self._previous_handler = self._loop.get_exception_handler()
+        self._loop.set_exception_handler(self._loop_exception)
         if not is_loopback(self.host) and not self.token:
             log.warning("%s: reachable from %s without a token: anyone who can connect may drive the vest; "
                         "set --token (or HAPMOTION_LIVE_TOKEN)", self.name, reach(self.host))
@@ -314,9 +356,27 @@ class WsSource(Source):
         self.engine.faults.add(kind, detail)
         return conn.respond(status, f"{status.phrase}: {detail}\n")
 
+    def _loop_exception(self, loop: asyncio.AbstractEventLoop, context: dict[str, Any]) -> None:
+        """The event loop's error handler while the source listens: an ``accept`` that fails for want of file
+        descriptors (asyncio retries it every second, logging each time with a traceback) is a fault of its own."""
+        if context.get("message") == _ACCEPT_FAILED:
+            exc = context.get("exception")
+            why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+            self.engine.faults.add("accept", f"cannot accept a connection ({why}): too many connections for the "
+                                             f"process's file limit; new ones wait")
+        elif self._previous_handler is not None:
+            self._previous_handler(loop, context)
+        else:
+            loop.default_exception_handler(context)
+
     def _check_request(self, conn: ServerConnection, request: Request) -> Optional[Response]:
-        """Before the handshake: sender address, token, room. (The Origin is checked next, by the library.)"""
+        """Before the handshake: one Origin and one token header, sender address, token, room. (The Origin's value
+        is checked next, by the library.)"""
         sender = _address(conn)
+        for header in ("Origin", TOKEN_HEADER):
+            if len(request.headers.get_all(header)) > 1:
+                return self._refuse(conn, HTTPStatus.BAD_REQUEST, "handshake",
+                                    f"a connection from {sender} with two {header} headers")
         if not self.allow_senders.allows(sender):
             return self._refuse(conn, HTTPStatus.FORBIDDEN, "sender_refused",
                                 f"a connection from {sender}, which is not in --allow-sender")
@@ -328,20 +388,41 @@ class WsSource(Source):
                 return self._refuse(conn, HTTPStatus.UNAUTHORIZED, "token_refused",
                                     f"a connection from {sender} without the right token")
         self._slots = {c for c in self._slots if c.state is not State.CLOSED}
-        if len(self._slots) >= self.max_senders:
+        now = time.perf_counter()
+        if len(self._slots) >= self.max_senders and not self._replace_idle(now, sender):
             return self._refuse(conn, HTTPStatus.SERVICE_UNAVAILABLE, "too_many_senders",
                                 f"a connection from {sender}: {self.max_senders} senders are already connected")
         self._slots.add(conn)
+        self._useful[conn] = now
         return None
+
+    def _replace_idle(self, now: float, sender: str) -> bool:
+        """Close the connection that has sent no usable frame for longest, if for over :data:`IDLE_SENDER_S`
+        seconds, so that ``sender`` can have its place; whether one was closed."""
+        idle = [c for c in self._slots if now - self._useful.get(c, now) > IDLE_SENDER_S]
+        if not idle:
+            return False
+        old = min(idle, key=lambda c: self._useful.get(c, now))
+        self._slots.discard(old)
+        self._useful.pop(old, None)
+        if old.state is State.OPEN:
+            asyncio.get_running_loop().create_task(
+                old.close(CloseCode.POLICY_VIOLATION, "no usable frame: the place went to a new sender"))
+        else:  # still in its opening handshake (a slow or stalled request)
+            old.transport.abort()
+        _count_replaced(self.engine, sender, 1, IDLE_SENDER_S)
+        return True
 
     def _check_response(self, conn: ServerConnection, request: Request, response: Response) -> None:
         """After the handshake decision: count the library's refusals (a browser Origin that is not allowed)."""
         if response.status_code == HTTPStatus.SWITCHING_PROTOCOLS:
             return
         self._slots.discard(conn)
+        self._useful.pop(conn, None)
         if conn in self._refused:
             return
-        origin = request.headers.get("Origin")
+        origins = request.headers.get_all("Origin")
+        origin = origins[0] if origins else None
         if response.status_code == HTTPStatus.FORBIDDEN and origin is not None:
             self.engine.faults.add("origin_refused", f"a browser page from {origin!r}, which is not in "
                                                      f"--allow-origin")
@@ -371,14 +452,19 @@ class WsSource(Source):
                     continue
                 frame = decode_ws_skeleton(message, now, engine.faults)
                 if frame is not None:
+                    self._useful[conn] = now
                     engine.submit(frame)
         except ConnectionClosed as exc:
             if exc.rcvd is None or exc.rcvd.code not in (1000, 1001):
                 engine.faults.add("connection", f"a sender's connection ended abnormally ({exc})")
         finally:
             self._slots.discard(conn)
+            self._useful.pop(conn, None)
 
     async def close(self) -> None:
+        if self._loop is not None:
+            self._loop.set_exception_handler(self._previous_handler)
+            self._loop = None
         if self._server is not None:
             self._server.close()
             try:
