@@ -65,7 +65,7 @@ def test_the_token_from_a_file_or_the_environment_stays_out_of_the_process_list(
 def test_a_token_on_the_command_line_is_warned_about(tmp_path):
     code, err, cmdline, without = asyncio.run(asyncio.wait_for(_session(tmp_path, "--token", SECRET, env={}), 120))
     assert code == 0 and without == 401 and SECRET in cmdline
-    assert "--token on the command line can be read by every user of this machine" in err and SECRET not in err
+    assert "the token is on the command line, which every user of this machine can read" in err and SECRET not in err
 
 
 def test_a_token_file_others_can_read_is_warned_about(tmp_path):

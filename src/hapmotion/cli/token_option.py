@@ -1,8 +1,8 @@
 """``--token`` and ``--token-file`` of ``hapmotion live``: the shared secret of a ``ws://`` source, from a file, the
 environment (``HAPMOTION_LIVE_TOKEN``) or, least safely, the command line.
 
-A command line is readable by every local user (``ps``, ``/proc/PID/cmdline``), so a secret given there is said to
-be visible; a file (read once at start, first line, surrounding blanks stripped) or the environment keeps it out of
+A command line is readable by every local user (``ps``, ``/proc/PID/cmdline``), so a secret given there is warned
+about when the source starts (:class:`~hapmotion.live.ws_source.WsSource`); a file (read once at start, first line, surrounding blanks stripped) or the environment keeps it out of
 the process list.
 """
 
@@ -19,12 +19,6 @@ from ..errors import UsageError
 TOKEN_ENV = "HAPMOTION_LIVE_TOKEN"
 MAX_TOKEN_FILE_BYTES = 4096
 """A token file holds one secret: anything larger is not one."""
-
-
-def _warn(message: str) -> None:
-    """A warning before the session's logging is set up (options are read first): straight to stderr, as the
-    session's lines look."""
-    click.echo(f"live: {message}", err=True)
 
 
 def read_token_file(path: str) -> str:
@@ -45,7 +39,8 @@ def read_token_file(path: str) -> str:
     if not first:
         raise UsageError(f"--token-file {path}: expected a secret on its first line, found none")
     if info.st_mode & (stat.S_IRGRP | stat.S_IROTH):
-        _warn(f"--token-file {path} can be read by other users of this machine (chmod 600 it)")
+        # (logging is not set up while options are read: straight to stderr, as the session's lines look)
+        click.echo(f"live: --token-file {path} can be read by other users of this machine (chmod 600 it)", err=True)
     return first
 
 
@@ -60,11 +55,6 @@ def _token(ctx: click.Context, param: click.Parameter, value: Optional[str]) -> 
         if value is not None:
             raise UsageError(f"give the token once: --token-file, or --token / {TOKEN_ENV}")
         return from_file
-    # (click records where a value came from only after this callback: a value the environment does not hold came
-    # from the command line)
-    if value is not None and os.environ.get(TOKEN_ENV) != value:
-        _warn(f"--token on the command line can be read by every user of this machine (ps); use --token-file FILE "
-              f"or {TOKEN_ENV} instead")
     return value
 
 

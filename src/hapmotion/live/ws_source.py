@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import resource
+import sys
 import time
 import weakref
 from http import HTTPStatus
@@ -113,6 +114,9 @@ class WsSource(Source):
         self._loop = asyncio.get_running_loop()
         self._previous_handler = self._loop.get_exception_handler()
         self._loop.set_exception_handler(self._loop_exception)
+        if self.token and self.token in sys.argv:
+            log.warning("%s: the token is on the command line, which every user of this machine can read (ps); "
+                        "use --token-file FILE or HAPMOTION_LIVE_TOKEN instead", self.name)
         if not is_loopback(self.host) and not self.token:
             log.warning("%s: reachable from %s without a token: anyone who can connect may drive the vest; "
                         "set --token (or HAPMOTION_LIVE_TOKEN)", self.name, reach(self.host))
