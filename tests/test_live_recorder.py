@@ -278,3 +278,18 @@ def test_a_full_disk_during_the_show_loses_only_its_own_rows_and_the_summary_say
     assert sum("could not be written" in w for w in warnings) == 1
     assert sum("is written again" in w for w in warnings) == 1
     assert any(f"the journal missed {lost} rows" in w for w in warnings)
+
+
+def test_recovering_an_hour_long_journal_keeps_every_row_in_its_place(tmp_path):
+    """An hour at 60 fps (times with 6 decimals, so steps alternate 0.016666 / 0.016667) with 30 s missing in the
+    middle: every row comes back at its own index and the rate is 60 fps."""
+    n = 216_000
+    rows = np.zeros((n, 1))
+    rows[::600, 0] = 50.0                                   # a mark every 10 s
+    keep = np.r_[0:100_000, 101_800:n]                      # 1800 rows (30 s) lost
+    path = tmp_path / "hour.journal.csv"
+    path.write_bytes(b"time_s,VestFront_0\n" + b"".join(format_rows(int(k), rows[k:k + 1], 60.0)[0] for k in keep))
+    track = recover_journal(path)
+    assert track.n_frames == n and track.fps == pytest.approx(60.0, abs=1e-4) and track.meta["missing_rows"] == 1800
+    np.testing.assert_array_equal(np.flatnonzero(track.intensities[:, 0]),
+                                  [k for k in range(0, n, 600) if not 100_000 <= k < 101_800])

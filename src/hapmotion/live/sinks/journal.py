@@ -239,7 +239,9 @@ def recover_journal(journal: "str | os.PathLike[str]", out: "str | os.PathLike[s
     # Rows go back at their own times, so rows a full disk kept out leave silent gaps rather than shift the take.
     fps, index = 60.0, np.zeros(1, dtype=np.int64)
     if len(times) > 1:
-        index = np.rint((times - times[0]) / float(np.median(steps))).astype(np.int64)
+        # each step is a whole number of grid frames, found step by step (times carry 6 decimals: dividing the whole
+        # span by one rounded step would drift by rows over an hour)
+        index = np.concatenate([[0], np.cumsum(np.maximum(1, np.rint(steps / float(np.median(steps)))))]).astype(np.int64)
         fps = round(float(index[-1] / (times[-1] - times[0])), 4)
     check_frames(path, "column time_s", float(index[-1]) + 1, fps, DEFAULT_LIMITS, columns=len(header) - 1,
                  of="journal")
