@@ -7,14 +7,21 @@ Readers covered, each the way a user reaches it:
 - motion files (BVH, Azure Kinect JSON, AIST++ pickle, CSV and NPZ tables) through ``hapmotion info FILE``
   (the CLI entry point, so exit codes are the user's: 0 read, 2 a one-line error, 1 an internal error);
 - track files (.csv, .json, .npz, .tact) through ``hapmotion.load_track``;
-- audio (WAV, FLAC, Ogg Vorbis, MP3) through ``hapmotion.audio.analyze_file``.
+- audio (WAV, FLAC, Ogg Vorbis, MP3) through ``hapmotion.audio.analyze_file``;
+- device layouts (``--layout FILE``) through ``hapmotion.layout.load_layout``;
+- cue lists (``--cues FILE``, text and JSON) through ``hapmotion.show.cues.load_cues`` and then the work the cues
+  cause: every cue laid on a one-minute timeline at 50 fps (``cue_layer``), as ``render --cues`` does;
+- the viewer's input path: ``hapmotion view TRACK -o page.html`` on saved tracks (an NPZ with the renderer's
+  debug arrays, stored so that byte edits reach its array headers, and JSON, CSV and .tact tracks), through the CLI
+  entry point like motion files.
 
 Seeds are real files (the recordings, bHaptics patterns and music in ``../shared/data``, cut short where long)
 and files written by hapmotion itself (tables, tracks, synthetic skeletons named the MakeHuman, Mixamo and Perfume
 ways, generated audio). Each mutant comes from one seed by a random mix of byte flips, truncation, inserted or
 repeated chunks, and, for text, token-aware edits (a number replaced by a 5,000-digit integer, ``nan``, ``1e308``,
 ``-1``, ...; deep bracket nesting; a header line repeated or deleted). A few hand-made hostile files are added:
-deeply nested JSON, a forged pickle shape, an NPZ of deflated zeros, a hierarchy thousands of joints deep.
+deeply nested JSON, a forged pickle shape, an NPZ of deflated zeros, a hierarchy thousands of joints deep, layouts
+with ``rows: 1e999`` or 100,000 devices, 100 cues of a one-hour pattern, an NPZ with a corrupt array header.
 
 Every file runs in its own process, forked from a parent that has imported hapmotion and warmed its compiled
 parsers (a fresh interpreter per file would cost a second each). The parent waits at most ``--timeout`` seconds
@@ -65,7 +72,7 @@ def cut_bvh(text: str, frames: int) -> str:
 
 
 def make_seeds(folder: Path) -> dict[str, list[Path]]:
-    """Seed files per reader kind ("motion", "track", "audio")."""
+    """Seed files per reader kind (:data:`SHARE`)."""
     import soundfile as sf
 
     from tests.support.motion_files import SCHEMES, kinect_document, synthetic_bvh
@@ -105,6 +112,28 @@ def make_seeds(folder: Path) -> dict[str, list[Path]]:
         seeds["track"].append(path)
     for tact in sorted((SHARED / "tact").glob("*.tact"))[:3]:
         put("track", tact.name, tact.read_bytes())
+
+    from importlib import resources
+
+    layout_text = resources.files("hapmotion").joinpath("data/x40_shoulders.json").read_text()
+    put("layout", "x40_shoulders.json", layout_text)
+    put("layout", "compact.json", json.dumps(json.loads(layout_text), separators=(",", ":")))
+
+    # Cue lists name their patterns by absolute path, so that a mutant elsewhere still finds them.
+    patterns = [folder / "track.csv", folder / "track.npz", *sorted(folder.glob("*.tact"))]
+    lines = [f"{1.5 * k:g} {p} gain={0.5 + 0.25 * (k % 3):g}" + (" side=swap" if k % 2 else "") + "\n"
+             for k, p in enumerate(patterns)]
+    put("cues", "show.cues", "# time pattern options\n" + "".join(lines) + f"30 {patterns[0]} devices=VestFront\n")
+    put("cues", "show.json", json.dumps({"cues": [{"time": 2.0 * k, "pattern": str(p), "gain": 1.0, "name": f"c{k}"}
+                                                  for k, p in enumerate(patterns)]}, indent=1))
+
+    stored = io.BytesIO()  # the rendered track with its debug arrays, stored: byte edits reach the .npy headers
+    np.savez(stored, intensities=track.intensities, times=track.times, actuators=np.array(track.actuators),
+             fps=np.array(track.fps), layout=np.array(track.layout), meta_json=np.array(json.dumps({})),
+             **{f"debug_{k}": np.asarray(v) for k, v in track.debug.items()})
+    put("view", "view_stored.npz", stored.getvalue())
+    for ext in (".npz", ".json", ".csv", ".tact"):
+        seeds["view"].append(folder / f"track{ext}")
 
     sr = 22050
     t = np.arange(int(1.5 * sr)) / sr
@@ -158,6 +187,31 @@ def hostile_files(folder: Path) -> list[tuple[str, Path]]:
     for ext in (".csv", ".npz", ".tact", ".json"):
         put("track", "empty_track" + ext, b"")
     put("track", "header_only.csv", b"time_s,a1\n")
+
+    from importlib import resources
+
+    layout = json.loads(resources.files("hapmotion").joinpath("data/x40_shoulders.json").read_text())
+    put("layout", "deep_layout.json", b'{"devices": ' + b"[" * 100_000 + b"]" * 100_000 + b"}")
+    put("layout", "rows_1e999.json", json.dumps(layout).replace('"rows": 5', '"rows": 1e999', 1).encode())
+    put("layout", "many_devices.json", json.dumps({"devices": [layout["devices"][0]] * 100_000}).encode())
+    put("layout", "bigint_layout.json", b'{"devices": [{"rows": 1' + b"0" * 5000 + b"}]}")
+
+    hour = np.zeros((180_000, 2))
+    hour[::50, 0] = 50.0
+    save_track(hapmotion.HapticTrack(hour, 50.0, ("VestFront_0", "VestBack_0")), folder / "hour.npz")
+    put("cues", "hour_x100.json", json.dumps({"cues": [{"time": k, "pattern": str(folder / "hour.npz")}
+                                                       for k in range(100)]}).encode())
+    put("cues", "deep_cues.json", b'{"cues": ' + b"[" * 100_000 + b"]" * 100_000 + b"}")
+    put("cues", "many_cues.cues", "".join(f"{k % 60} {folder / 'hour.npz'}\n" for k in range(20_000)).encode())
+
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as z:  # an unclosed bracket in an array header: numpy's tokenizer fails
+        for name, value in (("intensities", np.full((2, 2), 10.0)), ("actuators", np.array(["VestFront_0", "VestBack_0"])),
+                            ("fps", np.array(50.0))):
+            npy = io.BytesIO()
+            np.lib.format.write_array(npy, value)
+            z.writestr(f"{name}.npy", npy.getvalue().replace(b"'shape': ()", b"'shape': ((", 1))
+    put("view", "bad_header.npz", buf.getvalue())
     return out
 
 
@@ -217,8 +271,8 @@ def mutate(data: bytes, rng: np.random.Generator, text: bool) -> bytes:
     return bytes(b)
 
 
-TEXT = {".bvh", ".json", ".csv", ".tact"}
-SHARE = {"motion": 0.5, "track": 0.3, "audio": 0.2}
+TEXT = {".bvh", ".json", ".csv", ".tact", ".cues"}
+SHARE = {"motion": 0.35, "track": 0.2, "audio": 0.15, "layout": 0.1, "cues": 0.1, "view": 0.1}
 """Fraction of the mutated files per reader kind."""
 
 
@@ -228,6 +282,7 @@ def write_inputs(work: Path, count: int, seed: int) -> None:
     seeds = make_seeds(work / "seeds")
     rng = np.random.default_rng(seed)
     jobs = [(kind, path, "hostile") for kind, path in hostile_files(work)]
+    jobs += [(kind, path, "seed") for kind, paths in seeds.items() for path in paths]  # each must read
     mutants = work / "mutants"
     mutants.mkdir()
     for kind, fraction in SHARE.items():
@@ -242,6 +297,33 @@ def write_inputs(work: Path, count: int, seed: int) -> None:
 # ------------------------------------------------------------------------------------------------------ running
 
 
+CUE_SHOW_S, CUE_FPS = 60.0, 50.0
+"""The timeline a fuzzed cue list is laid on (seconds, frames per second)."""
+
+
+def read_input(kind: str, path: str) -> None:
+    """The reader of ``kind`` on ``path``, as a library user reaches it (the CLI kinds are run by :func:`child`)."""
+    if kind == "track":
+        hapmotion.load_track(path)
+    elif kind == "audio":
+        from hapmotion.audio import analyze_file
+
+        analyze_file(path)
+    elif kind == "layout":
+        from hapmotion.layout import load_layout
+
+        load_layout(path)
+    elif kind == "cues":
+        from hapmotion.layout import load_layout
+        from hapmotion.show.cues import cue_layer, load_cues
+
+        layout = load_layout()
+        cue_layer(load_cues(path), fps=CUE_FPS, n_frames=int(CUE_SHOW_S * CUE_FPS), actuators=layout.actuators,
+                  mirror_map=layout.mirror_map())
+    else:
+        raise ValueError(kind)
+
+
 def child(kind: str, path: str, out_fd: int, cap_bytes: int) -> None:
     """Run one reader in this forked process and exit: 0 read, 2 a one-line user error, 1 anything else."""
     resource.setrlimit(resource.RLIMIT_AS, (cap_bytes, cap_bytes))
@@ -252,18 +334,20 @@ def child(kind: str, path: str, out_fd: int, cap_bytes: int) -> None:
     sys.stderr = open(2, "w", closefd=False)
     code = 1
     try:
-        if kind == "motion":
+        if kind in ("motion", "view"):
             from hapmotion.cli import main
 
-            code = main(["info", path])
+            if kind == "motion":
+                code = main(["info", path])
+            else:
+                page = Path(tempfile.mkdtemp(prefix="fuzz-view-")) / "page.html"
+                try:
+                    code = main(["view", path, "-o", str(page)])
+                finally:
+                    shutil.rmtree(page.parent, ignore_errors=True)
         else:
             try:
-                if kind == "track":
-                    hapmotion.load_track(path)
-                else:
-                    from hapmotion.audio import analyze_file
-
-                    analyze_file(path)
+                read_input(kind, path)
                 code = 0
             except HapMotionError as err:
                 print(f"error: {err}", file=sys.stderr)
@@ -303,9 +387,9 @@ def run_one(kind: str, path: Path, timeout: float, cap_bytes: int) -> dict:
 
 def classify(result: dict) -> str:
     """read / clean error / internal error / hang / stray stderr lines (anything on stderr but the one error line,
-    or the reader's own "warning:" lines)."""
+    or the reader's own "warning:" and "note:" lines)."""
     code = result["code"]
-    lines = [ln for ln in result["stderr"].splitlines() if ln.strip() and not ln.startswith("warning: ")]
+    lines = [ln for ln in result["stderr"].splitlines() if ln.strip() and not ln.startswith(("warning: ", "note: "))]
     if code is None:
         return "hang"
     if code == 2:
@@ -347,6 +431,15 @@ def main() -> None:
         hapmotion.load_motion(work / "seeds" / "bandai.bvh")
         hapmotion.load_track(work / "seeds" / "track.csv")
         analyze_file(work / "seeds" / "tone_pcm_16.wav")
+        read_input("cues", str(work / "seeds" / "show.cues"))
+        from hapmotion.cli import main as cli_main
+
+        with open(os.devnull, "w") as quiet:  # the viewer's page code, imported once for every child
+            saved, sys.stdout = sys.stdout, quiet
+            try:
+                cli_main(["view", str(work / "seeds" / "track.npz"), "-o", str(work / "warm.html")])
+            finally:
+                sys.stdout = saved
         baseline = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         cap = int(args.cap_gb * 2**30)
         counts: dict[str, Counter] = defaultdict(Counter)
@@ -356,9 +449,12 @@ def main() -> None:
         peak = (0.0, "")
         t0 = time.perf_counter()
         cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        seeds_failed = []
         for i, (kind, path, origin) in enumerate(jobs):
             r = run_one(kind, path, args.timeout, cap)
             c = classify(r)
+            if origin == "seed" and c != "read":
+                seeds_failed.append(f"{kind} {path.name}: {c}: {r['stderr'].strip()[-200:]}")
             counts[kind][c] += 1
             seconds[kind] += r["s"]
             peaks[kind] = max(peaks[kind], r["peak_mb"])
@@ -380,12 +476,14 @@ def main() -> None:
         for c in counts.values():
             total.update(c)
         n_hostile = sum(1 for _, _, o in jobs if o == "hostile")
-        print(f"\nfuzz_inputs: {len(jobs)} files ({n_hostile} hand-made hostile), seed {args.seed}, "
+        n_seeds = sum(1 for _, _, o in jobs if o == "seed")
+        print(f"\nfuzz_inputs: {len(jobs)} files ({n_hostile} hand-made hostile, {n_seeds} unmutated seeds), "
+              f"seed {args.seed}, "
               f"{wall:.0f} s wall, {cpu:.0f} s CPU in the runs; parent RSS {baseline:.0f} MB (each run starts "
               "from it)")
         print(f"{'reader':8s} {'files':>6s} {'read':>6s} {'clean':>6s} {'internal':>9s} {'hangs':>6s} "
               f"{'stray':>6s} {'s/file':>7s} {'peak MB':>8s}")
-        for kind in ("motion", "track", "audio"):
+        for kind in SHARE:
             c = counts[kind]
             n = sum(c.values())
             print(f"{kind:8s} {n:6d} {c['read']:6d} {c['clean error']:6d} {c['internal error']:9d} "
@@ -394,6 +492,9 @@ def main() -> None:
         print(f"\ninternal errors (exit 1 / tracebacks): {total['internal error']:5d}   target 0")
         print(f"hangs over {args.timeout:g} s:                   {total['hang']:5d}   target 0")
         print(f"stray stderr lines:                     {total['stray stderr lines']:5d}   target 0")
+        print(f"unmutated seeds not read:               {len(seeds_failed):5d}   target 0 (of {n_seeds})")
+        for line in seeds_failed:
+            print(f"  {line}")
         print(f"peak memory of a run:                   {peak[0]:5.0f} MB   target < {TARGET_PEAK_MB:.0f} MB "
               f"({peak[1]})")
         for kind, items in worst.items():

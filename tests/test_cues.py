@@ -137,3 +137,44 @@ def test_real_designer_pattern_as_a_cue(tmp_path):
     assert not energy[:50].any() and energy[50:].any()
     vest = [i for i, a in enumerate(IDS) if a.startswith("Vest")]
     assert energy[:, vest].sum() == pytest.approx(energy.sum())
+
+
+def test_total_cue_rows_are_bounded_by_the_frames_limit(tmp_path):
+    """By hand: a 11-row pattern cued 3 times is 33 rows; a frames limit of 40 admits 3 cues and refuses a 4th,
+    naming the cue where the total went over, the limit and how to raise it."""
+    pulse(tmp_path)
+    (tmp_path / "three.cues").write_text("0 pulse.csv\n1 pulse.csv\n2 pulse.csv\n")
+    assert len(load_cues(tmp_path / "three.cues", limits={"frames": 40}).cues) == 3
+    (tmp_path / "four.cues").write_text("0 pulse.csv\n1 pulse.csv\n2 pulse.csv\n3 pulse.csv\n")
+    with pytest.raises(InputError) as info:
+        load_cues(tmp_path / "four.cues", limits={"frames": 40})
+    assert str(info.value) == (f"{tmp_path / 'four.cues'}: line 4: expected at most 40 pattern rows in all cues "
+                               "together (each cue counts its pattern's rows) (limit frames; raise it with --limit "
+                               "frames=N), found 44")
+
+
+def test_a_hundred_cues_of_a_one_hour_pattern_are_refused_at_the_default_limits(tmp_path):
+    """The case that took 28-41 s to render: 100 cues of one hour at 50 fps are 18 million rows; the list is refused
+    at its third cue (540,000 rows > 500,000) after reading the pattern once."""
+    hour = np.zeros((180_000, 2))
+    hour[::50, 0] = 50.0
+    save_track(HapticTrack(hour, 50.0, ("VestFront_0", "VestBack_0")), tmp_path / "hour.npz")
+    (tmp_path / "show.json").write_text(json.dumps({"cues": [{"time": k, "pattern": "hour.npz"} for k in range(100)]}))
+    with pytest.raises(InputError, match=r"cues\[2\]: expected at most 500000 pattern rows .* found 540000"):
+        load_cues(tmp_path / "show.json")
+
+
+def test_a_real_pattern_cued_many_times_stays_within_the_limits(tmp_path):
+    """A real Designer pattern cued every 2 s for ten minutes is read once and laid on the timeline."""
+    cue_text = "".join(f"{2 * k} {TACT / 'FeedbackFiles_Vest_ArrowHit.tact'}\n" for k in range(300))
+    (tmp_path / "beats.cues").write_text(cue_text)
+    cues = load_cues(tmp_path / "beats.cues")
+    assert len(cues.patterns) == 1 and len(cues.cues) == 300
+    energy = cue_layer(cues, fps=50.0, n_frames=50 * 600, actuators=IDS, mirror_map=MIRROR)
+    assert energy.any() and np.isfinite(energy).all()
+
+
+def test_a_pattern_name_too_long_for_the_file_system_is_a_one_line_error(tmp_path):
+    (tmp_path / "long.cues").write_text(f"0 {'p' * 5000}.csv\n")
+    with pytest.raises(InputError, match=r"line 1: expected a pattern file name, found one the system refuses"):
+        load_cues(tmp_path / "long.cues")

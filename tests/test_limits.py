@@ -4,6 +4,7 @@ once it is raised (API and CLI), and one JSON guard in front of every JSON reade
 from __future__ import annotations
 
 import json
+from importlib import resources
 
 import numpy as np
 import pytest
@@ -94,8 +95,8 @@ def test_json_scan_by_hand(text, depth, longest):
 
 
 def test_every_json_reader_goes_through_the_one_guard(tmp_path, monkeypatch):
-    """Motion JSON, track JSON, .tact, cue lists and live .tact registration: each is scanned by the guard before
-    it is parsed (so one change to the guard covers them all)."""
+    """Motion JSON, track JSON, .tact, cue lists, device layouts and live .tact registration: each is scanned by the
+    guard before it is parsed (so one change to the guard covers them all)."""
     seen = []
     real = limits_module.scan_json
     monkeypatch.setattr(limits_module, "scan_json", lambda raw: seen.append(len(raw)) or real(raw))
@@ -107,13 +108,18 @@ def test_every_json_reader_goes_through_the_one_guard(tmp_path, monkeypatch):
     kinect = tmp_path / "body.json"
     clip = hapmotion.load_motion(MOTION / "dataset-1_punch_normal_001.bvh").slice(0, 8)
     kinect.write_text(json.dumps(kinect_document(clip, second_body=False, jitter=False)))
-    readers = [lambda: hapmotion.load_track(tact), lambda: hapmotion.load_track(track), lambda: load_cues(cues),
-               lambda: registered_patterns(Endpoint("player", options={"register": [str(tact)]})),
-               lambda: hapmotion.load_motion(kinect)]
-    for read in readers:
+    layout = tmp_path / "layout.json"
+    layout.write_text(json.dumps(json.loads(resources.files("hapmotion").joinpath("data/x40_shoulders.json")
+                                            .read_text())))
+    # (reader, files it reads: a cue list reads its pattern files as well)
+    readers = [(lambda: hapmotion.load_track(tact), 1), (lambda: hapmotion.load_track(track), 1),
+               (lambda: load_cues(cues), 2),
+               (lambda: registered_patterns(Endpoint("player", options={"register": [str(tact)]})), 1),
+               (lambda: hapmotion.load_motion(kinect), 1), (lambda: load_layout(layout), 1)]
+    for read, files in readers:
         before = len(seen)
         read()
-        assert len(seen) == before + 1
+        assert len(seen) == before + files
 
 
 def test_real_patterns_sit_well_inside_the_json_limits():

@@ -4,20 +4,25 @@
   with the rows the renderer produced, which :func:`recover_journal` turns into a ``.tact``;
 * a stalled source is recorded as the fade and then silence up to the stop (the silent tail is not cut);
 * the journal is readable while the show runs, a clean stop replaces it with the requested file, an earlier
-  unfinished take is never overwritten, no journal row crosses a page boundary.
+  unfinished take is never overwritten, no journal row crosses a page boundary;
+* a full disk (a writer that fails with ENOSPC for a while) costs the journal only the rows of that while: it goes
+  on when space returns, every line stays whole, and the summary says what was lost.
 """
 
 from __future__ import annotations
 
 import asyncio
+import errno
+import logging
 import os
 import signal
 import sys
+import threading
 import time
 
 import numpy as np
 import pytest
-from support.live_fakes import BVH, ScriptSource
+from support.live_fakes import BVH, ScriptSource, wait_for
 from support.synthetic import waving
 
 import hapmotion
@@ -168,3 +173,123 @@ def test_no_journal_row_crosses_a_page(tmp_path):
     track = load_track(path)                                         # padded rows read back exactly
     np.testing.assert_array_equal(track.intensities, rows)
     assert os.path.getsize(path) < 1.15 * sum(len(x) for x in format_rows(0, rows, FPS))
+
+
+# ------------------------------------------------------------------------------------------------ a full disk
+class PlannedDisk:
+    """``os.write`` of a disk whose answers are planned per call: ``"ok"`` writes everything, an int writes that
+    many bytes, ``"full"`` raises ENOSPC; calls past the plan write everything."""
+
+    def __init__(self, plan):
+        self.plan = list(plan)
+
+    def __call__(self, fd, data):
+        step = self.plan.pop(0) if self.plan else "ok"
+        if step == "full":
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return os.write(fd, data if step == "ok" else bytes(data)[:step])
+
+
+def test_a_journal_goes_on_after_a_full_disk_and_keeps_every_line_whole(tmp_path):
+    """By hand: four batches of 10 rows. The disk takes the header and batch 1, then row 10 and 10 bytes of row 11
+    (a row cut in the middle) and is full; full again for batch 3; then it has room. The cut row is finished first,
+    rows 12-29 are lost (counted, as one range), rows 30-39 are written, and every line of the file is whole."""
+    rows = np.round(np.random.default_rng(1).uniform(0, 100, (40, 4)), 2)
+    batches = [format_rows(k, rows[k:k + 10], 50.0) for k in range(0, 40, 10)]
+    path = tmp_path / "j.csv"
+    j = TrackJournal(path, ["VestFront_0", "VestFront_1", "VestFront_2", "VestFront_3"],
+                     write=PlannedDisk(["ok", "ok", len(batches[1][0]) + 10, "full", "full"]))
+    for k, lines in enumerate(batches):
+        j.append(lines, 10 * k)
+    j.close()
+    assert j.lost == [(12, 30)] and j.lost_rows == 18 and j.rows == 22 and not j.failing
+    assert j.error is not None and j.error.errno == errno.ENOSPC
+    lines = path.read_bytes().split(b"\n")
+    assert lines[-1] == b"" and len(lines) == 1 + 22 + 1
+    assert all(len(line.split(b",")) == 5 for line in lines[:-1])
+    track = recover_journal(path)               # every row at its own time; the lost ones silent
+    assert track.fps == pytest.approx(50.0) and track.n_frames == 40 and track.meta["missing_rows"] == 18
+    np.testing.assert_allclose(track.intensities[:12], rows[:12])
+    np.testing.assert_allclose(track.intensities[30:], rows[30:])
+    assert not track.intensities[12:30].any()
+
+
+def test_a_header_the_full_disk_refused_is_written_before_any_row(tmp_path):
+    path = tmp_path / "j.csv"
+    j = TrackJournal(path, ["VestFront_0"], write=PlannedDisk(["full"]))
+    j.append(format_rows(0, np.array([[5.0], [6.0]]), 50.0), 0)   # written with the header once there is room
+    j.close()
+    assert path.read_text() == "time_s,VestFront_0\n0.000000,5.00\n0.020000,6.00\n" and j.lost_rows == 0
+
+
+class SwitchedDisk:
+    """``os.write`` of a disk that is full while :attr:`full` is set (the first write then takes 37 bytes)."""
+
+    def __init__(self):
+        self.full = threading.Event()
+        self.cut = False
+
+    def __call__(self, fd, data):
+        if self.full.is_set():
+            if not self.cut:
+                self.cut = True
+                return os.write(fd, bytes(data)[:37])
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return os.write(fd, data)
+
+
+def test_a_full_disk_during_the_show_loses_only_its_own_rows_and_the_summary_says_so(tmp_path, caplog):
+    """A live session whose disk fills up for a while: the journal says so once, writes again when space returns
+    (said once), the summary names the rows the journal lost, and the file written at stop has every row."""
+    disk = SwitchedDisk()
+
+    class Recorder(RecorderSink):
+        async def start(self):
+            await super().start()
+            self._journal._os_write = disk
+
+    rec = Recorder(tmp_path / "take.csv", ACTUATORS, fps=FPS)
+    engine = LiveEngine(hapmotion.Renderer(fps=FPS), [rec], n_actuators=N, fps=FPS, handle_signals=False)
+    source = ScriptSource(waving(n=240), then="wait")
+    seen = {}
+
+    async def scenario():
+        task = asyncio.create_task(engine.run(source))
+        await wait_for(lambda: rec._journal is not None and rec._journal.rows >= 20, 20)
+        disk.full.set()
+        await wait_for(lambda: rec._journal.lost_rows >= 30, 20)
+        disk.full.clear()
+        seen["rows_back"] = rec._journal.rows
+        await wait_for(lambda: rec._journal.rows >= seen["rows_back"] + 20, 20)
+        engine.request_stop("test over")
+        return await task
+
+    with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
+        stats = asyncio.run(asyncio.wait_for(scenario(), 60))
+    track = load_track(rec.path)
+    assert not rec.journal_path.exists()
+    assert track.n_frames == len(rec.rows())                               # the take is whole
+    np.testing.assert_allclose(track.intensities, rec.rows(), atol=0.005)
+    lost = rec.stats.extra["journal_rows_lost"]
+    assert lost >= 30 and rec.stats.extra["journal_gaps"].endswith(" s")
+    line = next(x for x in stats.summary_lines() if rec.name in x)
+    assert f"journal rows lost {lost}" in line and "journal gaps" in line
+    warnings = [r.getMessage() for r in caplog.records]
+    assert sum("could not be written" in w for w in warnings) == 1
+    assert sum("is written again" in w for w in warnings) == 1
+    assert any(f"the journal missed {lost} rows" in w for w in warnings)
+
+
+def test_recovering_an_hour_long_journal_keeps_every_row_in_its_place(tmp_path):
+    """An hour at 60 fps (times with 6 decimals, so steps alternate 0.016666 / 0.016667) with 30 s missing in the
+    middle: every row comes back at its own index and the rate is 60 fps."""
+    n = 216_000
+    rows = np.zeros((n, 1))
+    rows[::600, 0] = 50.0                                   # a mark every 10 s
+    keep = np.r_[0:100_000, 101_800:n]                      # 1800 rows (30 s) lost
+    path = tmp_path / "hour.journal.csv"
+    path.write_bytes(b"time_s,VestFront_0\n" + b"".join(format_rows(int(k), rows[k:k + 1], 60.0)[0] for k in keep))
+    track = recover_journal(path)
+    assert track.n_frames == n and track.fps == pytest.approx(60.0, abs=1e-4) and track.meta["missing_rows"] == 1800
+    np.testing.assert_array_equal(np.flatnonzero(track.intensities[:, 0]),
+                                  [k for k in range(0, n, 600) if not 100_000 <= k < 101_800])

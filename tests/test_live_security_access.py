@@ -49,9 +49,10 @@ def test_senders_beyond_the_limit_wait_for_a_silent_one():
     b = SenderBudgets(rate=100.0, burst=10.0, max_senders=2, idle_s=2.0)
     assert b.admit("a", 0.0) is None and b.admit("b", 0.0) is None
     assert b.admit("c", 1.0) == "too_many_senders"
-    assert b.admit("a", 1.5) is None                 # a keeps sending: it keeps its place
+    assert b.admit("a", 1.5) is None                 # a keeps sending ...
+    b.useful("a", 1.5)                               # ... usable messages: it keeps its place
     assert b.admit("c", 2.5) is None                 # b silent for 2.5 s: c takes its place
-    assert b.admit("b", 2.6) == "too_many_senders" and b.senders == 2
+    assert b.admit("b", 2.6) == "too_many_senders" and b.senders == 2 and b.evicted == 1
     with pytest.raises(UsageError):
         SenderBudgets(1.0, 1.0, max_senders=0)
 
@@ -67,3 +68,34 @@ def test_exposure_line_and_loopback():
                     "240 messages/s each")
     assert exposure_line("127.0.0.1", SenderAllowList(), max_senders=8, budget=2400.0) == (
         "reachable from this machine only; senders: any address; at most 8 senders, 2400 messages/s each")
+
+
+def test_a_sender_of_junk_gives_its_place_to_the_performer():
+    """By hand: two places. j sends one junk message a second (admitted, never useful), p1 streams usable frames.
+    A performer p2 arriving at 3.0 s takes j's place (nothing usable for over 2 s); p1 keeps its own."""
+    b = SenderBudgets(rate=100.0, burst=10.0, max_senders=2, idle_s=2.0)
+    for t in (0.0, 1.0, 2.0, 2.9):
+        assert b.admit("j", t) is None
+        assert b.admit("p1", t) is None
+        b.useful("p1", t)
+    assert b.admit("p2", 1.5) == "too_many_senders"  # j is still within its first 2 s
+    assert b.admit("p2", 3.0) is None and b.evicted == 1
+    assert b.admit("j", 3.1) == "too_many_senders"   # the junk sender is the one that went
+
+
+def test_a_bundle_counts_for_what_it_holds():
+    """A VMC source's default budget at 60 fps: 7680 messages/s in bursts of 1024. A 4.3 KB bundle (one frame of
+    55 bones) costs 67.5 messages, so 15 pass at once and a 16th waits; a 60 KB bundle costs 937.5: one passes
+    with a full bucket, a second right after it does not, where each would have cost 1 before."""
+    from hapmotion.live.sources import VmcSource
+    from hapmotion.live.wire.vmc_in import VmcDecoder
+
+    frame = b"#bundle\0" + b"\0" * (4320 - 8)
+    big = b"#bundle\0" + b"\0" * (60_000 - 8)
+    assert VmcDecoder.cost(frame) == 67.5 and VmcDecoder.cost(big) == 937.5
+    assert VmcDecoder.cost(b"/VMC/Ext/T\0\0") == 1.0
+    rate, burst = VmcSource().default_budget(60.0)
+    assert (rate, burst) == (7680.0, 1024.0)
+    b = SenderBudgets(rate, burst, max_senders=1)
+    assert [b.admit("s", 0.0, VmcDecoder.cost(frame)) for _ in range(16)] == [None] * 15 + ["flood"]
+    assert b.admit("s", 10.0, VmcDecoder.cost(big)) is None and b.admit("s", 10.0, VmcDecoder.cost(big)) == "flood"

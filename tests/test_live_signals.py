@@ -62,3 +62,36 @@ def test_hangup_and_quit_end_the_session_like_ctrl_c(sig, close_terminal, tmp_pa
     if not close_terminal:
         assert code == 0, err
         assert f"stopped: {sig.name}" in err and "Traceback" not in err
+
+
+async def _nohup_session(out):
+    """``nohup hapmotion live ...`` streaming a real recording: SIGHUP (the terminal hung up) must not stop it; a
+    later SIGTERM ends it like Ctrl-C."""
+    frames, _ = real_frames()
+    player = await FakePlayerSdk1().start()
+    proc, port, lines = await start_live_process(["nohup", *HAPMOTION], "--sink", player.url(), "--sink",
+                                                 f"record:{out}")
+    sender = asyncio.create_task(send_osc(port, frames[:3000]))
+    await wait_for(lambda: len(player.frames) >= 30, 15)
+    proc.send_signal(signal.SIGHUP)
+    after_hangup = len(player.frames)
+    # still streaming well after the hang-up: another 60 frames reach the Player
+    await wait_for(lambda: len(player.frames) >= after_hangup + 60, 15)
+    alive = proc.returncode is None
+    proc.send_signal(signal.SIGTERM)
+    rest = await asyncio.wait_for(proc.stderr.read(), 20)
+    code = await asyncio.wait_for(proc.wait(), 20)
+    sender.cancel()
+    await player.stop()
+    return alive, code, "".join(lines) + rest.decode(), player
+
+
+def test_nohup_keeps_the_session_running_when_the_terminal_hangs_up(tmp_path):
+    out = tmp_path / "take.csv"
+    alive, code, err, player = asyncio.run(asyncio.wait_for(_nohup_session(out), 120))
+    assert alive, err
+    assert code == 0, err
+    assert "SIGHUP" not in err and "stopped: SIGTERM" in err and "Traceback" not in err
+    assert player.turn_off_all and all(player.last_values(p) == [0] * n for p, n in DEVICES)
+    track = load_track(out)
+    assert track.n_frames >= 20 and track.intensities.max() > 0 and track.intensities[-1].max() == 0

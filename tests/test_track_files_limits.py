@@ -113,3 +113,66 @@ def test_tact_declaring_a_day_long_pattern_is_refused(tmp_path):
                     '[{"index":1,"intensity":1}]}]}}}}]}]}}' + " " * 10_000)
     _refused(path, f"expected at most {DEFAULT_LIMITS.frames} frames (limit frames; raise it with --limit frames=N), "
                    "found 4300001")
+
+
+def _npz_track(tmp_path, name="t.npz", **arrays):
+    """A valid two-frame NPZ track with ``arrays`` added or replacing members (stored, so bytes can be edited)."""
+    base = {"intensities": np.array([[10.0, 20.0], [30.0, 0.0]]), "actuators": np.array(["VestFront_0", "VestFront_1"]),
+            "fps": np.array(50.0), "layout": np.array("x40_shoulders"), "meta_json": np.array("{}"),
+            "debug_level": np.array([0.5, 1.0]), "debug_active": np.array([[1, 0], [0, 1]], dtype=np.int8)}
+    base.update(arrays)
+    path = tmp_path / name
+    with open(path, "wb") as fh:
+        np.savez(fh, **base)
+    return path
+
+
+def test_a_valid_npz_track_keeps_its_debug_arrays(tmp_path):
+    track = load_track(_npz_track(tmp_path))
+    assert track.debug["level"].tolist() == [0.5, 1.0] and track.debug["active"].shape == (2, 2)
+
+
+def test_a_corrupt_npy_header_is_an_input_error_not_a_tokenizer_error(tmp_path):
+    path = _npz_track(tmp_path)
+    with zipfile.ZipFile(path) as zf:
+        members = {name: zf.read(name) for name in zf.namelist()}
+    # An unclosed bracket in the header's Python literal: numpy's header reader fails in its tokenizer (TokenError).
+    members["fps.npy"] = members["fps.npy"].replace(b"'shape': ()", b"'shape': ((", 1)
+    with zipfile.ZipFile(path, "w") as zf:
+        for name, data in members.items():
+            zf.writestr(name, data)
+    _refused(path, "array fps: expected a readable .npy array header")
+
+
+@pytest.mark.parametrize("name, value, needle", [
+    ("debug_active", np.array([1, 0], dtype=np.int8), "array debug_active: expected shape (T, 2) with T = 2"),
+    ("debug_dynamic_point", np.zeros((2, 2)), "array debug_dynamic_point: expected shape (T, 3)"),
+    ("debug_level", np.array(["a", "b"]), "array debug_level: expected numbers, found <U1"),
+    ("debug_level", np.zeros(5), "expected shape (T,) with T = 2, found (5,)"),
+    ("debug_extra", np.zeros((2, 2, 2)), "array debug_extra: expected one row per frame (2)"),
+    ("intensities", np.array([["a", "b"]]), "array intensities: expected numbers"),
+], ids=["active-1d", "point-2-wide", "text", "wrong-length", "3d-unknown", "text-intensities"])
+def test_every_debug_array_is_checked(tmp_path, name, value, needle):
+    _refused(_npz_track(tmp_path, **{name: value}), needle)
+
+
+def test_the_viewer_page_is_made_from_a_checked_npz(tmp_path):
+    """What the viewer reads from a track: a page from a good NPZ; a bad debug array never reaches it."""
+    from hapmotion.viewer.page import page_data
+
+    data, blobs, _ = page_data([load_track(_npz_track(tmp_path))])
+    assert set(data["tracks"][0]["debug"]) == {"active", "level"} and blobs
+
+
+def test_an_npz_of_an_unknown_zip_version_is_a_one_line_error_in_view(tmp_path):
+    """A byte edit that makes the archive claim zip version 22.8: the sniffing before ``view`` reads it and the
+    reader both say so in one line (zipfile raises NotImplementedError)."""
+    from hapmotion.cli import main
+
+    path = _npz_track(tmp_path)
+    data = bytearray(path.read_bytes())
+    central = data.index(b"PK\x01\x02")
+    data[central + 6] = 228                          # "version needed to extract" of the first member: 22.8
+    path.write_bytes(bytes(data))
+    assert main(["view", str(path), "-o", str(tmp_path / "page.html")]) == 2
+    assert not (tmp_path / "page.html").exists()

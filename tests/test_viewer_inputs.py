@@ -89,3 +89,20 @@ def test_view_and_plot_accept_a_motion_table_csv(motion_csv, tmp_path, capsys):
     code, stdout, err = run(["plot", path, "-o", fig], capsys)
     assert code == 0, err
     assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_view_of_an_npz_with_a_bad_debug_array_is_one_line_and_writes_no_page(tmp_path, capsys):
+    """The viewer draws the renderer's debug arrays; an NPZ track whose ``debug_active`` is not (T, 2) is refused
+    by the reader with one line naming the array, and no page is written."""
+    import numpy as np
+
+    from hapmotion.cli import main
+
+    path = tmp_path / "bad.npz"
+    np.savez(path, intensities=np.full((3, 2), 20.0), actuators=np.array(["VestFront_0", "VestFront_1"]),
+             fps=np.array(50.0), layout=np.array("x40_shoulders"), meta_json=np.array("{}"),
+             debug_active=np.array([1, 0, 1], dtype=np.int8))
+    assert main(["view", str(path), "-o", str(tmp_path / "page.html")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"error: {path}: array debug_active: expected shape (T, 2) with T = 3, found (3,)")
+    assert not (tmp_path / "page.html").exists()

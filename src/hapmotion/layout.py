@@ -17,7 +17,6 @@ one *chart* of the body surface:
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass
 from importlib import resources
@@ -28,6 +27,7 @@ import numpy as np
 from .bhaptics.devices import bhaptics_devices
 from .body.model import BodyModel
 from .errors import InputError
+from .limits import LimitsArg, as_limits, checked_json_text, parse_json_text
 
 CHART_FRONT, CHART_BACK, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT = 0, 1, 2, 3
 CHART_NAMES = ("front", "back", "shoulder_left", "shoulder_right")
@@ -139,28 +139,29 @@ class Layout:
 _CHART_CODES = {"front": CHART_FRONT, "back": CHART_BACK}
 
 
-def load_layout(path: "str | os.PathLike[str] | None" = None) -> Layout:
+N_CHARTS = 4
+"""A layout has one device per chart (front, back, left and right shoulder), so this many devices."""
+
+
+def load_layout(path: "str | os.PathLike[str] | None" = None, limits: LimitsArg = None) -> Layout:
     """Read a layout file (default: the bundled X40 + two shoulder Tactosy layout).
 
-    Raises :class:`~hapmotion.errors.InputError` naming the field when the file does not fit the schema.
+    The file goes through the JSON guard every reader shares (:func:`hapmotion.limits.checked_json_text`: size,
+    nesting, parsed size and number length within ``limits``) before it is parsed. Raises
+    :class:`~hapmotion.errors.InputError` naming the field when the file does not fit the schema.
     """
     if path is None:
         source = f"{DEFAULT_LAYOUT_NAME}.json"
         text = resources.files("hapmotion").joinpath(f"data/{source}").read_text()
     else:
         source = os.fspath(path)
-        try:
-            text = Path(path).read_text(encoding="utf-8")
-        except OSError as err:
-            raise InputError(source, None, f"cannot read layout: {err.strerror}") from None
-        except UnicodeDecodeError:
-            raise InputError(source, None, "expected a UTF-8 JSON layout, found binary data") from None
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise InputError(source, f"line {err.lineno}", f"expected JSON: {err.msg}") from None
+        text = checked_json_text(path, as_limits(limits), what="JSON layout")
+    doc = parse_json_text(source, text, what="JSON layout")
     if not isinstance(doc, dict) or not isinstance(doc.get("devices"), list):
         raise InputError(source, "field devices", "expected an object with a list of devices")
+    if len(doc["devices"]) > N_CHARTS:  # refused before any is read: one per chart
+        raise InputError(source, "field devices", f"expected at most {N_CHARTS} devices (a front, a back and two "
+                         f"shoulder charts), found {len(doc['devices'])}")
     devices = []
     offset = 0
     seen_charts = set()
@@ -185,8 +186,8 @@ def load_layout(path: "str | os.PathLike[str] | None" = None) -> Layout:
                 sdk2_position=int(dd.get("sdk2_position", -1)), sdk2_offset=int(dd.get("sdk2_offset", 0)),
                 sdk2_length=int(dd.get("sdk2_length", rows * cols)), x_span=x_span, z_span=z_span,
             )
-        except (KeyError, TypeError, ValueError, AttributeError) as err:
-            raise InputError(source, place, f"expected name, rows, cols, chart (front|back|shoulder), side, x_span: {err}") from None
+        except (KeyError, TypeError, ValueError, AttributeError, OverflowError) as err:
+            raise InputError(source, place, f"expected name, rows, cols, chart (front|back|shoulder), side, x_span: {str(err)[:80]}") from None
         if not (1 <= rows <= 64 and 1 <= cols <= 64):
             raise InputError(source, place, f"expected rows and cols in 1..64, found {rows} x {cols}")
         if dev.name in names or "_" in dev.name or not dev.name:
@@ -208,4 +209,7 @@ def load_layout(path: "str | os.PathLike[str] | None" = None) -> Layout:
         if (by_chart[a].rows, by_chart[a].cols) != (by_chart[b].rows, by_chart[b].cols):
             raise InputError(source, "field devices", f"expected {by_chart[a].name} and {by_chart[b].name} to have the "
                              "same grid (mirroring swaps them)")
-    return Layout(name=str(doc.get("name", Path(source).stem)), devices=tuple(devices))
+    name = doc.get("name", Path(source).stem)
+    if not isinstance(name, str):
+        raise InputError(source, "field name", f"expected the layout's name as text, found {type(name).__name__}")
+    return Layout(name=name, devices=tuple(devices))

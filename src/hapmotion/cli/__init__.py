@@ -66,7 +66,8 @@ class Terminated(BaseException):
 @contextlib.contextmanager
 def signals_raise() -> Iterator[None]:
     """While the command runs, :data:`TERMINATING_SIGNALS` raise :class:`Terminated` (live mode installs its own
-    handlers on top, which turn every sink off first). The previous handlers come back afterwards."""
+    handlers on top, which turn every sink off first), except those the process was started with ignored. The
+    previous handlers come back afterwards."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -74,7 +75,9 @@ def signals_raise() -> Iterator[None]:
     def handler(signum: int, frame: object) -> None:
         raise Terminated(signum)
 
-    previous = {s: signal.signal(s, handler) for s in TERMINATING_SIGNALS}
+    # A signal the command was started with ignored stays ignored (``nohup`` ignores SIGHUP so that the command
+    # outlives its terminal).
+    previous = {s: signal.signal(s, handler) for s in TERMINATING_SIGNALS if signal.getsignal(s) is not signal.SIG_IGN}
     try:
         yield
     finally:

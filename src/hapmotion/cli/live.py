@@ -10,6 +10,7 @@ from ..show import Show
 from .kinds_help import KindsHelpCommand
 from .motion_options import CLI_SPELLING, motion_options, read_motion
 from .show_options import cue_port_option, session_options, show_options, split_values
+from .token_option import token_options
 from .session_report import finish_session, setup_logging
 
 HELP = """Render a live skeleton stream frame by frame and drive haptic devices, recorders and viewers.
@@ -55,9 +56,7 @@ Examples:
 @click.option("--allow-origin", "allow_origins", metavar="ORIGIN[,ORIGIN]", multiple=True,
               help="ws:// source: web page origins (https://show.example) allowed to connect; browser pages are "
                    "refused otherwise. Programs (no Origin header) are not affected.")
-@click.option("--token", envvar="HAPMOTION_LIVE_TOKEN", default=None, metavar="SECRET",
-              help="ws:// source: senders must present this secret, as 'Authorization: Bearer SECRET' or "
-                   "?token=SECRET in the URL [env HAPMOTION_LIVE_TOKEN].")
+@token_options
 @click.option("--allow-sender", "allow_senders", metavar="IP[,IP]", multiple=True,
               help="Network sources: only these sender addresses (or networks, 10.0.0.0/24) may send.")
 @click.option("--max-senders", type=click.IntRange(min=1), default=8, show_default=True,

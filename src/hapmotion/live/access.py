@@ -108,25 +108,33 @@ def bearer_token(header: Optional[str]) -> Optional[str]:
     return value.strip() if scheme.lower() == "bearer" and value.strip() else None
 
 
+IDLE_SENDER_S = 2.0
+"""Seconds after which a sender that has sent nothing usable (no frame, or only messages counted as faults) gives
+its place to a new sender when every place is taken: idle connections and junk senders cannot lock the performer
+out, and a performer who streams never loses its place."""
+
+
 class SenderBudgets:
     """A message budget (token bucket) per sender key, for at most ``max_senders`` senders at once.
 
-    A new sender beyond ``max_senders`` takes the place of one silent for ``idle_s`` seconds, or is refused: a
-    performer who is sending keeps its place and its whole budget, whoever else floods. Sans-I/O: the caller passes
-    the time.
+    A new sender beyond ``max_senders`` takes the place of one that has sent nothing usable for ``idle_s`` seconds
+    (the caller says what was usable with :meth:`useful`; a new sender gets ``idle_s`` to show it), or is refused:
+    a performer who is streaming keeps its place and its whole budget, whoever else floods or sends junk.
+    Sans-I/O: the caller passes the time.
     """
 
-    def __init__(self, rate: float, burst: float, max_senders: int = MAX_SENDERS, idle_s: float = 2.0):
+    def __init__(self, rate: float, burst: float, max_senders: int = MAX_SENDERS, idle_s: float = IDLE_SENDER_S):
         if max_senders < 1:
             raise UsageError(f"--max-senders must be at least 1, got {max_senders}")
         self.rate, self.burst = float(rate), float(burst)
         self.max_senders = int(max_senders)
         self.idle_s = float(idle_s)
-        self._buckets: dict[str, tuple[RateLimiter, list[float]]] = {}
+        self._buckets: dict[str, tuple[RateLimiter, list[float]]] = {}  # key -> (budget, [last useful time])
+        self.evicted = 0
 
-    def admit(self, key: str, now: float) -> Optional[str]:
-        """None when the message may be decoded, else the fault kind: ``flood`` (over this sender's budget) or
-        ``too_many_senders``."""
+    def admit(self, key: str, now: float, cost: float = 1.0) -> Optional[str]:
+        """None when the message may be decoded, else the fault kind: ``flood`` (over this sender's budget;
+        ``cost`` is what the datagram holds, in messages) or ``too_many_senders``."""
         entry = self._buckets.get(key)
         if entry is None:
             if len(self._buckets) >= self.max_senders:
@@ -134,13 +142,19 @@ class SenderBudgets:
                 if len(self._buckets) >= self.max_senders:
                     return "too_many_senders"
             entry = self._buckets[key] = (RateLimiter(self.rate, self.burst), [now])
-        bucket, seen = entry
-        seen[0] = now
-        return None if bucket.allow(now) else "flood"
+        return None if entry[0].allow(now, cost) else "flood"
+
+    def useful(self, key: str, now: float) -> None:
+        """``key`` just sent something usable (a frame, or a message that decoded without a fault)."""
+        entry = self._buckets.get(key)
+        if entry is not None:
+            entry[1][0] = now
 
     def _forget_idle(self, now: float) -> None:
-        for key in [k for k, (_, seen) in self._buckets.items() if now - seen[0] > self.idle_s]:
+        idle = [k for k, (_, useful) in self._buckets.items() if now - useful[0] > self.idle_s]
+        for key in idle:
             del self._buckets[key]
+        self.evicted += len(idle)
 
     @property
     def senders(self) -> int:

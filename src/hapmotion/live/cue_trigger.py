@@ -139,6 +139,7 @@ class CueTrigger:
             return
         for name, gain in decode_cue_messages(data, faults, self.address):
             if self.cues.fire(name, gain):
+                self.budgets.useful(sender, now)  # an operator who fires cues keeps its place
                 log.info("cue %r fired by %s%s", name, sender, "" if gain is None else f" (gain {gain:g})")
             else:
                 known = ", ".join(self.cues.names[:10]) or "none has a name"

@@ -42,7 +42,9 @@ STOP_SIGNALS: tuple[int, ...] = tuple(
     getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT") if hasattr(signal, name))
 """Every signal that would end the process: each ends the session like Ctrl-C (turn-off to every sink, the
 recording finished). SIGHUP comes with a closed terminal or ssh session, SIGQUIT with Ctrl-\\; left to their
-default action they would kill the process with the motors still playing and the take unfinished."""
+default action they would kill the process with the motors still playing and the take unfinished. A signal that
+was ignored when the process started stays ignored: ``nohup hapmotion live ...`` keeps the show going when the
+terminal hangs up."""
 
 
 class StepRenderer(Protocol):
@@ -337,6 +339,8 @@ class LiveEngine:
             return []
         installed = []
         for sig in STOP_SIGNALS:
+            if signal.getsignal(sig) is signal.SIG_IGN:
+                continue  # ignored when we started (``nohup`` ignores SIGHUP): it stays ignored
             try:
                 loop.add_signal_handler(sig, self.request_stop, signal.Signals(sig).name)
                 installed.append(sig)

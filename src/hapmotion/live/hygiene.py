@@ -163,11 +163,12 @@ class RateLimiter:
         self._tokens = float(burst)
         self._last: Optional[float] = None
 
-    def allow(self, now: float) -> bool:
+    def allow(self, now: float, cost: float = 1.0) -> bool:
+        """Take ``cost`` messages' worth (a bundle counts for the messages it holds) if the bucket has them."""
         if self._last is not None:
             self._tokens = min(self.burst, self._tokens + (now - self._last) * self.rate)
         self._last = now
-        if self._tokens >= 1.0:
-            self._tokens -= 1.0
+        if self._tokens >= cost:
+            self._tokens -= cost
             return True
         return False

@@ -155,7 +155,8 @@ def _osc_sink(ep: "Endpoint", ctx: SinkContext) -> Sink:
 
 def _broadcast_sink(ep: "Endpoint", ctx: SinkContext) -> Sink:
     return BroadcastSink(ctx.dmap.actuators, ctx.layout_name, host=ep.host, port=ep.port, fps=ctx.fps,
-                         render_info=ctx.meta)
+                         render_info=ctx.meta, allow_origins=ep.options.get("allow_origin", []),
+                         local_pages=ep.flag("local_pages"))
 
 
 def _record_sink(ep: "Endpoint", ctx: SinkContext) -> Sink:
@@ -173,7 +174,8 @@ SINK_KINDS: dict[str, Kind] = {k.name: k for k in (
     Kind("osc", "osc", "osc://HOST:PORT[/PREFIX]", "OSC out: /hapmotion/VestFront/5 f (0..1), /hapmotion/VestFront "
          "f*20", OSC_OUT, {"actuators": "0|1", "devices": "0|1"}, factory=_osc_sink, address_required=True),
     Kind("ws-broadcast", "ws-broadcast", "ws-broadcast[://HOST:PORT]",
-         "WebSocket broadcast of frames, skeleton and dynamic point", WS_BROADCAST, factory=_broadcast_sink),
+         "WebSocket broadcast of frames, skeleton and dynamic point", WS_BROADCAST,
+         {"allow_origin": "ORIGIN", "local_pages": "0|1"}, factory=_broadcast_sink),
     Kind("record", "record", "record:PATH", "the session as a track at stop (.csv .json .npz .tact)",
          factory=_record_sink),
     Kind("nats", "nats", "nats://HOST:PORT/SHOW", "publish the show to an audience (hapmotion listen)", NATS,

@@ -15,57 +15,28 @@ import logging
 import math
 import os
 import time
-import weakref
-from http import HTTPStatus
 from typing import Any, Mapping, Optional, Protocol, Sequence
-from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
-from websockets.asyncio.server import Server, ServerConnection, serve
-from websockets.exceptions import ConnectionClosed
-from websockets.frames import CloseCode
-from websockets.http11 import Request, Response
-from websockets.protocol import State
 
 from ..errors import UsageError
 from ..motion import Motion
 from ..motion_files import load_motion
-from .access import (MAX_SENDERS, OSC_MESSAGE_BUDGET, TOKEN_HEADER, TOKEN_QUERY, WS_MESSAGE_BUDGET, SenderAllowList,
-                     SenderBudgets, bearer_token, burst_for, exposure_line, is_loopback, reach, token_matches)
-from .addresses import OSC_IN, WS_IN
-from .frames import FrameInlet, SkeletonFrame
-from .hygiene import RateLimiter
+from .access import (MAX_SENDERS, OSC_MESSAGE_BUDGET, SenderAllowList, SenderBudgets, burst_for, exposure_line,
+                     is_loopback, reach)
+from .addresses import OSC_IN
 from .endpoint import Endpoint
+from .frames import FrameInlet, SkeletonFrame
+from .source_base import Source, count_replaced
 from .wire.osc_address import OSC_PREFIX
 from .wire.osc_in import OscSkeletonDecoder
 from .wire.vmc_in import VMC_HOST, VMC_MESSAGES_PER_FRAME, VMC_PORT, VmcDecoder
-from .wire.ws_in import decode_ws_skeleton
+from .ws_source import WsSource
+
+__all__ = ["Source", "UdpSource", "OscSource", "VmcSource", "WsSource", "ReplaySource", "ClockSource",
+           "network_source"]
 
 log = logging.getLogger("hapmotion.live")
-
-
-class Source:
-    """Base class: :meth:`start` binds (errors stop the session before it begins), :meth:`run` returns when the
-    source ends (a replay without --loop) and runs for ever otherwise, :meth:`close` releases everything."""
-
-    name = "source"
-    engine: FrameInlet
-
-    async def start(self, engine: FrameInlet) -> None:
-        self.engine = engine
-
-    async def run(self) -> None:
-        await asyncio.Event().wait()
-
-    async def close(self) -> None:
-        pass
-
-    def describe(self) -> str:
-        return self.name
-
-    def exposure(self) -> str:
-        """Who can reach the source and who may send, for the startup line ("" for sources that do not listen)."""
-        return ""
 
 
 # ---------------------------------------------------------------------------------------------------- UDP
@@ -128,6 +99,10 @@ class UdpSource(Source):
         """Whether a datagram is worth its budget (a format may drop what its decoder never reads, unparsed)."""
         return True
 
+    def cost(self, data: bytes) -> float:
+        """What a datagram counts in its sender's budget, in messages (a format with bundles counts what they hold)."""
+        return 1.0
+
     async def start(self, engine: FrameInlet) -> None:
         await super().start(engine)
         self.decoder = self.make_decoder(engine)
@@ -157,12 +132,20 @@ class UdpSource(Source):
             return
         if not self.wants(data):
             return
-        assert self._budgets is not None and self.decoder is not None
-        refused = self._budgets.admit(sender, now)
+        budgets = self._budgets
+        assert budgets is not None and self.decoder is not None
+        evicted = budgets.evicted
+        refused = budgets.admit(sender, now, self.cost(data))
         if refused is not None:
-            _count_refusal(engine, refused, sender, self._budgets)
+            _count_refusal(engine, refused, sender, budgets)
             return
-        for frame in self.decoder.feed(data, now):
+        if budgets.evicted > evicted:
+            count_replaced(engine, sender, budgets.evicted - evicted, budgets.idle_s)
+        faults = engine.faults.total()
+        frames = self.decoder.feed(data, now)
+        if frames or engine.faults.total() == faults:  # usable: keeps the sender's place
+            budgets.useful(sender, now)
+        for frame in frames:
             engine.submit(frame)
 
     async def close(self) -> None:
@@ -188,15 +171,21 @@ class OscSource(UdpSource):
 # ---------------------------------------------------------------------------------------------------- VMC
 VMC_MESSAGE_BUDGET = 2.0 * VMC_MESSAGES_PER_FRAME
 """A VMC sender that does not bundle sends a datagram per bone: its budget is this many times the frame rate
-(7680 datagrams/s at 60 fps; a bundle counts as one). Messages the decoder does not read (blend shapes, devices)
-are dropped before the budget and cost nothing."""
+(7680 messages/s at 60 fps). A bundle counts for what it holds, one message per
+:data:`~hapmotion.live.wire.vmc_in.VMC_BYTES_PER_MESSAGE` bytes (a frame's bundle of 55 bones about 64), so a
+sender cannot pass 900 messages off as one datagram (a stream of 60 KB bundles gets about 8 a second through).
+Messages the decoder does not read (blend shapes, devices) are dropped before the budget and cost nothing."""
+VMC_BURST_FRAMES = 16.0
+"""A VMC sender's burst, in frames of :data:`~hapmotion.live.wire.vmc_in.VMC_MESSAGES_PER_FRAME` messages (1024
+messages): a quarter of a second of bundles at 60 fps that a busy machine read late all at once still passes."""
 
 
 class VmcSource(UdpSource):
     """Listens for a VMC protocol sender (VirtualMotionCapture, VSeeFace, XR Animator, Warudo, SlimeVR, mocopi
     bridges) on UDP ``host:port`` (default 127.0.0.1:39539); the wire format and the decoding are in
     :mod:`hapmotion.live.wire.vmc_in`, docs/vmc.md has the user's side. See :class:`UdpSource` for who may send.
-    Each sender's default budget is :data:`VMC_MESSAGE_BUDGET` x the frame rate, in bursts of four frames' worth;
+    Each sender's default budget is :data:`VMC_MESSAGE_BUDGET` x the frame rate, in bursts of
+    :data:`VMC_BURST_FRAMES` frames' worth (a bundle counts for the messages it holds);
     datagrams the decoder never reads (blend shapes, devices) are dropped unparsed before the budget. Several
     senders share one pose: stream one performer."""
 
@@ -212,7 +201,10 @@ class VmcSource(UdpSource):
         return VmcDecoder(engine.faults)
 
     def default_budget(self, rate: float) -> tuple[float, float]:
-        return VMC_MESSAGE_BUDGET * rate, max(burst_for(rate), 4.0 * VMC_MESSAGES_PER_FRAME)
+        return VMC_MESSAGE_BUDGET * rate, max(burst_for(rate), VMC_BURST_FRAMES * VMC_MESSAGES_PER_FRAME)
+
+    def cost(self, data: bytes) -> float:
+        return VmcDecoder.cost(data)
 
     def wants(self, data: bytes) -> bool:
         if self.decoder is not None and not self.decoder.wants(data):
@@ -228,173 +220,6 @@ def _count_refusal(engine: FrameInlet, kind: str, sender: str, budgets: SenderBu
         engine.faults.add("flood", f"{sender} sent more than {budgets.rate:g} messages/s; the excess is dropped")
     else:
         engine.faults.add(kind, f"{sender} is one sender too many (at most {budgets.max_senders} at once)")
-
-
-# ---------------------------------------------------------------------------------------------------- WebSocket
-# The websockets library logs every refused or failed handshake; the source counts those itself as faults, so its
-# messages go to a quiet child of the live logger (warnings and errors only).
-_WS_LOG = logging.getLogger("hapmotion.live.websockets")
-_WS_LOG.setLevel(logging.WARNING)
-
-
-class WsSource(Source):
-    """A WebSocket server on ``host:port`` that takes skeleton JSON text frames from a few senders.
-
-    Parameters
-    ----------
-    host:
-        Interface to listen on (loopback by default).
-    allow_origins:
-        Web page origins (``https://show.example``) allowed to connect. A browser always sends its page's
-        ``Origin`` and any other origin is refused (HTTP 403; checked by the websockets library's ``origins``), so a
-        web page the performer happens to open cannot drive the vest. A request without ``Origin`` comes from a
-        program, not a browser, and is allowed.
-    token:
-        Shared secret a sender must present in its opening request, as ``Authorization: Bearer <token>`` or as the
-        ``token`` query parameter (``ws://host:port/?token=...``, the only way for a browser); compared in
-        constant time. Others are refused with HTTP 401.
-    allow_senders:
-        Sender addresses allowed to connect (empty: any); others are refused with HTTP 403.
-    max_senders, sender_rate:
-        At most ``max_senders`` connections at once (others are refused with HTTP 503), each within
-        ``sender_rate`` messages per second (default :data:`~hapmotion.live.access.WS_MESSAGE_BUDGET` x the frame
-        rate; the excess is counted as ``flood`` and never decoded). A sender that is streaming keeps its place and
-        budget however many others try to connect.
-    max_size:
-        Messages over this many bytes close that sender's connection (code 1009); others are not affected.
-    """
-
-    def __init__(self, host: str = WS_IN.host, port: int = WS_IN.port, max_size: int = 2 ** 16, *,
-                 allow_origins: Sequence[str] = (), token: Optional[str] = None,
-                 allow_senders: Optional[SenderAllowList] = None, max_senders: int = MAX_SENDERS,
-                 sender_rate: Optional[float] = None):
-        if max_senders < 1:
-            raise UsageError(f"--max-senders must be at least 1, got {max_senders}")
-        self.host, self.port, self.max_size = host, port, max_size
-        self.name = f"ws://{host}:{port}"
-        self.allow_origins = tuple(allow_origins)
-        self.token = token or None
-        self.allow_senders = allow_senders or SenderAllowList()
-        self.max_senders = max_senders
-        self.sender_rate = sender_rate
-        self._server: Optional[Server] = None
-        self._rate = 0.0
-        self._burst = 0.0
-        self._slots: set[ServerConnection] = set()  # accepted or being accepted, not yet finished
-        self._refused: "weakref.WeakSet[ServerConnection]" = weakref.WeakSet()  # refusals already counted
-
-    async def start(self, engine: FrameInlet) -> None:
-        await super().start(engine)
-        self._rate = self.sender_rate or WS_MESSAGE_BUDGET * engine.rate
-        self._burst = burst_for(engine.rate)
-        try:
-            self._server = await serve(self._handler, self.host, self.port, compression=None,
-                                       max_size=self.max_size, max_queue=4, close_timeout=1.0,
-                                       origins=[None, *self.allow_origins], process_request=self._check_request,
-                                       process_response=self._check_response, logger=_WS_LOG)
-        except OSError as exc:
-            raise UsageError(f"--source {self.name}: cannot listen ({exc.strerror or exc})") from None
-        self.port = self._server.sockets[0].getsockname()[1]
-        self.name = f"ws://{self.host}:{self.port}"
-        if not is_loopback(self.host) and not self.token:
-            log.warning("%s: reachable from %s without a token: anyone who can connect may drive the vest; "
-                        "set --token (or HAPMOTION_LIVE_TOKEN)", self.name, reach(self.host))
-
-    @property
-    def senders(self) -> int:
-        """Connections served now (or being accepted)."""
-        return len(self._slots)
-
-    def exposure(self) -> str:
-        return exposure_line(self.host, self.allow_senders, max_senders=self.max_senders, budget=self._rate,
-                             origins=self.allow_origins, token=self.token)
-
-    def _refuse(self, conn: ServerConnection, status: HTTPStatus, kind: str, detail: str) -> Response:
-        self._refused.add(conn)
-        self.engine.faults.add(kind, detail)
-        return conn.respond(status, f"{status.phrase}: {detail}\n")
-
-    def _check_request(self, conn: ServerConnection, request: Request) -> Optional[Response]:
-        """Before the handshake: sender address, token, room. (The Origin is checked next, by the library.)"""
-        sender = _address(conn)
-        if not self.allow_senders.allows(sender):
-            return self._refuse(conn, HTTPStatus.FORBIDDEN, "sender_refused",
-                                f"a connection from {sender}, which is not in --allow-sender")
-        if self.token is not None:
-            given = bearer_token(request.headers.get(TOKEN_HEADER))
-            if given is None:
-                given = _query_value(request.path, TOKEN_QUERY)
-            if not token_matches(self.token, given):
-                return self._refuse(conn, HTTPStatus.UNAUTHORIZED, "token_refused",
-                                    f"a connection from {sender} without the right token")
-        self._slots = {c for c in self._slots if c.state is not State.CLOSED}
-        if len(self._slots) >= self.max_senders:
-            return self._refuse(conn, HTTPStatus.SERVICE_UNAVAILABLE, "too_many_senders",
-                                f"a connection from {sender}: {self.max_senders} senders are already connected")
-        self._slots.add(conn)
-        return None
-
-    def _check_response(self, conn: ServerConnection, request: Request, response: Response) -> None:
-        """After the handshake decision: count the library's refusals (a browser Origin that is not allowed)."""
-        if response.status_code == HTTPStatus.SWITCHING_PROTOCOLS:
-            return
-        self._slots.discard(conn)
-        if conn in self._refused:
-            return
-        origin = request.headers.get("Origin")
-        if response.status_code == HTTPStatus.FORBIDDEN and origin is not None:
-            self.engine.faults.add("origin_refused", f"a browser page from {origin!r}, which is not in "
-                                                     f"--allow-origin")
-        else:
-            self.engine.faults.add("handshake", f"a connection from {_address(conn)} refused with "
-                                                f"HTTP {response.status_code}")
-
-    async def _handler(self, conn: ServerConnection) -> None:
-        engine = self.engine
-        budget = RateLimiter(self._rate, self._burst)
-        # Refused messages use up a second bucket of the same size: a sender that keeps sending at more than twice
-        # its budget is disconnected, so reading its flood stops costing the event loop anything.
-        strikes = RateLimiter(self._rate, self._burst)
-        sender = _address(conn)
-        try:
-            async for message in conn:
-                now = time.perf_counter()
-                if not budget.allow(now):
-                    engine.stats.flood += 1
-                    engine.faults.add("flood", f"{sender} sent more than {self._rate:g} messages/s; the excess "
-                                               f"is dropped")
-                    if not strikes.allow(now):
-                        engine.faults.add("flood_closed", f"{sender} kept sending over twice its budget: "
-                                                          f"disconnected")
-                        await conn.close(CloseCode.POLICY_VIOLATION, "over the message budget")
-                        return
-                    continue
-                frame = decode_ws_skeleton(message, now, engine.faults)
-                if frame is not None:
-                    engine.submit(frame)
-        except ConnectionClosed as exc:
-            if exc.rcvd is None or exc.rcvd.code not in (1000, 1001):
-                engine.faults.add("connection", f"a sender's connection ended abnormally ({exc})")
-        finally:
-            self._slots.discard(conn)
-
-    async def close(self) -> None:
-        if self._server is not None:
-            self._server.close()
-            try:
-                await asyncio.wait_for(self._server.wait_closed(), 1.5)
-            except asyncio.TimeoutError:
-                pass
-
-
-def _address(conn: ServerConnection) -> str:
-    peer = conn.remote_address
-    return str(peer[0]) if peer else "?"
-
-
-def _query_value(path: str, name: str) -> Optional[str]:
-    values = parse_qs(urlsplit(path).query).get(name)
-    return values[-1] if values else None
 
 
 def network_source(ep: Endpoint, *, allow_origins: Sequence[str] = (), token: Optional[str] = None,

@@ -26,7 +26,6 @@ import numpy as np
 
 from .cues import MAX_GAIN, Cue, CueList, layer, pattern_rows
 from ..track import HapticTrack
-from ..track_files import load_track
 
 log = logging.getLogger("hapmotion.live")
 
@@ -64,7 +63,7 @@ class LiveCues:
         self._energy: dict[tuple, np.ndarray] = {}
         for cue in cue_list.cues:
             if cue.pattern not in self._tracks:
-                self._tracks[cue.pattern] = load_track(cue.pattern, limits=cue_list.limits)
+                self._tracks[cue.pattern] = cue_list.pattern(cue.pattern)  # read once, by load_cues
         keys = [self._prepare(cue) for cue in cue_list.cues]
         self._keys = keys
         self._starts = np.array([int(round(c.time_s * self.fps)) for c in cue_list.cues], dtype=np.int64)

@@ -18,6 +18,12 @@ fire a cue by name). Pattern paths are relative to the cue list's folder.
 
 Pattern devices the show's layout does not have (a head or hand pattern on a vest show) are left out and noted.
 
+**Bounded work.** Every cue lays its whole pattern on the timeline, so the work of a cue list is the rows of all
+its cues together: the same one-hour pattern cued 100 times is 100 hours of rows. :func:`load_cues` reads each
+pattern file once and refuses a list whose cues hold more rows in all (each cue counting its pattern's rows at the
+pattern's own rate) than the ``frames`` limit (:class:`~hapmotion.limits.InputLimits`; 500,000 by default, 2.8 h
+at 50 fps), with one line that names the limit and how to raise it.
+
 **The layering rule** (:func:`layer`): the cue layer is added to the show's mixed motion and music in the energy
 domain, ``I = sqrt(I_show^2 + sum_k (g_k I_k)^2)`` per motor, clipped to 0..100, then limited to the same total
 power as the show (``sum (I/100)^2 <= limit``). Energy adds where vibrations overlap (two equal sources read as
@@ -37,7 +43,7 @@ import numpy as np
 
 from ..audio.mix import limit_power
 from ..errors import InputError
-from ..limits import DEFAULT_LIMITS, InputLimits, LimitsArg, as_limits, loads_json
+from ..limits import DEFAULT_LIMITS, InputLimits, LimitsArg, as_limits, loads_json, over_limit
 from ..track import HapticTrack, parse_actuator_id
 from ..track_files import load_track
 
@@ -71,6 +77,14 @@ class CueList:
     source: Path
     notes: list[str] = field(default_factory=list)
     limits: InputLimits = DEFAULT_LIMITS  # the pattern files are read within these
+    patterns: dict[Path, HapticTrack] = field(default_factory=dict)
+    """Each pattern file, read once (by :func:`load_cues`)."""
+
+    def pattern(self, path: Path) -> HapticTrack:
+        """The pattern at ``path``, read within :attr:`limits` the first time it is asked for."""
+        if path not in self.patterns:
+            self.patterns[path] = load_track(path, self.limits)
+        return self.patterns[path]
 
     def by_name(self, name: str) -> Optional[Cue]:
         """The first cue called ``name`` (live shows fire cues by name), else ``None``."""
@@ -179,9 +193,20 @@ def load_cues(path: "str | os.PathLike[str]", limits: LimitsArg = None) -> CueLi
     if len(cues) > MAX_CUES:
         raise InputError(source, None, f"expected at most {MAX_CUES} cues, found {len(cues)}")
     for cue in cues:
-        if not cue.pattern.is_file():
+        try:
+            found = cue.pattern.is_file()
+        except OSError as exc:  # a name too long for the file system, ...
+            raise InputError(source, cue.place, f"expected a pattern file name, found one the system refuses "
+                                                f"({exc.strerror or exc})") from None
+        if not found:
             raise InputError(source, cue.place, f"expected a pattern file at {cue.pattern}, found none")
-    return CueList(sorted(cues, key=lambda c: c.time_s), source, limits=limits)
+    cue_list = CueList(sorted(cues, key=lambda c: c.time_s), source, limits=limits)
+    total = 0
+    for cue in cue_list.cues:
+        total += cue_list.pattern(cue.pattern).n_frames
+        over_limit(source, cue.place, "pattern rows in all cues together (each cue counts its pattern's rows)",
+                   total, limits, "frames")
+    return cue_list
 
 
 def pattern_rows(pattern: HapticTrack, *, fps: float, actuators: Sequence[str], mirror_map: np.ndarray,
@@ -215,16 +240,18 @@ def pattern_rows(pattern: HapticTrack, *, fps: float, actuators: Sequence[str], 
 def cue_layer(cue_list: CueList, *, fps: float, n_frames: int, actuators: Sequence[str],
               mirror_map: np.ndarray) -> np.ndarray:
     """Every cue of ``cue_list`` on one timeline: ``(n_frames, N)`` cue *energy* ``sum_k (g_k I_k / 100)^2``
-    (the quantity :func:`layer` adds), cues past the end cut off. Each pattern file is read once."""
+    (the quantity :func:`layer` adds), cues past the end cut off. Each pattern file is read and resampled once."""
     energy = np.zeros((n_frames, len(actuators)))
-    loaded: dict[Path, HapticTrack] = {}
+    resampled: dict[Path, HapticTrack] = {}  # each pattern at the show's rate, once
     for cue in cue_list.cues:
-        if cue.pattern not in loaded:
-            loaded[cue.pattern] = load_track(cue.pattern, cue_list.limits)
-        rows = pattern_rows(loaded[cue.pattern], fps=fps, actuators=actuators, mirror_map=mirror_map, cue=cue,
-                            notes=cue_list.notes)
         start = int(round(cue.time_s * fps))
-        if start >= n_frames or not rows.shape[0]:
+        if start >= n_frames:
+            continue
+        if cue.pattern not in resampled:
+            resampled[cue.pattern] = cue_list.pattern(cue.pattern).resample(fps)
+        rows = pattern_rows(resampled[cue.pattern], fps=fps, actuators=actuators, mirror_map=mirror_map, cue=cue,
+                            notes=cue_list.notes)
+        if not rows.shape[0]:
             continue
         stop = min(n_frames, start + rows.shape[0])
         energy[start:stop] += (rows[: stop - start] / 100.0) ** 2

@@ -45,7 +45,7 @@ def is_track_file(path: "str | os.PathLike[str]") -> bool:
         with open(p, "rb") as fh:
             # the whole header line for a CSV: a cut-off last column would be judged on a fragment
             head = (fh.readline(HEADER_MAX_BYTES) if ext == ".csv" else fh.read(SNIFF_BYTES))
-    except (OSError, zipfile.BadZipFile):
+    except (OSError, zipfile.BadZipFile, NotImplementedError, ValueError):  # (an unknown zip version: the former)
         return False  # the motion reader reports the problem in its own words
     text = head.decode("utf-8", errors="replace")
     if ext == ".csv":

@@ -49,13 +49,18 @@ class BroadcastSink(Sink):
         ``SO_SNDBUF`` of each client socket, bytes (None: the system default).
     pipe_limit:
         Bytes waiting in the pipe to the server process beyond which frames are skipped.
+    allow_origins:
+        Web page origins (``https://show.example``) allowed to watch, besides programs (no ``Origin`` header) and
+        pages opened from a file (``Origin: null``, what the pages of ``hapmotion view --live`` send) unless
+        ``local_pages`` is False. Every other browser page is refused (HTTP 403, counted as ``origins refused``), so
+        a web site the audience happens to open cannot read the show.
     """
 
     def __init__(self, actuators: Sequence[str], layout: str = DEFAULT_LAYOUT_NAME, *,
                  host: str = WS_BROADCAST.host, port: int = WS_BROADCAST.port, fps: float = 60.0,
                  client_buffer: int = 65536, slow_client_s: float = 5.0, sndbuf: Optional[int] = 65536,
                  name: Optional[str] = None, render_info: Optional[dict[str, Any]] = None, pipe_limit: int = 65536,
-                 **kwargs: Any):
+                 allow_origins: Sequence[str] = (), local_pages: bool = True, **kwargs: Any):
         super().__init__(name or f"ws-broadcast ws://{host}:{port}", fps=fps, **kwargs)
         self.host, self.port = host, port
         self.hello = broadcast_hello(fps, actuators, layout, render_info)
@@ -63,6 +68,7 @@ class BroadcastSink(Sink):
         self.slow_client_s = slow_client_s
         self.sndbuf = sndbuf
         self.pipe_limit = pipe_limit
+        self.origins: list[Optional[str]] = [None, *(["null"] if local_pages else []), *allow_origins]
         self.bound: Optional[int] = None
         self._proc: Optional[asyncio.subprocess.Process] = None
         self._reports: Optional[asyncio.Task] = None
@@ -70,7 +76,7 @@ class BroadcastSink(Sink):
         self._last_error = ""  # the server process's last line on stderr (a crash)
         self._ended = False  # the server process is gone
         self._stopping = False
-        self.stats.extra.update(clients=0, client_skips=0, clients_dropped=0)
+        self.stats.extra.update(clients=0, client_skips=0, clients_dropped=0, origins_refused=0)
 
     @property
     def bound_port(self) -> int:
@@ -83,7 +89,7 @@ class BroadcastSink(Sink):
     async def start(self) -> None:
         self._proc = await asyncio.create_subprocess_exec(
             sys.executable, "-c", _LAUNCH, str(SERVER), self.host, str(self.port), str(self.client_buffer),
-            str(self.slow_client_s), str(self.sndbuf or 0),
+            str(self.slow_client_s), str(self.sndbuf or 0), json.dumps(self.origins),
             stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE)
         assert self._proc.stdout is not None and self._proc.stdin is not None
         try:
@@ -153,7 +159,10 @@ class BroadcastSink(Sink):
         if rep.get("clients_dropped", 0) > extra["clients_dropped"]:
             self.warn_once("dropped", "disconnecting viewers that have not read for %.1f s (counted as clients "
                                       "dropped)", self.slow_client_s)
-        for key in ("clients", "client_skips", "clients_dropped"):
+        if rep.get("origins_refused", 0) > extra["origins_refused"]:
+            self.warn_once("origin", "a browser page from an origin not allowed to watch was refused (allow it with "
+                                     "the sink option allow_origin=ORIGIN)")
+        for key in ("clients", "client_skips", "clients_dropped", "origins_refused"):
             extra[key] = int(rep.get(key, extra[key]))
         for lat in rep.get("latency", ()):
             self.stats.latency.add(float(lat))

@@ -5,14 +5,16 @@ the slow ones). In the session's process it would share the interpreter lock and
 sinks, and a thousand viewers that never read did cost the Players tens of milliseconds. Here it costs the session
 one pipe write per frame; the operating system spreads the two processes over the cores.
 
-This file is run by path (``python broadcast_server.py HOST PORT CLIENT_BUFFER SLOW_S SNDBUF``) and imports
-nothing from hapmotion, so it starts in a fraction of a second.
+This file is run by path (``python broadcast_server.py HOST PORT CLIENT_BUFFER SLOW_S SNDBUF ORIGINS``) and imports
+nothing from hapmotion, so it starts in a fraction of a second. ``ORIGINS`` is a JSON list of the ``Origin`` header
+values allowed to watch (``null`` in the list: a request without one, from a program); any other browser page, and
+a request with two ``Origin`` headers, is refused with HTTP 403 and counted (``origins_refused``).
 
 Pipes, session → server (stdin): records of a 4-byte big-endian length and a payload: ``H`` + the hello message,
 ``F`` + 8-byte big-endian double (``time.perf_counter`` when the source read the frame, NaN for none) + the frame
 message, ``S`` (stop: send ``stop`` to every viewer, close, exit). End of input (the session died) also stops it.
 Server → session (stdout): JSON lines, ``{"port": P}`` or ``{"error": "..."}`` first, then every 0.25 s and at
-exit ``{"clients", "client_skips", "clients_dropped", "sent", "latency"}`` (counters so far; latency samples in
+exit ``{"clients", "client_skips", "clients_dropped", "origins_refused", "sent", "latency"}`` (counters so far; latency samples in
 seconds since the previous line: frame read → written to the viewers; ``perf_counter`` is the system-wide
 monotonic clock on Linux, so the two processes share it).
 """
@@ -27,11 +29,13 @@ import socket
 import struct
 import sys
 import time
-from typing import Optional
+from http import HTTPStatus
+from typing import Optional, Sequence
 
 from websockets.asyncio.connection import broadcast
 from websockets.asyncio.server import ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
+from websockets.http11 import Request, Response
 
 _LENGTH = struct.Struct(">I")
 _TIME = struct.Struct(">d")
@@ -39,16 +43,28 @@ REPORT_S = 0.25
 
 
 class ViewerServer:
-    def __init__(self, host: str, port: int, client_buffer: int, slow_client_s: float, sndbuf: int):
+    def __init__(self, host: str, port: int, client_buffer: int, slow_client_s: float, sndbuf: int,
+                 origins: Sequence[Optional[str]] = (None,)):
         self.host, self.port = host, port
+        self.origins = frozenset(origins)
         self.client_buffer = client_buffer
         self.slow_client_s = slow_client_s
         self.sndbuf = sndbuf
         self.hello = ""
         self.clients: dict[ServerConnection, Optional[float]] = {}  # client -> time it started lagging
-        self.counts = {"clients": 0, "client_skips": 0, "clients_dropped": 0, "sent": 0}
+        self.counts = {"clients": 0, "client_skips": 0, "clients_dropped": 0, "origins_refused": 0,
+                       "sent": 0}
         self.latency: list[float] = []
         self.server = None
+
+    def check_origin(self, conn: ServerConnection, request: Request) -> Optional[Response]:
+        """Before the handshake: a browser page's ``Origin`` must be one of :attr:`origins` (one header only)."""
+        given = request.headers.get_all("Origin")
+        if len(given) <= 1 and (given[0] if given else None) in self.origins:
+            return None
+        self.counts["origins_refused"] += 1
+        why = "two Origin headers" if len(given) > 1 else f"Origin {given[0][:80]!r} is not allowed to watch"
+        return conn.respond(HTTPStatus.FORBIDDEN, f"Forbidden: {why}\n")
 
     async def handler(self, conn: ServerConnection) -> None:
         sock = conn.transport.get_extra_info("socket")
@@ -128,7 +144,7 @@ class ViewerServer:
         try:
             self.server = await serve(self.handler, self.host, self.port, compression=None, max_size=2 ** 16,
                                       max_queue=4, close_timeout=1.0, ping_interval=20, ping_timeout=20,
-                                      logger=_silent_logger())
+                                      process_request=self.check_origin, logger=_silent_logger())
         except OSError as exc:
             sys.stdout.write(json.dumps({"error": exc.strerror or str(exc)}) + "\n")
             sys.stdout.flush()
@@ -180,5 +196,6 @@ if __name__ == "__main__":
     for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT"):
         if hasattr(signal, name):
             signal.signal(getattr(signal, name), signal.SIG_IGN)
-    host, port, client_buffer, slow_s, sndbuf = sys.argv[1:6]
-    asyncio.run(ViewerServer(host, int(port), int(client_buffer), float(slow_s), int(sndbuf)).main())
+    host, port, client_buffer, slow_s, sndbuf, origins = sys.argv[1:7]
+    asyncio.run(ViewerServer(host, int(port), int(client_buffer), float(slow_s), int(sndbuf),
+                             json.loads(origins)).main())

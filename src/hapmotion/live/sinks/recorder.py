@@ -12,7 +12,9 @@ target, ``PATH.journal.csv`` (:mod:`.journal`: a CSV track, readable as it is af
 the take is written in the requested format by ``hapmotion.track_files.save_track`` (extension picks .csv .json
 .npz .tact; atomic: a temporary file renamed into place), off the event loop, and only then is the journal
 removed. A session refuses to start while an earlier take's journal is still there, so an unfinished take is
-never overwritten. The path is checked before the show (not a folder, its folder writable); if saving still fails
+never overwritten. A full disk costs the journal only the rows written while it lasts: it is said once, the journal
+goes on when space returns (said once more), and the rows it missed are in the session summary
+(``journal rows lost``, ``journal gaps`` in seconds of the take); the take itself is kept whole in memory. The path is checked before the show (not a folder, its folder writable); if saving still fails
 at stop, ``recording not saved: ...`` is logged (naming the journal that keeps the take) and kept in
 :attr:`RecorderSink.error` (the CLI then exits non-zero).
 """
@@ -150,11 +152,31 @@ class RecorderSink(Sink):
             self._fill(self._n, k_now, self._last)
         upto = self._n if final else min(self._n, k_now)
         if upto > self._committed and self._journal is not None:
-            self._journal.append(format_rows(self._committed, self._rows(self._committed, upto), self.fps))
+            self._journal.append(format_rows(self._committed, self._rows(self._committed, upto), self.fps),
+                                 self._committed)
             self._committed = upto
-            if self._journal.error is not None:
-                self.warn_once("journal", "the journal %s could not be written (%s); the take is kept in memory "
-                               "and written at stop", self.journal_path, self._journal.error)
+            self._watch_journal()
+
+    def _watch_journal(self) -> None:
+        """Say once when the journal meets a write error (a full disk) and once when it writes again; keep the
+        rows it lost in the sink's figures (the session summary prints them)."""
+        journal = self._journal
+        if journal is None or journal.error is None:
+            return
+        self.warn_once("journal", "the journal %s could not be written (%s); the take is kept in memory and "
+                       "written at stop, and the journal goes on when the disk has room again", self.journal_path,
+                       journal.error)
+        if journal.lost:
+            self.stats.extra["journal_rows_lost"] = journal.lost_rows
+            self.stats.extra["journal_gaps"] = self.lost_spans(journal.lost)
+        if not journal.failing and journal.lost:
+            self.warn_once("journal_back", "the journal %s is written again; %d rows (%s) are missing from it",
+                           self.journal_path, journal.lost_rows, self.lost_spans(journal.lost))
+
+    def lost_spans(self, lost: Sequence[tuple[int, int]]) -> str:
+        """``"3.20-5.00 s, 9.00-9.50 s"``: row ranges as seconds of the take (at most three, then how many more)."""
+        spans = [f"{a / self.fps / self.time_scale:.2f}-{b / self.fps / self.time_scale:.2f} s" for a, b in lost[:3]]
+        return ", ".join(spans) + (f" and {len(lost) - 3} more" if len(lost) > 3 else "")
 
     async def run(self) -> None:
         while True:
@@ -175,20 +197,28 @@ class RecorderSink(Sink):
         self._advance(time.perf_counter())  # the silent tail up to the stop is held ...
         self._fill(self._n, self._n + 1, np.zeros(len(self.actuators)))  # ... then the turn-off
         self._advance(time.perf_counter(), final=True)
-        journal, self._journal = self._journal, None
+        journal = self._journal
         if journal is not None:
             await asyncio.to_thread(journal.close)
+            self._watch_journal()
+            self._journal = None
         track = HapticTrack(intensities=self.rows(), fps=self.fps, actuators=self.actuators, layout=self.layout,
                             meta={**self.meta, "live": True})
         try:
             await asyncio.to_thread(save_track, track, self.path)
         except Exception as exc:  # the show is over; say so loudly rather than lose the take silently
             self.error = str(exc) or exc.__class__.__name__
-            kept = (f"; the take is kept in {journal.path} (a CSV track)"
-                    if journal is not None and journal.error is None else "")
+            kept = ""
+            if journal is not None:
+                missing = (f", missing {journal.lost_rows} rows ({self.lost_spans(journal.lost)}) the full disk kept "
+                           "out" if journal.lost else "")
+                kept = f"; the take is kept in {journal.path} (a CSV track{missing})"
             log.error("%s: recording not saved: %s%s", self.name, self.error, kept)
             return
         if journal is not None:
             journal.remove()
         self.saved = self.path
         log.info("%s: %d rows (%.1f s) written", self.name, track.n_frames, track.duration)
+        if journal is not None and journal.lost:
+            log.warning("%s: the journal missed %d rows (%s) while the disk was full; the file written at stop has "
+                        "every row", self.name, journal.lost_rows, self.lost_spans(journal.lost))

@@ -88,6 +88,11 @@ VMC_MESSAGES_PER_FRAME = 64
 """Datagrams a sender that does not bundle needs per frame for what this decoder reads: the root, 55 bones (and
 LastBone), OK and the time."""
 
+VMC_BYTES_PER_MESSAGE = 64
+"""A bundle counts one message per this many bytes in its sender's budget (:meth:`VmcDecoder.cost`): a bone
+message in a bundle takes 68 to 84 (a 4-byte size, the 20-byte address, a 12-byte type tag, the bone's name and
+seven 4-byte floats), so a frame's bundle counts about what the same bones sent one per datagram would."""
+
 _ROOT = N_BONES  # index of the avatar root in the pose lists (after the 55 bones)
 _MAPPED = tuple((JOINT_INDEX[j], BONE_INDEX[b]) for j, b in UNITY_HUMANOID.items())
 # Bones whose world pose is needed: the mapped ones and the spine candidates (their ancestors come along).
@@ -176,6 +181,12 @@ class VmcDecoder:
         if dgram.startswith(b"#bundle\0"):
             return any(p in dgram for p in _WANTED_PREFIXES)
         return True  # not OSC: the decoder counts it
+
+    @staticmethod
+    def cost(dgram: bytes) -> float:
+        """What a datagram counts in its sender's budget, in messages: 1 for a message, a bundle's bytes over
+        :data:`VMC_BYTES_PER_MESSAGE` (a 60 KB bundle counts as the 900-odd messages it can hold, not as one)."""
+        return max(1.0, len(dgram) / VMC_BYTES_PER_MESSAGE) if dgram.startswith(b"#bundle\0") else 1.0
 
     def feed(self, dgram: bytes, received: float) -> list[SkeletonFrame]:
         """Decode one datagram (a message or a bundle); return the frames it completes (usually zero or one)."""
