@@ -8,17 +8,34 @@
     rows = mix(motion_rows, audio_rows, ratio=(2, 3), rule="duck", positions=layout.positions())  # per frame or (T, N)
 
 docs/audio.md explains every parameter, the spatial mapping and the mix; hapmotion.show composes a show from it.
+
+Every name is imported on first use: the analysis pulls in scipy's signal and ndimage (about 0.5 s and 50 MB),
+which a command that only mixes or parses a mix ratio (``hapmotion --help``, ``info``, a live session) never needs.
 """
 
-from .analysis import AudioAnalysis, analyze_file, analyze_signal
-from .io import mp3_supported
-from .mix import DEFAULT_RATIO, check_ratio, limit_power, mix, parse_mix_ratio, resolve_rule
-from .params import (DEFAULT_PARAMS, MIX_RULES, PAPER_PARAMS, SPATIAL_MAPPINGS, AudioParams,
-                     params_for_preset)
-from .pattern import audio_track, kick_frames, region_weights
+from __future__ import annotations
 
-__all__ = [
-    "AudioAnalysis", "AudioParams", "DEFAULT_PARAMS", "DEFAULT_RATIO", "MIX_RULES", "PAPER_PARAMS",
-    "SPATIAL_MAPPINGS", "analyze_file", "analyze_signal", "audio_track", "check_ratio", "kick_frames", "limit_power", "mix", "mp3_supported", "params_for_preset", "parse_mix_ratio",
-    "region_weights", "resolve_rule",
-]
+import importlib
+from typing import Any
+
+_LAZY = {
+    "AudioAnalysis": "analysis", "analyze_file": "analysis", "analyze_signal": "analysis",
+    "mp3_supported": "io",
+    "DEFAULT_RATIO": "mix", "check_ratio": "mix", "limit_power": "mix", "mix": "mix", "parse_mix_ratio": "mix",
+    "resolve_rule": "mix",
+    "DEFAULT_PARAMS": "params", "MIX_RULES": "params", "PAPER_PARAMS": "params", "SPATIAL_MAPPINGS": "params",
+    "AudioParams": "params", "params_for_preset": "params",
+    "audio_track": "pattern", "kick_frames": "pattern", "region_weights": "pattern",
+}
+
+__all__ = sorted(_LAZY)
+
+
+def __getattr__(name: str) -> Any:
+    try:
+        module = _LAZY[name]
+    except KeyError:
+        raise AttributeError(f"module 'hapmotion.audio' has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value

@@ -8,9 +8,8 @@ from typing import Optional
 
 import click
 
-from ..track_files import save_track
 from ..errors import UsageError
-from ..show import Show, render_show
+from ..show.settings import Show
 from .motion_options import motion_options, read_motion
 from .show_options import show_options
 
@@ -40,6 +39,11 @@ def command(motion_file: Optional[str], output: str, show: Show, motion_opts: di
     """
     if motion_file is None and show.audio is None:
         raise UsageError("give a MOTION_FILE to render, or --audio SONG for the music alone")
+    # imported here, not at the top: rendering pulls in the music analysis (scipy), which `hapmotion --help` and
+    # every other command's start-up would otherwise pay for
+    from ..show import render_show
+    from ..track_files import save_track
+
     mode = show.resolved_mode(motion_file is not None)
     out_path = Path(output)
     motion = None
