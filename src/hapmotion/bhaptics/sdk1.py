@@ -55,14 +55,18 @@ class V2FrameTemplate:
                               "}" + (tail if i == len(device_cols) - 1 else "")))
             cols += [int(c) for c in device_cols]
         self._cols = np.array(cols, dtype=np.int64)
-        self._rows = np.arange(len(cols))
-        self._dots = np.array([[f"{before}{v}{after}" for v in range(101)] for before, after in texts],
-                              dtype=object).reshape(len(texts), 101)  # text of dot k at intensity v
+        self._base = np.arange(len(cols), dtype=np.int64) * 101
+        # text of dot k at intensity v: _dots[k * 101 + v]
+        self._dots = np.array([f"{before}{v}{after}" for before, after in texts for v in range(101)], dtype=object)
 
     def message(self, row: np.ndarray) -> str:
         """The request that plays ``row`` ((N,) 0..100 floats of the device map's columns; NaN counts as 0)."""
-        values = np.rint(np.clip(np.nan_to_num(row[self._cols], nan=0.0), 0.0, 100.0)).astype(np.int64)
-        return '{"Submit":[' + "".join(self._dots[self._rows, values].tolist()) + "]}"
+        v = row[self._cols]  # a copy (fancy indexing), changed in place below
+        v[np.isnan(v)] = 0.0  # what player_json.to_int_percent does, without its slower nan_to_num and clip
+        np.maximum(v, 0.0, out=v)
+        np.minimum(v, 100.0, out=v)
+        np.rint(v, out=v)
+        return '{"Submit":[' + "".join(self._dots.take(self._base + v.astype(np.int64)).tolist()) + "]}"
 
 
 def v2_frame_message(row: np.ndarray, dmap: DeviceMap, duration_ms: int, key_prefix: str = "hapmotion") -> str:
