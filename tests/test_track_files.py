@@ -277,12 +277,21 @@ def _reference_tact_doc(name: str, type_name: str, rows: dict, duration_ms: int)
 
 def _assert_same_as_reference(track: HapticTrack, tmp_path) -> int:
     """Save ``track`` as .tact and compare every file with the reference writer's bytes; returns the files."""
-    from hapmotion.bhaptics.tact.files import _files
+    from hapmotion.bhaptics.devices import type_for_position
 
     path = tmp_path / "show.tact"
     written = save_track(track, path)
     ticked = track.resample(50.0)
-    for target, (type_name, devs) in _files(track, path).items():
+    plan: dict = {}  # as documented: the vest in show.tact, every other device in show.<position>.tact
+    for dev in track.devices():
+        type_name = type_for_position(dev, len(track.device_columns(dev))).name
+        target = path if type_name == "Tactot" else path.with_name(f"show.{dev}.tact")
+        plan.setdefault(target, (type_name, []))[1].append(dev)
+    if path not in plan:  # no vest: the first device's file takes the plain name
+        first = next(iter(plan))
+        plan = {(path if k == first else k): v for k, v in plan.items()}
+    assert sorted(plan) == sorted(written)
+    for target, (type_name, devs) in plan.items():
         doc = _reference_tact_doc("show", type_name, {d: ticked.intensities[:, ticked.device_columns(d)] for d in devs},
                                   ticked.n_frames * 20)
         assert target.read_bytes() == json.dumps(doc, separators=(",", ":")).encode()
