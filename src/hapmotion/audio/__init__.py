@@ -9,8 +9,10 @@
 
 docs/audio.md explains every parameter, the spatial mapping and the mix; hapmotion.show composes a show from it.
 
-Every name is imported on first use: the analysis pulls in scipy's signal and ndimage (about 0.5 s and 50 MB),
-which a command that only mixes or parses a mix ratio (``hapmotion --help``, ``info``, a live session) never needs.
+The analysis, the audio track and the decoder are imported on first use: the analysis pulls in scipy's signal and
+ndimage (about 0.5 s and 50 MB), which a command that only mixes or parses a mix ratio (``hapmotion --help``,
+``info``, a live session) never needs. The mix and the parameters are light and imported here (``mix`` must be
+bound here: importing the submodule ``hapmotion.audio.mix`` would otherwise leave the module under that name).
 """
 
 from __future__ import annotations
@@ -18,17 +20,19 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from .mix import DEFAULT_RATIO, check_ratio, limit_power, mix, parse_mix_ratio, resolve_rule
+from .params import (DEFAULT_PARAMS, MIX_RULES, PAPER_PARAMS, SPATIAL_MAPPINGS, AudioParams,
+                     params_for_preset)
+
 _LAZY = {
     "AudioAnalysis": "analysis", "analyze_file": "analysis", "analyze_signal": "analysis",
     "mp3_supported": "io",
-    "DEFAULT_RATIO": "mix", "check_ratio": "mix", "limit_power": "mix", "mix": "mix", "parse_mix_ratio": "mix",
-    "resolve_rule": "mix",
-    "DEFAULT_PARAMS": "params", "MIX_RULES": "params", "PAPER_PARAMS": "params", "SPATIAL_MAPPINGS": "params",
-    "AudioParams": "params", "params_for_preset": "params",
     "audio_track": "pattern", "kick_frames": "pattern", "region_weights": "pattern",
 }
 
-__all__ = sorted(_LAZY)
+__all__ = sorted([*_LAZY, "AudioParams", "DEFAULT_PARAMS", "DEFAULT_RATIO", "MIX_RULES", "PAPER_PARAMS",
+                  "SPATIAL_MAPPINGS", "check_ratio", "limit_power", "mix", "params_for_preset", "parse_mix_ratio",
+                  "resolve_rule"])
 
 
 def __getattr__(name: str) -> Any:
