@@ -332,6 +332,9 @@ def test_tact_writer_edge_cases_match_the_reference(tmp_path):
         "every_value": np.tile(np.arange(101.0), (52, 1)).T,  # every quantised intensity 0..100 on every motor
         "noise": rng.uniform(0, 100, (300, 52)) * (rng.uniform(size=(300, 52)) > 0.6),
         "half_percents": np.tile(np.arange(0.0, 100.0, 0.5), (52, 1)).T,  # rint ties round to even
+        # more frames than the writer turns into text at a time (8192), with silent ticks between
+        "many_frames": rng.uniform(0, 30, (20_000, 52)) * (np.arange(20_000)[:, None] % 7 != 3),
+        "low_levels": rng.integers(0, 3, (9000, 52)).astype(float),  # a table of only three levels
     }
     for name, rows in cases.items():
         (tmp_path / name).mkdir()

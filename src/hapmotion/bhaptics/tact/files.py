@@ -75,11 +75,13 @@ def _feedback_json(rows: np.ndarray) -> str:
 
     Runs of identical ticks become one frame ``{"startTime":..,"endTime":..,"playbackType":"NONE","pointList":
     [{"index":i,"intensity":x},..]}`` (silent runs left out), intensities quantised to 1 % as ``round(q / 100, 2)``.
-    Built from tables of preformatted pieces, one numpy pass per piece, instead of a dict per frame and a
-    ``json.dumps`` over them: an hour of ticks is written about 7x faster.
+    Built from a table of every point's text (``{"index":i,"intensity":x}`` for each motor and level, with and
+    without the comma before it), picked by numpy for every point of a block of frames and joined, instead of a dict
+    per frame and point and a ``json.dumps`` over them: an hour of ticks is written several times faster, and no
+    string is made per point (the memory is the output text and one block's references).
     """
     q = np.rint(rows).astype(np.int64)
-    n = q.shape[0]
+    n, m = q.shape
     if n == 0:
         return "[]"
     change = np.ones(n, dtype=bool)
@@ -91,21 +93,28 @@ def _feedback_json(rows: np.ndarray) -> str:
     starts, ends, runs = starts[keep], ends[keep], runs[keep]
     if not len(starts):
         return "[]"
-    run_of, motor = np.nonzero(runs)  # row-major: by run, then by motor, as the pointList lists them
-    values, which = np.unique(runs[run_of, motor], return_inverse=True)
+    levels = int(runs.max()) + 1  # rows are 0..100, so at most 101
     # np.int64 / 100.0 rounded by numpy, exactly as the frames were always written
-    value_text = np.array([f"{json.dumps(round(v / 100.0, 2))}}}" for v in values], dtype=object)
-    index_text = np.array([f'{{"index":{i},"intensity":' for i in range(q.shape[1])], dtype=object)
-    last_of_run = np.ones(len(run_of), dtype=bool)
-    last_of_run[:-1] = run_of[1:] != run_of[:-1]
-    sep = np.where(last_of_run, "]},", ",").astype(object)
-    sep[-1] = "]}"
-    cells = index_text[motor] + value_text[which.ravel()] + sep
-    heads = np.array([f'{{"startTime":{s * PLAYER_TICK_MS},"endTime":{e * PLAYER_TICK_MS},'
-                      f'"playbackType":"NONE","pointList":['
-                      for s, e in zip(starts.tolist(), ends.tolist())], dtype=object)
-    first_cell = np.flatnonzero(np.append(True, last_of_run[:-1]))
-    return "[" + "".join(np.insert(cells, first_cell, heads).tolist()) + "]"
+    value = [json.dumps(round(np.int64(v) / 100.0, 2)) for v in range(levels)]
+    point = np.array([f'{comma}{{"index":{i},"intensity":{value[v]}}}' for comma in ("", ",") for i in range(m)
+                      for v in range(levels)], dtype=object)  # point[(comma * m + i) * levels + v]
+    out = []
+    for b0 in range(0, len(starts), _RUNS_PER_BLOCK):
+        block = runs[b0:b0 + _RUNS_PER_BLOCK]
+        run_of, motor = np.nonzero(block)  # row-major: by run, then by motor, as the pointList lists them
+        first = np.ones(len(run_of), dtype=bool)
+        first[1:] = run_of[1:] != run_of[:-1]
+        cells = point.take((~first * m + motor) * levels + block[run_of, motor])
+        heads = [f'{"" if b0 + k == 0 else "]},"}{{"startTime":{s * PLAYER_TICK_MS},"endTime":{e * PLAYER_TICK_MS},'
+                 '"playbackType":"NONE","pointList":['
+                 for k, (s, e) in enumerate(zip(starts[b0:b0 + len(block)].tolist(),
+                                                ends[b0:b0 + len(block)].tolist()))]
+        out.append("".join(np.insert(cells, np.flatnonzero(first), heads).tolist()))
+    return "[" + "".join(out) + "]}]"
+
+
+_RUNS_PER_BLOCK = 8192
+"""Frames of one position turned into text at a time by :func:`_feedback_json` (bounds its temporary arrays)."""
 
 
 def _project(name: str, type_name: str, duration_ms: int) -> dict:
