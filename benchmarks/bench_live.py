@@ -2,6 +2,7 @@
 
     python -m benchmarks.bench_live            # about 80 s
     python -m benchmarks.bench_live --quick    # shorter runs, same figures
+    python -m benchmarks.bench_live --only 6   # one part: a session's own cost
 
 ``hapmotion live`` runs as a real subprocess (the ``hapmotion`` entry point) pinned to CPU 0; this harness (OSC
 sender, a recording bHaptics Player, WebSocket viewers) is pinned to CPU 1, so the session has one core to itself.
@@ -23,6 +24,12 @@ Input is the real recording dataset-1_byebye_happy_001.bvh (30 fps) resampled to
    one: Python starts it on its own when enough objects have aged): its pause with the session's startup heap
    frozen (hapmotion.live.steady_heap) against the same pass with nothing frozen. Target: under 5 ms, well inside
    one 60 Hz frame and the 50 ms after which a seat drops a frame.
+
+6. A session's own cost, the way a performer's show runs: 60 Hz OSC skeleton messages in, the bHaptics Player (SDK1)
+   out, nothing else. The session's CPU (% of one core, its process over the run) against a target of 3 %, and its
+   added latency p99 against 1 ms (on a quiet machine: the load average is printed); with the two steps that
+   dominated it timed in this process: building one SDK1 request with all 52 dots, and decoding one skeleton
+   datagram.
 
 The Player sinks send at most once per 20 ms Player tick; their "added latency" leaves out the time a frame waits
 for that tick on purpose (reported apart as "held").
@@ -289,6 +296,60 @@ async def bench_latency(frames: np.ndarray, seconds: float, tmp: Path) -> bool:
     return ok1 and ok2 and ok3
 
 
+# ------------------------------------------------------------------------------------------------ 6. session cost
+def _per_call_us(fn, n: int = 3000) -> float:
+    """Median over 5 batches of the time of one call of ``fn`` (us)."""
+    fn()
+    batches = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        for _ in range(n):
+            fn()
+        batches.append((time.perf_counter() - t0) / n * 1e6)
+    return float(np.median(batches))
+
+
+async def bench_session_cost(frames: np.ndarray, seconds: float, tmp: Path) -> bool:
+    import logging
+    from types import SimpleNamespace
+
+    from hapmotion.bhaptics.device_map import DeviceMap
+    from hapmotion.layout import load_layout
+    from hapmotion.live.hygiene import Faults
+    from hapmotion.live.sinks import PlayerSdk1Sink
+    from hapmotion.live.wire.osc_in import OscSkeletonDecoder
+
+    print(f"\n6. a session's own cost: 60 Hz OSC in -> Player SDK1 only, {seconds:.0f} s "
+          f"(load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)")
+    n = int(seconds * FPS)
+    dgrams = [datagram(k, frames[k % len(frames)]) for k in range(n)]
+    player = await Player().start()
+    session = await Session([f"player://127.0.0.1:{player.port}"], tmp / "cost.json").start()
+    await asyncio.sleep(1.0)
+    sender = await Sender().start(session.port)
+    cpu0, t0 = session.cpu_s(), time.perf_counter()
+    await sender.play(dgrams, FPS)
+    cpu = (session.cpu_s() - cpu0) / (time.perf_counter() - t0)
+    await asyncio.sleep(0.1)
+    stats = await session.stop()
+    player.server.close()
+    lat = {s["name"].split()[0]: s for s in stats["sinks"]}["player"]["latency_ms"]
+
+    dmap = DeviceMap.from_layout(load_layout())
+    sink = PlayerSdk1Sink(dmap, port=1)
+    row = SimpleNamespace(row=np.linspace(0.0, 100.0, dmap.n))
+    build = _per_call_us(lambda: sink.frame_messages(row))
+    decoder = OscSkeletonDecoder(Faults("bench", logging.getLogger("hapmotion.bench")))
+    decode = _per_call_us(lambda: decoder.feed(dgrams[5], 0.0))
+    ok_cpu, ok_lat = cpu <= 0.03, lat["p99"] <= 1.0
+    line("session CPU at 60 Hz (% of one core)", f"{cpu * 100:.2f} %", "<= 3 %", ok_cpu)
+    line("added latency to the Player SDK1, p50 / p99 (ms)", f"{lat['p50']:.3f} / {lat['p99']:.3f}",
+         "p99 <= 1 ms (quiet)", ok_lat)
+    line("one SDK1 request, 52 dots (us, this process)", f"{build:.1f}", "(reported)", True)
+    line("one skeleton datagram decoded (us, this process)", f"{decode:.1f}", "(reported)", True)
+    return ok_cpu and ok_lat
+
+
 # ------------------------------------------------------------------------------------------------ 2. memory
 async def bench_memory(frames: np.ndarray, seconds: float, tmp: Path) -> bool:
     print(f"\n2. 1000 frames/s OSC input for {seconds:.0f} s (sinks: Player, broadcast with one viewer)")
@@ -461,7 +522,8 @@ async def main(quick: bool, only: Optional[list[int]] = None) -> int:
                2: lambda tmp: bench_memory(frames, 12 if quick else 30, tmp),
                3: lambda tmp: bench_clients(frames, 8 if quick else 20, tmp),
                4: lambda tmp: bench_stuck_viewers(frames, 10 if quick else 20, tmp),
-               5: lambda tmp: bench_gc_pause(4 if quick else 10)}
+               5: lambda tmp: bench_gc_pause(4 if quick else 10),
+               6: lambda tmp: bench_session_cost(frames, 10 if quick else 30, tmp)}
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
         results = [await benches[k](tmp) for k in (only or sorted(benches))]
@@ -472,6 +534,6 @@ async def main(quick: bool, only: Optional[list[int]] = None) -> int:
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="shorter runs")
-    ap.add_argument("--only", type=int, action="append", choices=[1, 2, 3, 4, 5], help="run only this part (repeatable)")
+    ap.add_argument("--only", type=int, action="append", choices=[1, 2, 3, 4, 5, 6], help="run only this part (repeatable)")
     args = ap.parse_args()
     sys.exit(asyncio.run(main(args.quick, args.only)))

@@ -154,3 +154,32 @@ def test_one_definition_of_the_limits(capsys):
     help_text = " ".join(capsys.readouterr().out.split())
     for name in InputLimits.names():
         assert f"{name} ({limits_module.number_text(getattr(DEFAULT_LIMITS, name))})" in help_text, name
+
+
+def test_default_limits_admit_an_hour_of_every_real_clip_at_120_fps():
+    """Extrapolated from the real files' bytes per frame: an hour at 120 fps of each is within the defaults."""
+    clips = sorted(MOTION.glob("*.bvh"))
+    assert len(clips) >= 5
+    for path in clips:
+        raw = path.read_bytes()
+        n_frames = int(raw.split(b"Frames:")[1].split()[0])
+        per_frame = (len(raw) - raw.index(b"MOTION")) / n_frames
+        hour = 3600 * 120
+        assert hour <= DEFAULT_LIMITS.frames
+        assert per_frame * hour <= DEFAULT_LIMITS.file_bytes, path.name
+        assert per_frame * hour > 256e6  # the former 256 MB default refused every one of them
+
+
+def test_a_forged_frame_count_is_still_refused_before_allocating(tmp_path):
+    """Within file_mb and frames, a Frames: count the bytes cannot hold is refused by the byte bound, and a count
+    the bytes could hold but over the frames limit by that limit."""
+    head = (MOTION / "01_01.bvh").read_bytes().split(b"MOTION")[0]
+    forged = tmp_path / "forged.bvh"
+    forged.write_bytes(head + b"MOTION\nFrames: 400000\nFrame Time: .0083333\n" + b"0 " * 96 + b"\n")
+    with pytest.raises(InputError, match=r"Frames: says 400000 but the file holds at most 2 frames: truncated\?"):
+        hapmotion.load_motion(forged)
+    many = tmp_path / "many.bvh"
+    many.write_bytes(head + b"MOTION\nFrames: 600000\nFrame Time: .0083333\n" + (b"0 " * 96 + b"\n") * 600_000)
+    assert many.stat().st_size < DEFAULT_LIMITS.file_bytes
+    with pytest.raises(InputError, match=r"expected at most 500000 frames \(limit frames"):
+        hapmotion.load_motion(many)

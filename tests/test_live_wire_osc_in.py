@@ -157,3 +157,60 @@ def test_osc_decoder_accounts_for_every_datagram(data):
     assert len(out) + faults.total() >= 1
     for f in out:
         assert f.positions.shape == (32, 3) and f.positions.dtype == np.float64
+
+
+def _general_frames(dgram: bytes, prefix: str = "/hapmotion"):
+    """What the decoder gives when every datagram goes through python-osc (the skeleton fast path refused)."""
+    dec = OscSkeletonDecoder(Faults("ref", logging.getLogger("hapmotion.test")), prefix)
+    dec._skeleton_fast = lambda dgram, received: None
+    return dec.feed(dgram, received=3.0), dec.faults.counts
+
+
+@pytest.mark.parametrize("prefix", ["/hapmotion", "/show/dancer1", "/é"])
+def test_skeleton_fast_path_equals_python_osc_on_a_real_recording(prefix, monkeypatch):
+    """Every frame of a real clip, sent the three common ways (no seq, seq + float32 time, seq + float64 time), with
+    NaN joints: the direct read gives exactly python-osc's frames, and does not call python-osc at all."""
+    import hapmotion
+    from support.data import MOTION
+
+    import hapmotion.live.wire.osc_in as osc_in
+
+    motion = hapmotion.load_motion(MOTION / "dataset-1_punch_normal_001.bvh")
+    frames = motion.positions.copy()
+    frames[::7, HL] = np.nan
+    sent = []
+    for k, pos in enumerate(frames):
+        xyz = pos.ravel().tolist()
+        sent += [osc(prefix + "/skeleton", *xyz), osc(prefix + "/skeleton", k, k / 60.0, *xyz),
+                 osc(prefix + "/skeleton", k, k / 60.0, *xyz, types="id" + "f" * 96)]
+    assert len(sent) == 3 * motion.n_frames > 600
+    expected = [_general_frames(d, prefix) for d in sent]
+    calls = []
+    monkeypatch.setattr(osc_in, "read_osc", lambda *a, **k: calls.append(a) or read_osc(*a, **k))
+    dec = OscSkeletonDecoder(Faults("fast", logging.getLogger("hapmotion.test")), prefix)
+    for d, (want, _) in zip(sent, expected):
+        [got] = dec.feed(d, received=3.0)
+        [ref] = want
+        np.testing.assert_array_equal(got.positions, ref.positions)
+        assert (got.seq, got.t, got.received) == (ref.seq, ref.t, ref.received)
+        assert got.positions.dtype == np.float64 and got.positions.flags.writeable
+    assert not calls and not dec.faults.counts
+
+
+@pytest.mark.parametrize("dgram", [
+    osc("/hapmotion/skeleton", *skeleton_args()[:95]),  # a coordinate short
+    osc("/hapmotion/skeleton", *skeleton_args())[:-4],  # cut
+    osc("/hapmotion/skeleton", *skeleton_args()) + b"\0\0\0\0",  # trailing bytes
+    osc("/hapmotion/skeleton", 1, 2, *skeleton_args(), types="ih" + "f" * 96),  # int64 time
+    osc("/hapmotion/skeleton", "x", *skeleton_args()[1:]),
+    osc("/hapmotion/skeleton", *skeleton_args(), types="d" * 96),  # doubles: the general reader takes them
+    osc("/hapmotion/skeletons", *skeleton_args()),
+])
+def test_skeleton_messages_off_the_fast_path_decode_as_python_osc_does(dgram):
+    want, want_faults = _general_frames(dgram)
+    dec = OscSkeletonDecoder(Faults("fast", logging.getLogger("hapmotion.test")))
+    got = dec.feed(dgram, received=3.0)
+    assert len(got) == len(want) and dict(dec.faults.counts) == dict(want_faults)
+    for g, w in zip(got, want):
+        np.testing.assert_array_equal(g.positions, w.positions)
+        assert (g.seq, g.t) == (w.seq, w.t)

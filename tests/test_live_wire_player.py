@@ -105,3 +105,41 @@ def test_player_replies_parsed_in_any_casing():
     assert parse_v3_message('{"Type": "ServerDevices", "Message": "[{\\"position\\": 0}]"}') == \
         ("ServerDevices", [{"position": 0}])
     assert parse_v3_message('{"type": "ServerReady", "message": null}') == ("ServerReady", None)
+
+
+def _reference_v2_frame(row, dmap, duration_ms, key_prefix="hapmotion"):
+    """The SDK1 frame request as first built, a dict per dot and one json.dumps: the template must match it."""
+    from hapmotion.bhaptics.player_json import to_int_percent
+    from hapmotion.bhaptics.sdk1 import V2_POSITIONS
+
+    submits = []
+    for device, cols in dmap.devices.items():
+        if device in V2_POSITIONS:
+            dots = [{"index": i, "intensity": v} for i, v in enumerate(to_int_percent(row[cols]))]
+            submits.append({"Type": "frame", "Key": f"{key_prefix}_{device}",
+                            "Frame": {"position": device, "dotPoints": dots, "pathPoints": [],
+                                      "durationMillis": int(duration_ms)}})
+    return json.dumps({"Submit": submits}, separators=(",", ":"))
+
+
+def test_prebuilt_v2_frame_template_is_byte_identical_to_the_dict_built_request():
+    from hapmotion.bhaptics.sdk1 import V2FrameTemplate
+    from support.data import TACT
+
+    import hapmotion
+
+    rng = np.random.default_rng(7)
+    rows = [np.zeros(52), np.full(52, 100.0), np.arange(52.0) * 2, rng.uniform(-20, 130, 52),
+            np.where(rng.uniform(size=52) > 0.5, np.nan, 37.5), np.full(52, 0.5), np.full(52, 99.5)]
+    track = hapmotion.load_track(TACT / "FeedbackFiles_Vest_ArrowHit.tact")
+    cols = [track.actuators.index(a) if a in track.actuators else None for a in LAYOUT.actuators]
+    rows += [np.array([r[c] if c is not None else 0.0 for c in cols]) for r in track.intensities]
+    template = V2FrameTemplate(DMAP, 40, "show")
+    for row in rows:
+        assert template.message(row) == _reference_v2_frame(row, DMAP, 40, "show")
+        assert v2_frame_message(row, DMAP, 33) == _reference_v2_frame(row, DMAP, 33)
+    # a device the SDK1 API has no position for is left out, by both
+    odd = DeviceMap(tuple(f"a{i}" for i in range(9)), {"Tail": np.arange(3), "ForearmR": np.arange(3, 9)}, ())
+    row = rng.uniform(0, 100, 9)
+    assert V2FrameTemplate(odd, 40).message(row) == _reference_v2_frame(row, odd, 40)
+    assert '"Tail"' not in V2FrameTemplate(odd, 40).message(row)

@@ -477,3 +477,65 @@ def test_huge_frames_count_is_refused_before_allocating(tmp_path):
 ])
 def test_non_ascii_digit_counts_are_input_errors(tmp_path, old, new, place):
     assert_input_error(write(tmp_path, TINY.replace(old, new)), place, "expected", loader=parse_bvh)
+
+
+def _vectorised_fk(b, wanted):
+    """The numpy forward kinematics the compiled one replaced (a (T,) array per operation), kept as the reference
+    it must match bit for bit."""
+    from hapmotion.motion_files.bvh_kinematics import position_columns, rotation_columns
+
+    def times_axis(q, c, s, axis):
+        w, x, y, z = q
+        if axis == 0:
+            return (w * c - x * s, x * c + w * s, y * c + z * s, z * c - y * s)
+        if axis == 1:
+            return (w * c - y * s, x * c - z * s, y * c + w * s, z * c + x * s)
+        return (w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s)
+
+    def rotate(q, v):
+        w, x, y, z = q
+        vx, vy, vz = v
+        tx, ty, tz = 2.0 * (y * vz - z * vy), 2.0 * (z * vx - x * vz), 2.0 * (x * vy - y * vx)
+        return (vx + w * tx + (y * tz - z * ty), vy + w * ty + (z * tx - x * tz), vz + w * tz + (x * ty - y * tx))
+
+    ch, n, joints = b.channels, b.channels.shape[1], b.joints
+    need_pos, need_rot = set(), set()
+    for j in wanted:
+        k = j
+        while k >= 0 and k not in need_pos:
+            need_pos.add(k)
+            k = joints[k].parent
+            if k >= 0:
+                need_rot.add(k)
+    pos, rot = {}, {}
+    for j in sorted(need_pos):
+        joint = joints[j]
+        t = [float(v) for v in joint.offset]
+        for a, col in enumerate(position_columns(joint)):
+            if col >= 0:
+                t[a] = ch[col]
+        p = joint.parent
+        parent_rot = rot[p] if p >= 0 else None
+        moved = rotate(parent_rot, t) if parent_rot is not None else t
+        pos[j] = tuple(np.broadcast_to(v, (n,)) for v in moved) if p < 0 else tuple(pos[p][k] + moved[k] for k in range(3))
+        if j in need_rot:
+            q = parent_rot
+            for col, axis in rotation_columns(joint):
+                h = ch[col] * (math.pi / 360.0)
+                c, s = np.cos(h), np.sin(h)
+                q = (c, *(s if a == axis else np.zeros(n) for a in range(3))) if q is None else times_axis(q, c, s, axis)
+            rot[j] = q
+    return np.stack([np.stack([np.broadcast_to(pos[j][a], (n,)) for a in range(3)], axis=-1) for j in wanted], axis=1)
+
+
+@pytest.mark.parametrize("path", sorted(MOTION.glob("*.bvh")), ids=lambda p: p.name)
+def test_compiled_forward_kinematics_equals_the_vectorised_one_bit_for_bit(path):
+    b = parse_bvh(path)
+    every = list(range(len(b.joints)))
+    world = forward_kinematics(b, every)
+    assert world.shape == (b.n_frames, len(b.joints), 3) and np.isfinite(world).all()
+    np.testing.assert_array_equal(world, _vectorised_fk(b, every))
+    hands = [len(b.joints) - 1, 0, len(b.joints) - 1]  # a subset, the root, one joint twice
+    np.testing.assert_array_equal(forward_kinematics(b, hands), world[:, hands])
+    part = b.channels[:, 5:17]
+    np.testing.assert_array_equal(forward_kinematics(b, every, part), world[5:17])

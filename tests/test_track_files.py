@@ -238,3 +238,109 @@ def test_mirror_map_is_a_permutation():
     m = load_layout().mirror_map()
     assert sorted(m.tolist()) == list(range(52))
     assert (m[m] == np.arange(52)).all()  # mirroring twice is the identity
+
+
+# ------------------------------------------------------------------------------------------ the .tact writer's text
+def _reference_tact_doc(name: str, type_name: str, rows: dict, duration_ms: int) -> dict:
+    """The ``.tact`` document as the writer first built it, a dict per frame and point, kept here as the reference
+    the table-driven writer must match byte for byte."""
+    from hapmotion.bhaptics.devices import bhaptics_devices
+
+    def feedback(r):
+        q = np.rint(r).astype(np.int64)
+        n = q.shape[0]
+        change = np.ones(n, dtype=bool)
+        change[1:] = (q[1:] != q[:-1]).any(axis=1)
+        starts = np.flatnonzero(change)
+        ends = np.append(starts[1:], n)
+        entries = []
+        for s, e in zip(starts, ends):
+            idx = np.flatnonzero(q[s])
+            if idx.size:
+                entries.append({"startTime": int(s) * 20, "endTime": int(e) * 20, "playbackType": "NONE",
+                                "pointList": [{"index": int(i), "intensity": round(q[s, i] / 100.0, 2)}
+                                              for i in idx]})
+        return entries
+
+    dtype = bhaptics_devices()[type_name]
+    points = [{"index": i, "x": float(x), "y": float(y)} for i, (x, y) in enumerate(dtype.points)]
+    modes = {pos: {"mode": "DOT_MODE",
+                   "dotMode": {"dotConnected": False, "feedback": feedback(rows[pos]) if pos in rows else []},
+                   "pathMode": {"feedback": []}} for pos in dtype.positions}
+    return {"project": {"name": name, "description": "rendered by hapmotion", "mediaFileDuration": duration_ms / 1000.0,
+                        "layout": {"name": type_name, "type": type_name,
+                                   "layouts": {pos: points for pos in dtype.positions}},
+                        "tracks": [{"enable": True, "effects": [
+                            {"name": name, "startTime": 0, "offsetTime": duration_ms, "modes": modes}]}]},
+            "durationMillis": 0, "intervalMillis": 20, "size": 20}
+
+
+def _assert_same_as_reference(track: HapticTrack, tmp_path) -> int:
+    """Save ``track`` as .tact and compare every file with the reference writer's bytes; returns the files."""
+    from hapmotion.bhaptics.devices import type_for_position
+
+    path = tmp_path / "show.tact"
+    written = save_track(track, path)
+    ticked = track.resample(50.0)
+    plan: dict = {}  # as documented: the vest in show.tact, every other device in show.<position>.tact
+    for dev in track.devices():
+        type_name = type_for_position(dev, len(track.device_columns(dev))).name
+        target = path if type_name == "Tactot" else path.with_name(f"show.{dev}.tact")
+        plan.setdefault(target, (type_name, []))[1].append(dev)
+    if path not in plan:  # no vest: the first device's file takes the plain name
+        first = next(iter(plan))
+        plan = {(path if k == first else k): v for k, v in plan.items()}
+    assert sorted(plan) == sorted(written)
+    for target, (type_name, devs) in plan.items():
+        doc = _reference_tact_doc("show", type_name, {d: ticked.intensities[:, ticked.device_columns(d)] for d in devs},
+                                  ticked.n_frames * 20)
+        assert target.read_bytes() == json.dumps(doc, separators=(",", ":")).encode()
+    return len(written)
+
+
+@pytest.mark.parametrize("clip", ["60_12_scaled.bvh", "dataset-1_dance-short_normal_001.bvh", "01_01.bvh"])
+def test_tact_writer_is_byte_identical_to_the_reference_on_real_motion(clip, tmp_path):
+    from support.data import MOTION
+
+    track = hapmotion.render(hapmotion.load_motion(MOTION / clip))
+    assert track.intensities.max() > 10  # a real, moving render, not a silent one
+    assert _assert_same_as_reference(track, tmp_path) == 3
+
+
+def test_tact_writer_is_byte_identical_on_real_patterns_and_music(tmp_path):
+    from support.data import AUDIO, TACT
+
+    patterns = sorted(TACT.glob("*.tact"))
+    assert len(patterns) >= 10
+    for k, src in enumerate(patterns):
+        out = tmp_path / str(k)
+        out.mkdir()
+        _assert_same_as_reference(load_track(src), out)
+    from hapmotion.audio import analyze_file, audio_track
+
+    music = audio_track(analyze_file(AUDIO / "vibe_ace.ogg", fps=60.0))
+    (tmp_path / "music").mkdir()
+    assert _assert_same_as_reference(music, tmp_path / "music") == 3
+
+
+def test_tact_writer_edge_cases_match_the_reference(tmp_path):
+    ids = load_layout().actuators
+    rng = np.random.default_rng(3)
+    cases = {
+        "silent": np.zeros((40, 52)),
+        "one_row": np.full((1, 52), 100.0),
+        "every_value": np.tile(np.arange(101.0), (52, 1)).T,  # every quantised intensity 0..100 on every motor
+        "noise": rng.uniform(0, 100, (300, 52)) * (rng.uniform(size=(300, 52)) > 0.6),
+        "half_percents": np.tile(np.arange(0.0, 100.0, 0.5), (52, 1)).T,  # rint ties round to even
+        # more frames than the writer turns into text at a time (8192), with silent ticks between
+        "many_frames": rng.uniform(0, 30, (20_000, 52)) * (np.arange(20_000)[:, None] % 7 != 3),
+        "low_levels": rng.integers(0, 3, (9000, 52)).astype(float),  # a table of only three levels
+    }
+    for name, rows in cases.items():
+        (tmp_path / name).mkdir()
+        _assert_same_as_reference(HapticTrack(rows, 50.0, ids), tmp_path / name)
+    # a sleeve-only track: the first device's file takes the plain name
+    sleeves = [i for i in ids if i.startswith("Forearm")]
+    (tmp_path / "sleeves").mkdir()
+    assert _assert_same_as_reference(HapticTrack(rng.uniform(0, 100, (90, 12)), 50.0, tuple(sleeves)),
+                                     tmp_path / "sleeves") == 2

@@ -50,7 +50,10 @@ class InputLimits:
         Nesting depth: BVH joints inside joints, JSON lists and objects inside each other. Real BVH skeletons
         nest about 12 deep (root to fingertip), Kinect JSON 6, a ``.tact`` 9.
     file_mb:
-        File size in MB (10^6 bytes). Text motion files take 1-3 MB per minute at 120 fps.
+        File size in MB (10^6 bytes). Text motion files take 5-10 MB per minute at 120 fps (measured on CMU and
+        Bandai Namco BVH: 750-1,300 bytes a frame), so an hour at 120 fps is 320-570 MB; 1,024 MB admits the heaviest
+        of them with a margin. What a file may allocate stays bounded by its size: a BVH ``Frames:`` count must fit
+        in its bytes (a digit and a separator per value: at most 4 bytes of float64 per byte of file).
     json_mb:
         Memory (MB) a JSON file may take once parsed, estimated before parsing from its lists, objects and values.
         Python holds each value as an object, about 17 kB per frame of a one-body Azure Kinect file: 512 MB is
@@ -65,7 +68,7 @@ class InputLimits:
     joints: int = 1_000
     cells: int = 60_000_000
     depth: int = 64
-    file_mb: float = 256.0
+    file_mb: float = 1024.0
     json_mb: float = 512.0
     number_digits: int = 100
 

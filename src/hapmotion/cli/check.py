@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import asyncio
 from typing import Optional
 
 import click
@@ -42,6 +41,9 @@ Examples:
 @show_options("layout", comfort=False)
 def command(sinks: tuple[str, ...], step_ms: int, gap_ms: int, intensity: float, no_pattern: bool,
             workspace_id: Optional[str], api_key: Optional[str], show: Show) -> None:
+    # imported here, not at the top, like the live modules: asyncio alone is 30 ms of every command's start-up
+    import asyncio
+
     from ..bhaptics.device_map import DeviceMap
     from ..live.player_check import CHECK_FPS, pattern_steps, pattern_track, probe_player
     from ..live.playback import run_play

@@ -7,8 +7,7 @@ from pathlib import Path
 
 import click
 
-from ..track_files import save_track
-from ..show import MODES, Show, render_show
+from ..show.settings import MODES, Show
 from .show_options import preset_option
 
 EXAMPLE_MOTION = "60_12_scaled.bvh"
@@ -31,7 +30,11 @@ def example_path(name: str) -> Path:
 def command(out_dir, mode, preset):
     """Render the bundled salsa clip (CMU mocap) with the bundled music ("Vibe Ace", Kevin MacLeod) into
     OUT_DIR/demo.tact (+ sleeve files), demo.csv, a plot demo.png and a viewer page demo.html."""
+    # imported here, not at the top: rendering pulls in the music analysis (scipy), which `hapmotion --help` and
+    # every other command's start-up would otherwise pay for
     from ..motion_files import load_motion
+    from ..show import render_show
+    from ..track_files import save_track
 
     audio = example_path(EXAMPLE_AUDIO)
     show = Show(method="mst", preset=preset, mode=mode, audio=audio, length="motion")  # checked before any folder

@@ -9,9 +9,8 @@ from typing import Optional
 
 import click
 
-from ..track_files import save_track
 from ..errors import UsageError
-from ..show import Show, render_show
+from ..show.settings import Show
 from ..track_files.sniff import is_track_file
 from .motion_options import CLI_SPELLING, motion_options, read_motion, read_track
 from .show_options import show_options
@@ -48,6 +47,11 @@ def command(motion_file: Optional[str], output: str, show: Show, motion_opts: di
     if motion_file is not None and is_track_file(motion_file):
         convert_track(motion_file, output, show, motion_opts or {})
         return
+    # imported here, not at the top: rendering pulls in the music analysis (scipy), which `hapmotion --help` and
+    # every other command's start-up would otherwise pay for
+    from ..show import render_show
+    from ..track_files import save_track
+
     mode = show.resolved_mode(motion_file is not None)
     out_path = Path(output)
     motion = None
@@ -77,6 +81,8 @@ def convert_track(path: str, output: str, show: Show, motion_opts: dict) -> None
     if dataclasses.replace(show, fps=None) != Show():
         raise UsageError(f"{path} is a haptic track or pattern: render converts it as it is (only -o, --fps and "
                          "--limit apply); play it with cues or comfort limits with 'hapmotion play'")
+    from ..track_files import save_track  # as in command(): the track files load with what they write
+
     track = read_track(path, **motion_opts)
     if show.fps is not None:
         track = track.resample(show.fps)

@@ -1,5 +1,5 @@
 """BVH forward kinematics: world positions of chosen joints from the channel table of :mod:`.bvh_text`, vectorised
-over frames.
+over frames (one compiled pass).
 
 Conventions (the Biovision format as the CMU, Daz and Bandai Namco exports write it):
 
@@ -17,37 +17,15 @@ from __future__ import annotations
 import math
 from typing import Optional
 
+import numba
 import numpy as np
 
 from .bvh_text import AXES, BvhFile, BvhJoint
 
-# Rotations are unit quaternions (w, x, y, z), each component a (T,) array: composing a world rotation with one
-# elementary channel rotation costs 12 array operations, against a 3x3 matrix product per joint plus building the
-# matrices (about twice as slow in numpy for 100,000 frames).
-
-
-def _times_axis(q, c, s, axis: int):
-    """``q (x) (c + s e_axis)``: Hamilton product with an elementary rotation quaternion (c = cos, s = sin of
-    half the angle)."""
-    w, x, y, z = q
-    if axis == 0:  # q (x) e_x = (-x, w, z, -y)
-        return (w * c - x * s, x * c + w * s, y * c + z * s, z * c - y * s)
-    if axis == 1:  # q (x) e_y = (-y, -z, w, x)
-        return (w * c - y * s, x * c - z * s, y * c + w * s, z * c + x * s)
-    return (w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s)  # q (x) e_z = (-z, y, -x, w)
-
-
-def _rotate(q, v):
-    """Rotate ``v`` (three floats or (T,) arrays) by the quaternions ``q``; returns three (T,) arrays.
-
-    ``v' = v + w t + u x t`` with ``t = 2 u x v`` (u = vector part), the usual expansion of ``q v q*``.
-    """
-    w, x, y, z = q
-    vx, vy, vz = v
-    tx = 2.0 * (y * vz - z * vy)
-    ty = 2.0 * (z * vx - x * vz)
-    tz = 2.0 * (x * vy - y * vx)
-    return (vx + w * tx + (y * tz - z * ty), vy + w * ty + (z * tx - x * tz), vz + w * tz + (x * ty - y * tx))
+# Rotations are unit quaternions (w, x, y, z): composing a world rotation with one elementary channel rotation costs
+# 12 multiply-adds, against a 3x3 matrix product per joint plus building the matrices. One compiled pass over the
+# frames (:func:`_fk_kernel`) does every joint of a frame while its numbers are in registers; the numpy version it
+# replaced made a (T,) array per operation (about 5x slower, and memory traffic that grew with the file).
 
 
 def rotation_columns(joint: BvhJoint) -> list[tuple[int, int]]:
@@ -56,25 +34,89 @@ def rotation_columns(joint: BvhJoint) -> list[tuple[int, int]]:
             if ch.endswith("rotation")]
 
 
-def local_translations(joint: BvhJoint, channels: np.ndarray) -> list:
-    """Local translation per axis: the OFFSET component (a float), or the ``(T,)`` position channel that
-    replaces it."""
-    out: list = [float(v) for v in joint.offset]
+def position_columns(joint: BvhJoint) -> list[int]:
+    """MOTION column of the position channel that replaces the OFFSET component of each axis, -1 where none."""
+    out = [-1, -1, -1]
     for k, ch in enumerate(joint.channels):
         if ch.endswith("position"):
-            out[AXES.index(ch[0])] = channels[joint.first_channel + k]
+            out[AXES.index(ch[0])] = joint.first_channel + k
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _fk_kernel(channels, parent, offset, pos_col, rot_start, rot_col, rot_axis, need_rot, out_slot, out):
+    """World positions of a chain of joints, frame by frame, into ``out`` ((T, W, 3)).
+
+    Joints are numbered 0..J-1 parents-first: ``parent`` (J,) (-1 = root), ``offset`` (J, 3), ``pos_col`` (J, 3)
+    (position channel replacing the OFFSET component, -1 = none), rotation channels ``rot_col`` / ``rot_axis``
+    from ``rot_start[j]`` to ``rot_start[j + 1]``, ``need_rot`` (J,) (a wanted joint's ancestor), ``out_slot`` (J,)
+    (its index in ``out``, -1 = not wanted). ``channels`` is (C, T) in degrees.
+
+    The operations and their order are those of the quaternion formulas (``t = 2 u x v``, ``v' = v + w t + u x t``;
+    Hamilton products with elementary rotations), so the positions equal the vectorised version's bit for bit.
+    """
+    n_j = parent.shape[0]
+    half_angle = math.pi / 360.0  # degrees -> radians, halved for quaternions
+    pos = np.empty((n_j, 3))
+    rot = np.empty((n_j, 4))
+    has_rot = np.zeros(n_j, dtype=np.bool_)  # False = identity
+    for t in range(channels.shape[1]):
+        for j in range(n_j):
+            v0, v1, v2 = offset[j, 0], offset[j, 1], offset[j, 2]
+            if pos_col[j, 0] >= 0:
+                v0 = channels[pos_col[j, 0], t]
+            if pos_col[j, 1] >= 0:
+                v1 = channels[pos_col[j, 1], t]
+            if pos_col[j, 2] >= 0:
+                v2 = channels[pos_col[j, 2], t]
+            p = parent[j]
+            q_on = False
+            w = x = y = z = 0.0
+            if p >= 0 and has_rot[p]:
+                w, x, y, z = rot[p, 0], rot[p, 1], rot[p, 2], rot[p, 3]
+                q_on = True
+                tx = 2.0 * (y * v2 - z * v1)
+                ty = 2.0 * (z * v0 - x * v2)
+                tz = 2.0 * (x * v1 - y * v0)
+                v0, v1, v2 = (v0 + w * tx + (y * tz - z * ty), v1 + w * ty + (z * tx - x * tz),
+                              v2 + w * tz + (x * ty - y * tx))
+            if p >= 0:
+                v0, v1, v2 = pos[p, 0] + v0, pos[p, 1] + v1, pos[p, 2] + v2
+            pos[j, 0], pos[j, 1], pos[j, 2] = v0, v1, v2
+            if out_slot[j] >= 0:
+                out[t, out_slot[j], 0], out[t, out_slot[j], 1], out[t, out_slot[j], 2] = v0, v1, v2
+            if need_rot[j]:
+                for r in range(rot_start[j], rot_start[j + 1]):
+                    h = channels[rot_col[r], t] * half_angle
+                    c, s = math.cos(h), math.sin(h)
+                    a = rot_axis[r]
+                    if not q_on:
+                        w, x, y, z = c, 0.0, 0.0, 0.0
+                        if a == 0:
+                            x = s
+                        elif a == 1:
+                            y = s
+                        else:
+                            z = s
+                        q_on = True
+                    elif a == 0:  # q (x) e_x = (-x, w, z, -y)
+                        w, x, y, z = w * c - x * s, x * c + w * s, y * c + z * s, z * c - y * s
+                    elif a == 1:  # q (x) e_y = (-y, -z, w, x)
+                        w, x, y, z = w * c - y * s, x * c - z * s, y * c + w * s, z * c + x * s
+                    else:  # q (x) e_z = (-z, y, -x, w)
+                        w, x, y, z = w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s
+                has_rot[j] = q_on
+                if q_on:
+                    rot[j, 0], rot[j, 1], rot[j, 2], rot[j, 3] = w, x, y, z
 
 
 def forward_kinematics(bvh: BvhFile, wanted: list[int], channels: Optional[np.ndarray] = None) -> np.ndarray:
     """World positions ``(T, len(wanted), 3)`` (file units) of the joints ``wanted`` (indices into ``bvh.joints``).
 
-    ``channels`` ((C, T), default ``bvh.channels``) may be a frame slice. Vectorised over frames with numpy; only
-    the wanted joints and their ancestors are computed (rotations only for ancestors), so fingers and toes cost
-    nothing when unused.
+    ``channels`` ((C, T), default ``bvh.channels``) may be a frame slice. Only the wanted joints and their
+    ancestors are computed (rotations only for ancestors), so fingers and toes cost nothing when unused.
     """
     channels = bvh.channels if channels is None else channels
-    n = channels.shape[1]
     joints = bvh.joints
     need_pos: set[int] = set()
     need_rot: set[int] = set()
@@ -85,34 +127,27 @@ def forward_kinematics(bvh: BvhFile, wanted: list[int], channels: Optional[np.nd
             k = joints[k].parent
             if k >= 0:
                 need_rot.add(k)
-    half_angle = math.pi / 360.0  # degrees -> radians, halved for quaternions
-    pos: dict[int, tuple] = {}
-    rot: dict[int, Optional[tuple]] = {}  # world rotation quaternion per joint, None = identity
-    for j in sorted(need_pos):  # file order is parents-first
-        joint = joints[j]
-        t = local_translations(joint, channels)
-        p = joint.parent
-        parent_rot = rot[p] if p >= 0 else None
-        moved = _rotate(parent_rot, t) if parent_rot is not None else t
-        if p < 0:
-            pos[j] = tuple(np.broadcast_to(v, (n,)) for v in moved)
-        else:
-            pos[j] = tuple(pos[p][k] + moved[k] for k in range(3))
-        if j in need_rot:
-            q = parent_rot
-            for col, axis in rotation_columns(joint):
-                h = channels[col] * half_angle
-                c, s = np.cos(h), np.sin(h)
-                if q is None:
-                    zero = np.zeros(n)
-                    q = (c, *(s if a == axis else zero for a in range(3)))
-                else:
-                    q = _times_axis(q, c, s, axis)
-            rot[j] = q
-    out = np.empty((n, len(wanted), 3))
+    chain = sorted(need_pos)  # file order is parents-first
+    slot = {j: i for i, j in enumerate(chain)}
+    rots = [rotation_columns(joints[j]) if j in need_rot else [] for j in chain]
+    out_slot = np.full(len(chain), -1, dtype=np.int64)
+    out = np.empty((channels.shape[1], len(wanted), 3))
+    duplicates = []
     for k, j in enumerate(wanted):
-        for a in range(3):
-            out[:, k, a] = pos[j][a]
+        if out_slot[slot[j]] < 0:
+            out_slot[slot[j]] = k
+        else:  # the same joint wanted twice: copied after the pass
+            duplicates.append((k, int(out_slot[slot[j]])))
+    _fk_kernel(np.ascontiguousarray(channels, dtype=np.float64),
+               np.array([slot[joints[j].parent] if joints[j].parent >= 0 else -1 for j in chain], dtype=np.int64),
+               np.array([[float(v) for v in joints[j].offset] for j in chain], dtype=np.float64).reshape(-1, 3),
+               np.array([position_columns(joints[j]) for j in chain], dtype=np.int64).reshape(-1, 3),
+               np.cumsum([0] + [len(r) for r in rots]).astype(np.int64),
+               np.array([c for r in rots for c, _ in r], dtype=np.int64),
+               np.array([a for r in rots for _, a in r], dtype=np.int64),
+               np.array([j in need_rot for j in chain], dtype=np.bool_), out_slot, out)
+    for k, first in duplicates:
+        out[:, k] = out[:, first]
     return out
 
 

@@ -17,7 +17,7 @@ from urllib.parse import urlencode
 import numpy as np
 
 from ...bhaptics.device_map import DeviceMap
-from ...bhaptics.sdk1 import parse_v2_status, v2_frame_message, v2_register_message, v2_turn_off_all
+from ...bhaptics.sdk1 import V2FrameTemplate, parse_v2_status, v2_register_message, v2_turn_off_all
 from ...bhaptics.tick import PLAYER_TICK_MS, PLAYER_TICK_S
 from ..addresses import PLAYER_SDK1
 from ..frames import OutFrame
@@ -63,17 +63,17 @@ class PlayerSdk1Sink(WebSocketClientSink):
         self.key_prefix = key_prefix
         self.registrations = dict(registrations or {})
         self.status: Optional[dict] = None
+        self.template = V2FrameTemplate(dmap, self.duration_ms, key_prefix)  # built once: one request per tick
 
     def hello_messages(self) -> list[str]:
         reg = v2_register_message(self.registrations)
         return [reg] if reg else []
 
     def frame_messages(self, frame: OutFrame) -> list[str]:
-        return [v2_frame_message(frame.row, self.dmap, self.duration_ms, self.key_prefix)]
+        return [self.template.message(frame.row)]
 
     def off_messages(self) -> list[str]:
-        return [v2_frame_message(np.zeros(self.dmap.n), self.dmap, self.duration_ms, self.key_prefix),
-                v2_turn_off_all()]
+        return [self.template.message(np.zeros(self.dmap.n)), v2_turn_off_all()]
 
     def on_message(self, message: "str | bytes") -> None:
         status = parse_v2_status(message)

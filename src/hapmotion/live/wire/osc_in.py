@@ -11,6 +11,7 @@ Address scheme, prefix ``/hapmotion`` (settable; docs/live.md has the full descr
 
 from __future__ import annotations
 
+import struct
 from typing import Any, Optional
 
 import numpy as np
@@ -20,6 +21,18 @@ from ..frames import SkeletonFrame, joint_index
 from ..hygiene import Faults, is_number, seq_value, time_value
 from .osc_address import OSC_PREFIX, normalize_prefix
 from .osc_packet import read_osc
+
+
+_TAGS_XYZ = b"," + b"f" * (3 * N_JOINTS)
+_TAGS_SEQ_T32 = b",if" + b"f" * (3 * N_JOINTS)
+_TAGS_SEQ_T64 = b",id" + b"f" * (3 * N_JOINTS)
+
+
+def _osc_string(text: str) -> bytes:
+    """``text`` as an OSC-string: its bytes (UTF-8, as python-osc writes and reads them), NUL-terminated, padded
+    with NULs to a multiple of 4 bytes."""
+    raw = text.encode("utf-8")
+    return raw + b"\0" * (4 - len(raw) % 4)
 
 
 class OscSkeletonDecoder:
@@ -38,9 +51,14 @@ class OscSkeletonDecoder:
         self._pending: Optional[np.ndarray] = None
         self._pending_seq: Optional[int] = None
         self._pending_t: Optional[float] = None
+        self._skeleton_head = _osc_string(self.addr_skeleton)
 
     def feed(self, dgram: bytes, received: float) -> list[SkeletonFrame]:
         """Decode one datagram; return the frames it completes (usually zero or one)."""
+        if dgram.startswith(self._skeleton_head):
+            frame = self._skeleton_fast(dgram, received)
+            if frame is not None:
+                return [frame]
         packet = read_osc(dgram, self.faults)
         out: list[SkeletonFrame] = []
         joints_seen = False
@@ -78,6 +96,38 @@ class OscSkeletonDecoder:
             params = params[2:]
         pos = np.array(params, dtype=np.float64).reshape(N_JOINTS, 3)
         return SkeletonFrame(pos, seq, t, received)
+
+    def _skeleton_fast(self, dgram: bytes, received: float) -> Optional[SkeletonFrame]:
+        """The common skeleton message read straight from its bytes, or None to leave it to the general reader.
+
+        A sender streaming at 60 Hz sends one ``/hapmotion/skeleton`` message a frame with type tags ``,f*96``,
+        ``,if f*96`` or ``,id f*96`` (seq int32, time float32 or float64; the OSC 1.0 specification's big-endian
+        encodings). python-osc decodes such a message argument by argument (about 40 us); here the 96 coordinates
+        are one numpy view (a few us). The values are the ones python-osc returns (float32 widened to float64);
+        anything else (other tags, a wrong length, a bundle) goes through :func:`read_osc`, which counts faults.
+        """
+        start = len(self._skeleton_head)
+        end = dgram.find(b"\0", start)
+        if end < 0:
+            return None
+        tags = dgram[start:end]
+        args = start + (end - start) // 4 * 4 + 4  # the tag string is padded to a multiple of 4 with at least one NUL
+        if tags == _TAGS_XYZ:
+            seq = t = None
+        elif tags == _TAGS_SEQ_T32 and len(dgram) == args + 8 + 4 * 3 * N_JOINTS:
+            seq_raw, t_raw = struct.unpack_from(">if", dgram, args)
+            seq, t = seq_value(seq_raw), time_value(t_raw)
+            args += 8
+        elif tags == _TAGS_SEQ_T64 and len(dgram) == args + 12 + 4 * 3 * N_JOINTS:
+            seq_raw, t_raw = struct.unpack_from(">id", dgram, args)
+            seq, t = seq_value(seq_raw), time_value(t_raw)
+            args += 12
+        else:
+            return None
+        if len(dgram) != args + 4 * 3 * N_JOINTS:
+            return None
+        pos = np.frombuffer(dgram, dtype=">f4", count=3 * N_JOINTS, offset=args).astype(np.float64)
+        return SkeletonFrame(pos.reshape(N_JOINTS, 3), seq, t, received)
 
     def _joint(self, name: str, params: list[Any], received: float, out: list[SkeletonFrame]) -> None:
         try:
