@@ -63,7 +63,7 @@ def whole_command_rows() -> list[tuple[str, str, str]]:
             wall, kb = out.stderr.strip().splitlines()[-1].split()
             rows.append((f"hapmotion render, 1 h at {fps} fps ({n:,} frames, {size:.0f} MB BVH) to .tact",
                          f"{float(wall):.1f} s", f"<= {seconds_target:g} s"))
-            rows.append((f"  peak memory of that command", f"{int(kb) / 1024:.0f} MB",
+            rows.append(("  peak memory of that command", f"{int(kb) / 1024:.0f} MB",
                          f"<= {mb_target:g} MB" if mb_target else "(reported)"))
             src.unlink()
     return rows

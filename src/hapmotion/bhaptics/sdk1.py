@@ -11,7 +11,7 @@ from typing import Any, Mapping, Optional
 import numpy as np
 
 from .device_map import DeviceMap
-from .player_json import get_ci, json_object, to_int_percent
+from .player_json import get_ci, json_object
 
 SDK1_PORT = 15881
 """The Player's SDK1 WebSocket port on the machine it runs on (plain ``ws://``, no authentication)."""
