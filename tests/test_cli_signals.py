@@ -46,3 +46,22 @@ def test_signal_during_render_leaves_no_partial_file(tmp_path, sig):
     assert proc.returncode == (130 if sig == signal.SIGINT else 128 + sig)
     assert err.strip() == ("aborted" if sig == signal.SIGINT else f"stopped by {sig.name}")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_ctrl_c_while_the_command_line_loads_is_a_clean_stop():
+    """A SIGINT in the moment the commands are imported (made certain here: the import of the command line raises
+    it) ends like one while running: one line, exit 130, no traceback."""
+    import subprocess
+    import sys
+
+    code = ("import builtins, sys\n"
+            "real_import = builtins.__import__\n"
+            "def interrupted(name, globals=None, locals=None, fromlist=(), level=0):\n"
+            "    if name == 'cli' and level == 1:\n"
+            "        raise KeyboardInterrupt\n"
+            "    return real_import(name, globals, locals, fromlist, level)\n"
+            "builtins.__import__ = interrupted\n"
+            "from hapmotion.console import main\n"
+            "sys.exit(main())\n")
+    out = subprocess.run([sys.executable, "-c", code, "--help"], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 130 and out.stderr.strip() == "aborted", out.stderr
