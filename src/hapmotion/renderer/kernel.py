@@ -22,7 +22,7 @@ from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENE
                      P_MAX_LEVEL, P_METHOD, P_NEAR, P_PCT, P_PHANTOM_ENERGY, P_REL_DECAY, P_RELEASE, P_SIDE_BLEND,
                      P_SILENCE, P_TOL, P_W_GAIN, P_W_MAX, P_WINDOW, S_TPX, S_TPY, S_TPZ, ST_AXES, ST_CHOICE,
                      ST_LEVEL, ST_PREV_DP, ST_SEEN, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE,
-                     P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W)
+                     P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT)
 from .steps.choice import (active_hand, active_hands, choose_active, hand_accelerations, moving_only, update_speeds,
                            update_thresholds)
 from .steps.held_joints import hold_joints
@@ -146,7 +146,7 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         face = locate_on_body(dp, torso, axes, dist, prm[P_NEAR], prm[P_FAR], surf, tp_body, p, hit)
 
         # step 7: intensity from distance (Eq. 2); beyond the paper, from the faster hand's speed and the distance
-        drive = normalised_distance(dist, prm[P_NEAR], prm[P_IFAR])
+        drive = normalised_distance(dist, prm[P_INEAR], prm[P_IFAR])
         if by_speed:
             fastest = max(speed_n[0], speed_n[1])
             drive = speed_reach_drive(drive, fastest, prm[P_REACH_SHARE])
@@ -159,7 +159,7 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         amp = level_drive(total_level, prm[P_PCT], prm[P_BETA])
         raw[:] = 0.0
         chart, u, v = spread_on_charts(hit, face, amp, surf, charts, prm[P_SIDE_BLEND], prm[P_PHANTOM_ENERGY] > 0.5,
-                                       prm[P_TOL], raw)
+                                       prm[P_TOL], prm[P_MAIN_FLAT] > 0.5, raw)
 
         # output: dead zone, clip, mirror, per-actuator release
         write_outputs(raw, prm[P_DEAD], prm[P_SILENCE], prm[P_REL_DECAY], mirror_map, state, out[t])

@@ -65,7 +65,12 @@ def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
     release_s = params.actuator_release_s
     p[packed.P_REL_DECAY] = float(np.exp(-1.0 / (fps * release_s))) if release_s > 0 else 0.0
     p[packed.P_FPS] = fps
-    p[packed.P_IFAR] = params.intensity_far_m if params.intensity_far_m > 0 else params.far_m
+    far = params.intensity_far_m if params.intensity_far_m > 0 else params.far_m
+    if method == "baseline" and params.baseline_intensity_far_m > 0:
+        far = params.baseline_intensity_far_m
+    p[packed.P_IFAR] = far
+    p[packed.P_INEAR] = params.intensity_near_m
+    p[packed.P_MAIN_FLAT] = 1.0 if params.phantom_main == "flat" else 0.0
     p[packed.P_SILENCE] = params.silence_floor
     p[packed.P_SPEED_ON] = 1.0 if params.speed_full_mps > 0 else 0.0
     p[packed.P_SPEED_START] = params.speed_start_mps

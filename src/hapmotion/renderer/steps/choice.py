@@ -2,8 +2,8 @@
 
 Paper (Section 4): a hand is active when its acceleration exceeds a threshold equal to the mean acceleration over
 the previous three frames (at 60 Hz). Two active hands make the triangle (left hand, right hand, J_T), one makes
-(J_A, opposite shoulder, J_T); with none, the last choice is kept. Our readings (accelerations relative to J_T,
-the floor, the relative excess) are in docs/algorithm.md.
+(J_A, opposite shoulder, J_T). Our readings (accelerations relative to J_T, the floor, the relative excess, the
+choice when no hand is active) are in docs/algorithm.md.
 
 Hands are indexed 0 = left, 1 = right in the ``(2,)`` arrays below.
 """
@@ -145,8 +145,9 @@ def moving_only(state, min_speed, above, excess):
 def choose_active(above_left, above_right, dist_left, dist_right, last, idle_farther):
     """Step 4: the active-joint choice (``CHOICE_LEFT``, ``CHOICE_RIGHT`` or ``CHOICE_BOTH``).
 
-    Both hands active: both; one: that one. Neither: the ``last`` choice (paper), unless there is none yet or
-    ``idle_farther`` is set; then the hand farther from J_T (``dist_*``, m; the left hand on a tie).
+    Both hands active: both; one: that one. Neither: the hand farther from J_T (``dist_*``, m; the left hand on a
+    tie) when ``idle_farther`` is set (the ``paper`` preset's reading of flow step 3) or no choice exists yet, else
+    the ``last`` choice.
     """
     if above_left and above_right:
         return CHOICE_BOTH
