@@ -22,15 +22,15 @@ from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENE
                      P_MAX_LEVEL, P_METHOD, P_NEAR, P_PCT, P_PHANTOM_ENERGY, P_REL_DECAY, P_RELEASE, P_SIDE_BLEND,
                      P_SILENCE, P_TOL, P_W_GAIN, P_W_MAX, P_WINDOW, S_TPX, S_TPY, S_TPZ, ST_AXES, ST_CHOICE,
                      ST_LEVEL, ST_PREV_DP, ST_SEEN, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE,
-                     P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT)
-from .steps.choice import (active_hand, active_hands, choose_active, hand_accelerations, moving_only, update_speeds,
-                           update_thresholds)
+                     P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA)
+from .steps.choice import (active_hand, active_hands, choose_active, hand_accelerations, held_choice, moving_only,
+                           update_speeds, update_thresholds)
 from .steps.held_joints import hold_joints
 from .steps.intensity import boosted_level, filtered_level, level_drive, normalised_distance, speed_reach_drive
 from .steps.numeric import dist3
 from .steps.output import write_outputs, write_silence
 from .steps.phantom import spread_on_charts
-from .steps.triangle import dynamic_point, previous_dynamic_point, salient_triangle, speed_weighted
+from .steps.triangle import dynamic_point, glide, previous_dynamic_point, salient_triangle, speed_weighted
 from .steps.warping import locate_on_body
 
 
@@ -125,6 +125,7 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         dist_l = dist3(jt[J_HAND_L], torso)
         dist_r = dist3(jt[J_HAND_R], torso)
         choice = choose_active(above[0], above[1], dist_l, dist_r, int(state[ST_CHOICE]), prm[P_IDLE_FARTHER] > 0.5)
+        choice = held_choice(choice, not (above[0] or above[1]), state, int(prm[P_HOLD]))
         state[ST_CHOICE] = choice
         hand, hand_excess = active_hand(choice, dist_l, dist_r, excess)
 
@@ -138,6 +139,8 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             if by_speed:
                 w_a, w_r = speed_weighted(choice, w_a, w_r, speed_n, prm[P_SPEED_W], prm[P_OPPOSITE_W])
             dynamic_point(jt[j_a], jt[j_r], torso, w_a, w_r, 1.0, dp)  # J_T keeps weight 1
+            if prm[P_DP_ALPHA] < 1.0:  # beyond the paper: the point glides
+                glide(torso, axes, state, prm[P_DP_ALPHA], dp)
         for k in range(3):
             state[ST_PREV_DP + k] = dp[k]
         dist = dist3(dp, torso)

@@ -38,7 +38,8 @@ _RANGES = (
     ("perceptual_exponent", 0.0, 5.0), ("dead_zone", 0.0, 99.0), ("silence_floor", 0.0, 50.0),
     ("actuator_release_s", 0.0, 10.0), ("speed_start_mps", 0.0, 10.0), ("speed_full_mps", 0.0, 20.0),
     ("reach_share", 0.0, 1.0), ("active_speed_mps", 0.0, 10.0), ("opposite_weight", 0.0, 10.0),
-    ("speed_smoothing_s", 0.0, 1.0), ("speed_weight", 0.0, 100.0),
+    ("speed_smoothing_s", 0.0, 1.0), ("speed_weight", 0.0, 100.0), ("choice_hold_s", 0.0, 2.0),
+    ("point_smoothing_s", 0.0, 2.0),
 )
 """Accepted range of each numeric parameter (beyond these the renderer's numbers stop meaning anything)."""
 
@@ -59,11 +60,19 @@ class Params:
     "keep track of both distances to J_T. By comparing computed distances, we determine ... J_A") or ``keep`` the
     last choice (ours; the paper is silent)."""
 
+    choice_hold_s: float = 0.0
+    """s. A new active-joint choice is adopted only once it has been made this long without a break (ours; 0 = at
+    once, the paper): both hands moving make the three-frame threshold flip the choice several times a second."""
+
     # --- step 5: weights and the dynamic point (Eq. 1) --------------------------------------------------------
     weight_gain: float = 1.0
     """Extra weight of an active hand per unit of relative excess acceleration ((a - thr) / thr) (ours)."""
     weight_extra_max: float = 2.0
     """Cap on the extra weight (so an active hand's weight is 1..3) (ours)."""
+
+    point_smoothing_s: float = 0.0
+    """s. Time constant of a one-pole filter on MST's dynamic point relative to J_T (ours; 0 = none, the paper):
+    changes of the triangle move Eq. 1's point by jumps the filter turns into glides."""
 
     # --- step 6: locating on the vest --------------------------------------------------------------------------
     near_m: float = 0.13

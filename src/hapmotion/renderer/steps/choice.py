@@ -14,7 +14,8 @@ import numpy as np
 from numba import njit
 
 from ..packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_NONE, CHOICE_RIGHT, J_HAND_L, J_HAND_R, J_TORSO, MAX_WINDOW,
-                      ST_HIST, ST_HIST_COUNT, ST_HIST_POS, ST_PREV_REL, ST_PREV_VEL, ST_SEEN, ST_SPEED)
+                      ST_CHOICE, ST_HIST, ST_HIST_COUNT, ST_HIST_POS, ST_PENDING, ST_PENDING_N, ST_PREV_REL, ST_PREV_VEL,
+                      ST_SEEN, ST_SPEED)
 from .numeric import clip
 
 
@@ -158,6 +159,39 @@ def choose_active(above_left, above_right, dist_left, dist_right, last, idle_far
     if last != CHOICE_NONE and not idle_farther:
         return last
     return CHOICE_LEFT if dist_left >= dist_right else CHOICE_RIGHT
+
+
+@njit(cache=True, inline="always")
+def held_choice(choice, idle, state, hold_frames):
+    """Beyond the paper: a change of the active-joint choice is adopted only once it has stood ``hold_frames``
+    frames without a contrary choice; until then the current choice (``state[ST_CHOICE]``) stays.
+
+    ``idle`` (no hand above its threshold this frame, so ``choice`` only repeats or re-picks) neither confirms nor
+    breaks a pending change: it keeps counting. A frame that makes the current choice again cancels it, another
+    choice starts a new one. 0 or 1 frame, or no current choice yet: the choice is taken at once (the paper).
+    Updates the pending choice and its count in ``state``.
+
+    Both hands moving make the three-frame threshold rule flip between left, right and both several times a
+    second; each flip moves the dynamic point between two triangles.
+    """
+    current = int(state[ST_CHOICE])
+    if hold_frames <= 1 or current == CHOICE_NONE:
+        state[ST_PENDING_N] = 0.0
+        return choice
+    if idle:
+        if state[ST_PENDING_N] > 0.0:
+            state[ST_PENDING_N] += 1.0
+    elif choice == current:
+        state[ST_PENDING_N] = 0.0
+    elif int(state[ST_PENDING]) == choice and state[ST_PENDING_N] > 0.0:
+        state[ST_PENDING_N] += 1.0
+    else:
+        state[ST_PENDING] = choice
+        state[ST_PENDING_N] = 1.0
+    if state[ST_PENDING_N] >= hold_frames:
+        state[ST_PENDING_N] = 0.0
+        return int(state[ST_PENDING])
+    return current
 
 
 @njit(cache=True, inline="always")
