@@ -282,3 +282,16 @@ def test_cli_default_presets_with_figures_and_bench(tmp_path):
     assert res.exit_code == 0, res.output
     assert f"scored {len(PRESETS)} runs" in res.output
     assert (tmp_path / "r" / "bench.png").stat().st_size > 10_000
+
+
+def test_evaluate_takes_the_mix_options_and_the_default_mix_keeps_the_beat():
+    """The default (felt, duck with the kicks through) keeps the song's onsets felt under a punching performer;
+    the same evaluation with the music's share at 0 (ratio 0:1) has no kick left, so the options reach the mix."""
+    clip = SHARED_DATA / "motion" / "dataset-1_punch_normal_001.bvh"
+    song = SHARED_DATA / "audio" / "vibe_ace.ogg"
+    kept = evaluate([clip], ("mst",), ("felt",), audio=song, figures=False, bench=False)
+    assert kept.runs[0].scores["onset_r"] >= 0.7
+    gone = evaluate([clip], ("mst",), ("felt",), audio=song, figures=False, bench=False, mix_ratio=(0.0, 1.0))
+    assert gone.runs[0].scores["onset_r"] < 0.2
+    paper_rule = evaluate([clip], ("mst",), ("felt",), audio=song, figures=False, bench=False, mix_rule="paper")
+    assert paper_rule.runs[0].scores["mix_follows_audio"] != kept.runs[0].scores["mix_follows_audio"]

@@ -117,6 +117,8 @@ def evaluate(
     bench: bool = True,
     load: Callable[[str], Motion] | None = None,
     progress: Callable[[str], None] | None = None,
+    mix_ratio: tuple[float, float] = (2.0, 3.0),
+    mix_rule: str | None = None,
 ) -> Report:
     """Render every recording with every method and preset, score each track, and write the report.
 
@@ -141,6 +143,9 @@ def evaluate(
         Motion loader (default :func:`hapmotion.motion_files.load_motion`).
     progress:
         Called with a short label after each rendered run (for progress bars).
+    mix_ratio, mix_rule:
+        The multimodal mix with ``audio`` (audio:motion, and ``duck``, ``paper`` or ``energy``; ``None`` = each
+        preset's own rule), as :class:`hapmotion.show.Show` takes them.
     """
     t_start = time.perf_counter()
     if not inputs:
@@ -149,7 +154,7 @@ def evaluate(
     suffix = "*" if overrides else ""
     # Show checks the method, preset and mix names (one UsageError naming the choices)
     shows = {(m, f"{p}{suffix}"): Show(method=m, preset=p, overrides=overrides or {}, audio=audio, length="motion",
-                                        layout=layout)
+                                        layout=layout, mix_ratio=mix_ratio, mix_rule=mix_rule)
              for m in methods for p in (PRESETS if presets is None else presets)}
     if load is None:
         load = load_motion
