@@ -22,9 +22,9 @@ from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENE
                      P_MAX_LEVEL, P_METHOD, P_NEAR, P_PCT, P_PHANTOM_ENERGY, P_REL_DECAY, P_RELEASE, P_SIDE_BLEND,
                      P_SILENCE, P_TOL, P_W_GAIN, P_W_MAX, P_WINDOW, S_TPX, S_TPY, S_TPZ, ST_AXES, ST_CHOICE,
                      ST_LEVEL, ST_PREV_DP, ST_SEEN, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE,
-                     P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA)
+                     P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA, P_TORSO_START, P_TORSO_FULL)
 from .steps.choice import (active_hand, active_hands, choose_active, hand_accelerations, held_choice, moving_only,
-                           update_speeds, update_thresholds)
+                           update_speeds, update_thresholds, upper_body_speed)
 from .steps.held_joints import hold_joints
 from .steps.intensity import boosted_level, filtered_level, level_drive, normalised_distance, speed_reach_drive
 from .steps.numeric import dist3
@@ -114,8 +114,12 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
 
         # step 3: the candidates' accelerations relative to J_T
         energy = hand_accelerations(jt, state, prm[P_FPS], acc)
-        if by_speed:  # beyond the paper: hand speed relative to J_T
+        upper_n = 0.0
+        if by_speed:  # beyond the paper: hand speed relative to J_T, and the upper body's own motion
             update_speeds(state, prm[P_SPEED_ALPHA], prm[P_SPEED_START], prm[P_SPEED_FULL], speed_n)
+            if prm[P_TORSO_FULL] > 0.0:
+                upper_n = upper_body_speed(jt, state, prm[P_FPS], prm[P_SPEED_ALPHA], prm[P_TORSO_START],
+                                           prm[P_TORSO_FULL])
 
         # step 4: thresholds and the active-joint choice
         update_thresholds(state, acc, window, thr)
@@ -152,8 +156,8 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         drive = normalised_distance(dist, prm[P_INEAR], prm[P_IFAR])
         if by_speed:
             fastest = max(speed_n[0], speed_n[1])
-            drive = speed_reach_drive(drive, fastest, prm[P_REACH_SHARE])
             hand_excess *= fastest  # no boost from a hand that is not moving (capture noise)
+            drive = speed_reach_drive(drive, max(fastest, upper_n), prm[P_REACH_SHARE])
         level = filtered_level(drive, prm[P_C], state[ST_LEVEL], prm[P_ATTACK], prm[P_RELEASE])
         state[ST_LEVEL] = level
 

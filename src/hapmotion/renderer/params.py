@@ -39,7 +39,7 @@ _RANGES = (
     ("actuator_release_s", 0.0, 10.0), ("speed_start_mps", 0.0, 10.0), ("speed_full_mps", 0.0, 20.0),
     ("reach_share", 0.0, 1.0), ("active_speed_mps", 0.0, 10.0), ("opposite_weight", 0.0, 10.0),
     ("speed_smoothing_s", 0.0, 1.0), ("speed_weight", 0.0, 100.0), ("choice_hold_s", 0.0, 2.0),
-    ("point_smoothing_s", 0.0, 2.0),
+    ("point_smoothing_s", 0.0, 2.0), ("upper_speed_start_mps", 0.0, 10.0), ("upper_speed_full_mps", 0.0, 20.0),
 )
 """Accepted range of each numeric parameter (beyond these the renderer's numbers stop meaning anything)."""
 
@@ -157,6 +157,12 @@ class Params:
     """With the speed term on: extra weight of the one active hand per unit of normalised speed."""
     speed_smoothing_s: float = 0.05
     """s. Time constant of the one-pole filter on the hand speeds (0 = none)."""
+    upper_speed_full_mps: float = 0.0
+    """m/s. With the speed term on: the speed of the neck relative to the pelvis (a bow, a lean, a twist) that
+    counts as a hand at full speed; the faster of the hands' and the upper body's normalised speeds drives the
+    level. 0 = off (the hands alone)."""
+    upper_speed_start_mps: float = 0.05
+    """m/s. Below this smoothed upper-body speed its term is 0 (capture noise, breathing)."""
 
     def __post_init__(self) -> None:
         if self.idle_choice not in IDLE_CHOICES:
@@ -173,6 +179,9 @@ class Params:
             v = getattr(self, name)
             if v and v <= self.intensity_near_m:
                 raise UsageError(f"{name} must be 0 or more than intensity_near_m, not {v}")
+        if self.upper_speed_full_mps and self.upper_speed_full_mps <= self.upper_speed_start_mps:
+            raise UsageError(f"upper_speed_full_mps must be 0 or more than upper_speed_start_mps, not "
+                             f"{self.upper_speed_full_mps}")
         if self.speed_full_mps and self.speed_full_mps <= self.speed_start_mps:
             raise UsageError(f"speed_full_mps must be 0 or more than speed_start_mps, not {self.speed_full_mps}")
         if not 0.0 <= self.near_m < self.far_m:
@@ -229,6 +238,7 @@ PRESETS: dict[str, Params] = {
         active_speed_mps=0.2,
         opposite_weight=0.5,
         speed_weight=1.0,
+        upper_speed_full_mps=0.4,
     ),
 }
 """Named parameter sets. ``paper``: the paper's values. ``energy``: energy-preserving phantom split, asymmetric

@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_NONE, CHOICE_RIGHT, J_HAND_L, J_HAND_R, J_TORSO, MAX_WINDOW,
+from ..packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_NONE, CHOICE_RIGHT, J_HAND_L, J_HAND_R, J_NECK, J_PELVIS,
+                      J_TORSO, MAX_WINDOW, ST_PREV_UPPER, ST_TORSO_SPEED,
                       ST_CHOICE, ST_HIST, ST_HIST_COUNT, ST_HIST_POS, ST_PENDING, ST_PENDING_N, ST_PREV_REL, ST_PREV_VEL,
                       ST_SEEN, ST_SPEED)
 from .numeric import clip
@@ -130,6 +131,25 @@ def update_speeds(state, alpha, start, full, speed_n):
             v2 += v * v
         state[ST_SPEED + h] += alpha * (np.sqrt(v2) - state[ST_SPEED + h])
         speed_n[h] = clip((state[ST_SPEED + h] - start) / max(full - start, 1e-9), 0.0, 1.0)
+
+
+@njit(cache=True, inline="always")
+def upper_body_speed(jt, state, fps, alpha, start, full):
+    """Beyond the paper: how fast the upper body moves on its own, normalised (0..1).
+
+    The speed of the neck relative to the pelvis (m/s; a bow, a lean or a twist moves it, walking and turning the
+    whole body do not), smoothed like the hand speeds (``s += alpha (|v| - s)``), then
+    ``clip((s - start) / (full - start), 0, 1)``. A bow moves the hands with the torso, so their speed relative to
+    J_T stays near 0 and, without this term, a slow bow is silent. 0 before the second frame.
+    """
+    v2 = 0.0
+    for k in range(3):
+        rel = jt[J_NECK, k] - jt[J_PELVIS, k]
+        v = (rel - state[ST_PREV_UPPER + k]) * fps if state[ST_SEEN] >= 1.0 else 0.0
+        v2 += v * v
+        state[ST_PREV_UPPER + k] = rel
+    state[ST_TORSO_SPEED] += alpha * (np.sqrt(v2) - state[ST_TORSO_SPEED])
+    return clip((state[ST_TORSO_SPEED] - start) / max(full - start, 1e-9), 0.0, 1.0)
 
 
 @njit(cache=True, inline="always")
