@@ -15,6 +15,7 @@ import numpy as np
 from numba import njit
 
 from ..body.frame import body_axes_into, to_world_into
+from ..layout import CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT
 from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENERGY, D_HIT, D_HIT_BODY, D_LEVEL,
                      D_TP, D_U, D_V, DI_ACTIVE_L, DI_ACTIVE_R, DI_CHART, J_HAND_L, J_HAND_R, J_NECK, J_PELVIS,
                      J_SHOULDER_L, J_SHOULDER_R, J_TORSO, N_DEBUG_F, N_DEBUG_I, N_RENDER_JOINTS, P_ATTACK,
@@ -22,7 +23,7 @@ from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENE
                      P_MAX_LEVEL, P_METHOD, P_NEAR, P_PCT, P_PHANTOM_ENERGY, P_REL_DECAY, P_RELEASE, P_SIDE_BLEND,
                      P_SILENCE, P_TOL, P_W_GAIN, P_W_MAX, P_WINDOW, S_TPX, S_TPY, S_TPZ, ST_AXES, ST_CHOICE,
                      ST_LEVEL, ST_PREV_DP, ST_SEEN, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE,
-                     P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA, P_TORSO_START, P_TORSO_FULL)
+                     P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA, P_TORSO_START, P_TORSO_FULL, P_SLEEVE_SHARE, P_SLEEVE_REACH)
 from .steps.choice import (active_hand, active_hands, choose_active, hand_accelerations, held_choice, moving_only,
                            update_speeds, update_thresholds, upper_body_speed)
 from .steps.held_joints import hold_joints
@@ -30,6 +31,7 @@ from .steps.intensity import boosted_level, filtered_level, level_drive, normali
 from .steps.numeric import dist3
 from .steps.output import write_outputs, write_silence
 from .steps.phantom import spread_on_charts
+from .steps.sleeves import carry_on_sleeve
 from .steps.triangle import dynamic_point, glide, previous_dynamic_point, salient_triangle, speed_weighted
 from .steps.warping import locate_on_body
 
@@ -167,6 +169,9 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         raw[:] = 0.0
         chart, u, v = spread_on_charts(hit, face, amp, surf, charts, prm[P_SIDE_BLEND], prm[P_PHANTOM_ENERGY] > 0.5,
                                        prm[P_TOL], prm[P_MAIN_FLAT] > 0.5, raw)
+        if prm[P_SLEEVE_SHARE] > 0.0 and chart != CHART_SHOULDER_LEFT and chart != CHART_SHOULDER_RIGHT:
+            carry_on_sleeve(jt, hand, speed_n, by_speed, axes, amp, prm[P_SLEEVE_SHARE], prm[P_SLEEVE_REACH],
+                            charts, prm[P_PHANTOM_ENERGY] > 0.5, prm[P_TOL], raw)
 
         # output: dead zone, clip, mirror, per-actuator release
         write_outputs(raw, prm[P_DEAD], prm[P_SILENCE], prm[P_REL_DECAY], mirror_map, state, out[t])

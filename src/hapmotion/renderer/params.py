@@ -40,6 +40,7 @@ _RANGES = (
     ("reach_share", 0.0, 1.0), ("active_speed_mps", 0.0, 10.0), ("opposite_weight", 0.0, 10.0),
     ("speed_smoothing_s", 0.0, 1.0), ("speed_weight", 0.0, 100.0), ("choice_hold_s", 0.0, 2.0),
     ("point_smoothing_s", 0.0, 2.0), ("upper_speed_start_mps", 0.0, 10.0), ("upper_speed_full_mps", 0.0, 20.0),
+    ("sleeve_share", 0.0, 1.0), ("sleeve_reach_m", 0.01, 2.0),
 )
 """Accepted range of each numeric parameter (beyond these the renderer's numbers stop meaning anything)."""
 
@@ -139,6 +140,13 @@ class Params:
     actuator_release_s: float = 0.0
     """Per-actuator release time constant, seconds: outputs rise at once and decay no faster than this
     (smooths location jumps for slow ERMs); 0 = off."""
+
+    sleeve_share: float = 0.0
+    """Share of the frame's amplitude (of energy with the energy split) added on the sleeve of the rendered hand's
+    side while that hand is above or outside its shoulder, times how far (``sleeve_reach_m``); 0 = off (ours:
+    the paper added the sleeves for what the vest misses, and the ray alone seldom reaches them)."""
+    sleeve_reach_m: float = 0.25
+    """m. The hand's height above, or reach outside, its shoulder at which the sleeve share is full."""
 
     # --- beyond the paper: hand speed (0 = off, the paper's distance-only intensity) ---------------------------
     speed_full_mps: float = 0.0

@@ -74,6 +74,8 @@ def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
     p[packed.P_TORSO_START] = params.upper_speed_start_mps
     p[packed.P_TORSO_FULL] = (max(params.upper_speed_full_mps, params.upper_speed_start_mps + 1e-6)
                               if params.upper_speed_full_mps > 0 else 0.0)
+    p[packed.P_SLEEVE_SHARE] = params.sleeve_share
+    p[packed.P_SLEEVE_REACH] = params.sleeve_reach_m
     p[packed.P_HOLD] = max(1, int(round(params.choice_hold_s * fps))) if params.choice_hold_s > 0 else 0
     p[packed.P_DP_ALPHA] = (1.0 - float(np.exp(-1.0 / (fps * params.point_smoothing_s)))
                             if params.point_smoothing_s > 0 else 1.0)
