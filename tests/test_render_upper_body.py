@@ -1,5 +1,6 @@
-"""The upper body's own motion (a bow, a lean) drives the default preset's level, with the hands still relative to
-the torso; a still performer, and one who turns or walks as a whole, stay silent."""
+"""The whole upper body in the default preset: its own motion (a bow, a lean) drives the level with the hands still
+relative to the torso; a still performer, and one who turns or walks as a whole, stay silent; raised hands are
+felt high."""
 
 from __future__ import annotations
 
@@ -64,3 +65,30 @@ def test_still_turning_or_walking_as_a_whole_is_silent():
 def test_upper_speed_parameters_are_checked():
     with pytest.raises(UsageError, match="upper_speed_full_mps"):
         PRESETS["felt"].replace(upper_speed_full_mps=0.04)
+
+
+@pytest.mark.parametrize("method", ["mst", "baseline"])
+def test_raised_hands_are_felt_in_the_upper_rows(method):
+    """24 seeded raises (a hand lifted 0.25-0.6 m above its shoulder, 0-0.5 m out, 0.1 m back to 0.4 m forward,
+    waving there): with the hand up, the vest's top two rows and the sleeves carry more energy than its bottom
+    two rows in every one."""
+    ids = hapmotion.load_layout().actuators
+    row = np.array([int(a.split("_")[1]) // 4 if a.startswith("Vest") else -1 for a in ids])
+    sleeve = np.array([a.startswith("Forearm") for a in ids])
+    rng = np.random.default_rng(3)
+    for g in range(24):
+        side = 1.0 if g % 2 == 0 else -1.0
+        hand = "HAND_LEFT" if side > 0 else "HAND_RIGHT"
+        top = np.array([side * 0.19, 1.45, 0.0]) + np.array([side * rng.uniform(0.0, 0.5), rng.uniform(0.25, 0.6),
+                                                             rng.uniform(-0.1, 0.4)])
+        t = np.linspace(0.0, 1.0, 150)
+        s = np.minimum(t / 0.5, 1.0)
+        s = s ** 3 * (10 - 15 * s + 6 * s * s)
+        rest = np.array([side * 0.24, 0.85, 0.0])
+        path = rest + s[:, None] * (top - rest)
+        path[:, 0] += 0.05 * np.sin(4 * np.pi * t) * (t > 0.5)
+        frames = np.repeat(pose()[None], 150, axis=0)
+        frames[:, JOINT_INDEX[hand]] = path
+        e = (hapmotion.render(motion_from_frames(frames), method=method).intensities[75:] ** 2).sum(axis=0)
+        upper = e[(row >= 0) & (row <= 1)].sum() + e[sleeve].sum()
+        assert upper > e[row >= 3].sum() and upper > 0, g
