@@ -17,7 +17,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from hapmotion.renderer.params import PRESETS, Params
+from hapmotion.renderer.params import PAPER_VARIANTS, PRESETS, Params
 from hapmotion.metrics.scorecard import COLUMNS, PERCENT_KEYS, motion_facts, score_track
 from hapmotion.metrics.sweep import run_bench
 from hapmotion.cli.show_options import parse_param_overrides
@@ -32,11 +32,16 @@ SHIPPED: dict[str, Any] = {f.name: getattr(PRESETS["energy"], f.name) for f in f
                            if getattr(PRESETS["energy"], f.name) != getattr(PAPER, f.name)}
 """The ``energy`` preset as params.py defines it (its changes from ``paper``), read from the preset itself."""
 
+EARLIER: dict[str, Any] = dict(PAPER_VARIANTS["earlier"])
+"""The ``paper`` preset's earlier readings (D_t over 13..185 cm, keep the last choice, flat 2D main node), on which
+the ``energy`` preset was built."""
+
 VARIANTS: dict[str, dict[str, Any]] = {
     "paper": {},
-    "+ energy split": {"phantom": "energy"},
-    "+ attack 0.6 / release 0.3": {"phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.3},
-    "+ dead zone 10": {"phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.3, "dead_zone": 10.0},
+    "paper, earlier readings": EARLIER,
+    "+ energy split": {**EARLIER, "phantom": "energy"},
+    "+ attack 0.6 / release 0.3": {**EARLIER, "phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.3},
+    "+ dead zone 10": {**EARLIER, "phantom": "energy", "attack_alpha": 0.6, "release_alpha": 0.3, "dead_zone": 10.0},
     "energy (shipped)": SHIPPED,
     "shipped, release_alpha 0.15": {**SHIPPED, "release_alpha": 0.15},
     "shipped, release_alpha 0.5": {**SHIPPED, "release_alpha": 0.5},
@@ -46,7 +51,8 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "shipped, no perceptual mapping": {**SHIPPED, "perceptual_exponent": 0.0},
     "shipped, paper split": {**SHIPPED, "phantom": "paper"},
 }
-"""Cumulative steps from ``paper`` to the shipped ``energy`` preset, then one knob at a time on top of it;
+"""``paper``, then cumulative steps from its earlier readings to the shipped ``energy`` preset, then one knob at a
+time on top of it;
 :func:`main` adds variants given on the command line as ``NAME=VALUE,...`` on top of the shipped preset."""
 
 

@@ -57,6 +57,18 @@ def test_duck_is_the_default_and_worked_by_hand():
     np.testing.assert_allclose(mix(np.zeros(3), audio, ratio=(1, 0)), audio)
 
 
+def test_a_kick_comes_through_the_duck_under_motion():
+    """Only a kick rises above the continuous part's ceiling (max_level 60): it passes at kick_through (0.7) of its
+    level, neither compressed nor ducked, while the continuous bed beside it is ducked as before."""
+    motion = np.array([0.0, 80.0, 0.0])
+    audio = np.array([100.0, 100.0, 60.0])
+    out = mix(motion, audio)
+    np.testing.assert_allclose(out, [70.0, 100.0, 18.0])  # hypot(80, 70) = 106 is clipped to 100
+    # the earlier rule (kick_through 0): the kick is compressed and ducked like the bed: 20 + 0.4 * 80 = 52, x 0.5
+    np.testing.assert_allclose(mix(motion, audio, params=AudioParams(kick_through=0.0))[0], 26.0)
+    np.testing.assert_allclose(mix(motion, audio, ratio=(0, 1)), motion)  # motion only: no kick either
+
+
 def test_duck_gives_way_near_the_motion_on_the_layout():
     layout = hapmotion.load_layout()
     pos = layout.positions()

@@ -15,7 +15,7 @@ from hapmotion.body.model import BodyModel
 from hapmotion.skeleton.joints import JOINT_INDEX
 from hapmotion.layout import load_layout
 from hapmotion.renderer.steps.phantom import split_energy, split_paper
-from hapmotion.renderer.params import alpha_at
+from hapmotion.renderer.params import PAPER_VARIANTS, PRESETS, alpha_at
 
 LAYOUT = load_layout()
 IDS = LAYOUT.actuators
@@ -56,15 +56,59 @@ def test_dynamic_point_eq1_with_unit_weights():
 
 
 def test_intensity_filter_eq2_by_hand():
-    """I_t = alpha D_t C + (1 - alpha) I_{t-1} with alpha 0.5, C 6, I_0 = 0; D = (d - 0.13) / (1.85 - 0.13)."""
+    """I_t = alpha D_t C + (1 - alpha) I_{t-1} with alpha 0.5, C 6, I_0 = 0; D = d / 0.35 (full scale where a
+    stretched arm puts the dynamic point), clipped to 1."""
     hand = (0.89, 1.45, 0.0)
     track = render_paper(still(pose(HAND_LEFT=hand), n=8))
     dp = (np.array(hand) + np.array([-0.19, 1.45, 0.0]) + np.array([0.0, 1.10, 0.0])) / 3
     d = np.linalg.norm(dp - np.array([0.0, 1.10, 0.0]))
-    big_d = (d - 0.13) / (1.85 - 0.13)
+    big_d = min(d / 0.35, 1.0)
     expected = [6 * big_d * (1 - 0.5 ** t) for t in range(1, 9)]
     np.testing.assert_allclose(track.debug["level"], expected, rtol=1e-12)
     np.testing.assert_allclose(track.debug["distance"], d, rtol=1e-12)
+
+
+def test_the_earlier_13_to_185_cm_reading_stays_available_as_a_variant():
+    """``PAPER_VARIANTS["range-185"]``: D = (d - 0.13) / (1.85 - 0.13), the earlier reading."""
+    hand = (0.89, 1.45, 0.0)
+    params = PRESETS["paper"].replace(**PAPER_VARIANTS["range-185"])
+    track = hapmotion.render(still(pose(HAND_LEFT=hand), n=8), params=params)
+    d = track.debug["distance"][0]
+    expected = [6 * (d - 0.13) / 1.72 * (1 - 0.5 ** t) for t in range(1, 9)]
+    np.testing.assert_allclose(track.debug["level"], expected, rtol=1e-12)
+
+
+@pytest.mark.parametrize("direction", [(0, 0, 1), (1, 0, 0), (0, 1, 0)])
+def test_a_fully_stretched_arm_reaches_the_full_scale(direction):
+    """Sections 4.3.2-4.3.3: C = 6 is the base level and C + 2 = 8 the maximum, so a still arm stretched 70 cm from
+    the shoulder forward, sideways or overhead must reach at least 0.8 C. DP at unit weights = (hand + opposite
+    shoulder + J_T) / 3: 0.33 m from J_T forward and sideways, 0.47 m overhead; D = min(d / 0.35, 1)."""
+    hand = np.array([0.19, 1.45, 0.0]) + 0.70 * np.array(direction, dtype=float)
+    track = render_paper(still(pose(HAND_LEFT=tuple(hand)), n=120))
+    dp = (hand + np.array([-0.19, 1.45, 0.0]) + np.array([0.0, 1.10, 0.0])) / 3
+    d = np.linalg.norm(dp - np.array([0.0, 1.10, 0.0]))
+    assert track.debug["level"][-1] == pytest.approx(6 * min(d / 0.35, 1.0), rel=1e-9)
+    assert track.debug["level"][-1] >= 0.8 * 6
+
+
+@pytest.mark.parametrize("method", ["mst", "baseline"])
+def test_level_rises_with_reach(method):
+    """Fig. 10 (top): the intensity increases as the distance from the body gets larger (still arm forward,
+    10-70 cm from the shoulder)."""
+    levels = [render_paper(still(pose(HAND_LEFT=(0.19, 1.45, r)), n=120), method=method).debug["level"][-1]
+              for r in np.linspace(0.1, 0.7, 7)]
+    assert np.all(np.diff(levels) >= 0) and levels[-1] > levels[0] + 1.0
+
+
+def test_forward_and_back_at_the_same_speed_is_tracked_by_the_level():
+    """Section 4.3.3: the level follows the distance, so a hand going forward and back at 0.5 m/s is tracked:
+    Pearson(forward displacement, level) >= 0.8 (0.29 with the earlier 13..185 cm reading)."""
+    t = np.arange(600) / 60.0
+    tri = 0.5 * np.abs((t % 2) - 1)
+    frames = np.repeat(pose()[None], t.size, axis=0)
+    frames[:, JOINT_INDEX["HAND_LEFT"]] = np.stack([0.2 + 0 * t, 1.3 + 0 * t, 0.1 + tri], axis=1)
+    track = render_paper(motion_from_frames(frames))
+    assert np.corrcoef(tri[60:], track.debug["level"][60:])[0, 1] >= 0.8
 
 
 def test_alpha_keeps_the_time_constant_at_other_rates():
@@ -74,16 +118,24 @@ def test_alpha_keeps_the_time_constant_at_other_rates():
     assert (1 - a120) ** 2 == pytest.approx(0.5)
 
 
-def test_on_the_body_under_13_cm_gives_no_distance_intensity():
-    """Hands hanging at the hips: the centroid is within 13 cm of J_T, so D = 0 and the vest stays silent."""
+def test_on_the_body_under_13_cm_is_felt():
+    """Section 4.2.1, Fig. 8b: under 13 cm the surface nodes "transfer tactile feedback". Hands hanging at the hips:
+    the dynamic point is within 13 cm of J_T, mapped onto the surface, and its distance still gives the level
+    D = d / 0.35 (the earlier 13..185 cm reading left it silent)."""
     p = pose(HAND_LEFT=(0.05, 1.08, 0.10), HAND_RIGHT=(-0.05, 1.08, 0.10))
     track = render_paper(still(p, n=10))
-    assert (track.debug["distance"] < 0.13).all()
-    assert track.intensities.max() == 0.0
+    d = track.debug["distance"]
+    assert (d < 0.13).all()
+    expected = [6 * d[0] / 0.35 * (1 - 0.5 ** t) for t in range(1, 11)]
+    np.testing.assert_allclose(track.debug["level"], expected, rtol=1e-12)
+    assert track.intensities[-1].max() > 0.0
+    earlier = hapmotion.render(still(p, n=10), params=PRESETS["paper"].replace(**PAPER_VARIANTS["range-185"]))
+    assert earlier.intensities.max() == 0.0
 
 
 def test_out_of_range_projection_caps_distance_at_185_cm():
-    """Baseline with a hand 3 m away: D is clipped to 1 and the level tends to C = 6 (60 %)."""
+    """Baseline with a hand 3 m away: D (over the baseline's 0.8 m full scale) is clipped to 1 and the level tends
+    to C = 6 (60 %)."""
     far = pose(HAND_LEFT=(0.19, 1.45, 3.0))
     track = render_paper(still(far, n=200), method="baseline")
     assert track.debug["level"][-1] == pytest.approx(6.0, abs=1e-9)
@@ -115,13 +167,53 @@ def test_phantom_split_paper_1d_and_2d():
     expect[2 * 4 + 2] = 50 * 0.25
     np.testing.assert_allclose(raw, expect)
     raw[:] = 0
-    split_paper(1.3, 2.2, 4, 5, 40.0, 0.05, 0, raw)  # 2D: main (1, 2) x 0.5, neighbours K a, diagonal mean
+    split_paper(1.3, 2.2, 4, 5, 40.0, 0.05, 0, raw)  # 2D: main 0.5 [K(1-a_u) + K(1-a_v)], neighbours K a, diag mean
     expect[:] = 0
-    expect[2 * 4 + 1] = 20.0
+    expect[2 * 4 + 1] = 0.5 * (40 * 0.7 + 40 * 0.8)
     expect[2 * 4 + 2] = 40 * 0.3
     expect[3 * 4 + 1] = 40 * 0.2
     expect[3 * 4 + 2] = (40 * 0.3 + 40 * 0.2) / 2
     np.testing.assert_allclose(raw, expect, atol=1e-12)
+
+
+def test_phantom_split_flat_main_node_is_the_literal_half():
+    raw = np.zeros(20)
+    split_paper(1.3, 2.2, 4, 5, 40.0, 0.05, 0, raw, True)
+    assert raw[2 * 4 + 1] == pytest.approx(20.0)
+    assert raw.sum() == pytest.approx(20.0 + 12.0 + 8.0 + 10.0)
+
+
+def largest_jump_at_the_1d_2d_border(flat_main: bool) -> float:
+    """Fig. 11: the largest change of any motor (share of K) as the point crosses the 1D band's edge."""
+    worst = 0.0
+    for a in np.linspace(0.06, 0.5, 23):
+        rows = []
+        for dv in (0.05 - 1e-9, 0.05 + 1e-9):
+            raw = np.zeros(20)
+            split_paper(1.0 + a, 2.0 + dv, 4, 5, 1.0, 0.05, 0, raw, flat_main)
+            rows.append(raw)
+        worst = max(worst, float(np.abs(rows[1] - rows[0]).max()))
+    return worst
+
+
+def test_the_main_node_reading_shrinks_the_jump_at_the_1d_2d_border():
+    """The flat 0.5 K main node drops by up to 0.44 K (at a = 0.06: from K(1 - a) to 0.5 K); the halved 1D shares
+    change it by 0.5 K a_u + ..., at most about a quarter of K, as does the diagonal appearing (0.5 K a_u)."""
+    assert largest_jump_at_the_1d_2d_border(True) == pytest.approx(0.44, abs=0.005)
+    assert largest_jump_at_the_1d_2d_border(False) == pytest.approx(0.275, abs=0.005)
+
+
+def test_no_active_hand_re_picks_the_farther_hand():
+    """Flow step 3: the hands' distances to J_T decide J_A. After a left-hand jerk, both hands still: the right hand
+    is farther from J_T, so it becomes J_A again; the earlier ``keep-last`` reading stays on the left."""
+    frames = np.repeat(pose(HAND_LEFT=(0.3, 1.2, 0.2), HAND_RIGHT=(-0.6, 1.4, 0.2))[None], 40, axis=0)
+    frames[20:, JOINT_INDEX["HAND_LEFT"], 0] += 0.05
+    farther = render_paper(motion_from_frames(frames)).debug["active"]
+    keep = hapmotion.render(motion_from_frames(frames),
+                            params=PRESETS["paper"].replace(**PAPER_VARIANTS["keep-last"])).debug["active"]
+    assert (farther[20] == [1, 0]).all() and (keep[20] == [1, 0]).all()
+    assert (farther[-1] == [0, 1]).all()
+    assert (keep[-1] == [1, 0]).all()
 
 
 def test_phantom_split_energy_preserves_energy_and_centroid():

@@ -257,19 +257,19 @@ def test_spread_on_charts_puts_a_node_hit_on_one_actuator_and_shares_side_hits()
     raw = np.zeros(52)
     y_mid = 0.5 * (0.25 - 0.05)  # v = 0.5: row 2
     hit = np.array([-0.2 * A, y_mid, B])  # u = 1/3: column 1, on the front
-    chart, u, v = spread_on_charts(hit, FACE_SIDE, 40.0, surf, tab, 0.5, False, 0.05, raw)
+    chart, u, v = spread_on_charts(hit, FACE_SIDE, 40.0, surf, tab, 0.5, False, 0.05, False, raw)
     assert (chart, u, v) == (CHART_FRONT, pytest.approx(1 / 3), pytest.approx(0.5))
     expected = np.zeros(52)
     expected[2 * 4 + 1] = 40.0
     np.testing.assert_allclose(raw, expected)
     raw[:] = 0.0
     side = np.array([-0.2 * A, y_mid, 0.0])  # z = 0: half on the front, half on the back (paper: amplitude)
-    spread_on_charts(side, FACE_SIDE, 40.0, surf, tab, 0.5, False, 0.05, raw)
+    spread_on_charts(side, FACE_SIDE, 40.0, surf, tab, 0.5, False, 0.05, False, raw)
     expected[2 * 4 + 1] = 20.0
     expected[20 + 2 * 4 + 1] = 20.0
     np.testing.assert_allclose(raw, expected)
     raw[:] = 0.0
-    spread_on_charts(side, FACE_SIDE, 40.0, surf, tab, 0.5, True, 0.05, raw)  # energy: half the energy each
+    spread_on_charts(side, FACE_SIDE, 40.0, surf, tab, 0.5, True, 0.05, False, raw)  # energy: half the energy each
     np.testing.assert_allclose(raw[[9, 29]], [40.0 / np.sqrt(2)] * 2)
     assert (raw ** 2).sum() == pytest.approx(1600.0)
 

@@ -10,7 +10,10 @@ Three rules (``rule``), all stateless per frame so live and file rendering mix a
       bed   = floor + s (A - floor)             where A >= floor (floor = AudioParams.min_level), else A
       bed  *= (1 - duck_motion_depth x min(1, sum (M/100)^2 / duck_reference_power))
       bed  *= (1 - duck_locus_depth x L),   L_i = max_j exp(-d_ij^2 / 2 r^2) min(1, M_j / floor)
+      bed   = kick_through x A                 where A > max_level (only a kick is above the continuous ceiling)
       I     = sqrt(M^2 + bed^2)
+
+  so the beat stays a distinct rise on the motors while the performer moves.
 
 - ``paper``: the HapMotion paper's study-2 weighted sum, ``I = 0.4 I_audio + 0.6 I_motion`` at 2:3;
 - ``energy``: the weighted sum of vibration powers, ``I = sqrt(0.4 I_audio^2 + 0.6 I_motion^2)`` (research doc 3.7
@@ -112,6 +115,8 @@ def duck_mix(motion: np.ndarray, audio: np.ndarray, audio_share: float, kernel: 
     for j in range(motion.shape[-1]):  # max over source motors without an (T, N, N) array
         np.maximum(locus, running[..., j:j + 1] * kernel[:, j], out=locus)
     bed = bed * (1.0 - p.duck_locus_depth * locus)
+    if p.kick_through > 0.0 and audio_share > 0.0:  # only a kick rises above the continuous ceiling: not ducked
+        bed = np.where(audio > p.max_level, p.kick_through * audio, bed)
     return np.sqrt(motion ** 2 + bed ** 2)
 
 

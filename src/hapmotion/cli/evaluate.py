@@ -12,7 +12,8 @@ import click
 from ..errors import UsageError
 from ..renderer.params import METHODS, PRESETS
 from .motion_options import motion_options, read_motion
-from .show_options import param_option, parse_param_overrides, split_list
+from ..audio.mix import parse_mix_ratio
+from .show_options import SHOW_OPTIONS, mix_rule_option, param_option, parse_param_overrides, split_list
 
 
 def _unsized_terminal() -> dict[str, int]:
@@ -44,12 +45,15 @@ def _names(text: str, what: str, allowed) -> list[str]:
 @click.option("--audio", "audio_file", type=click.Path(exists=True, dir_okay=False), default=None,
               help="Song to mix with every track (the multimodal show): adds onset agreement, lateral accuracy "
                    "with music, how the mix follows the music.")
+@SHOW_OPTIONS["mix"]
+@mix_rule_option
 @click.option("--no-figures", is_flag=True, help="Tables only (faster).")
 @click.option("--bench/--no-bench", default=False, show_default=True,
               help="Also run the synthetic sweep bench (hand tracing known paths, not the INPUT recordings) and "
                    "add it to the report.")
 @motion_options
-def command(inputs, output, methods, presets, params, audio_file, no_figures, bench, motion_opts=None):
+def command(inputs, output, methods, presets, params, audio_file, mix_ratio, mix_rule, no_figures, bench,
+            motion_opts=None):
     """Measure the feel: render each INPUT motion file with each method and preset and score the tracks.
 
     \b
@@ -75,6 +79,10 @@ def command(inputs, output, methods, presets, params, audio_file, no_figures, be
     method_list = _names(methods, "method", METHODS)
     preset_list = _names(presets, "preset", PRESETS) if presets is not None else list(PRESETS)
     overrides = parse_param_overrides(params)
+    ratio = parse_mix_ratio(mix_ratio)
+    if audio_file is None and (mix_ratio != "2:3" or mix_rule is not None):
+        raise UsageError(f"{'--mix' if mix_ratio != '2:3' else '--mix-rule'} sets how the music mixes: give --audio "
+                         "SONG too")
     total = steps(len(inputs), len(method_list), len(preset_list), bench=bench, write=True)
     # the bar is drawn at once and names the step it waits for (reading a clip, the first run's compilation, the
     # figures), so a long evaluation never sits silent; off a terminal (a log, a pipe) nothing is drawn
@@ -91,7 +99,7 @@ def command(inputs, output, methods, presets, params, audio_file, no_figures, be
         report = evaluate(
             list(inputs), method_list, preset_list, out_dir=Path(output), audio=audio_file, overrides=overrides,
             figures=not no_figures, bench=bench, load=lambda p: read_motion(p, **motion_opts),
-            progress=progress, status=status,
+            progress=progress, status=status, mix_ratio=ratio, mix_rule=mix_rule,
         )
     finally:
         bar.close()

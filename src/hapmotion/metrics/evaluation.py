@@ -123,6 +123,8 @@ def evaluate(
     load: Callable[[str], Motion] | None = None,
     progress: Callable[[str], None] | None = None,
     status: Callable[[str], None] | None = None,
+    mix_ratio: tuple[float, float] = (2.0, 3.0),
+    mix_rule: str | None = None,
 ) -> Report:
     """Render every recording with every method and preset, score each track, and write the report.
 
@@ -152,6 +154,9 @@ def evaluate(
         Called with what is about to take time (reading a recording, a run, the bench, the figures), so a progress
         bar can say what it waits for: the first run also compiles the renderer (numba), and a large recording
         takes seconds to read.
+    mix_ratio, mix_rule:
+        The multimodal mix with ``audio`` (audio:motion, and ``duck``, ``paper`` or ``energy``; ``None`` = each
+        preset's own rule), as :class:`hapmotion.show.Show` takes them.
     """
     t_start = time.perf_counter()
     if not inputs:
@@ -160,7 +165,7 @@ def evaluate(
     suffix = "*" if overrides else ""
     # Show checks the method, preset and mix names (one UsageError naming the choices)
     shows = {(m, f"{p}{suffix}"): Show(method=m, preset=p, overrides=overrides or {}, audio=audio, length="motion",
-                                        layout=layout)
+                                        layout=layout, mix_ratio=mix_ratio, mix_rule=mix_rule)
              for m in methods for p in (PRESETS if presets is None else presets)}
     if load is None:
         load = load_motion

@@ -16,10 +16,12 @@ the square-root energy split of Tactile Brush, Israr & Poupyrev, CHI 2011):
 
 * **row / column** sweeps cross motor to motor along a grid line: the paper's 1D rule ``K(1-a), K a`` has energy
   ``K^2 ((1-a)^2 + a^2)``, a 3.01 dB dip at every midpoint; the energy split keeps ``K^2`` (0 dB).
-* the **diagonal** sweep crosses cells corner to corner (``a_u = a_v = a``): the paper's 2D rule (main x 0.5,
-  neighbours ``K a``, diagonal their mean) has energy ``K^2 (1/4 + 3 a^2)`` once ``a`` leaves the 1D tolerance, so
-  it falls from ``K^2`` at a motor to ``K^2 (1/4 + 3 tol^2)`` just beside it (-5.9 dB for tol = 0.05) and climbs
-  back to ``K^2`` at the cell centre; the energy split keeps ``K^2``.
+* the **diagonal** sweep crosses cells corner to corner (``a_u = a_v = a``): the paper's 2D rule (neighbours
+  ``K a``, diagonal their mean, the main node ``0.5 [K(1 - a_u) + K(1 - a_v)]``, the ``paper`` preset's reading)
+  has energy ``K^2 ((1 - a)^2 + 3 a^2)`` once ``a`` leaves the 1D tolerance: from ``K^2`` at a motor down to
+  ``0.75 K^2`` at ``a = 1/4`` (-1.25 dB) and back to ``K^2`` at the cell centre. With the literal flat main node
+  ``0.5 K`` (``phantom_main = "flat"``) it is ``K^2 (1/4 + 3 a^2)``: from ``K^2`` at a motor to
+  ``K^2 (1/4 + 3 tol^2)`` just beside it (-5.9 dB for tol = 0.05). The energy split keeps ``K^2``.
 * the **still** case holds the hand at one point: a constant track (no toggles, no jerk once settled).
 
 :func:`reasoned_energy`, :func:`reasoned_commands` and :func:`reasoned_centroids` compute the expected energy,
@@ -192,12 +194,13 @@ def sweep_case(
     return SweepCase(name, motion, sweep, hit, np.stack([cu, cv], axis=1), body)
 
 
-def reasoned_energy(grid: np.ndarray, phantom: str, tol: float = 0.05) -> np.ndarray:
+def reasoned_energy(grid: np.ndarray, phantom: str, tol: float = 0.05, flat_main: bool = False) -> np.ndarray:
     """Expected ``E / K^2`` of each frame from the phantom formulas, for grid coordinates ``(T, 2)``.
 
     ``energy``: 1 everywhere. ``paper``: at a motor (both offsets within ``tol``) 1; along a grid line the 1D rule
-    ``(1-a)^2 + a^2``; inside a cell the 2D rule, main ``1/2``, neighbours ``a_u``, ``a_v``, diagonal
-    ``(a_u + a_v)/2``, with ``a`` the offsets from the *nearest* motor (the paper's main node).
+    ``(1-a)^2 + a^2``; inside a cell the 2D rule, main ``1 - (a_u + a_v)/2`` (``1/2`` with ``flat_main``),
+    neighbours ``a_u``, ``a_v``, diagonal ``(a_u + a_v)/2``, with ``a`` the offsets from the *nearest* motor (the
+    paper's main node).
     """
     g = np.asarray(grid, dtype=np.float64)
     if phantom == "energy":
@@ -208,13 +211,14 @@ def reasoned_energy(grid: np.ndarray, phantom: str, tol: float = 0.05) -> np.nda
     av = np.abs(g[:, 1] - np.floor(g[:, 1] + 0.5))
     one_d_u = (1 - au) ** 2 + au**2
     one_d_v = (1 - av) ** 2 + av**2
-    two_d = 0.25 + au**2 + av**2 + 0.25 * (au + av) ** 2
+    main = 0.5 if flat_main else 1.0 - 0.5 * (au + av)
+    two_d = main**2 + au**2 + av**2 + 0.25 * (au + av) ** 2
     return np.where(
         (au <= tol) & (av <= tol), 1.0, np.where(av <= tol, one_d_u, np.where(au <= tol, one_d_v, two_d))
     )
 
 
-def _weights(grid: np.ndarray, phantom: str, layout: Layout, tol: float) -> np.ndarray:
+def _weights(grid: np.ndarray, phantom: str, layout: Layout, tol: float, flat_main: bool = False) -> np.ndarray:
     """``(T, N)`` amplitude shares (per unit K) on the front panel, from the phantom formulas."""
     dev = layout.chart_device(0)
     cols, rows = dev.cols, dev.rows
@@ -241,7 +245,7 @@ def _weights(grid: np.ndarray, phantom: str, layout: Layout, tol: float) -> np.n
             w[t, main] += 1 - av
             w[t, main + dj * cols] += av
         else:
-            w[t, main] += 0.5
+            w[t, main] += 0.5 if flat_main else 1.0 - 0.5 * (au + av)
             w[t, main + di] += au
             w[t, main + dj * cols] += av
             w[t, main + dj * cols + di] += 0.5 * (au + av)
@@ -261,7 +265,7 @@ def reasoned_commands(case: SweepCase, params, level: float, layout: Layout | No
     amp = level * params.percent_per_level
     if params.perceptual_exponent > 0:
         amp = 100.0 * (min(amp, 100.0) / 100.0) ** (1.0 / params.perceptual_exponent)
-    x = amp * _weights(case.grid, params.phantom, layout, params.phantom_1d_tolerance)
+    x = amp * _weights(case.grid, params.phantom, layout, params.phantom_1d_tolerance, params.phantom_main == "flat")
     if params.dead_zone > 0:
         x = np.where(x < params.silence_floor, 0.0,
                      params.dead_zone + (100.0 - params.dead_zone) * np.minimum(x, 100.0) / 100.0)

@@ -15,6 +15,7 @@ import numpy as np
 from numba import njit
 
 from ..body.frame import body_axes_into, to_world_into
+from ..layout import CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT
 from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENERGY, D_HIT, D_HIT_BODY, D_LEVEL,
                      D_TP, D_U, D_V, DI_ACTIVE_L, DI_ACTIVE_R, DI_CHART, J_HAND_L, J_HAND_R, J_NECK, J_PELVIS,
                      J_SHOULDER_L, J_SHOULDER_R, J_TORSO, N_DEBUG_F, N_DEBUG_I, N_RENDER_JOINTS, P_ATTACK,
@@ -22,15 +23,16 @@ from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENE
                      P_MAX_LEVEL, P_METHOD, P_NEAR, P_PCT, P_PHANTOM_ENERGY, P_REL_DECAY, P_RELEASE, P_SIDE_BLEND,
                      P_SILENCE, P_TOL, P_W_GAIN, P_W_MAX, P_WINDOW, S_TPX, S_TPY, S_TPZ, ST_AXES, ST_CHOICE,
                      ST_LEVEL, ST_PREV_DP, ST_SEEN, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE,
-                     P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W)
-from .steps.choice import (active_hand, active_hands, choose_active, hand_accelerations, moving_only, update_speeds,
-                           update_thresholds)
+                     P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA, P_TORSO_START, P_TORSO_FULL, P_SLEEVE_SHARE, P_SLEEVE_REACH)
+from .steps.choice import (active_hand, active_hands, choose_active, hand_accelerations, held_choice, moving_only,
+                           update_speeds, update_thresholds, upper_body_speed)
 from .steps.held_joints import hold_joints
 from .steps.intensity import boosted_level, filtered_level, level_drive, normalised_distance, speed_reach_drive
 from .steps.numeric import dist3
 from .steps.output import write_outputs, write_silence
 from .steps.phantom import spread_on_charts
-from .steps.triangle import dynamic_point, previous_dynamic_point, salient_triangle, speed_weighted
+from .steps.sleeves import carry_on_sleeve
+from .steps.triangle import dynamic_point, glide, previous_dynamic_point, salient_triangle, speed_weighted
 from .steps.warping import locate_on_body
 
 
@@ -114,8 +116,12 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
 
         # step 3: the candidates' accelerations relative to J_T
         energy = hand_accelerations(jt, state, prm[P_FPS], acc)
-        if by_speed:  # beyond the paper: hand speed relative to J_T
+        upper_n = 0.0
+        if by_speed:  # beyond the paper: hand speed relative to J_T, and the upper body's own motion
             update_speeds(state, prm[P_SPEED_ALPHA], prm[P_SPEED_START], prm[P_SPEED_FULL], speed_n)
+            if prm[P_TORSO_FULL] > 0.0:
+                upper_n = upper_body_speed(jt, state, prm[P_FPS], prm[P_SPEED_ALPHA], prm[P_TORSO_START],
+                                           prm[P_TORSO_FULL])
 
         # step 4: thresholds and the active-joint choice
         update_thresholds(state, acc, window, thr)
@@ -125,6 +131,7 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         dist_l = dist3(jt[J_HAND_L], torso)
         dist_r = dist3(jt[J_HAND_R], torso)
         choice = choose_active(above[0], above[1], dist_l, dist_r, int(state[ST_CHOICE]), prm[P_IDLE_FARTHER] > 0.5)
+        choice = held_choice(choice, not (above[0] or above[1]), state, int(prm[P_HOLD]))
         state[ST_CHOICE] = choice
         hand, hand_excess = active_hand(choice, dist_l, dist_r, excess)
 
@@ -138,6 +145,8 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             if by_speed:
                 w_a, w_r = speed_weighted(choice, w_a, w_r, speed_n, prm[P_SPEED_W], prm[P_OPPOSITE_W])
             dynamic_point(jt[j_a], jt[j_r], torso, w_a, w_r, 1.0, dp)  # J_T keeps weight 1
+            if prm[P_DP_ALPHA] < 1.0:  # beyond the paper: the point glides
+                glide(torso, axes, state, prm[P_DP_ALPHA], dp)
         for k in range(3):
             state[ST_PREV_DP + k] = dp[k]
         dist = dist3(dp, torso)
@@ -146,11 +155,11 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         face = locate_on_body(dp, torso, axes, dist, prm[P_NEAR], prm[P_FAR], surf, tp_body, p, hit)
 
         # step 7: intensity from distance (Eq. 2); beyond the paper, from the faster hand's speed and the distance
-        drive = normalised_distance(dist, prm[P_NEAR], prm[P_IFAR])
+        drive = normalised_distance(dist, prm[P_INEAR], prm[P_IFAR])
         if by_speed:
             fastest = max(speed_n[0], speed_n[1])
-            drive = speed_reach_drive(drive, fastest, prm[P_REACH_SHARE])
             hand_excess *= fastest  # no boost from a hand that is not moving (capture noise)
+            drive = speed_reach_drive(drive, max(fastest, upper_n), prm[P_REACH_SHARE])
         level = filtered_level(drive, prm[P_C], state[ST_LEVEL], prm[P_ATTACK], prm[P_RELEASE])
         state[ST_LEVEL] = level
 
@@ -159,7 +168,10 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         amp = level_drive(total_level, prm[P_PCT], prm[P_BETA])
         raw[:] = 0.0
         chart, u, v = spread_on_charts(hit, face, amp, surf, charts, prm[P_SIDE_BLEND], prm[P_PHANTOM_ENERGY] > 0.5,
-                                       prm[P_TOL], raw)
+                                       prm[P_TOL], prm[P_MAIN_FLAT] > 0.5, raw)
+        if prm[P_SLEEVE_SHARE] > 0.0 and chart != CHART_SHOULDER_LEFT and chart != CHART_SHOULDER_RIGHT:
+            carry_on_sleeve(jt, hand, speed_n, by_speed, axes, amp, prm[P_SLEEVE_SHARE], prm[P_SLEEVE_REACH],
+                            charts, prm[P_PHANTOM_ENERGY] > 0.5, prm[P_TOL], raw)
 
         # output: dead zone, clip, mirror, per-actuator release
         write_outputs(raw, prm[P_DEAD], prm[P_SILENCE], prm[P_REL_DECAY], mirror_map, state, out[t])

@@ -33,8 +33,9 @@ J_NECK = RENDER_JOINTS.index("NECK")
 (P_METHOD, P_WINDOW, P_FLOOR, P_IDLE_FARTHER, P_W_GAIN, P_W_MAX, P_NEAR, P_FAR, P_SIDE_BLEND, P_C,
  P_ATTACK, P_RELEASE, P_BOOST, P_BOOST_FULL, P_MAX_LEVEL, P_PCT, P_PHANTOM_ENERGY, P_TOL, P_BETA, P_DEAD,
  P_REL_DECAY, P_FPS, P_IFAR, P_SILENCE, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE, P_ACTIVE_SPEED,
- P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W) = range(32)
-N_PARAMS = 32
+ P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA, P_TORSO_START, P_TORSO_FULL,
+ P_SLEEVE_SHARE, P_SLEEVE_REACH) = range(40)
+N_PARAMS = 40
 
 # ---- surface vector (float64): BodyModel.as_array(), body frame metres
 (S_A, S_B, S_YBOT, S_YTOP, S_YROW0, S_YROWN, S_YSLEEVE, S_TPX, S_TPY, S_TPZ) = range(10)
@@ -62,7 +63,12 @@ ST_HIST_COUNT = ST_HAVE + N_RENDER_JOINTS  # accelerations in the history, at mo
 ST_HIST_POS = ST_HIST_COUNT + 1  # next write position of the history ring
 ST_HIST = ST_HIST_POS + 1  # (2, MAX_WINDOW) ring of hand accelerations (left, right), m/s^2
 ST_SPEED = ST_HIST + 2 * MAX_WINDOW  # (2,) smoothed hand speeds relative to J_T (left, right), m/s
-ST_OUT = ST_SPEED + 2  # (N,) last output row, percent (per-actuator release)
+ST_PREV_DP_BODY = ST_SPEED + 2  # (3,) last filtered dynamic point relative to J_T, body frame m
+ST_PENDING = ST_PREV_DP_BODY + 3  # a choice waiting to be adopted (CHOICE_*), and ...
+ST_PENDING_N = ST_PENDING + 1  # ... for how many frames it has been made in a row
+ST_PREV_UPPER = ST_PENDING_N + 1  # (3,) last neck position relative to the pelvis, world m
+ST_TORSO_SPEED = ST_PREV_UPPER + 3  # smoothed speed of the neck relative to the pelvis, m/s
+ST_OUT = ST_TORSO_SPEED + 1  # (N,) last output row, percent (per-actuator release)
 N_STATE_BASE = ST_OUT
 
 # ---- debug columns

@@ -25,18 +25,22 @@ REFERENCE_FPS = 60.0
 
 METHODS = ("mst", "baseline")
 PHANTOMS = ("paper", "energy")
+PHANTOM_MAINS = ("share", "flat")
 IDLE_CHOICES = ("keep", "farther")
 
 
 _RANGES = (
     ("threshold_window_s", 1e-3, 0.5), ("accel_floor", 0.0, 1e3), ("weight_gain", 0.0, 100.0),
     ("weight_extra_max", 0.0, 100.0), ("near_m", 0.0, 10.0), ("far_m", 0.01, 20.0), ("intensity_far_m", 0.0, 20.0),
+    ("intensity_near_m", 0.0, 10.0), ("baseline_intensity_far_m", 0.0, 20.0),
     ("side_blend", 0.0, 1.0), ("base_level", 0.0, 10.0), ("boost_levels", 0.0, 10.0), ("boost_full_ratio", 1e-3, 1e3),
     ("max_level", 0.0, 10.0), ("percent_per_level", 0.0, 100.0), ("phantom_1d_tolerance", 0.0, 0.5),
     ("perceptual_exponent", 0.0, 5.0), ("dead_zone", 0.0, 99.0), ("silence_floor", 0.0, 50.0),
     ("actuator_release_s", 0.0, 10.0), ("speed_start_mps", 0.0, 10.0), ("speed_full_mps", 0.0, 20.0),
     ("reach_share", 0.0, 1.0), ("active_speed_mps", 0.0, 10.0), ("opposite_weight", 0.0, 10.0),
-    ("speed_smoothing_s", 0.0, 1.0), ("speed_weight", 0.0, 100.0),
+    ("speed_smoothing_s", 0.0, 1.0), ("speed_weight", 0.0, 100.0), ("choice_hold_s", 0.0, 2.0),
+    ("point_smoothing_s", 0.0, 2.0), ("upper_speed_start_mps", 0.0, 10.0), ("upper_speed_full_mps", 0.0, 20.0),
+    ("sleeve_share", 0.0, 1.0), ("sleeve_reach_m", 0.01, 2.0),
 )
 """Accepted range of each numeric parameter (beyond these the renderer's numbers stop meaning anything)."""
 
@@ -52,14 +56,24 @@ class Params:
     accel_floor: float = 0.5
     """m/s^2. A hand counts as above its threshold only if its acceleration also exceeds this floor (ours: the paper
     gives none; without it, sensor noise on a still hand flips the active joint)."""
-    idle_choice: str = "keep"
-    """Neither hand above threshold: ``keep`` the last choice (paper) or re-pick the hand ``farther`` from J_T."""
+    idle_choice: str = "farther"
+    """Neither hand above threshold: re-pick the hand ``farther`` from J_T (our reading of the paper's flow step 3,
+    "keep track of both distances to J_T. By comparing computed distances, we determine ... J_A") or ``keep`` the
+    last choice (ours; the paper is silent)."""
+
+    choice_hold_s: float = 0.0
+    """s. A new active-joint choice is adopted only once it has been made this long without a break (ours; 0 = at
+    once, the paper): both hands moving make the three-frame threshold flip the choice several times a second."""
 
     # --- step 5: weights and the dynamic point (Eq. 1) --------------------------------------------------------
     weight_gain: float = 1.0
     """Extra weight of an active hand per unit of relative excess acceleration ((a - thr) / thr) (ours)."""
     weight_extra_max: float = 2.0
     """Cap on the extra weight (so an active hand's weight is 1..3) (ours)."""
+
+    point_smoothing_s: float = 0.0
+    """s. Time constant of a one-pole filter on MST's dynamic point relative to J_T (ours; 0 = none, the paper):
+    changes of the triangle move Eq. 1's point by jumps the filter turns into glides."""
 
     # --- step 6: locating on the vest --------------------------------------------------------------------------
     near_m: float = 0.13
@@ -73,10 +87,19 @@ class Params:
     0 = hard switch)."""
 
     # --- step 7: intensity from distance (Eq. 2) ---------------------------------------------------------------
-    intensity_far_m: float = 0.0
-    """Distance (m) that gives the full base level in Eq. 2; 0 = ``far_m`` (paper: D normalised over 13..185 cm).
-    A dynamic point inside the triangle rarely gets farther than about 0.6 m from J_T, so the paper's range leaves
-    most of the intensity scale unused; presets beyond the paper may set the performer's reach here (ours)."""
+    intensity_far_m: float = 0.35
+    """Distance (m) of the dynamic point from J_T that gives the full base level in Eq. 2; 0 = ``far_m``. The paper
+    says only "distance measurement of two vertices"; our reading is the distance the dynamic point reaches with an
+    arm fully stretched (forward or sideways at rest weights: 0.33 m for an average adult), so the full scale C is
+    reachable, as the paper's "maximum ... level 8" (C + 2) requires. The earlier reading, the 13..185 cm warping
+    range (``PAPER_VARIANTS["range-185"]``), leaves D_t under 0.16 on real recordings."""
+    intensity_near_m: float = 0.0
+    """Distance (m) at which D_t starts: ``D_t = clip((d - intensity_near_m) / (far - intensity_near_m), 0, 1)``.
+    0 in ``paper``: a dynamic point under 13 cm is mapped directly on the surface and those nodes "transfer tactile
+    feedback" (Section 4.2.1, Fig. 8b), so its distance still gives intensity."""
+    baseline_intensity_far_m: float = 0.8
+    """The baseline's full-scale distance (its point is the hand itself, which reaches 0.8-1.1 m from J_T with the
+    arm stretched forward, sideways or overhead); 0 = ``intensity_far_m``."""
     base_level: float = 6.0
     """C: bHaptics intensity level scaling the normalised distance (paper: level 6)."""
     attack_alpha: float = 0.5
@@ -96,6 +119,11 @@ class Params:
     phantom: str = "paper"
     """``paper``: 1D ``K(1-a), K a``; 2D main x 0.5, neighbours by the 1D rule, diagonal their mean.
     ``energy``: square-root bilinear split (constant total energy, energy centroid on the target)."""
+    phantom_main: str = "share"
+    """``paper`` split, 2D case, the main node: ``share`` = 0.5 [K(1 - a_u) + K(1 - a_v)], each 1D share halved
+    (our reading: Node_A varies with the distance, as Fig. 11b plots it, and tends to K at the node; the largest
+    jump of a motor at the 1D/2D border falls from 0.44 K to 0.25 K); ``flat`` = 0.5 K (the literal coefficient).
+    Neither is continuous at that border: the diagonal, the mean of its neighbours, appears at once there."""
     phantom_1d_tolerance: float = 0.05
     """``paper`` split: a point within this fraction of the motor pitch from a grid line uses the 1D rule (ours)."""
 
@@ -112,6 +140,13 @@ class Params:
     actuator_release_s: float = 0.0
     """Per-actuator release time constant, seconds: outputs rise at once and decay no faster than this
     (smooths location jumps for slow ERMs); 0 = off."""
+
+    sleeve_share: float = 0.0
+    """Share of the frame's amplitude (of energy with the energy split) added on the sleeve of the rendered hand's
+    side while that hand is above or outside its shoulder, times how far (``sleeve_reach_m``); 0 = off (ours:
+    the paper added the sleeves for what the vest misses, and the ray alone seldom reaches them)."""
+    sleeve_reach_m: float = 0.25
+    """m. The hand's height above, or reach outside, its shoulder at which the sleeve share is full."""
 
     # --- beyond the paper: hand speed (0 = off, the paper's distance-only intensity) ---------------------------
     speed_full_mps: float = 0.0
@@ -130,18 +165,31 @@ class Params:
     """With the speed term on: extra weight of the one active hand per unit of normalised speed."""
     speed_smoothing_s: float = 0.05
     """s. Time constant of the one-pole filter on the hand speeds (0 = none)."""
+    upper_speed_full_mps: float = 0.0
+    """m/s. With the speed term on: the speed of the neck relative to the pelvis (a bow, a lean, a twist) that
+    counts as a hand at full speed; the faster of the hands' and the upper body's normalised speeds drives the
+    level. 0 = off (the hands alone)."""
+    upper_speed_start_mps: float = 0.05
+    """m/s. Below this smoothed upper-body speed its term is 0 (capture noise, breathing)."""
 
     def __post_init__(self) -> None:
         if self.idle_choice not in IDLE_CHOICES:
             raise UsageError(f"idle_choice must be one of {', '.join(IDLE_CHOICES)}, not {self.idle_choice!r}")
+        if self.phantom_main not in PHANTOM_MAINS:
+            raise UsageError(f"phantom_main must be one of {', '.join(PHANTOM_MAINS)}, not {self.phantom_main!r}")
         if self.phantom not in PHANTOMS:
             raise UsageError(f"phantom must be one of {', '.join(PHANTOMS)}, not {self.phantom!r}")
         for name in ("attack_alpha", "release_alpha"):
             v = getattr(self, name)
             if not 0.0 < v <= 1.0:
                 raise UsageError(f"{name} must be in (0, 1], not {v}")
-        if self.intensity_far_m and self.intensity_far_m <= self.near_m:
-            raise UsageError(f"intensity_far_m must be 0 or more than near_m, not {self.intensity_far_m}")
+        for name in ("intensity_far_m", "baseline_intensity_far_m"):
+            v = getattr(self, name)
+            if v and v <= self.intensity_near_m:
+                raise UsageError(f"{name} must be 0 or more than intensity_near_m, not {v}")
+        if self.upper_speed_full_mps and self.upper_speed_full_mps <= self.upper_speed_start_mps:
+            raise UsageError(f"upper_speed_full_mps must be 0 or more than upper_speed_start_mps, not "
+                             f"{self.upper_speed_full_mps}")
         if self.speed_full_mps and self.speed_full_mps <= self.speed_start_mps:
             raise UsageError(f"speed_full_mps must be 0 or more than speed_start_mps, not {self.speed_full_mps}")
         if not 0.0 <= self.near_m < self.far_m:
@@ -170,6 +218,9 @@ class Params:
 PRESETS: dict[str, Params] = {
     "paper": Params(),
     "energy": Params(
+        idle_choice="keep",
+        intensity_near_m=0.13,
+        baseline_intensity_far_m=0.0,
         phantom="energy",
         attack_alpha=0.6,
         release_alpha=0.3,
@@ -178,6 +229,9 @@ PRESETS: dict[str, Params] = {
         perceptual_exponent=0.8,
     ),
     "felt": Params(
+        idle_choice="keep",
+        intensity_near_m=0.13,
+        baseline_intensity_far_m=0.0,
         phantom="energy",
         attack_alpha=0.6,
         release_alpha=0.3,
@@ -192,12 +246,25 @@ PRESETS: dict[str, Params] = {
         active_speed_mps=0.2,
         opposite_weight=0.5,
         speed_weight=1.0,
+        upper_speed_full_mps=0.4,
     ),
 }
 """Named parameter sets. ``paper``: the paper's values. ``energy``: energy-preserving phantom split, asymmetric
 attack/release smoothing, ERM-aware output mapping (see docs/metrics.md for the evidence). ``felt`` (the default):
 the ``energy`` pipeline calibrated for ERM vests, intensity from hand speed and reach, motors lifted over their
 start (docs/algorithm.md, "The felt preset", gives every value with its reason and measured figure)."""
+
+PAPER_VARIANTS: dict[str, dict[str, Any]] = {
+    "range-185": {"intensity_far_m": 0.0, "intensity_near_m": 0.13, "baseline_intensity_far_m": 0.0},
+    "keep-last": {"idle_choice": "keep"},
+    "flat-main": {"phantom_main": "flat"},
+    "earlier": {"intensity_far_m": 0.0, "intensity_near_m": 0.13, "baseline_intensity_far_m": 0.0,
+                "idle_choice": "keep", "phantom_main": "flat"},
+}
+"""The earlier readings of the paper, as field changes to the ``paper`` preset (``Params.replace(**changes)``,
+``--param`` on the command line): D_t over the 13..185 cm warping range, keep the last choice when no hand is
+active, the 2D main node at a flat 0.5 K; ``earlier`` restores all three (the ``paper`` preset before these
+readings were revised). docs/algorithm.md gives each reading with its measured effect."""
 
 DEFAULT_PRESET = "felt"
 """The preset used when none is named (render, live, view, demo and the API)."""

@@ -65,7 +65,20 @@ def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
     release_s = params.actuator_release_s
     p[packed.P_REL_DECAY] = float(np.exp(-1.0 / (fps * release_s))) if release_s > 0 else 0.0
     p[packed.P_FPS] = fps
-    p[packed.P_IFAR] = params.intensity_far_m if params.intensity_far_m > 0 else params.far_m
+    far = params.intensity_far_m if params.intensity_far_m > 0 else params.far_m
+    if method == "baseline" and params.baseline_intensity_far_m > 0:
+        far = params.baseline_intensity_far_m
+    p[packed.P_IFAR] = far
+    p[packed.P_INEAR] = params.intensity_near_m
+    p[packed.P_MAIN_FLAT] = 1.0 if params.phantom_main == "flat" else 0.0
+    p[packed.P_TORSO_START] = params.upper_speed_start_mps
+    p[packed.P_TORSO_FULL] = (max(params.upper_speed_full_mps, params.upper_speed_start_mps + 1e-6)
+                              if params.upper_speed_full_mps > 0 else 0.0)
+    p[packed.P_SLEEVE_SHARE] = params.sleeve_share
+    p[packed.P_SLEEVE_REACH] = params.sleeve_reach_m
+    p[packed.P_HOLD] = max(1, int(round(params.choice_hold_s * fps))) if params.choice_hold_s > 0 else 0
+    p[packed.P_DP_ALPHA] = (1.0 - float(np.exp(-1.0 / (fps * params.point_smoothing_s)))
+                            if params.point_smoothing_s > 0 else 1.0)
     p[packed.P_SILENCE] = params.silence_floor
     p[packed.P_SPEED_ON] = 1.0 if params.speed_full_mps > 0 else 0.0
     p[packed.P_SPEED_START] = params.speed_start_mps

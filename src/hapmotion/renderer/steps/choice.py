@@ -2,8 +2,8 @@
 
 Paper (Section 4): a hand is active when its acceleration exceeds a threshold equal to the mean acceleration over
 the previous three frames (at 60 Hz). Two active hands make the triangle (left hand, right hand, J_T), one makes
-(J_A, opposite shoulder, J_T); with none, the last choice is kept. Our readings (accelerations relative to J_T,
-the floor, the relative excess) are in docs/algorithm.md.
+(J_A, opposite shoulder, J_T). Our readings (accelerations relative to J_T, the floor, the relative excess, the
+choice when no hand is active) are in docs/algorithm.md.
 
 Hands are indexed 0 = left, 1 = right in the ``(2,)`` arrays below.
 """
@@ -13,8 +13,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_NONE, CHOICE_RIGHT, J_HAND_L, J_HAND_R, J_TORSO, MAX_WINDOW,
-                      ST_HIST, ST_HIST_COUNT, ST_HIST_POS, ST_PREV_REL, ST_PREV_VEL, ST_SEEN, ST_SPEED)
+from ..packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_NONE, CHOICE_RIGHT, J_HAND_L, J_HAND_R, J_NECK, J_PELVIS,
+                      J_TORSO, MAX_WINDOW, ST_PREV_UPPER, ST_TORSO_SPEED,
+                      ST_CHOICE, ST_HIST, ST_HIST_COUNT, ST_HIST_POS, ST_PENDING, ST_PENDING_N, ST_PREV_REL, ST_PREV_VEL,
+                      ST_SEEN, ST_SPEED)
 from .numeric import clip
 
 
@@ -132,6 +134,25 @@ def update_speeds(state, alpha, start, full, speed_n):
 
 
 @njit(cache=True, inline="always")
+def upper_body_speed(jt, state, fps, alpha, start, full):
+    """Beyond the paper: how fast the upper body moves on its own, normalised (0..1).
+
+    The speed of the neck relative to the pelvis (m/s; a bow, a lean or a twist moves it, walking and turning the
+    whole body do not), smoothed like the hand speeds (``s += alpha (|v| - s)``), then
+    ``clip((s - start) / (full - start), 0, 1)``. A bow moves the hands with the torso, so their speed relative to
+    J_T stays near 0 and, without this term, a slow bow is silent. 0 before the second frame.
+    """
+    v2 = 0.0
+    for k in range(3):
+        rel = jt[J_NECK, k] - jt[J_PELVIS, k]
+        v = (rel - state[ST_PREV_UPPER + k]) * fps if state[ST_SEEN] >= 1.0 else 0.0
+        v2 += v * v
+        state[ST_PREV_UPPER + k] = rel
+    state[ST_TORSO_SPEED] += alpha * (np.sqrt(v2) - state[ST_TORSO_SPEED])
+    return clip((state[ST_TORSO_SPEED] - start) / max(full - start, 1e-9), 0.0, 1.0)
+
+
+@njit(cache=True, inline="always")
 def moving_only(state, min_speed, above, excess):
     """A hand slower than ``min_speed`` (m/s, smoothed speed relative to J_T) is not active, whatever its
     acceleration: at 120 Hz a still hand's capture noise alone exceeds the acceleration floor (beyond the paper)."""
@@ -145,8 +166,9 @@ def moving_only(state, min_speed, above, excess):
 def choose_active(above_left, above_right, dist_left, dist_right, last, idle_farther):
     """Step 4: the active-joint choice (``CHOICE_LEFT``, ``CHOICE_RIGHT`` or ``CHOICE_BOTH``).
 
-    Both hands active: both; one: that one. Neither: the ``last`` choice (paper), unless there is none yet or
-    ``idle_farther`` is set; then the hand farther from J_T (``dist_*``, m; the left hand on a tie).
+    Both hands active: both; one: that one. Neither: the hand farther from J_T (``dist_*``, m; the left hand on a
+    tie) when ``idle_farther`` is set (the ``paper`` preset's reading of flow step 3) or no choice exists yet, else
+    the ``last`` choice.
     """
     if above_left and above_right:
         return CHOICE_BOTH
@@ -157,6 +179,39 @@ def choose_active(above_left, above_right, dist_left, dist_right, last, idle_far
     if last != CHOICE_NONE and not idle_farther:
         return last
     return CHOICE_LEFT if dist_left >= dist_right else CHOICE_RIGHT
+
+
+@njit(cache=True, inline="always")
+def held_choice(choice, idle, state, hold_frames):
+    """Beyond the paper: a change of the active-joint choice is adopted only once it has stood ``hold_frames``
+    frames without a contrary choice; until then the current choice (``state[ST_CHOICE]``) stays.
+
+    ``idle`` (no hand above its threshold this frame, so ``choice`` only repeats or re-picks) neither confirms nor
+    breaks a pending change: it keeps counting. A frame that makes the current choice again cancels it, another
+    choice starts a new one. 0 or 1 frame, or no current choice yet: the choice is taken at once (the paper).
+    Updates the pending choice and its count in ``state``.
+
+    Both hands moving make the three-frame threshold rule flip between left, right and both several times a
+    second; each flip moves the dynamic point between two triangles.
+    """
+    current = int(state[ST_CHOICE])
+    if hold_frames <= 1 or current == CHOICE_NONE:
+        state[ST_PENDING_N] = 0.0
+        return choice
+    if idle:
+        if state[ST_PENDING_N] > 0.0:
+            state[ST_PENDING_N] += 1.0
+    elif choice == current:
+        state[ST_PENDING_N] = 0.0
+    elif int(state[ST_PENDING]) == choice and state[ST_PENDING_N] > 0.0:
+        state[ST_PENDING_N] += 1.0
+    else:
+        state[ST_PENDING] = choice
+        state[ST_PENDING_N] = 1.0
+    if state[ST_PENDING_N] >= hold_frames:
+        state[ST_PENDING_N] = 0.0
+        return int(state[ST_PENDING])
+    return current
 
 
 @njit(cache=True, inline="always")

@@ -2,8 +2,9 @@
 level's drive in percent.
 
 Paper (Section 4): ``I_t = alpha D_t C + (1 - alpha) I_{t-1}``, alpha 0.5, C = 6 (bHaptics "level 6"), D_t the
-distance from the dynamic point to J_T normalised to 13..185 cm; while the active hand is above its threshold up
-to 2 levels are added; the maximum is level 8. Levels become percent at ``percent_per_level`` (our reading).
+distance from the dynamic point to J_T (its normalisation is our reading: ``Params.intensity_far_m``); while the
+active hand is above its threshold up to 2 levels are added; the maximum is level 8. Levels become percent at
+``percent_per_level`` (our reading).
 """
 
 from __future__ import annotations

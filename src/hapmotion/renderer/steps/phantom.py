@@ -21,11 +21,15 @@ from .warping import front_share, panel_u, panel_v, sleeve_reached, sleeve_uv
 
 
 @njit(cache=True)
-def split_paper(cu, cv, cols, rows, amp, tol, base, raw):
+def split_paper(cu, cv, cols, rows, amp, tol, base, raw, flat_main=False):
     """The paper's split of ``amp`` at grid coordinates ``(cu, cv)``.
 
     The main node is the nearest actuator and ``a`` the distance from it along u or v, in motor pitches. On a row or
-    column line (within ``tol`` pitches) the 1D rule applies, at a node the node takes it all, elsewhere the 2D rule.
+    column line (within ``tol`` pitches) the 1D rule applies, at a node the node takes it all, elsewhere the 2D rule:
+    the neighbours by the 1D rule (``K a_u``, ``K a_v``), the diagonal their mean, and the main node
+    ``0.5 [K (1 - a_u) + K (1 - a_v)]`` (each 1D share halved: our reading, equal to K at the node) or, with
+    ``flat_main``, the literal ``0.5 K``. Both jump at the 1D/2D border (the diagonal appears at once), by at most
+    0.25 K and 0.44 K of a motor respectively.
     """
     i0 = int(np.floor(cu + 0.5))
     j0 = int(np.floor(cv + 0.5))
@@ -49,7 +53,7 @@ def split_paper(cu, cv, cols, rows, amp, tol, base, raw):
     else:  # 2D: main x 0.5, neighbours by the 1D rule, diagonal the mean of the two
         nu = amp * au
         nv = amp * av
-        raw[main] += 0.5 * amp
+        raw[main] += 0.5 * amp if flat_main else 0.5 * (amp * (1.0 - au) + amp * (1.0 - av))
         raw[base + j0 * cols + i0 + di] += nu
         raw[base + (j0 + dj) * cols + i0] += nv
         raw[base + (j0 + dj) * cols + i0 + di] += 0.5 * (nu + nv)
@@ -82,11 +86,12 @@ def split_energy(cu, cv, cols, rows, amp, base, raw):
 
 
 @njit(cache=True)
-def split_on_chart(chart, u, v, share, amp, charts, energy, tol, raw):
+def split_on_chart(chart, u, v, share, amp, charts, energy, tol, flat_main, raw):
     """Split ``share`` (0..1) of ``amp`` at chart coordinates ``(u, v)`` (0..1) of one chart.
 
     ``energy``: True for the energy split (the share is one of energy, so the amplitude scales by its square root),
-    False for the paper's (the share is one of amplitude). ``tol``: the paper split's 1D tolerance, pitches.
+    False for the paper's (the share is one of amplitude). ``tol``, ``flat_main``: the paper split's 1D tolerance
+    (pitches) and main-node reading (:func:`split_paper`).
     """
     rows = int(charts[chart, C_ROWS])
     cols = int(charts[chart, C_COLS])
@@ -96,11 +101,11 @@ def split_on_chart(chart, u, v, share, amp, charts, energy, tol, raw):
     if energy:
         split_energy(cu, cv, cols, rows, amp * np.sqrt(share), base, raw)
     else:
-        split_paper(cu, cv, cols, rows, amp * share, tol, base, raw)
+        split_paper(cu, cv, cols, rows, amp * share, tol, base, raw, flat_main)
 
 
 @njit(cache=True, inline="always")
-def spread_on_charts(hit, face, amp, surf, charts, side_blend, energy, tol, raw):
+def spread_on_charts(hit, face, amp, surf, charts, side_blend, energy, tol, flat_main, raw):
     """Steps 6 and 8 on the charts: the hit's chart coordinates, then the phantom split of ``amp`` there.
 
     Parameters
@@ -111,8 +116,9 @@ def spread_on_charts(hit, face, amp, surf, charts, side_blend, energy, tol, raw)
         Amplitude to split, percent.
     surf, charts:
         Surface vector and chart table.
-    side_blend, energy, tol:
-        Front/back crossfade band (half-depths), energy split or not, 1D tolerance of the paper split.
+    side_blend, energy, tol, flat_main:
+        Front/back crossfade band (half-depths), energy split or not, 1D tolerance and main-node reading of the
+        paper split.
     raw:
         ``(N,)`` amplitudes, percent; added into (not mirrored).
 
@@ -123,16 +129,16 @@ def spread_on_charts(hit, face, amp, surf, charts, side_blend, energy, tol, raw)
     chart = sleeve_reached(hit, face, surf, charts)
     if chart >= 0:
         u, v = sleeve_uv(hit, chart, surf, charts)
-        split_on_chart(chart, u, v, 1.0, amp, charts, energy, tol, raw)
+        split_on_chart(chart, u, v, 1.0, amp, charts, energy, tol, flat_main, raw)
         return chart, u, v
     u = panel_u(hit, CHART_FRONT, surf, charts)
     u_back = panel_u(hit, CHART_BACK, surf, charts)
     v = panel_v(hit, face, surf)
     w_front = front_share(hit[2], surf[S_B], side_blend)
     if w_front > 0.0:
-        split_on_chart(CHART_FRONT, u, v, w_front, amp, charts, energy, tol, raw)
+        split_on_chart(CHART_FRONT, u, v, w_front, amp, charts, energy, tol, flat_main, raw)
     if w_front < 1.0:
-        split_on_chart(CHART_BACK, u_back, v, 1.0 - w_front, amp, charts, energy, tol, raw)
+        split_on_chart(CHART_BACK, u_back, v, 1.0 - w_front, amp, charts, energy, tol, flat_main, raw)
     if w_front >= 0.5:
         return CHART_FRONT, u, v
     return CHART_BACK, u_back, v

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..packed import CHOICE_BOTH, CHOICE_LEFT, J_HAND_L, J_HAND_R, J_SHOULDER_L, J_SHOULDER_R, ST_PREV_DP, ST_SEEN
+from ..packed import (CHOICE_BOTH, CHOICE_LEFT, J_HAND_L, J_HAND_R, J_SHOULDER_L, J_SHOULDER_R, ST_PREV_DP,
+                      ST_PREV_DP_BODY, ST_SEEN)
 from .numeric import dist3
 
 
@@ -20,6 +21,29 @@ def previous_dynamic_point(state, torso, out):
     seen = state[ST_SEEN]
     for k in range(3):
         out[k] = state[ST_PREV_DP + k] if seen >= 1.0 else torso[k]
+
+
+@njit(cache=True, inline="always")
+def glide(torso, axes, state, alpha, dp):
+    """Beyond the paper: a one-pole filter on the dynamic point in the body frame, ``r += alpha (r_new - r)``.
+
+    ``r`` is the point relative to J_T in body coordinates (``axes`` ``(3, 3)``, rows right, up, forward), so that
+    neither walking nor turning drags the point behind the body; the last filtered ``r`` is in
+    ``state[ST_PREV_DP_BODY]`` (its first value is this frame's). ``torso`` ``(3,)`` is J_T and ``dp`` ``(3,)``
+    (world m, this frame's point from Eq. 1) is replaced by the filtered point. Each change of the triangle (the
+    active hand, its weight) moves Eq. 1's point by up to a hand's length at once; the filter makes it a glide.
+    """
+    for i in range(3):
+        r = 0.0
+        for k in range(3):
+            r += axes[i, k] * (dp[k] - torso[k])
+        if state[ST_SEEN] >= 1.0:
+            r = state[ST_PREV_DP_BODY + i] + alpha * (r - state[ST_PREV_DP_BODY + i])
+        state[ST_PREV_DP_BODY + i] = r
+    for k in range(3):
+        dp[k] = torso[k]
+        for i in range(3):
+            dp[k] += axes[i, k] * state[ST_PREV_DP_BODY + i]
 
 
 @njit(cache=True, inline="always")

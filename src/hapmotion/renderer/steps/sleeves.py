@@ -1,0 +1,64 @@
+"""Beyond the paper: the shoulder sleeves carry a raised or outstretched hand on its own side.
+
+The paper added the shoulder sleeves to cover what the vest misses; with the ray towards the target point, a hand
+raised above the shoulder or reaching out to the side mostly hits the top row or the side of the vest, so the
+sleeves stay nearly silent. This step adds a share of the frame's amplitude on the sleeve of the rendered hand's
+side, growing with how far the hand is above or outside its shoulder (with the speed term, on the side of the hand
+that moves).
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+from ...layout import CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT
+from ..packed import J_HAND_L, J_HAND_R, J_SHOULDER_L, J_SHOULDER_R
+from .numeric import clip
+from .phantom import split_on_chart
+
+OUT_MARGIN_M = 0.15
+"""m. A hand counts as reaching out to the side only beyond this much outside its shoulder: a hand hanging at the
+hip is 5-10 cm outside it, an arm lifted sideways 30-60 cm."""
+
+
+@njit(cache=True, inline="always")
+def sleeve_reach(jt, hand, axes, reach_m):
+    """How far the hand (row ``hand`` of ``jt`` ``(N_RENDER_JOINTS, 3)``, world m) is above or outside its own
+    shoulder, 0..1: ``clip(max(up, out - OUT_MARGIN_M) / reach_m, 0, 1)``, ``up`` and ``out`` the hand's offset from
+    the shoulder along the body's up axis and outwards along its right axis (``axes`` ``(3, 3)``, rows right, up,
+    forward)."""
+    shoulder = J_SHOULDER_L if hand == J_HAND_L else J_SHOULDER_R
+    outward = -1.0 if hand == J_HAND_L else 1.0  # the performer's left is -right
+    up = 0.0
+    out = 0.0
+    for k in range(3):
+        d = jt[hand, k] - jt[shoulder, k]
+        up += d * axes[1, k]
+        out += outward * d * axes[0, k]
+    return clip(max(up, out - OUT_MARGIN_M) / reach_m, 0.0, 1.0)
+
+
+@njit(cache=True, inline="always")
+def carry_on_sleeve(jt, hand, speed_n, by_speed, axes, amp, share, reach_m, charts, energy, tol, raw):
+    """Add a share of ``amp`` (percent; of energy with the energy split, of amplitude with the paper's) at the middle
+    of each hand's sleeve (the performer's side; the mirror swaps it later) into ``raw`` ``(N,)``.
+
+    The share is ``share x reach`` (:func:`sleeve_reach`) of one hand: the faster one when the speed term is on
+    (``by_speed``, ``speed_n`` ``(2,)``, so the sleeve runs on the side of the hand that moves), else the rendered
+    ``hand``.
+    """
+    if share <= 0.0 or amp <= 0.0:
+        return
+    top = max(speed_n[0], speed_n[1])
+    for h in range(2):
+        joint = J_HAND_L if h == 0 else J_HAND_R
+        if by_speed:  # the faster hand (the left on a tie)
+            w = 1.0 if top > 0.0 and speed_n[h] == top and (h == 0 or speed_n[0] < top) else 0.0
+        else:
+            w = 1.0 if joint == hand else 0.0
+        if w <= 0.0:
+            continue
+        reach = sleeve_reach(jt, joint, axes, reach_m)
+        if reach > 0.0:
+            chart = CHART_SHOULDER_LEFT if h == 0 else CHART_SHOULDER_RIGHT
+            split_on_chart(chart, 0.5, 1.0, share * reach * w, amp, charts, energy, tol, False, raw)
