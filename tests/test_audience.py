@@ -14,9 +14,12 @@ from support.live_fakes import BVH, FakePlayerSdk1, is_tick_max_sequence, start_
 import hapmotion
 from hapmotion.audience import Seat
 from hapmotion.show.comfort import Comfort
-from support.audience import DelayedReplay, Tap, reference_rows, start_seat, stop
+from support.audience import rehearsal, DelayedReplay, Tap, reference_rows, start_seat, stop
 
 SONG = BVH.parents[1] / "audio" / "vibe_ace.ogg"
+
+
+pytestmark = pytest.mark.usefixtures("rehearsal")
 
 
 @pytest.fixture(scope="module")

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from support.live_fakes import BVH, FakePlayerSdk1, start_session, wait_for
-from support.audience import DelayedReplay, LoopWatch, Tap, reference_rows, start_seat, stop
+from support.audience import REHEARSAL, rehearsal, DelayedReplay, LoopWatch, Tap, reference_rows, start_seat, stop
 
 import hapmotion
-from hapmotion.audience import Seat, listen
+from hapmotion.audience import PublisherSecurity, Seat, listen
 from hapmotion.audience.publisher import NatsPublisherSink, connect, describe_show, description_bucket
 from hapmotion.audience.server import LocalNatsServer
 from hapmotion.audience.wire import encode_frame, subject
@@ -23,6 +23,9 @@ from hapmotion.layout import load_layout
 from hapmotion.live import ReplaySource
 from hapmotion.show import OutputStage, Show
 from hapmotion.show.comfort import Comfort
+
+
+pytestmark = pytest.mark.usefixtures("rehearsal")
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +91,8 @@ def test_missing_then_wrong_then_right_description(nats_server, motion, caplog):
 
     async def scenario():
         tap = Tap()
-        task = asyncio.create_task(listen(f"{nats_server.url}/wrong", [lambda d, f: tap], handle_signals=False))
+        task = asyncio.create_task(listen(f"{nats_server.url}/wrong", [lambda d, f: tap], handle_signals=False,
+                                          security=REHEARSAL))
         async with ManualShow(nats_server, "wrong", motion) as show:
             await asyncio.sleep(0.8)  # no description yet: the seat waits
             await show.play([k / motion.fps for k in range(10)])
@@ -107,7 +111,7 @@ def test_missing_then_wrong_then_right_description(nats_server, motion, caplog):
     assert before == []  # nothing plays without a usable description
     assert len(tap.rendered()) >= 25
     text = caplog.text
-    assert "no show description for 'wrong' yet" in text and "protocol" in text
+    assert "no show description for 'wrong'" in text and "protocol" in text
 
 
 def test_publisher_restart_same_settings_plays_on_changed_settings_rebuild(nats_server, motion):
@@ -226,7 +230,7 @@ def test_publisher_announces_cues_to_the_seat(nats_server, motion):
         layout = load_layout()
         sink = NatsPublisherSink(nats_server.url, describe_show(
             "cues", show=Show(), stage=OutputStage.for_show(Show(), "motion", layout=layout, fps=30.0),
-            layout=layout, body=None, stall_ms=250.0, mirror=True))
+            layout=layout, body=None, stall_ms=250.0, mirror=True), security=PublisherSecurity(unsigned=True))
         await sink.start()
         task, sessions = await start_seat(f"{nats_server.url}/cues", [lambda d, f: tap], Seat(delay_s=0.05),
                                           on_cue=lambda event, due: heard.append(event))

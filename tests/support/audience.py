@@ -7,8 +7,9 @@ import asyncio
 import time
 
 import numpy as np
+import pytest
 
-from hapmotion.audience import Seat, listen
+from hapmotion.audience import PublisherSecurity, Seat, SeatSecurity, listen, publishing
 from hapmotion.body.model import BodyModel
 from hapmotion.live import ReplaySource
 from hapmotion.live.sinks import Sink
@@ -101,9 +102,22 @@ def reference_rows(motion, seat: Seat, mode: str, ks) -> np.ndarray:
     return np.array([stage(r) for r in rows])
 
 
-async def start_seat(url: str, sinks: list, seat: Seat, **kwargs):
+REHEARSAL = SeatSecurity(unsigned=True)
+"""A seat of an unsigned rehearsal (the explicit choice)."""
+
+
+@pytest.fixture
+def rehearsal():
+    """``nats://`` sinks built in the test publish unsigned (a rehearsal, chosen explicitly)."""
+    with publishing(PublisherSecurity(unsigned=True)) as security:
+        yield security
+
+
+async def start_seat(url: str, sinks: list, seat: Seat, security: SeatSecurity = REHEARSAL, **kwargs):
+    """A seat listening in a task; returns once its session subscribed to the show: (task, sessions)."""
     sessions: list = []
-    task = asyncio.create_task(listen(url, sinks, seat=seat, handle_signals=False, sessions=sessions, **kwargs))
+    task = asyncio.create_task(listen(url, sinks, seat=seat, security=security, handle_signals=False,
+                                      sessions=sessions, **kwargs))
     await wait_for(lambda: sessions or task.done(), 10)
     if task.done():
         task.result()
