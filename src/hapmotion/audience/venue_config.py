@@ -39,7 +39,7 @@ def permissions(show: str) -> dict[str, dict[str, list[str]]]:
     show)."""
     return {
         "venue": {"publish": [f"hapmotion.show.{show}.>", f"$KV.{BUCKET}.{show}", f"$JS.API.STREAM.INFO.{STREAM}",
-                              f"$JS.API.STREAM.CREATE.{STREAM}"],
+                              f"$JS.API.STREAM.CREATE.{STREAM}", f"$JS.API.DIRECT.GET.{STREAM}.$KV.{BUCKET}.{show}"],
                   "subscribe": ["_INBOX.>"]},
         "seat": {"publish": [f"$JS.API.STREAM.INFO.{STREAM}", f"$JS.API.DIRECT.GET.{STREAM}.$KV.{BUCKET}.{show}"],
                  "subscribe": [f"hapmotion.show.{show}.>", f"$KV.{BUCKET}.{show}", "_INBOX.>"]},
