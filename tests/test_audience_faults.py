@@ -247,12 +247,12 @@ def test_publisher_announces_cues_to_the_seat(nats_server, motion):
 def test_listen_command_usage_errors():
     from hapmotion.cli.listen import command
 
-    r = CliRunner().invoke(command, ["ws://x/show", "--sink", "player"])
+    r = CliRunner().invoke(command, ["ws://x/show", "--sink", "player", "--unsigned"])
     assert r.exit_code != 0 and "nats://HOST:PORT/SHOW" in str(r.exception or r.output)
-    r = CliRunner().invoke(command, ["nats://127.0.0.1:1/show", "--sink", "player", "--delay", "-5"])
+    r = CliRunner().invoke(command, ["nats://127.0.0.1:1/show", "--sink", "player", "--delay", "-5", "--unsigned"])
     assert r.exit_code != 0 and "--delay" in str(r.exception or r.output)
     # a seat does not publish a show of its own: refused before connecting (nothing listens on port 1)
-    r = CliRunner().invoke(command, ["nats://127.0.0.1:1/show", "--sink", "nats://127.0.0.1:1/again"])
+    r = CliRunner().invoke(command, ["nats://127.0.0.1:1/show", "--sink", "nats://127.0.0.1:1/again", "--unsigned"])
     assert r.exit_code != 0 and "only 'hapmotion live' publishes one" in str(r.exception or r.output)
 
 
@@ -264,13 +264,13 @@ def test_no_nats_server_is_a_one_line_error_not_a_hang(tmp_path, capsys):
     url = f"nats://127.0.0.1:{free_port()}"  # nothing listens there
     t0 = time.perf_counter()
     code = main(["live", "--source", f"replay:{BVH}", "--sink", f"{url}/show", "--sink",
-                 f"record:{tmp_path / 'take.csv'}", "-q"])
+                 f"record:{tmp_path / 'take.csv'}", "-q", "--unsigned"])
     err = capsys.readouterr().err
     assert code == 2 and time.perf_counter() - t0 < 15, err
     lines = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith(("live: ", "  "))]
     assert len(lines) == 1 and "cannot reach the NATS server" in lines[0] and "Traceback" not in err
     assert list(tmp_path.iterdir()) == []  # the recorder wrote nothing: the session never began
     t0 = time.perf_counter()
-    code = main(["listen", f"{url}/show", "--sink", f"record:{tmp_path / 'seat.csv'}"])
+    code = main(["listen", f"{url}/show", "--sink", f"record:{tmp_path / 'seat.csv'}", "--unsigned"])
     err = capsys.readouterr().err
     assert code == 2 and time.perf_counter() - t0 < 15 and "cannot reach the NATS server" in err, err
