@@ -152,6 +152,9 @@ class NatsPublisherSink(Sink):
     async def _put(self) -> None:
         await self.kv.put(self.description.show, self.signer.seal("description", self.description.to_json()))
 
+    def describe(self) -> str:
+        return f"{self.name} ({self.signer.describe()})"
+
     def _on_state(self, state: str) -> None:
         if self._closing:
             return
