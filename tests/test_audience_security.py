@@ -421,3 +421,53 @@ def test_a_seats_recordings_are_numbered_not_overwritten(nats_server, motion, tm
     assert sorted(p.name for p in tmp_path.iterdir()) == ["seat-2.csv", "seat.csv"]
     first, second = (hapmotion.load_track(tmp_path / n) for n in ("seat.csv", "seat-2.csv"))
     assert first.n_frames >= 15 and second.n_frames >= 25
+
+
+# ---------------------------------------------------------------------------------------------------- credentials
+def test_credentials_from_files_and_the_environment_never_shown(tmp_path):
+    secret = tmp_path / "password"
+    secret.write_text("s3cret-pw\n")
+    auth = NatsAuth.from_env({"HAPMOTION_NATS_USER": "venue"}, password_file=str(secret))
+    assert (auth.user, auth.password) == ("venue", "s3cret-pw")
+    assert "s3cret" not in repr(auth) and "s3cret" not in auth.describe()
+    assert NatsAuth.from_env({"HAPMOTION_NATS_TOKEN": "tok-123"}).connect_kwargs("nats://h:1") == {"token": "tok-123"}
+    with pytest.raises(UsageError, match="one kind of NATS credentials"):
+        NatsAuth.from_env({"HAPMOTION_NATS_TOKEN": "t", "HAPMOTION_NATS_USER": "u", "HAPMOTION_NATS_PASSWORD": "p"})
+    with pytest.raises(UsageError, match="needs a user name"):
+        NatsAuth.from_env({"HAPMOTION_NATS_PASSWORD": "p"})
+    with pytest.raises(UsageError, match="empty"):
+        (tmp_path / "empty").write_text("")
+        NatsAuth.from_env({}, token_file=str(tmp_path / "empty"))
+
+
+@pytest.mark.parametrize("server_args, good, bad", [
+    (("--user", "venue", "--pass", "right-pw"), NatsAuth(user="venue", password="right-pw"),
+     NatsAuth(user="venue", password="wrong-pw")),
+    (("--auth", "right-token"), NatsAuth(token="right-token"), NatsAuth(token="wrong-token")),
+])
+def test_user_password_and_token_against_a_real_server(server_args, good, bad):
+    async def scenario(server):
+        nc = await connect(server.url, name="ok", auth=good)
+        ok = nc.is_connected
+        await nc.close()
+        with pytest.raises(AuthRefused, match="refused the credentials"):
+            await connect(server.url, name="bad", auth=bad)
+        return ok
+
+    with LocalNatsServer(extra_args=server_args) as server:
+        assert asyncio.run(asyncio.wait_for(scenario(server), 20))
+
+
+def test_a_replayed_older_description_is_refused(keys):
+    from hapmotion.audience.descriptions import DescriptionWatch
+    from hapmotion.audience.signing import SeatTrust
+
+    watch = DescriptionWatch(None, "concert", SeatTrust("concert", keys["public"]))
+    signer = VenueSigner("concert", keys["venue"])
+    old = HandShow("nats://x:1", "concert", hapmotion.load_motion(BVH).slice(0, 2), epoch=1, issued=1000.0)
+    new = HandShow("nats://x:1", "concert", hapmotion.load_motion(BVH).slice(0, 2), epoch=2, issued=2000.0)
+    watch.latest = watch.check(signer.seal("description", new.desc.to_json()))
+    assert watch.latest.epoch == 2
+    assert watch.check(signer.seal("description", old.desc.to_json())) is None          # the venue's, but older
+    assert watch.refused == {"replayed": 1}
+    assert watch.check(old.desc.to_json()) is None and watch.refused["unsigned"] == 1
