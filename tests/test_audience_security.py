@@ -471,3 +471,11 @@ def test_a_replayed_older_description_is_refused(keys):
     assert watch.check(signer.seal("description", old.desc.to_json())) is None          # the venue's, but older
     assert watch.refused == {"replayed": 1}
     assert watch.check(old.desc.to_json()) is None and watch.refused["unsigned"] == 1
+
+
+def test_tls_asked_for_but_not_offered_is_refused(nats_server, tmp_path):
+    from support.audience import make_tls
+
+    tls = make_tls(tmp_path)
+    with pytest.raises(UsageError, match="TLS was asked for"):
+        asyncio.run(connect(nats_server.url.replace("nats://", "tls://"), name="x", auth=NatsAuth(ca=tls["ca"])))

@@ -19,7 +19,7 @@ from __future__ import annotations
 import asyncio
 import os
 import ssl
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Mapping, Optional
 from urllib.parse import urlsplit
@@ -203,13 +203,25 @@ async def connect(url: str, *, name: str, auth: NatsAuth = NatsAuth(),
     finally:
         watch.cancel()
     if attempt in done:
+        nc = attempt.result()
+        if auth.wants_tls(url) and not _is_tls(nc):
+            await nc.close()
+            raise UsageError(f"{url}: TLS was asked for (tls:// or --nats-ca/--nats-cert) but the server did not "
+                             f"start it: give the server a tls block (hapmotion venue-setup --tls-cert)")
         connected = True
-        return attempt.result()
+        return nc
     attempt.cancel()
     await asyncio.gather(attempt, return_exceptions=True)
     if refused.is_set():
         raise AuthRefused(f"the NATS server refused the credentials ({auth.describe()})")
     raise ConnectionError(f"no NATS server answered within {first_try_s:g} s")
+
+
+def _is_tls(nc: NatsClient) -> bool:
+    """Whether the connection runs over TLS. nats-py starts TLS only when the server's INFO requires it, even for a
+    tls:// URL, so the caller checks (through nats-py's transport, pinned in pyproject.toml)."""
+    writer = getattr(getattr(nc, "_transport", None), "_io_writer", None)
+    return writer is not None and writer.get_extra_info("ssl_object") is not None
 
 
 def connect_error(what: str, exc: BaseException) -> UsageError:
@@ -260,8 +272,3 @@ async def description_bucket(nc: NatsClient) -> KeyValue:
                          f"{MAX_DESCRIPTION_BYTES} a show description may take: delete it (nats kv del {BUCKET}) "
                          f"or recreate it with a larger limit")
     return kv
-
-
-def auth_fields() -> tuple[str, ...]:
-    """The names of :class:`NatsAuth`'s fields (the CLI maps its options onto them)."""
-    return tuple(f.name for f in fields(NatsAuth))

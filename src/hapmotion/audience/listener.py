@@ -395,6 +395,8 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
     try:
         nc = await connect(server, name=f"hapmotion seat {show}", auth=security.auth,
                            on_state=lambda state: log.info("seat: NATS %s", state))
+    except UsageError:
+        raise
     except Exception as exc:
         raise connect_error(url, exc) from None
     log.log(logging.INFO if trust.signed else logging.WARNING, "seat: %s", trust.describe())
