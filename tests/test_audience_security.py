@@ -479,3 +479,25 @@ def test_tls_asked_for_but_not_offered_is_refused(nats_server, tmp_path):
     tls = make_tls(tmp_path)
     with pytest.raises(UsageError, match="TLS was asked for"):
         asyncio.run(connect(nats_server.url.replace("nats://", "tls://"), name="x", auth=NatsAuth(ca=tls["ca"])))
+
+
+def test_a_description_stored_while_the_seat_did_not_hear_it_is_read_when_its_frames_come(nats_server, motion):
+    async def scenario():
+        tap = Tap()
+        async with HandShow(nats_server.url, "missed", motion, epoch=1) as first:
+            await first.describe()
+            task, sessions = await start_seat(f"{nats_server.url}/missed", [lambda d, f: tap], Seat())
+            await first.play(range(10))
+        watch = sessions[0][1].on_other_run.__self__
+        await watch._sub.unsubscribe()          # as if the seat was disconnected while the next run was described
+        async with HandShow(nats_server.url, "missed", motion, epoch=2) as second:
+            await second.describe()
+            await asyncio.sleep(0.7)
+            await second.play(range(10, 70))
+            await asyncio.sleep(0.3)
+        await stop(task)
+        return tap, sessions
+
+    tap, sessions = asyncio.run(asyncio.wait_for(scenario(), 30))
+    assert sessions[0][1].desc.epoch == 2                           # the same show settings: played on
+    assert sum(1 for _, f in tap.rendered() if f.t >= 10 / motion.fps) >= 45

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import time
 from typing import Optional
 
 from nats.aio.client import Client as NatsClient
@@ -31,6 +32,8 @@ log = logging.getLogger("hapmotion.live")
 
 BUCKET_RETRY_S = 1.0
 """How often a seat looks for the bucket while the server has none yet (before any show was ever published)."""
+REFRESH_S = 1.0
+"""A seat reads the stored description again at most this often."""
 QUEUE = 16
 """Values kept while the seat is busy; the oldest goes first (only the latest matters)."""
 
@@ -48,10 +51,20 @@ class DescriptionWatch:
         self._sub: Optional[Subscription] = None
         self._said: set[str] = set()
         self._reader: Optional[asyncio.Task] = None
+        self._last_refresh = -1e9
 
     async def start(self) -> None:
         """Subscribe, then read the stored value (in the background while the bucket does not exist yet)."""
         self._sub = await self.nc.subscribe(self.subject, cb=self._on_value)
+        self._reader = asyncio.ensure_future(self._read_stored())
+
+    def refresh(self) -> None:
+        """Read the stored value again (at most once a second): after a reconnect, or when frames of a run arrive
+        whose description this seat has not heard (stored while it was disconnected)."""
+        now = time.monotonic()
+        if (self._reader is not None and not self._reader.done()) or now - self._last_refresh < REFRESH_S:
+            return
+        self._last_refresh = now
         self._reader = asyncio.ensure_future(self._read_stored())
 
     async def close(self) -> None:

@@ -66,6 +66,11 @@ SEQ_SLACK_S = 2.0
 over, for a replay at double speed): a forged far-future seq cannot make every real frame count as replayed."""
 
 
+MAX_EVENT_SEQ_JUMP = 10_000
+"""An event's seq may run at most this far ahead of the last one (events are a few a second; a seat that missed
+ten thousand has reconnected to another run anyway): a forged far-future seq cannot silence the cues."""
+
+
 def parse_show_url(text: str) -> tuple[str, str]:
     """``nats://HOST[:PORT]/SHOW`` or ``tls://...`` -> (``SCHEME://HOST:PORT``, ``SHOW``); UsageError otherwise
     (credentials in the URL included: they go in files or the environment)."""
@@ -103,7 +108,9 @@ class AudienceSource(Source):
 
     def __init__(self, nc: NatsClient, desc: ShowDescription, seat: Seat, *, mode: str,
                  music: Optional[RowTimeline], trust: Optional[SeatTrust] = None, cues: Optional[LiveCues] = None,
-                 on_cue: Optional[Callable[[dict, float], None]] = None, max_pending: Optional[int] = None):
+                 on_cue: Optional[Callable[[dict, float], None]] = None, max_pending: Optional[int] = None,
+                 on_other_run: Optional[Callable[[], None]] = None):
+        self.on_other_run = on_other_run
         self.nc, self.desc, self.seat, self.mode, self.music = nc, desc, seat, mode, music
         self.trust = trust or SeatTrust.unsigned(desc.show)
         self.name = f"nats show {desc.show}"
@@ -191,6 +198,8 @@ class AudienceSource(Source):
         if wf.epoch != self.desc.epoch:
             faults.add("other_run", f"frames of publisher run {wf.epoch}, not {self.desc.epoch}: waiting for its "
                                     f"description")
+            if self.on_other_run is not None:
+                self.on_other_run()
             return
         if self._last_seq is not None:
             if wf.seq <= self._last_seq:
@@ -242,8 +251,12 @@ class AudienceSource(Source):
             return None
         if event["epoch"] != self.desc.epoch:
             return None
-        if self._last_event_seq is not None and event["seq"] <= self._last_event_seq:
-            self.engine.faults.add("replayed", f"{kind} seq={event['seq']} after seq={self._last_event_seq}")
+        last = self._last_event_seq
+        if last is not None and event["seq"] <= last:
+            self.engine.faults.add("replayed", f"{kind} seq={event['seq']} after seq={last}")
+            return None
+        if last is not None and event["seq"] - last > MAX_EVENT_SEQ_JUMP:
+            self.engine.faults.add("seq_jump", f"{kind} seq={event['seq']} runs {event['seq'] - last} ahead")
             return None
         self._last_event_seq = event["seq"]
         return event
@@ -392,9 +405,15 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
     cue_list = Show(cues=cues).load_cues()
     # a zone this seat's vest does not have, or a layout that cannot be read, is a usage error before connecting
     SeatStage(seat, Show(layout=seat.layout).load_layout())
+    watch: Optional[DescriptionWatch] = None
+
+    def on_state(state: str) -> None:
+        log.info("seat: NATS %s", state)
+        if state == "reconnected" and watch is not None:
+            watch.refresh()  # a description stored while this seat was away was not heard
+
     try:
-        nc = await connect(server, name=f"hapmotion seat {show}", auth=security.auth,
-                           on_state=lambda state: log.info("seat: NATS %s", state))
+        nc = await connect(server, name=f"hapmotion seat {show}", auth=security.auth, on_state=on_state)
     except UsageError:
         raise
     except Exception as exc:
@@ -416,7 +435,7 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
             n_session += 1
             zones = SeatStage(seat, parts.layout)
             source = AudienceSource(nc, desc, seat, mode=parts.mode, music=parts.music, trust=trust,
-                                    cues=parts.stage.cues, on_cue=on_cue)
+                                    cues=parts.stage.cues, on_cue=on_cue, on_other_run=watch.refresh)
             session = Session(source, parts.renderer, parts.stage, parts.layout, numbered_sinks(sinks, n_session),
                               fps=desc.fps, wrap=lambda sink: SeatSink(sink, zones), stall_s=desc.stall_ms / 1000.0,
                               handle_signals=handle_signals, stats_interval=stats_interval, on_stats=on_stats,
