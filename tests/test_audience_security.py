@@ -501,3 +501,38 @@ def test_a_description_stored_while_the_seat_did_not_hear_it_is_read_when_its_fr
     tap, sessions = asyncio.run(asyncio.wait_for(scenario(), 30))
     assert sessions[0][1].desc.epoch == 2                           # the same show settings: played on
     assert sum(1 for _, f in tap.rendered() if f.t >= 10 / motion.fps) >= 45
+
+
+def test_the_publisher_stores_its_description_again_when_it_is_deleted_or_replaced(motion):
+    async def scenario(server):
+        layout = load_layout()
+        sink = NatsPublisherSink(server.url, describe_show(
+            "kept", show=Show(), stage=OutputStage.for_show(Show(), "motion", layout=layout, fps=30.0),
+            layout=layout, body=None, stall_ms=250.0, mirror=True), security=PublisherSecurity(unsigned=True))
+        await sink.start()
+        nc = await connect(server.url, name="vandal")
+
+        async def stored_again(deadline_s: float = 15.0) -> bool:
+            end = time.monotonic() + deadline_s
+            while time.monotonic() < end:
+                await asyncio.sleep(0.2)
+                kv = await open_bucket(nc)
+                try:
+                    if kv is not None and (await kv.get("kept")).value == sink.description.to_json():
+                        return True
+                except Exception:  # not there yet
+                    pass
+            return False
+
+        try:
+            await nc.jetstream().delete_key_value(BUCKET)
+            back = await stored_again()
+            await (await open_bucket(nc)).put("kept", b"{}")
+            repaired = await stored_again()
+        finally:
+            await nc.close()
+            await sink.shutdown()
+        return back, repaired
+
+    with LocalNatsServer() as server:
+        assert asyncio.run(asyncio.wait_for(scenario(server), 40)) == (True, True)

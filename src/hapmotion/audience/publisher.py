@@ -22,6 +22,7 @@ from typing import Iterator, Optional
 
 from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
 from nats.aio.client import Client as NatsClient
+from nats.js.errors import KeyNotFoundError
 from nats.js.kv import KeyValue
 
 from ..body.model import BodyModel
@@ -34,13 +35,16 @@ from ..live.endpoint import Endpoint
 from ..show.settings import Show
 from ..show.stage import OutputStage
 from ..show.timeline import RowTimeline
-from .connection import NatsAuth, connect, connect_error, description_bucket, parse_server_url
+from .connection import NatsAuth, connect, connect_error, description_bucket, open_bucket, parse_server_url
 from .signing import VenueSigner
 from .wire import ShowDescription, check_show_name, encode_event, encode_frame, subject
 
 __all__ = ["NatsPublisherSink", "PublisherSecurity", "connect", "describe_show", "description_bucket", "publishing"]
 
 log = logging.getLogger("hapmotion.live")
+
+GUARD_S = 2.0
+"""How often the publisher checks that the server still holds its description."""
 
 
 @dataclass(frozen=True)
@@ -125,7 +129,9 @@ class NatsPublisherSink(Sink):
         self.cues = 0
         self._subjects = {k: subject(description.show, k) for k in ("frame", "cue", "end")}
         self._republish: Optional[asyncio.Task] = None
+        self._guard: Optional[asyncio.Task] = None
         self._closing = False
+        self._stored = self.signer.seal("description", description.to_json())
 
     async def start(self) -> None:
         try:
@@ -145,12 +151,37 @@ class NatsPublisherSink(Sink):
             await self.nc.close()
             raise UsageError(f"--sink {self.name}: cannot store the show description ({exc.__class__.__name__}: "
                              f"{exc})") from None
+        self._guard = asyncio.ensure_future(self._keep_description())
         level = logging.INFO if self.signer.signed else logging.WARNING
         log.log(level, "%s: show description stored (epoch %d, %s); publishing on %s", self.name,
                 self.description.epoch, self.signer.describe(), self._subjects["frame"])
 
     async def _put(self) -> None:
-        await self.kv.put(self.description.show, self.signer.seal("description", self.description.to_json()))
+        await self.kv.put(self.description.show, self._stored)
+
+    async def _keep_description(self) -> None:
+        """Every :data:`GUARD_S` seconds, read the stored description back (one direct get, whatever the audience)
+        and store it again when it is missing or not this run's: a deleted bucket, a purged key or a value put by
+        someone else (on a server without the venue's permissions) is repaired for the seats that join later."""
+        while not self._closing:
+            await asyncio.sleep(GUARD_S)
+            if self.nc is None or not self.nc.is_connected or self._closing:
+                continue
+            try:
+                kv = await open_bucket(self.nc)
+                entry = None
+                if kv is not None:
+                    try:
+                        entry = await kv.get(self.description.show)
+                    except KeyNotFoundError:
+                        entry = None
+                if entry is None or entry.value != self._stored:
+                    self.warn_once("description_gone", "the show description was deleted or replaced on the server; "
+                                   "storing it again")
+                    self.kv = await description_bucket(self.nc)
+                    await self._put()
+            except Exception as exc:  # a server that does not answer now: tried again next time
+                self.warn_once("description", "could not check the stored show description (%s)", exc)
 
     def describe(self) -> str:
         return f"{self.name} ({self.signer.describe()})"
@@ -214,11 +245,15 @@ class NatsPublisherSink(Sink):
         except Exception as exc:
             self.warn_once("end", "could not announce the end (%s)", exc)
         finally:
-            if self._republish is not None:
-                self._republish.cancel()
+            for task in (self._republish, self._guard):
+                if task is not None:
+                    task.cancel()
             await self.nc.close()
 
     async def abandon(self) -> None:
+        self._closing = True
+        if self._guard is not None:
+            self._guard.cancel()
         if self.nc is not None:
             await self.nc.close()
 
