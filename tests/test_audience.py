@@ -14,7 +14,8 @@ from support.live_fakes import BVH, FakePlayerSdk1, is_tick_max_sequence, start_
 import hapmotion
 from hapmotion.audience import PublisherSecurity, Seat, publishing
 from hapmotion.show.comfort import Comfort
-from support.audience import REHEARSAL, Venue, rehearsal, DelayedReplay, Tap, reference_rows, start_seat, stop
+from support.audience import REHEARSAL, DelayedReplay, Tap, Venue, reference_rows, start_seat, stop
+from support.audience import rehearsal  # noqa: F401 (the fixture every test here uses)
 
 SONG = BVH.parents[1] / "audio" / "vibe_ace.ogg"
 

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from support.live_fakes import BVH, FakePlayerSdk1, start_session, wait_for
-from support.audience import REHEARSAL, rehearsal, DelayedReplay, LoopWatch, Tap, reference_rows, start_seat, stop
+from support.audience import REHEARSAL, DelayedReplay, LoopWatch, Tap, reference_rows, start_seat, stop
+from support.audience import rehearsal  # noqa: F401 (the fixture every test here uses)
 
 import hapmotion
 from hapmotion.audience import PublisherSecurity, Seat, listen
