@@ -536,3 +536,18 @@ def test_the_publisher_stores_its_description_again_when_it_is_deleted_or_replac
 
     with LocalNatsServer() as server:
         assert asyncio.run(asyncio.wait_for(scenario(server), 40)) == (True, True)
+
+
+def test_a_certificate_that_does_not_verify_is_named_in_the_one_line_error(tmp_path, capsys):
+    from hapmotion.cli import main
+    from support.audience import make_tls
+
+    other = tmp_path / "other"
+    other.mkdir()
+    stranger_ca = make_tls(other)["ca"]                  # not the CA that signed the server's certificate
+    with Venue(tmp_path, show="concert") as venue:
+        code = main(["listen", f"{venue.url}/concert", "--sink", "player", "--venue-pubkey",
+                     str(venue.paths["venue_pub"]), "--nats-nkey", str(venue.paths["seat_nkey"]),
+                     "--nats-ca", stranger_ca])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "CERTIFICATE_VERIFY_FAILED" in err, err

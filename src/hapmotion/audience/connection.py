@@ -172,6 +172,7 @@ async def connect(url: str, *, name: str, auth: NatsAuth = NatsAuth(),
     connected = False
     refused = asyncio.Event()
     said: set[str] = set()
+    last_error: list[str] = []
 
     async def disconnected() -> None:
         if on_state and connected:
@@ -185,6 +186,7 @@ async def connect(url: str, *, name: str, auth: NatsAuth = NatsAuth(),
         if isinstance(exc, AuthorizationError) or "authorization violation" in str(exc).lower():
             refused.set()
         text = f"error: {exc.__class__.__name__}: {exc}"
+        last_error[:] = [f"{exc.__class__.__name__}: {exc}"[:200]]
         if on_state and connected and text not in said:  # before the first connection the caller reports once
             said.add(text)
             on_state(text)
@@ -214,7 +216,9 @@ async def connect(url: str, *, name: str, auth: NatsAuth = NatsAuth(),
     await asyncio.gather(attempt, return_exceptions=True)
     if refused.is_set():
         raise AuthRefused(f"the NATS server refused the credentials ({auth.describe()})")
-    raise ConnectionError(f"no NATS server answered within {first_try_s:g} s")
+    # the last error tells a certificate that does not verify from a server that is not there
+    raise ConnectionError(f"no NATS server answered within {first_try_s:g} s"
+                          + (f"; last error {last_error[0]}" if last_error else ""))
 
 
 def _is_tls(nc: NatsClient) -> bool:
