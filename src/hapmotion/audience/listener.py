@@ -21,7 +21,7 @@ import itertools
 import logging
 import os
 import time
-from collections import OrderedDict
+from collections import OrderedDict, deque
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, Union
@@ -95,6 +95,53 @@ class SeatSecurity:
         return SeatTrust(show, self.venue_key)
 
 
+EARLY_FRAMES = 1024
+"""Frames kept while a seat session is being built (about 17 s at 60 fps; only those still due will play)."""
+
+
+class FrameInbox:
+    """A seat's one subscription to the show's frames, made before the description is read: frames that arrive
+    while a session is being built wait here with their arrival time and go to the session's source when it starts
+    (:meth:`attach`), so a seat that was waiting plays the show from its first frame."""
+
+    def __init__(self) -> None:
+        self.early: deque[tuple[float, bytes]] = deque(maxlen=EARLY_FRAMES)
+        self.target: Optional[Callable[[bytes, float], None]] = None
+        self.sub: Optional[Subscription] = None
+
+    async def start(self, nc: NatsClient, show: str, delay_s: float) -> None:
+        pending = 4 * (int(1000.0 * (delay_s + 2.0)) + 64)  # the source's queue at the highest frame rate, 4 times
+        self.sub = await nc.subscribe(subject(show, "frame"), cb=self._on_msg, pending_msgs_limit=pending,
+                                      pending_bytes_limit=8 << 20)
+
+    async def _on_msg(self, msg: Msg) -> None:
+        arrival = time.perf_counter()
+        if self.target is not None:
+            self.target(msg.data, arrival)
+        else:
+            self.early.append((arrival, msg.data))
+
+    def attach(self, target: Callable[[bytes, float], None], delay_s: float) -> None:
+        """Hand the waiting frames, then every new one, to ``target``; a frame that arrived so long ago that it can no
+        longer play (its play time is at most its arrival plus the delay) is left out, not counted."""
+        self.target = target
+        too_old = time.perf_counter() - delay_s - LATE_S
+        while self.early:
+            arrival, data = self.early.popleft()
+            if arrival >= too_old:
+                target(data, arrival)
+
+    def detach(self) -> None:
+        self.target = None
+
+    async def close(self) -> None:
+        if self.sub is not None:
+            try:
+                await self.sub.unsubscribe()
+            except Exception:  # the connection may be gone: nothing to release then
+                pass
+
+
 class AudienceSource(Source):
     """Frames of one show run (one ``epoch``) from NATS, each handed to the engine at its play time.
 
@@ -109,8 +156,9 @@ class AudienceSource(Source):
     def __init__(self, nc: NatsClient, desc: ShowDescription, seat: Seat, *, mode: str,
                  music: Optional[RowTimeline], trust: Optional[SeatTrust] = None, cues: Optional[LiveCues] = None,
                  on_cue: Optional[Callable[[dict, float], None]] = None, max_pending: Optional[int] = None,
-                 on_other_run: Optional[Callable[[], None]] = None):
+                 on_other_run: Optional[Callable[[], None]] = None, inbox: Optional["FrameInbox"] = None):
         self.on_other_run = on_other_run
+        self.inbox = inbox
         self.nc, self.desc, self.seat, self.mode, self.music = nc, desc, seat, mode, music
         self.trust = trust or SeatTrust.unsigned(desc.show)
         self.name = f"nats show {desc.show}"
@@ -142,10 +190,13 @@ class AudienceSource(Source):
     async def start(self, engine: FrameInlet) -> None:
         await super().start(engine)
         show = self.desc.show
-        limits = {"pending_msgs_limit": 4 * self.max_pending, "pending_bytes_limit": 8 << 20}
-        self._subs = [await self.nc.subscribe(subject(show, "frame"), cb=self._on_frame, **limits),
-                      await self.nc.subscribe(subject(show, "cue"), cb=self._on_cue),
+        self._subs = [await self.nc.subscribe(subject(show, "cue"), cb=self._on_cue),
                       await self.nc.subscribe(subject(show, "end"), cb=self._on_end)]
+        if self.inbox is None:
+            limits = {"pending_msgs_limit": 4 * self.max_pending, "pending_bytes_limit": 8 << 20}
+            self._subs.append(await self.nc.subscribe(subject(show, "frame"), cb=self._on_frame, **limits))
+        else:
+            self.inbox.attach(self._frame, self.seat.delay_s)
 
     async def run(self) -> None:
         while not self.ended.is_set():
@@ -185,9 +236,12 @@ class AudienceSource(Source):
 
     # ------------------------------------------------------------------ NATS callbacks
     async def _on_frame(self, msg: Msg) -> None:
-        arrival = time.perf_counter()
+        self._frame(msg.data, time.perf_counter())
+
+    def _frame(self, raw: bytes, arrival: float) -> None:
+        """One received frame (its bytes as sent, its local arrival time): checked, then queued for its time."""
         faults = self.engine.faults
-        data = self._open("frame", msg.data)
+        data = self._open("frame", raw)
         if data is None:
             return
         try:
@@ -309,6 +363,8 @@ class AudienceSource(Source):
             self._arrived.set()
 
     async def close(self) -> None:
+        if self.inbox is not None:
+            self.inbox.detach()
         for handle in self._timers:
             handle.cancel()
         self._timers.clear()
@@ -420,8 +476,10 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
         raise connect_error(url, exc) from None
     log.log(logging.INFO if trust.signed else logging.WARNING, "seat: %s", trust.describe())
     watch = DescriptionWatch(nc, show, trust)
+    inbox = FrameInbox()
     follower: Optional[asyncio.Task] = None
     try:
+        await inbox.start(nc, show, seat.delay_s)
         await watch.start()
         desc = await watch.next_description()
         n_session = 0
@@ -435,7 +493,7 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
             n_session += 1
             zones = SeatStage(seat, parts.layout)
             source = AudienceSource(nc, desc, seat, mode=parts.mode, music=parts.music, trust=trust,
-                                    cues=parts.stage.cues, on_cue=on_cue, on_other_run=watch.refresh)
+                                    cues=parts.stage.cues, on_cue=on_cue, on_other_run=watch.refresh, inbox=inbox)
             session = Session(source, parts.renderer, parts.stage, parts.layout, numbered_sinks(sinks, n_session),
                               fps=desc.fps, wrap=lambda sink: SeatSink(sink, zones), stall_s=desc.stall_ms / 1000.0,
                               handle_signals=handle_signals, stats_interval=stats_interval, on_stats=on_stats,
@@ -452,6 +510,7 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
                 return stats
             desc = source.changed
     finally:
+        await inbox.close()
         await watch.close()
         await nc.close()
 
