@@ -17,6 +17,7 @@ never printed: :class:`NatsAuth` shows only which mechanism is in use.
 from __future__ import annotations
 
 import asyncio
+import logging
 import os
 import ssl
 from dataclasses import dataclass
@@ -38,6 +39,18 @@ ENV = {"user": "HAPMOTION_NATS_USER", "password": "HAPMOTION_NATS_PASSWORD", "to
        "creds": "HAPMOTION_NATS_CREDS", "nkey": "HAPMOTION_NATS_NKEY"}
 """Environment variables read by :meth:`NatsAuth.from_env`."""
 SCHEMES = ("nats", "tls")
+
+
+class _TlsCloseNoise(logging.Filter):
+    """asyncio's StreamReaderProtocol (under nats-py's TLS transport) returns True from ``eof_received`` and asyncio
+    then logs "returning true from eof_received() has no effect when using ssl" whenever a TLS connection closes:
+    a line about nothing on every seat's exit."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "eof_received() has no effect when using ssl" not in record.getMessage()
+
+
+logging.getLogger("asyncio").addFilter(_TlsCloseNoise())
 
 
 class AuthRefused(ConnectionError):
