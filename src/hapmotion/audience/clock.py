@@ -43,6 +43,12 @@ class MediaClock:
     def reset(self) -> None:
         self._lags.clear()
 
+    def peek(self, media_t: float) -> float | None:
+        """Local time at which media time ``media_t`` plays by the current offset, without moving the clock (an
+        announced cue's time: only frames set the clock). None before the first frame."""
+        offset = self.offset
+        return None if offset is None else media_t + offset + self.delay_s
+
     def due(self, media_t: float, arrival: float) -> float:
         """Local time at which the frame with ``media_t`` that arrived at ``arrival`` plays."""
         lag = arrival - media_t

@@ -16,22 +16,21 @@ path turns every motor off.
 from __future__ import annotations
 
 import asyncio
-import os
 import heapq
 import itertools
 import logging
+import os
 import time
-from collections import OrderedDict
+from collections import OrderedDict, deque
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, Union
-from urllib.parse import urlsplit
 
 import numpy as np
+from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PublicKey
 from nats.aio.client import Client as NatsClient
 from nats.aio.msg import Msg
 from nats.aio.subscription import Subscription
-from nats.js.errors import KeyNotFoundError
-from nats.js.kv import KeyValue
 
 from ..body.model import BodyModel
 from ..errors import InputError, UsageError
@@ -45,52 +44,127 @@ from ..live.sources import Source
 from ..live.stats import LiveStats
 from ..live.urls import parse_sink
 from ..renderer.renderer import Renderer
-from ..show.cues import MAX_GAIN, CueList
+from ..show.cues import CueList
 from ..show.settings import Show
 from ..show.stage import OutputStage
 from ..show.timeline import RowTimeline
 from .clock import MediaClock
-from .publisher import connect, description_bucket
+from .connection import NatsAuth, connect, connect_error, parse_server_url
+from .cue_gate import CueGate
+from .descriptions import DescriptionWatch
 from .seat import Seat, SeatSink, SeatStage
-from .wire import ShowDescription, WireFrame, check_show_name, decode_event, decode_frame, parse_description, subject
+from .signing import BadSignature, SeatTrust, Unsigned
+from .wire import ShowDescription, WireFrame, check_show_name, decode_event, decode_frame, subject
 
 log = logging.getLogger("hapmotion.live")
 
 LATE_S = 0.05
 """A frame whose play time passed more than this long ago is stale and dropped: audio-haptic asynchrony becomes
 noticeable around 50 ms (see docs/audience.md)."""
-POLL_S = 0.5
-"""How often a seat asks for the show description while it has none (or a wrong one)."""
+SEQ_SLACK_S = 2.0
+"""A frame's seq may run ahead of the last one by the frames of the time since it arrived plus this much (twice
+over, for a replay at double speed): a forged far-future seq cannot make every real frame count as replayed."""
 
+
+MAX_EVENT_SEQ_JUMP = 10_000
+"""An event's seq may run at most this far ahead of the last one (events are a few a second; a seat that missed
+ten thousand has reconnected to another run anyway): a forged far-future seq cannot silence the cues."""
 
 
 def parse_show_url(text: str) -> tuple[str, str]:
-    """``nats://HOST[:PORT]/SHOW`` -> (``nats://HOST:PORT``, ``SHOW``); UsageError otherwise."""
-    try:
-        parts = urlsplit(text.strip())
-        host, port = parts.hostname, parts.port
-    except ValueError as exc:
-        raise UsageError(f"{text!r}: {exc}") from None
-    if parts.scheme != "nats" or not host:
-        raise UsageError(f"{text!r}: expected nats://HOST:PORT/SHOW")
-    return f"nats://{host}:{port or 4222}", check_show_name(parts.path.strip("/"))
+    """``nats://HOST[:PORT]/SHOW`` or ``tls://...`` -> (``SCHEME://HOST:PORT``, ``SHOW``); UsageError otherwise
+    (credentials in the URL included: they go in files or the environment)."""
+    server, show = parse_server_url(text)
+    return server, check_show_name(show)
+
+
+@dataclass(frozen=True)
+class SeatSecurity:
+    """How a seat connects and what it trusts: its NATS credentials and TLS
+    (:class:`~hapmotion.audience.connection.NatsAuth`) and the venue's Ed25519 public key, or ``unsigned=True``,
+    the explicit choice of a rehearsal without keys."""
+
+    auth: NatsAuth = NatsAuth()
+    venue_key: Optional[Ed25519PublicKey] = None
+    unsigned: bool = False
+
+    def trust(self, show: str) -> SeatTrust:
+        if self.venue_key is None and not self.unsigned:
+            raise UsageError("a seat checks the venue's signature: give the venue's public key (--venue-pubkey "
+                             "FILE or HAPMOTION_VENUE_PUBKEY), or --unsigned for a rehearsal without keys")
+        return SeatTrust(show, self.venue_key)
+
+
+EARLY_FRAMES = 1024
+"""Frames kept while a seat session is being built (about 17 s at 60 fps; only those still due will play)."""
+
+
+class FrameInbox:
+    """A seat's one subscription to the show's frames, made before the description is read: frames that arrive
+    while a session is being built wait here with their arrival time and go to the session's source when it starts
+    (:meth:`attach`), so a seat that was waiting plays the show from its first frame."""
+
+    def __init__(self) -> None:
+        self.early: deque[tuple[float, bytes]] = deque(maxlen=EARLY_FRAMES)
+        self.target: Optional[Callable[[bytes, float], None]] = None
+        self.sub: Optional[Subscription] = None
+
+    async def start(self, nc: NatsClient, show: str, delay_s: float) -> None:
+        pending = 4 * (int(1000.0 * (delay_s + 2.0)) + 64)  # the source's queue at the highest frame rate, 4 times
+        self.sub = await nc.subscribe(subject(show, "frame"), cb=self._on_msg, pending_msgs_limit=pending,
+                                      pending_bytes_limit=8 << 20)
+
+    async def _on_msg(self, msg: Msg) -> None:
+        arrival = time.perf_counter()
+        if self.target is not None:
+            self.target(msg.data, arrival)
+        else:
+            self.early.append((arrival, msg.data))
+
+    def attach(self, target: Callable[[bytes, float], None], delay_s: float) -> None:
+        """Hand the waiting frames, then every new one, to ``target``; a frame that arrived so long ago that it can no
+        longer play (its play time is at most its arrival plus the delay) is left out, not counted."""
+        self.target = target
+        too_old = time.perf_counter() - delay_s - LATE_S
+        while self.early:
+            arrival, data = self.early.popleft()
+            if arrival >= too_old:
+                target(data, arrival)
+
+    def detach(self) -> None:
+        self.target = None
+
+    async def close(self) -> None:
+        if self.sub is not None:
+            try:
+                await self.sub.unsubscribe()
+            except Exception:  # the connection may be gone: nothing to release then
+                pass
 
 
 class AudienceSource(Source):
     """Frames of one show run (one ``epoch``) from NATS, each handed to the engine at its play time.
 
-    Frames of another run make the source fetch the description again: the same rendering facts continue in
-    this session (the clock re-anchors), different ones end it (``changed`` holds the new description) so the
-    seat builds a new session. Malformed frames, frames of an unknown run, stale frames (play time more than
-    :data:`LATE_S` ago) and frames out of order are counted by kind and skipped.
+    Every message must carry the venue's signature (``trust``); a new description of the show
+    (:meth:`offer_description`) with the same rendering facts continues in this session (the clock re-anchors),
+    different ones end it (``changed`` holds the new description) so the seat builds a new session. Unsigned,
+    wrongly signed, malformed and replayed messages, frames of an unknown run, stale frames (play time more than
+    :data:`LATE_S` ago) and refused cues are counted by kind, logged once per kind and skipped. Announced cues
+    pass the seat's :class:`~hapmotion.audience.cue_gate.CueGate` and play on ``cues`` at their media time.
     """
 
-    def __init__(self, nc: NatsClient, kv: KeyValue, desc: ShowDescription, seat: Seat, *, mode: str,
-                 music: Optional[RowTimeline], on_cue: Optional[Callable[[dict, float], None]] = None,
-                 max_pending: Optional[int] = None):
-        self.nc, self.kv, self.desc, self.seat, self.mode, self.music = nc, kv, desc, seat, mode, music
+    def __init__(self, nc: NatsClient, desc: ShowDescription, seat: Seat, *, mode: str,
+                 music: Optional[RowTimeline], trust: Optional[SeatTrust] = None, cues: Optional[LiveCues] = None,
+                 on_cue: Optional[Callable[[dict, float], None]] = None, max_pending: Optional[int] = None,
+                 on_other_run: Optional[Callable[[], None]] = None, inbox: Optional["FrameInbox"] = None):
+        self.on_other_run = on_other_run
+        self.inbox = inbox
+        self.nc, self.desc, self.seat, self.mode, self.music = nc, desc, seat, mode, music
+        self.trust = trust or SeatTrust.unsigned(desc.show)
         self.name = f"nats show {desc.show}"
         self.clock = MediaClock(seat.delay_s)
+        self.cues = cues
+        self.gate = CueGate(cues.cue_list if cues is not None else None)
         self.on_cue = on_cue
         self.changed: Optional[ShowDescription] = None
         self.ended = asyncio.Event()
@@ -99,9 +173,11 @@ class AudienceSource(Source):
         self._count = itertools.count()
         self._arrived = asyncio.Event()
         self._last_seq: Optional[int] = None
+        self._last_seq_at = 0.0
+        self._last_event_seq: Optional[int] = None
+        self._latest_media_t: Optional[float] = None
         self._subs: list[Subscription] = []
-        self._fetching: Optional[asyncio.Task] = None
-        self._last_fetch = -1e9
+        self._timers: set[asyncio.TimerHandle] = set()
         self._n_music = len(desc.actuators)
         self.published_at: OrderedDict[float, float] = OrderedDict()  # media time -> publisher wall time
         # submit time (perf_counter, the OutFrame's ``received``) -> publisher wall time: frame age at the device
@@ -114,10 +190,13 @@ class AudienceSource(Source):
     async def start(self, engine: FrameInlet) -> None:
         await super().start(engine)
         show = self.desc.show
-        limits = {"pending_msgs_limit": 4 * self.max_pending, "pending_bytes_limit": 8 << 20}
-        self._subs = [await self.nc.subscribe(subject(show, "frame"), cb=self._on_frame, **limits),
-                      await self.nc.subscribe(subject(show, "cue"), cb=self._on_cue),
+        self._subs = [await self.nc.subscribe(subject(show, "cue"), cb=self._on_cue),
                       await self.nc.subscribe(subject(show, "end"), cb=self._on_end)]
+        if self.inbox is None:
+            limits = {"pending_msgs_limit": 4 * self.max_pending, "pending_bytes_limit": 8 << 20}
+            self._subs.append(await self.nc.subscribe(subject(show, "frame"), cb=self._on_frame, **limits))
+        else:
+            self.inbox.attach(self._frame, self.seat.delay_s)
 
     async def run(self) -> None:
         while not self.ended.is_set():
@@ -157,23 +236,38 @@ class AudienceSource(Source):
 
     # ------------------------------------------------------------------ NATS callbacks
     async def _on_frame(self, msg: Msg) -> None:
-        arrival = time.perf_counter()
+        self._frame(msg.data, time.perf_counter())
+
+    def _frame(self, raw: bytes, arrival: float) -> None:
+        """One received frame (its bytes as sent, its local arrival time): checked, then queued for its time."""
         faults = self.engine.faults
+        data = self._open("frame", raw)
+        if data is None:
+            return
         try:
-            wf = decode_frame(msg.data, self._n_music)
+            wf = decode_frame(data, self._n_music)
         except ValueError as exc:
             faults.add("malformed", f"frame: {exc}")
             return
         if wf.epoch != self.desc.epoch:
-            faults.add("other_run", f"frames of publisher run {wf.epoch}, not {self.desc.epoch}: fetching the "
-                                    f"show description again")
-            self._refetch()
+            faults.add("other_run", f"frames of publisher run {wf.epoch}, not {self.desc.epoch}: waiting for its "
+                                    f"description")
+            if self.on_other_run is not None:
+                self.on_other_run()
             return
-        if self._last_seq is not None and wf.seq <= self._last_seq:
-            faults.add("late", f"frame seq={wf.seq} arrived after seq={self._last_seq}")
-            self.engine.stats.late += 1
-            return
-        self._last_seq = wf.seq
+        if self._last_seq is not None:
+            if wf.seq <= self._last_seq:
+                faults.add("replayed", f"frame seq={wf.seq} arrived after seq={self._last_seq} (replayed or out "
+                                       f"of order)")
+                self.engine.stats.late += 1
+                return
+            ahead = self.desc.fps * 2.0 * (arrival - self._last_seq_at + SEQ_SLACK_S)
+            if wf.seq - self._last_seq > ahead:
+                faults.add("seq_jump", f"frame seq={wf.seq} runs {wf.seq - self._last_seq} frames ahead of "
+                                       f"seq={self._last_seq}, more than the time since allows")
+                return
+        self._last_seq, self._last_seq_at = wf.seq, arrival
+        self._latest_media_t = wf.media_t
         if self.mode != "audio" and wf.skeleton is None:
             faults.add("no_skeleton", "a frame without a skeleton in a show rendered from motion")
             return
@@ -189,46 +283,78 @@ class AudienceSource(Source):
         heapq.heappush(self._heap, (due, next(self._count), wf))
         self._arrived.set()
 
-    async def _on_cue(self, msg: Msg) -> None:
+    def _open(self, kind: str, data: bytes) -> Optional[bytes]:
+        """The message inside a received one, or None when it is not the venue's (counted and logged once)."""
         try:
-            event = decode_event(msg.data)
+            return self.trust.open(kind, data)
+        except Unsigned as exc:
+            self.engine.faults.add("unsigned", str(exc))
+        except BadSignature as exc:
+            self.engine.faults.add("bad_signature", str(exc))
+        return None
+
+    def _event(self, kind: str, data: bytes) -> Optional[dict]:
+        """A decoded cue or end event of this run that is not a replay, else None (counted)."""
+        message = self._open(kind, data)
+        if message is None:
+            return None
+        try:
+            event = decode_event(message)
         except ValueError as exc:
-            self.engine.faults.add("malformed", f"cue: {exc}")
-            return
+            self.engine.faults.add("malformed", f"{kind}: {exc}")
+            return None
         if event["epoch"] != self.desc.epoch:
+            return None
+        last = self._last_event_seq
+        if last is not None and event["seq"] <= last:
+            self.engine.faults.add("replayed", f"{kind} seq={event['seq']} after seq={last}")
+            return None
+        if last is not None and event["seq"] - last > MAX_EVENT_SEQ_JUMP:
+            self.engine.faults.add("seq_jump", f"{kind} seq={event['seq']} runs {event['seq'] - last} ahead")
+            return None
+        self._last_event_seq = event["seq"]
+        return event
+
+    async def _on_cue(self, msg: Msg) -> None:
+        event = self._event("cue", msg.data)
+        if event is None:
             return
-        due = self.clock.due(float(event["t"]), time.perf_counter())
+        now = time.perf_counter()
+        gain, refusal = self.gate.admit(event, now, self._latest_media_t)
+        due = self.clock.peek(float(event["t"]))  # the frames set the clock; a cue only reads it
+        if gain is None:
+            if self.cues is not None:  # a seat without the cue list ignores cues
+                kind, _, reason = refusal.partition(": ")
+                self.engine.faults.add(kind, reason)
+        elif due is not None:
+            self.gate.pending += 1
+            handle = asyncio.get_running_loop().call_later(max(0.0, due - now), self._fire_cue, str(event["name"]),
+                                                           gain)
+            self._timers.add(handle)
         if self.on_cue is not None:
-            self.on_cue(event, due)
+            self.on_cue(event, due if due is not None else now)
+
+    def _fire_cue(self, name: str, gain: float) -> None:
+        self.gate.pending -= 1
+        self._timers = {h for h in self._timers if not h.cancelled() and h.when() > asyncio.get_running_loop().time()}
+        self.cues.fire(name, gain)
 
     async def _on_end(self, msg: Msg) -> None:
-        try:
-            event = decode_event(msg.data)
-        except ValueError as exc:
-            self.engine.faults.add("malformed", f"end: {exc}")
-            return
-        if event["epoch"] == self.desc.epoch:
+        event = self._event("end", msg.data)
+        if event is not None:
             log.info("%s: the publisher stopped; the vest fades out and the seat waits for the show", self.name)
 
     # ------------------------------------------------------------------ another run
-    def _refetch(self) -> None:
-        now = time.perf_counter()
-        if (self._fetching is not None and not self._fetching.done()) or now - self._last_fetch < POLL_S:
-            return
-        self._last_fetch = now
-        self._fetching = asyncio.ensure_future(self._fetch())
-
-    async def _fetch(self) -> None:
-        desc, problem = await fetch_description(self.kv, self.desc.show)
-        if desc is None or desc.epoch == self.desc.epoch:
-            if problem:
-                self.engine.faults.add("description", problem)
+    def offer_description(self, desc: ShowDescription) -> None:
+        """A new description of the show (from the seat's :class:`DescriptionWatch`): the same rendering facts
+        play on in this session, other ones end it so the seat rebuilds."""
+        if desc.epoch == self.desc.epoch and desc.rendering_facts() == self.desc.rendering_facts():
             return
         if desc.rendering_facts() == self.desc.rendering_facts():
             log.info("%s: publisher run %d follows run %d; same show settings, playing on", self.name,
                      desc.epoch, self.desc.epoch)
             self.desc = desc
-            self._last_seq = None
+            self._last_seq = self._last_event_seq = None
             self.clock.reset()
         else:
             log.info("%s: the show description changed (run %d); rebuilding the seat", self.name, desc.epoch)
@@ -237,28 +363,17 @@ class AudienceSource(Source):
             self._arrived.set()
 
     async def close(self) -> None:
-        if self._fetching is not None:
-            self._fetching.cancel()
+        if self.inbox is not None:
+            self.inbox.detach()
+        for handle in self._timers:
+            handle.cancel()
+        self._timers.clear()
         for sub in self._subs:
             try:
                 await sub.unsubscribe()
             except Exception:  # the connection may be gone: nothing to release then
                 pass
         self._subs = []
-
-
-async def fetch_description(kv: KeyValue, show: str) -> tuple[Optional[ShowDescription], str]:
-    """The show's description, or (None, what is wrong): missing, unreadable, or not a description."""
-    try:
-        entry = await kv.get(show)
-    except KeyNotFoundError:
-        return None, f"no show description for {show!r} yet (is the show published?)"
-    except Exception as exc:
-        return None, f"cannot read the show description ({exc.__class__.__name__}: {exc})"
-    try:
-        return parse_description(entry.value or b"", show), ""
-    except InputError as exc:
-        return None, str(exc)
 
 
 @dataclass
@@ -299,50 +414,41 @@ def seat_show(desc: ShowDescription, seat: Seat, cues: Optional[CueList] = None)
     return SeatShow(layout, mode, renderer, stage, music)
 
 
-async def _first_description(kv: KeyValue, show: str, skip_epoch: Optional[int] = None) -> ShowDescription:
-    """Wait until a usable description is there (a different run than ``skip_epoch``); each problem logged once."""
-    said: set[str] = set()
-    while True:
-        desc, problem = await fetch_description(kv, show)
-        if desc is not None and desc.epoch != skip_epoch:
-            return desc
-        if problem and problem not in said:
-            said.add(problem)
-            log.warning("seat: %s; waiting", problem)
-        await asyncio.sleep(POLL_S)
+def numbered_sinks(sinks: Sequence[SinkSpec], session: int) -> list[SinkSpec]:
+    """The seat's sinks for its ``session``-th session (from 1): a recorder of a later session writes
+    ``NAME-2.EXT``, ``NAME-3.EXT``, ... (the next free number), never over an earlier session's recording."""
+    if session <= 1:
+        return list(sinks)
+    out: list[SinkSpec] = []
+    for spec in sinks:
+        if isinstance(spec, str) and parse_sink(spec).kind == "record":
+            path = Path(parse_sink(spec).path)
+            n = session
+            while (candidate := path.with_name(f"{path.stem}-{n}{path.suffix}")).exists():
+                n += 1
+            log.info("seat: the show changed; this session records to %s", candidate)
+            spec = f"record:{candidate}"
+        out.append(spec)
+    return out
 
 
-def _cue_player(seat_cues: Optional[LiveCues], on_cue: Optional[Callable[[dict, float], None]]
-                ) -> Optional[Callable[[dict, float], None]]:
-    """The seat's handler of an announced cue: fire it on the seat's cue layer when the seat's playback reaches the
-    media time it was fired at (its due time, :class:`~hapmotion.audience.clock.MediaClock`), then tell ``on_cue``."""
-    def handle(event: dict, due: float) -> None:
-        gain = event.get("gain", 1.0)
-        usable = (isinstance(gain, (int, float)) and not isinstance(gain, bool) and 0.0 <= gain <= MAX_GAIN
-                  and seat_cues is not None and seat_cues.cue_list.by_name(str(event.get("name"))) is not None)
-        if usable:
-            delay = max(0.0, due - time.perf_counter())
-            asyncio.get_running_loop().call_later(delay, seat_cues.fire, str(event["name"]), float(gain))
-        if on_cue is not None:
-            on_cue(event, due)
-
-    return handle if (seat_cues is not None or on_cue is not None) else None
-
-
-async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(), handle_signals: bool = True,
+async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
+                 security: Optional[SeatSecurity] = None, handle_signals: bool = True,
                  stats_interval: Optional[float] = None, on_stats: Optional[Callable[[str], None]] = None,
                  on_ready: Optional[Callable[[LiveEngine], None]] = None,
                  on_cue: Optional[Callable[[dict, float], None]] = None,
                  cues: Union[CueList, str, "os.PathLike[str]", None] = None,
                  sessions: Optional[list] = None) -> LiveStats:
-    """Render the show at ``nats://HOST:PORT/SHOW`` for one seat until a stop signal; return the statistics of the
-    last session (a new session starts when the show's settings change).
+    """Render the show at ``nats://HOST:PORT/SHOW`` (or ``tls://``) for one seat until a stop signal; return the
+    statistics of the last session (a new session starts when the show's settings change).
 
-    ``sinks`` are SINK strings of ``hapmotion live`` (``player``, ``player-v3``, ``osc://``, ``record:``, ...) or
-    callables ``(device_map, fps) -> Sink``; each is wrapped in the seat's :class:`SeatSink`. ``sessions``
-    (a list) receives each session's ``(engine, source)``. ``cues`` is the show's cue list (a file or a
-    :class:`~hapmotion.show.cues.CueList`, the seat's copy of the venue's): its timed cues play at their media time, and
-    the cues the venue fires are played when the seat reaches the media time they were fired at.
+    ``security`` (:class:`SeatSecurity`) holds the seat's NATS credentials and TLS and the venue's public key;
+    without a key it must say ``unsigned=True`` (a rehearsal), else UsageError. ``sinks`` are SINK strings of
+    ``hapmotion live`` (``player``, ``player-v3``, ``osc://``, ``record:``, ...) or callables
+    ``(device_map, fps) -> Sink``; each is wrapped in the seat's :class:`SeatSink`. ``sessions`` (a list) receives
+    each session's ``(engine, source)``. ``cues`` is the show's cue list (a file or a
+    :class:`~hapmotion.show.cues.CueList`, the seat's copy of the venue's): its timed cues play at their media
+    time, and the cues the venue announces play when the seat reaches the media time they were fired at.
     """
     server, show = parse_show_url(url)
     if not sinks:
@@ -350,39 +456,69 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(), ha
     for spec in sinks:
         if isinstance(spec, str) and parse_sink(spec).kind == "nats":  # refused before connecting, not later
             raise UsageError(NATS_ONLY_LIVE.format(sink=spec))
+    security = security or SeatSecurity()
+    trust = security.trust(show)
     cue_list = Show(cues=cues).load_cues()
     # a zone this seat's vest does not have, or a layout that cannot be read, is a usage error before connecting
     SeatStage(seat, Show(layout=seat.layout).load_layout())
+    watch: Optional[DescriptionWatch] = None
+
+    def on_state(state: str) -> None:
+        log.info("seat: NATS %s", state)
+        if state == "reconnected" and watch is not None:
+            watch.refresh()  # a description stored while this seat was away was not heard
+
     try:
-        nc = await connect(server, name=f"hapmotion seat {show}",
-                           on_state=lambda state: log.info("seat: NATS %s", state))
+        nc = await connect(server, name=f"hapmotion seat {show}", auth=security.auth, on_state=on_state)
+    except UsageError:
+        raise
     except Exception as exc:
-        raise UsageError(f"{url}: cannot reach the NATS server ({exc.__class__.__name__}: {exc})") from None
+        raise connect_error(url, exc) from None
+    log.log(logging.INFO if trust.signed else logging.WARNING, "seat: %s", trust.describe())
+    watch = DescriptionWatch(nc, show, trust)
+    inbox = FrameInbox()
+    follower: Optional[asyncio.Task] = None
     try:
-        kv = await description_bucket(nc)
-        desc = await _first_description(kv, show)
+        await inbox.start(nc, show, seat.delay_s)
+        await watch.start()
+        desc = await watch.next_description()
+        n_session = 0
         while True:
             try:
                 parts = seat_show(desc, seat, cue_list)
             except InputError as exc:
-                log.warning("seat: %s; waiting for another description", exc)
-                desc = await _first_description(kv, show, skip_epoch=desc.epoch)
+                watch.say_once(f"{exc}; waiting for another description")
+                desc = await watch.next_description()
                 continue
+            n_session += 1
             zones = SeatStage(seat, parts.layout)
-            source = AudienceSource(nc, kv, desc, seat, mode=parts.mode, music=parts.music,
-                                    on_cue=_cue_player(parts.stage.cues, on_cue))
-            session = Session(source, parts.renderer, parts.stage, parts.layout, sinks, fps=desc.fps,
-                              wrap=lambda sink: SeatSink(sink, zones), stall_s=desc.stall_ms / 1000.0,
+            source = AudienceSource(nc, desc, seat, mode=parts.mode, music=parts.music, trust=trust,
+                                    cues=parts.stage.cues, on_cue=on_cue, on_other_run=watch.refresh, inbox=inbox)
+            session = Session(source, parts.renderer, parts.stage, parts.layout, numbered_sinks(sinks, n_session),
+                              fps=desc.fps, wrap=lambda sink: SeatSink(sink, zones), stall_s=desc.stall_ms / 1000.0,
                               handle_signals=handle_signals, stats_interval=stats_interval, on_stats=on_stats,
                               on_ready=on_ready)
             if sessions is not None:
                 sessions.append((session.engine, source))
-            stats = await session.run()
+            follower = asyncio.ensure_future(_follow(watch, source))
+            try:
+                stats = await session.run()
+            finally:
+                follower.cancel()
+                await asyncio.gather(follower, return_exceptions=True)
             if source.changed is None:
                 return stats
             desc = source.changed
     finally:
+        await inbox.close()
+        await watch.close()
         await nc.close()
+
+
+async def _follow(watch: DescriptionWatch, source: AudienceSource) -> None:
+    """Hand every new description of the show to the running session's source."""
+    while not source.ended.is_set():
+        source.offer_description(await watch.next_description())
 
 
 def run_listen(*args: Any, **kwargs: Any) -> LiveStats:

@@ -11,16 +11,18 @@ served by the publisher would cost it one answer per joining seat).
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import dataclasses
 import logging
 import secrets
 import time
-from typing import Callable, Optional
+from contextvars import ContextVar
+from dataclasses import dataclass
+from typing import Iterator, Optional
 
-import nats
+from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
 from nats.aio.client import Client as NatsClient
-from nats.js.api import StorageType
-from nats.js.errors import BucketNotFoundError
+from nats.js.errors import KeyNotFoundError
 from nats.js.kv import KeyValue
 
 from ..body.model import BodyModel
@@ -33,56 +35,48 @@ from ..live.endpoint import Endpoint
 from ..show.settings import Show
 from ..show.stage import OutputStage
 from ..show.timeline import RowTimeline
-from .wire import BUCKET, ShowDescription, check_show_name, encode_event, encode_frame, subject
+from .connection import NatsAuth, connect, connect_error, description_bucket, open_bucket, parse_server_url
+from .signing import VenueSigner
+from .wire import ShowDescription, check_show_name, encode_event, encode_frame, subject
+
+__all__ = ["NatsPublisherSink", "PublisherSecurity", "connect", "describe_show", "description_bucket", "publishing"]
 
 log = logging.getLogger("hapmotion.live")
 
+GUARD_S = 2.0
+"""How often the publisher checks that the server still holds its description."""
 
-async def connect(url: str, *, name: str, on_state: Optional[Callable[[str], None]] = None,
-                  connect_timeout: float = 2.0, first_try_s: float = 5.0) -> NatsClient:
-    """A NATS connection that reconnects for ever (0.25 s apart) once it has been made, and keeps nothing buffered
-    while it is down beyond a small buffer; ``on_state(text)`` hears about disconnects and reconnects.
-    ConnectionError when no server answers within ``first_try_s`` seconds."""
-    async def disconnected() -> None:
-        if on_state:
-            on_state("disconnected")
 
-    async def reconnected() -> None:
-        if on_state:
-            on_state("reconnected")
+@dataclass(frozen=True)
+class PublisherSecurity:
+    """How the venue publishes: its NATS credentials and TLS (:class:`~hapmotion.audience.connection.NatsAuth`),
+    and its Ed25519 signing key, or ``unsigned=True``, the explicit choice of a rehearsal without keys."""
 
-    async def error(exc: Exception) -> None:
-        if on_state:
-            on_state(f"error: {exc.__class__.__name__}: {exc}")
+    auth: NatsAuth = NatsAuth()
+    key: Optional[Ed25519PrivateKey] = None
+    unsigned: bool = False
 
-    # nats-py keeps retrying the first connection too when reconnects are unlimited: a server that is not there
-    # would hang the command for ever, so the first connection gets one bounded try (then reconnects are endless)
+    def signer(self, show: str, where: str) -> VenueSigner:
+        if self.key is None and not self.unsigned:
+            raise UsageError(f"{where}: a show is signed with the venue's key (--venue-key FILE or "
+                             f"HAPMOTION_VENUE_KEY); for a rehearsal without keys say --unsigned")
+        return VenueSigner(show, self.key)
+
+
+PUBLISHER_SECURITY: ContextVar[Optional[PublisherSecurity]] = ContextVar("hapmotion_publisher_security",
+                                                                         default=None)
+"""The security the ``nats://`` sinks of the running command are built with (``hapmotion live`` sets it from its
+options; None: not chosen, and a ``nats://`` sink is refused)."""
+
+
+@contextlib.contextmanager
+def publishing(security: PublisherSecurity) -> Iterator[PublisherSecurity]:
+    """Within the block, ``nats://`` sinks publish with ``security`` (an event loop started inside inherits it)."""
+    token = PUBLISHER_SECURITY.set(security)
     try:
-        return await asyncio.wait_for(
-            nats.connect(servers=[url], name=name, allow_reconnect=True, max_reconnect_attempts=-1,
-                         reconnect_time_wait=0.25, connect_timeout=connect_timeout,
-                         disconnected_cb=disconnected, reconnected_cb=reconnected, error_cb=error,
-                         pending_size=64 * 1024),
-            first_try_s)
-    except asyncio.TimeoutError:
-        raise ConnectionError(f"no NATS server answered within {first_try_s:g} s") from None
-
-
-async def description_bucket(nc: NatsClient) -> KeyValue:
-    """The key-value bucket of show descriptions (created on first use: history 1, in memory, direct gets so any
-    server of a cluster answers). UsageError when the server has no JetStream."""
-    js = nc.jetstream(timeout=2.0)
-    try:
-        return await js.key_value(BUCKET)
-    except BucketNotFoundError:
-        pass
-    except Exception as exc:
-        if exc.__class__.__name__ in ("ServiceUnavailableError", "NoRespondersError", "TimeoutError"):
-            raise UsageError("the NATS server has no JetStream (start it with -js): the show description needs "
-                             "a key-value bucket") from None
-        raise
-    return await js.create_key_value(bucket=BUCKET, history=1, storage=StorageType.MEMORY, direct=True,
-                                     description="hapmotion show descriptions, one key per show")
+        yield security
+    finally:
+        PUBLISHER_SECURITY.reset(token)
 
 
 def describe_show(show_name: str, *, show: Show, stage: OutputStage, layout: Layout, body: Optional[BodyModel],
@@ -99,7 +93,7 @@ def describe_show(show_name: str, *, show: Show, stage: OutputStage, layout: Lay
         layout=layout.name, actuators=tuple(layout.actuators),
         render={"method": show.method, "preset": show.preset, "mirror": bool(mirror), "mode": stage.mode,
                 "overrides": dict(show.overrides)},
-        body=body.to_dict(), music=music, stall_ms=float(stall_ms))
+        body=body.to_dict(), music=music, stall_ms=float(stall_ms), issued=time.time())
 
 
 class NatsPublisherSink(Sink):
@@ -108,40 +102,89 @@ class NatsPublisherSink(Sink):
     Parameters
     ----------
     url:
-        The NATS server, ``nats://HOST:PORT``.
+        The NATS server, ``nats://HOST:PORT`` or ``tls://HOST:PORT``.
     description:
         The show's :class:`ShowDescription` (put in the key-value bucket at start and after every reconnect).
     music:
         The song's rows (:class:`~hapmotion.show.timeline.RowTimeline`; its row at each frame's show time is sent)
         or None.
+    security:
+        Credentials, TLS and the signing key (:class:`PublisherSecurity`); without a key it must say
+        ``unsigned=True`` (a rehearsal), else UsageError.
     """
 
     def __init__(self, url: str, description: ShowDescription, *, music: Optional[RowTimeline] = None,
-                 fps: float = 60.0):
+                 fps: float = 60.0, security: PublisherSecurity = PublisherSecurity()):
         super().__init__(f"nats {url}/{description.show}", fps=fps)
         self.url = url
         self.description = description
         self.music = music
         self.nc: Optional[NatsClient] = None
         self.kv: Optional[KeyValue] = None
+        self.security = security
+        self.signer = security.signer(description.show, f"--sink {url}/{description.show}")
         self.seq = 0
+        self.event_seq = 0
         self.published = 0
         self.cues = 0
         self._subjects = {k: subject(description.show, k) for k in ("frame", "cue", "end")}
         self._republish: Optional[asyncio.Task] = None
+        self._guard: Optional[asyncio.Task] = None
         self._closing = False
+        self._stored = self.signer.seal("description", description.to_json())
 
     async def start(self) -> None:
         try:
             self.nc = await connect(self.url, name=f"hapmotion publisher {self.description.show}",
-                                    on_state=self._on_state)
+                                    auth=self.security.auth, on_state=self._on_state)
+        except (UsageError, asyncio.CancelledError):
+            raise
         except Exception as exc:
-            raise UsageError(f"--sink {self.name}: cannot reach the NATS server ({exc.__class__.__name__}: "
+            raise connect_error(f"--sink {self.name}", exc) from None
+        try:
+            self.kv = await description_bucket(self.nc)
+            await self._put()
+        except UsageError:
+            await self.nc.close()
+            raise
+        except Exception as exc:
+            await self.nc.close()
+            raise UsageError(f"--sink {self.name}: cannot store the show description ({exc.__class__.__name__}: "
                              f"{exc})") from None
-        self.kv = await description_bucket(self.nc)
-        await self.kv.put(self.description.show, self.description.to_json())
-        log.info("%s: show description stored (epoch %d); publishing on %s", self.name, self.description.epoch,
-                 self._subjects["frame"])
+        self._guard = asyncio.ensure_future(self._keep_description())
+        level = logging.INFO if self.signer.signed else logging.WARNING
+        log.log(level, "%s: show description stored (epoch %d, %s); publishing on %s", self.name,
+                self.description.epoch, self.signer.describe(), self._subjects["frame"])
+
+    async def _put(self) -> None:
+        await self.kv.put(self.description.show, self._stored)
+
+    async def _keep_description(self) -> None:
+        """Every :data:`GUARD_S` seconds, read the stored description back (one direct get, whatever the audience)
+        and store it again when it is missing or not this run's: a deleted bucket, a purged key or a value put by
+        someone else (on a server without the venue's permissions) is repaired for the seats that join later."""
+        while not self._closing:
+            await asyncio.sleep(GUARD_S)
+            if self.nc is None or not self.nc.is_connected or self._closing:
+                continue
+            try:
+                kv = await open_bucket(self.nc)
+                entry = None
+                if kv is not None:
+                    try:
+                        entry = await kv.get(self.description.show)
+                    except KeyNotFoundError:
+                        entry = None
+                if entry is None or entry.value != self._stored:
+                    self.warn_once("description_gone", "the show description was deleted or replaced on the server; "
+                                   "storing it again")
+                    self.kv = await description_bucket(self.nc)
+                    await self._put()
+            except Exception as exc:  # a server that does not answer now: tried again next time
+                self.warn_once("description", "could not check the stored show description (%s)", exc)
+
+    def describe(self) -> str:
+        return f"{self.name} ({self.signer.describe()})"
 
     def _on_state(self, state: str) -> None:
         if self._closing:
@@ -155,7 +198,7 @@ class NatsPublisherSink(Sink):
     async def _store_again(self) -> None:
         try:
             self.kv = await description_bucket(self.nc)
-            await self.kv.put(self.description.show, self.description.to_json())
+            await self._put()
         except Exception as exc:
             self.warn_once("description", "could not store the show description again (%s)", exc)
 
@@ -167,7 +210,8 @@ class NatsPublisherSink(Sink):
             return
         skeleton = frame.skeleton if frame.skeleton is not None and frame.skeleton.shape == (32, 3) else None
         music = self.music.row(frame.t) if self.music is not None else None
-        data = encode_frame(self.description.epoch, self.seq, frame.t, time.time(), skeleton, music)
+        data = self.signer.seal("frame", encode_frame(self.description.epoch, self.seq, frame.t, time.time(),
+                                                      skeleton, music))
         self.seq += 1
         try:
             await self.nc.publish(self._subjects["frame"], data)
@@ -181,9 +225,14 @@ class NatsPublisherSink(Sink):
     async def publish_cue(self, name: str, t: float, gain: float = 1.0) -> None:
         """Announce a cue fired at media time ``t`` to every seat."""
         if self.nc is not None and self.nc.is_connected:
-            await self.nc.publish(self._subjects["cue"], encode_event(epoch=self.description.epoch, t=float(t),
-                                                                       name=str(name), gain=float(gain)))
+            await self.nc.publish(self._subjects["cue"], self._event("cue", t=float(t), name=str(name),
+                                                                     gain=float(gain)))
             self.cues += 1
+
+    def _event(self, kind: str, **fields: object) -> bytes:
+        """A cue or end event of this run, numbered (a seat drops a number it has seen: a replay) and sealed."""
+        self.event_seq += 1
+        return self.signer.seal(kind, encode_event(epoch=self.description.epoch, seq=self.event_seq, **fields))
 
     async def shutdown(self) -> None:
         if self.nc is None:
@@ -191,17 +240,20 @@ class NatsPublisherSink(Sink):
         self._closing = True
         try:
             if self.nc.is_connected:
-                await self.nc.publish(self._subjects["end"], encode_event(epoch=self.description.epoch,
-                                                                           t=float(self.seq / self.fps)))
+                await self.nc.publish(self._subjects["end"], self._event("end", t=float(self.seq / self.fps)))
                 await self.nc.flush(timeout=1)
         except Exception as exc:
             self.warn_once("end", "could not announce the end (%s)", exc)
         finally:
-            if self._republish is not None:
-                self._republish.cancel()
+            for task in (self._republish, self._guard):
+                if task is not None:
+                    task.cancel()
             await self.nc.close()
 
     async def abandon(self) -> None:
+        self._closing = True
+        if self._guard is not None:
+            self._guard.cancel()
         if self.nc is not None:
             await self.nc.close()
 
@@ -209,12 +261,14 @@ class NatsPublisherSink(Sink):
 def publisher_sink(ep: Endpoint, *, fps: float, show: Show, stage: OutputStage, layout: Layout,
                    body: Optional[BodyModel], music: Optional[RowTimeline], stall_ms: float,
                    mirror: bool) -> NatsPublisherSink:
-    """The sink for ``--sink nats://HOST:PORT/SHOW`` (a parsed :class:`~hapmotion.live.urls.Endpoint`)."""
-    name = ep.path.strip("/")
+    """The sink for ``--sink nats://HOST:PORT/SHOW`` (a parsed :class:`~hapmotion.live.urls.Endpoint`), with the
+    security of :data:`PUBLISHER_SECURITY` (UsageError when neither a key nor ``unsigned`` was chosen)."""
+    server, name = parse_server_url(ep.text, "--sink")
     if not name:
         raise UsageError(f"--sink {ep.text!r}: expected nats://HOST:PORT/SHOW (the show's name)")
+    security = PUBLISHER_SECURITY.get() or PublisherSecurity()
     desc = describe_show(name, show=show, stage=stage, layout=layout, body=body, stall_ms=stall_ms, mirror=mirror)
-    return NatsPublisherSink(f"nats://{ep.host}:{ep.port}", desc, music=music, fps=fps)
+    return NatsPublisherSink(server, desc, music=music, fps=fps, security=security)
 
 
 register_sink_kind("nats", publisher_sink)

@@ -39,11 +39,11 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ..audio.params import MIX_RULES
 from ..body.model import BodyModel
 from ..errors import InputError, UsageError
-from ..renderer.params import PRESETS
-from ..show.settings import MODES
+from ..renderer.params import METHODS, PRESETS
+from ..show.settings import FPS_RANGE, MODES
+from ..show.stage import OutputStage
 from ..skeleton.joints import JOINTS
 
 PROTOCOL = "hapmotion-audience"
@@ -58,6 +58,12 @@ BUCKET = "hapmotion_shows"
 MAX_MEDIA_T = 1e7
 """Media times beyond about 115 days are refused as corrupt."""
 MAX_DESCRIPTION_BYTES = 64 * 1024
+MAX_STALL_MS = 1000.0
+"""A description may ask seats to keep a silent vest running for at most 1 s before it has faded to zero."""
+MAX_POSITION_M = 100.0
+"""A joint farther than this from the origin is not a performer on a stage: the frame is dropped as malformed."""
+MAX_OVERRIDES = 64
+MAX_AUDIO_OFFSET_S = 3600.0
 SHOW_NAME = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 
 
@@ -121,8 +127,12 @@ def decode_frame(data: bytes, n_music: int) -> WireFrame:
                          f"{n_m} music values")
     if not (math.isfinite(media_t) and abs(media_t) <= MAX_MEDIA_T):
         raise ValueError(f"media_t {media_t}, expected finite seconds")
+    if not math.isfinite(wall_t):
+        raise ValueError(f"wall_t {wall_t}, expected a finite time stamp")
     values = np.frombuffer(data, dtype="<f4", offset=HEADER.size).astype(np.float64)
     skeleton = values[:3 * n_j].reshape(n_j, 3) if n_j else None
+    if skeleton is not None and (np.isinf(skeleton).any() or (np.abs(np.nan_to_num(skeleton)) > MAX_POSITION_M).any()):
+        raise ValueError(f"joint positions infinite or beyond {MAX_POSITION_M:g} m")
     music = values[3 * n_j:] if n_m else None
     if music is not None and not (np.isfinite(music).all() and music.min() >= 0.0 and music.max() <= 100.0):
         raise ValueError("music values outside 0..100")
@@ -131,12 +141,12 @@ def decode_frame(data: bytes, n_music: int) -> WireFrame:
 
 # ---------------------------------------------------------------------------------------------------- events
 def encode_event(**fields: Any) -> bytes:
-    """A cue or end event: a small JSON object (``epoch``, ``t`` and, for cues, ``name``, ``gain``)."""
+    """A cue or end event: a small JSON object (``epoch``, ``seq``, ``t`` and, for cues, ``name``, ``gain``)."""
     return json.dumps(fields, separators=(",", ":")).encode()
 
 
 def decode_event(data: bytes) -> dict[str, Any]:
-    """ValueError when the event is not a JSON object with a whole ``epoch`` and a finite ``t``."""
+    """ValueError when the event is not a JSON object with a whole ``epoch`` and ``seq`` and a finite ``t``."""
     if len(data) > 4096:
         raise ValueError(f"event of {len(data)} bytes, at most 4096")
     try:
@@ -145,9 +155,11 @@ def decode_event(data: bytes) -> dict[str, Any]:
         raise ValueError("event nested too deeply") from None
     if not isinstance(obj, dict):
         raise ValueError("event is not a JSON object")
-    epoch, t = obj.get("epoch"), obj.get("t")
+    epoch, t, seq = obj.get("epoch"), obj.get("t"), obj.get("seq")
     if not isinstance(epoch, int) or isinstance(epoch, bool):
         raise ValueError("event without a whole epoch")
+    if not isinstance(seq, int) or isinstance(seq, bool) or seq < 0:
+        raise ValueError("event without a whole sequence number seq")
     if not isinstance(t, (int, float)) or isinstance(t, bool) or not math.isfinite(t):
         raise ValueError("event without a finite media time t")
     return obj
@@ -173,12 +185,16 @@ class ShowDescription:
     body: dict[str, float]
     music: Optional[dict[str, Any]] = None
     stall_ms: float = 250.0
+    issued: float = 0.0
+    """The publisher's ``time.time()`` when it described the run: a seat refuses a description older than the one
+    it plays (a replayed one)."""
     extra: dict[str, Any] = field(default_factory=dict, compare=False)
 
     def to_json(self) -> bytes:
         obj = {"protocol": PROTOCOL, "version": VERSION, "show": self.show, "epoch": self.epoch, "fps": self.fps,
                "layout": self.layout, "actuators": list(self.actuators), "joints": list(JOINTS),
                "render": self.render, "body": self.body, "music": self.music, "stall_ms": self.stall_ms,
+               "issued": self.issued,
                "encoding": {"frame": "header <2sBBHHIIdd (magic HM, version, kind, n_joints, n_music, epoch, "
                                      "seq, media_t, wall_t) + float32 LE skeleton (n_joints x 3) + music (n_music)",
                             "subjects": {k: subject(self.show, k) for k in ("frame", "cue", "end")}},
@@ -219,44 +235,84 @@ def parse_description(data: bytes, show: str) -> ShowDescription:
         return value
 
     epoch = need("epoch", int, "a whole number")
+    if not 0 <= epoch <= 0xFFFFFFFF:
+        raise InputError(src, "epoch", f"expected 0..{0xFFFFFFFF}, found {epoch}")
     fps = float(need("fps", (int, float), "frames per second"))
-    if not (math.isfinite(fps) and 1.0 <= fps <= 1000.0):
-        raise InputError(src, "fps", f"expected 1..1000, found {fps}")
+    if not (math.isfinite(fps) and FPS_RANGE[0] <= fps <= FPS_RANGE[1]):
+        raise InputError(src, "fps", f"expected {FPS_RANGE[0]:g}..{FPS_RANGE[1]:g}, found {fps}")
+    layout = obj.get("layout", "")
+    if not isinstance(layout, str) or len(layout) > 200:
+        raise InputError(src, "layout", "expected a layout name of at most 200 characters")
     actuators = need("actuators", list, "a list of actuator ids")
-    if not actuators or not all(isinstance(a, str) for a in actuators) or len(actuators) > 4096:
+    if not (0 < len(actuators) <= 4096 and all(isinstance(a, str) and 0 < len(a) <= 64 for a in actuators)):
         raise InputError(src, "actuators", "expected 1 to 4096 actuator ids")
     if obj.get("joints") != list(JOINTS):
         raise InputError(src, "joints", "expected the 32 canonical joints in order")
-    render = need("render", dict, "an object")
-    for key, kind in (("method", str), ("preset", str), ("mirror", bool), ("mode", str)):
-        if not isinstance(render.get(key), kind):
-            raise InputError(src, f"render.{key}", f"expected a {kind.__name__}, found {render.get(key)!r}")
-    if render["mode"] not in MODES:
-        raise InputError(src, "render.mode", f"expected one of {', '.join(MODES)}, found {render['mode']!r}")
-    if not isinstance(render.get("overrides", {}), dict):
-        raise InputError(src, "render.overrides", "expected an object")
+    render = _check_render(need("render", dict, "an object"), src)
     try:
         body = BodyModel.from_dict(need("body", dict, "an object")).to_dict()
     except ValueError as exc:
         key, _, problem = str(exc).partition(": ")
         raise InputError(src, key, problem[:200]) from None
-    music = obj.get("music")
+    music = None
     if render["mode"] != "motion":
-        if not isinstance(music, dict):
-            raise InputError(src, "music", f"mode {render['mode']} needs the music's mix settings")
-        ratio = music.get("mix_ratio")
-        if not (isinstance(ratio, list) and len(ratio) == 2 and all(isinstance(r, (int, float)) for r in ratio)):
-            raise InputError(src, "music.mix_ratio", "expected [audio, motion] weights")
-        if music.get("mix_rule") not in MIX_RULES:
-            raise InputError(src, "music.mix_rule", f"expected one of {', '.join(MIX_RULES)}")
-        if music.get("params_preset") not in PRESETS:
-            raise InputError(src, "music.params_preset", f"expected one of {', '.join(PRESETS)}")
-        limit = music.get("power_limit")
-        if limit is not None and not (isinstance(limit, (int, float)) and limit > 0):
-            raise InputError(src, "music.power_limit", "expected a positive number or null")
-    stall_ms = float(obj.get("stall_ms", 250.0)) if isinstance(obj.get("stall_ms", 250.0), (int, float)) else -1
-    if not (0 < stall_ms <= 60_000):
-        raise InputError(src, "stall_ms", "expected 1..60000 ms")
-    return ShowDescription(show, epoch, fps, str(obj.get("layout", "")), tuple(actuators), render,
-                           body,
-                           music if render["mode"] != "motion" else None, stall_ms)
+        music = _check_music(obj.get("music"), len(actuators), src, render["mode"])
+    stall_ms = obj.get("stall_ms", 250.0)
+    if not (isinstance(stall_ms, (int, float)) and not isinstance(stall_ms, bool)
+            and math.isfinite(stall_ms) and 0 < stall_ms <= MAX_STALL_MS):
+        raise InputError(src, "stall_ms", f"expected 1..{MAX_STALL_MS:g} ms, found {stall_ms!r}"[:200])
+    issued = obj.get("issued", 0.0)
+    if not (isinstance(issued, (int, float)) and not isinstance(issued, bool) and math.isfinite(issued)
+            and issued >= 0):
+        raise InputError(src, "issued", f"expected a time stamp, found {issued!r}"[:200])
+    return ShowDescription(show, epoch, fps, layout, tuple(actuators), render, body, music, float(stall_ms),
+                           float(issued))
+
+
+def _check_render(render: dict, src: str) -> dict[str, Any]:
+    """The description's ``render`` object, every field typed, known and in range (the overrides too)."""
+    for key, kind in (("method", str), ("preset", str), ("mirror", bool), ("mode", str)):
+        if not isinstance(render.get(key), kind):
+            raise InputError(src, f"render.{key}", f"expected a {kind.__name__}, found {render.get(key)!r}"[:200])
+    for key, allowed in (("method", METHODS), ("preset", tuple(PRESETS)), ("mode", MODES)):
+        if render[key] not in allowed:
+            raise InputError(src, f"render.{key}", f"expected one of {', '.join(allowed)}, found "
+                                                   f"{render[key]!r}"[:200])
+    overrides = render.get("overrides", {})
+    if not isinstance(overrides, dict) or len(overrides) > MAX_OVERRIDES:
+        raise InputError(src, "render.overrides", f"expected an object of at most {MAX_OVERRIDES} parameters")
+    base = PRESETS[render["preset"]]
+    for name, value in overrides.items():
+        default = getattr(base, name, None)
+        if default is None:
+            raise InputError(src, f"render.overrides.{name}"[:100], "not a renderer parameter")
+        same_kind = (isinstance(value, bool) if isinstance(default, bool) else
+                     isinstance(value, str) if isinstance(default, str) else
+                     isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value))
+        if not same_kind:
+            raise InputError(src, f"render.overrides.{name}",
+                             f"expected a {type(default).__name__} like {default!r}, found {value!r}"[:200])
+    try:
+        base.replace(**overrides)
+    except (UsageError, TypeError, ValueError) as exc:
+        raise InputError(src, "render.overrides", str(exc)[:200]) from None
+    return {"method": render["method"], "preset": render["preset"], "mirror": render["mirror"],
+            "mode": render["mode"], "overrides": dict(overrides)}
+
+
+def _check_music(music: Any, n_actuators: int, src: str, mode: str) -> dict[str, Any]:
+    """The description's ``music`` object: the stage's mix settings (:meth:`OutputStage.check_settings`) and a
+    finite audio offset; ``audio_params`` is kept for the record only."""
+    if not isinstance(music, dict):
+        raise InputError(src, "music", f"mode {mode} needs the music's mix settings")
+    try:
+        checked = OutputStage.check_settings(music, n_actuators)
+    except UsageError as exc:
+        key, _, problem = str(exc).partition(": ")
+        raise InputError(src, key, problem) from None
+    offset = music.get("audio_offset_s", 0.0)
+    if not (isinstance(offset, (int, float)) and not isinstance(offset, bool) and math.isfinite(offset)
+            and abs(offset) <= MAX_AUDIO_OFFSET_S):
+        raise InputError(src, "music.audio_offset_s", f"expected seconds within +-{MAX_AUDIO_OFFSET_S:g}")
+    params = music.get("audio_params", {})
+    return {**checked, "audio_offset_s": float(offset), "audio_params": params if isinstance(params, dict) else {}}

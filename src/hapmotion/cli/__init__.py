@@ -42,10 +42,11 @@ def cli() -> None:
 
 
 def _register() -> None:
-    from . import check, demo, evaluate, info, listen, live, play, plot, render, view
+    from . import check, demo, evaluate, info, listen, live, play, plot, render, venue_setup, view
 
     for module in (render, info, demo, live, listen, play, check, view, plot, evaluate):
         cli.add_command(module.command, module.__name__.rsplit(".", 1)[1])
+    cli.add_command(venue_setup.command, "venue-setup")
 
 
 _register()

@@ -8,13 +8,14 @@ from typing import Optional
 import click
 
 from ..show.comfort import Comfort
+from .audience_options import seat_security_options
 from .show_options import (comfort_options, cues_option, layout_option, method_option, mirror_option, mode_option,
                            param_option, parse_param_overrides, preset_option, read_cues, split_values)
 
 HELP = """Render a show published with `hapmotion live ... --sink nats://HOST:PORT/SHOW` on this seat's vest.
 
 \b
-SHOW_URL: nats://HOST:PORT/SHOW (default port 4222).
+SHOW_URL: nats://HOST:PORT/SHOW or tls://HOST:PORT/SHOW (default port 4222).
 The seat reads the show's description (renderer, music mix, frame rate, the performer's body) from the server,
 renders the performer's skeleton with the same Renderer, mixes the music's channel, then applies its own
 settings. Each frame plays --delay after its media time arrived live, so the vest matches a video/audio stream
@@ -22,16 +23,21 @@ running that far behind the venue.
 \b
 SINK (one or more): the sinks of `hapmotion live` (player, player-v3, osc://, ws-broadcast, record:PATH).
 \b
+Trust: only what the venue signed plays (--venue-pubkey FILE); --unsigned is a rehearsal without keys. NATS
+credentials and TLS come from files and the environment (--nats-nkey, --nats-creds, --nats-ca, ...), never from the
+command line or the URL.
+\b
 Safety: a silent show (lost connection, publisher stopped) fades every actuator to zero within the show's stall
 time; Ctrl-C or SIGTERM turns every motor off before exiting.
 \b
 Examples:
-  hapmotion listen nats://venue.example:4222/concert --sink player
-  hapmotion listen nats://127.0.0.1:4222/concert --sink player --no-mirror --gain 0.7 --zone-off VestBack --delay 180
+  hapmotion listen tls://venue.example:4222/concert --venue-pubkey venue.pub --nats-nkey seat.nk --sink player
+  hapmotion listen nats://127.0.0.1:4222/concert --unsigned --sink player --no-mirror --gain 0.7 --delay 180
 """
 
 
 @click.command("listen", help=HELP)
+@seat_security_options
 @click.argument("show_url", metavar="SHOW_URL")
 @click.option("--sink", "sinks", metavar="SINK", multiple=True, required=True,
               help="Where the seat's frames go; repeat for several sinks at once.")
@@ -52,7 +58,7 @@ Examples:
 def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Optional[bool], method: Optional[str],
             preset: Optional[str], mode: Optional[str], params: tuple[str, ...], layout_file: Optional[str],
             zones_off: tuple[str, ...], show_stats: bool, quiet: bool, cues: Optional[str],
-            comfort: Comfort) -> None:
+            comfort: Comfort, security) -> None:
     from ..audience import Seat, run_listen
     from ..audience.listener import parse_show_url
     from .session_report import finish_session, setup_logging
@@ -65,10 +71,11 @@ def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Opti
 
     def ready(engine) -> None:
         names = ", ".join(s.describe() for s in engine.sinks)
-        click.echo(f"listen: {show_url} (delay {delay_ms:g} ms); sinks: {names}; Ctrl-C stops", err=True)
+        trust = engine.source.trust.describe()
+        click.echo(f"listen: {show_url} (delay {delay_ms:g} ms, {trust}); sinks: {names}; Ctrl-C stops", err=True)
 
     try:
-        run_listen(show_url, list(sinks), seat=seat, on_ready=ready, sessions=sessions, cues=read_cues(cues),
+        run_listen(show_url, list(sinks), seat=seat, security=security, on_ready=ready, sessions=sessions, cues=read_cues(cues),
                    stats_interval=1.0 if show_stats else None,
                    on_stats=lambda text: click.echo(f"listen: {text}", err=True))
     finally:

@@ -7,6 +7,7 @@ from typing import Optional
 import click
 
 from ..show import Show
+from .audience_options import publisher_security_options
 from .kinds_help import KindsHelpCommand
 from .motion_options import CLI_SPELLING, motion_options, read_motion
 from .show_options import cue_port_option, session_options, show_options, split_values
@@ -45,6 +46,7 @@ Examples:
 
 
 @click.command("live", help=HELP, cls=KindsHelpCommand)
+@publisher_security_options
 @click.option("--source", "source", metavar="SOURCE", help="Where the skeleton comes from (see above).")
 @click.option("--sink", "sinks", metavar="SINK", multiple=True, required=True,
               help="Where frames go; repeat for several sinks at once.")

@@ -148,18 +148,47 @@ class OutputStage:
         return {"mix_ratio": [self.ratio[0], self.ratio[1]], "mix_rule": self.rule,
                 "params_preset": self.audio_preset, "power_limit": self.power_limit}
 
+    @staticmethod
+    def check_settings(settings: Any, n_actuators: int) -> dict[str, Any]:
+        """:meth:`to_dict`'s settings as a seat receives them, every field typed and bounded: ``mix_ratio`` two
+        finite weights >= 0 (not both 0), ``mix_rule`` and ``params_preset`` known names, ``power_limit`` ``None``
+        or within (0, ``n_actuators``] (every motor at full drive). UsageError naming the field otherwise."""
+        if not isinstance(settings, dict):
+            raise UsageError(f"music: expected an object of mix settings, found {type(settings).__name__}")
+        ratio = settings.get("mix_ratio", [2.0, 3.0])
+        if not (isinstance(ratio, (list, tuple)) and len(ratio) == 2
+                and all(isinstance(r, (int, float)) and not isinstance(r, bool) for r in ratio)):
+            raise UsageError(f"music.mix_ratio: expected [audio, motion] weights, found {ratio!r}"[:200])
+        try:
+            ratio = check_ratio(ratio)
+        except UsageError as exc:
+            raise UsageError(f"music.mix_ratio: {exc}") from None
+        rule, preset = settings.get("mix_rule", "duck"), settings.get("params_preset", "felt")
+        if not isinstance(rule, str) or rule not in MIX_RULES:
+            raise UsageError(f"music.mix_rule: expected one of {', '.join(MIX_RULES)}, found {rule!r}"[:200])
+        if not isinstance(preset, str) or preset not in PRESETS:
+            raise UsageError(f"music.params_preset: expected one of {', '.join(PRESETS)}, found {preset!r}"[:200])
+        limit = settings.get("power_limit")
+        if limit is not None and not (isinstance(limit, (int, float)) and not isinstance(limit, bool)
+                                      and math.isfinite(limit) and 0 < limit <= n_actuators):
+            raise UsageError(f"music.power_limit: expected null or a number in (0, {n_actuators}] (every motor at "
+                             f"full drive), found {limit!r}"[:200])
+        return {"mix_ratio": [ratio[0], ratio[1]], "mix_rule": rule, "params_preset": preset,
+                "power_limit": None if limit is None else float(limit)}
+
     @classmethod
-    def from_dict(cls, settings: dict[str, Any], mode: str, *, layout: Layout, fps: float,
+    def from_dict(cls, settings: Optional[dict[str, Any]], mode: str, *, layout: Layout, fps: float,
                   comfort: Comfort = Comfort(), cues: Optional[CueList] = None,
                   music: Optional[RowTimeline] = None) -> "OutputStage":
         """The stage :meth:`to_dict` describes, on ``layout`` at ``fps``, with a seat's own ``comfort`` and
-        ``cues``. ``settings`` ``None`` or empty: a motion-only show (no mix; the show's power limit)."""
-        settings = settings or {"power_limit": show_power_limit(len(layout.actuators))}
-        ratio = settings.get("mix_ratio", (2.0, 3.0))
-        return cls(mode, layout.actuators, fps, ratio=(float(ratio[0]), float(ratio[1])),
-                   rule=settings.get("mix_rule", "duck"), audio_preset=settings.get("params_preset", "felt"),
-                   power_limit=settings.get("power_limit"), positions=layout.positions(),
-                   mirror_map=layout.mirror_map(), comfort=comfort, cues=cues, music=music)
+        ``cues``. ``settings`` ``None`` or empty: a motion-only show (no mix; the show's power limit). Every field
+        is checked (:meth:`check_settings`): UsageError naming the field, never an internal error."""
+        n = len(layout.actuators)
+        checked = cls.check_settings(settings or {"power_limit": show_power_limit(n)}, n)
+        return cls(mode, layout.actuators, fps, ratio=tuple(checked["mix_ratio"]), rule=checked["mix_rule"],
+                   audio_preset=checked["params_preset"], power_limit=checked["power_limit"],
+                   positions=layout.positions(), mirror_map=layout.mirror_map(), comfort=comfort, cues=cues,
+                   music=music)
 
     # ------------------------------------------------------------------ the mode stage (stateless)
     def condition(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray]) -> np.ndarray:

@@ -1,0 +1,103 @@
+"""The audience's security options, shared by ``hapmotion live`` (the ``nats://`` sink) and ``hapmotion listen``:
+NATS credentials and TLS, the venue's signing key (live) or public key (listen), or ``--unsigned``.
+
+Secrets never go on a command line: options name files (a password file, a token file, an NKey seed, a ``.creds``
+file, the keys) and the environment holds the rest (``HAPMOTION_NATS_PASSWORD``, ``HAPMOTION_NATS_TOKEN``;
+:mod:`hapmotion.audience.connection`).
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, Callable, Optional
+
+import click
+
+FILE = click.Path(dir_okay=False)
+
+_NATS = [
+    click.option("--nats-user", metavar="NAME", envvar="HAPMOTION_NATS_USER", default=None,
+                 help="NATS user name; the password comes from --nats-password-file or HAPMOTION_NATS_PASSWORD "
+                      "[env HAPMOTION_NATS_USER]."),
+    click.option("--nats-password-file", metavar="FILE", type=FILE, default=None,
+                 help="A file holding the NATS password (or the environment variable HAPMOTION_NATS_PASSWORD)."),
+    click.option("--nats-token-file", metavar="FILE", type=FILE, default=None,
+                 help="A file holding a NATS token (or the environment variable HAPMOTION_NATS_TOKEN)."),
+    click.option("--nats-nkey", metavar="FILE", type=FILE, default=None,
+                 help="A NATS NKey seed file (hapmotion venue-setup writes venue.nk and seat.nk) "
+                      "[env HAPMOTION_NATS_NKEY]."),
+    click.option("--nats-creds", metavar="FILE", type=FILE, default=None,
+                 help="A NATS JWT .creds file (accounts run by an operator) [env HAPMOTION_NATS_CREDS]."),
+    click.option("--nats-ca", metavar="FILE", type=FILE, default=None,
+                 help="TLS: the CA certificate(s) the server's certificate is checked against (PEM); implies TLS."),
+    click.option("--nats-cert", metavar="FILE", type=FILE, default=None,
+                 help="TLS: this client's certificate (PEM), with --nats-key, for servers that verify clients."),
+    click.option("--nats-key", metavar="FILE", type=FILE, default=None, help="TLS: the key of --nats-cert (PEM)."),
+    click.option("--nats-tls-name", metavar="NAME", default=None,
+                 help="TLS: the name the server's certificate must carry (default: the URL's host)."),
+    click.option("--unsigned", is_flag=True,
+                 help="A rehearsal without keys: nothing is signed or checked, and the start-up line says so."),
+]
+
+
+def _auth(values: dict[str, Any]):
+    from ..audience.connection import NatsAuth
+
+    return NatsAuth.from_env(user=values.pop("nats_user"), password_file=values.pop("nats_password_file"),
+                             token_file=values.pop("nats_token_file"), nkey=values.pop("nats_nkey"),
+                             creds=values.pop("nats_creds"), ca=values.pop("nats_ca"), cert=values.pop("nats_cert"),
+                             key=values.pop("nats_key"), tls_name=values.pop("nats_tls_name"))
+
+
+def _apply(options: list, command: Callable) -> Callable:
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
+def publisher_security_options(command: Callable) -> Callable:
+    """``hapmotion live``: the options above and ``--venue-key FILE``; every ``nats://`` sink of the command is
+    built with them (:func:`hapmotion.audience.publishing`). The command's own parameters are unchanged."""
+    @functools.wraps(command)
+    def run(**kwargs: Any) -> Any:
+        from ..audience.publisher import PublisherSecurity, publishing
+        from ..audience.signing import load_private_key
+
+        key_file: Optional[str] = kwargs.pop("venue_key")
+        unsigned: bool = kwargs.pop("unsigned")
+        auth = _auth(kwargs)
+        if key_file is not None and unsigned:
+            raise click.UsageError("--venue-key and --unsigned exclude each other")
+        key = load_private_key(key_file) if key_file is not None else None
+        with publishing(PublisherSecurity(auth=auth, key=key, unsigned=unsigned)):
+            return command(**kwargs)
+
+    venue_key = click.option("--venue-key", metavar="FILE", type=FILE, envvar="HAPMOTION_VENUE_KEY", default=None,
+                             help="nats:// sink: the venue's Ed25519 private key (PEM) that signs the show "
+                                  "[env HAPMOTION_VENUE_KEY].")
+    return _apply([venue_key, *_NATS], run)
+
+
+def seat_security_options(command: Callable) -> Callable:
+    """``hapmotion listen``: the options above and ``--venue-pubkey FILE``, given to the command as
+    ``security`` (:class:`hapmotion.audience.SeatSecurity`)."""
+    @functools.wraps(command)
+    def run(**kwargs: Any) -> Any:
+        from ..audience.listener import SeatSecurity
+        from ..audience.signing import load_public_key
+
+        key_file: Optional[str] = kwargs.pop("venue_pubkey")
+        unsigned: bool = kwargs.pop("unsigned")
+        auth = _auth(kwargs)
+        if key_file is not None and unsigned:
+            raise click.UsageError("--venue-pubkey and --unsigned exclude each other")
+        key = load_public_key(key_file) if key_file is not None else None
+        if key is None and not unsigned:
+            raise click.UsageError("a seat checks the venue's signature: give --venue-pubkey FILE (or "
+                                   "HAPMOTION_VENUE_PUBKEY), or --unsigned for a rehearsal without keys")
+        return command(security=SeatSecurity(auth=auth, venue_key=key, unsigned=unsigned), **kwargs)
+
+    pubkey = click.option("--venue-pubkey", metavar="FILE", type=FILE, envvar="HAPMOTION_VENUE_PUBKEY",
+                          default=None, help="The venue's Ed25519 public key (PEM): only what it signed plays "
+                                             "[env HAPMOTION_VENUE_PUBKEY].")
+    return _apply([pubkey, *_NATS], run)
