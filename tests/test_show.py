@@ -202,3 +202,15 @@ def test_the_stage_and_timeline_refuse_what_does_not_fit():
     assert not stage.step(None, 0.0).any()
     with pytest.raises(ValueError, match="finite"):
         stage.step(None, float("nan"))
+
+
+def test_a_seat_never_plays_above_the_show_s_power_limit():
+    """Whatever a description says (no limit, or every motor at full drive), the rebuilt stage keeps the show's."""
+    layout = load_layout()
+    for settings in ({"power_limit": None}, {"power_limit": 52.0}, {}):
+        stage = OutputStage.from_dict(settings, "audio", layout=layout, fps=60.0,
+                                      music=RowTimeline(np.full((1, 52), 100.0), 60.0))
+        assert stage.power_limit == show_power_limit(52)
+        row = stage.step(None, 0.0)
+        assert np.sum((row / 100.0) ** 2) <= show_power_limit(52) + 1e-9
+    assert OutputStage.from_dict({"power_limit": 10.0}, "audio", layout=layout, fps=60.0).power_limit == 10.0

@@ -152,7 +152,9 @@ class OutputStage:
     def check_settings(settings: Any, n_actuators: int) -> dict[str, Any]:
         """:meth:`to_dict`'s settings as a seat receives them, every field typed and bounded: ``mix_ratio`` two
         finite weights >= 0 (not both 0), ``mix_rule`` and ``params_preset`` known names, ``power_limit`` ``None``
-        or within (0, ``n_actuators``] (every motor at full drive). UsageError naming the field otherwise."""
+        or within (0, ``n_actuators``] (every motor at full drive). UsageError naming the field otherwise. A seat
+        never plays above the show's own limit (:func:`show_power_limit`): a missing limit, or one above it, is
+        that limit."""
         if not isinstance(settings, dict):
             raise UsageError(f"music: expected an object of mix settings, found {type(settings).__name__}")
         ratio = settings.get("mix_ratio", [2.0, 3.0])
@@ -173,8 +175,9 @@ class OutputStage:
                                       and math.isfinite(limit) and 0 < limit <= n_actuators):
             raise UsageError(f"music.power_limit: expected null or a number in (0, {n_actuators}] (every motor at "
                              f"full drive), found {limit!r}"[:200])
+        ceiling = show_power_limit(n_actuators)
         return {"mix_ratio": [ratio[0], ratio[1]], "mix_rule": rule, "params_preset": preset,
-                "power_limit": None if limit is None else float(limit)}
+                "power_limit": ceiling if limit is None else min(float(limit), ceiling)}
 
     @classmethod
     def from_dict(cls, settings: Optional[dict[str, Any]], mode: str, *, layout: Layout, fps: float,
