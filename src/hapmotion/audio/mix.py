@@ -122,14 +122,16 @@ def duck_mix(motion: np.ndarray, audio: np.ndarray, audio_share: float, kernel: 
 
 def mix(motion_rows: np.ndarray, audio_rows: np.ndarray, ratio: "tuple[float, float]" = DEFAULT_RATIO,
         power_limit: float | None = None, *, rule: str | None = None,
-        positions: np.ndarray | None = None, params: AudioParams | None = None) -> np.ndarray:
+        positions: np.ndarray | None = None, params: AudioParams | None = None,
+        kernel: np.ndarray | None = None) -> np.ndarray:
     """Mix motion and audio intensities of the same shape, ``(N,)`` (one frame, as live uses it) or ``(T, N)``.
 
     ``ratio`` is ``(audio, motion)``. ``rule`` is ``duck``, ``paper`` or ``energy`` (module docstring); not given:
     ``params.mix_rule`` (``duck``). ``paper`` and
     ``energy`` normalise the weights to sum to 1; ``duck`` keeps the motion whole and uses the audio share for the
     bed. ``positions`` ``(N, 3)`` (metres, e.g. ``Layout.positions()``) let ``duck`` find the motion's neighbours;
-    ``params`` (default :data:`DEFAULT_PARAMS`) holds its depths and the start level.
+    ``params`` (default :data:`DEFAULT_PARAMS`) holds its depths and the start level. ``kernel`` is
+    :func:`locus_kernel` of those positions when the caller keeps it (a live stage mixes every row with one).
     Inputs are clipped to 0..100 first (non-finite values count as 0); the result is clipped to 0..100 and, with
     ``power_limit``, scaled per frame by :func:`limit_power`. Returns float64 of the input shape.
     """
@@ -149,5 +151,7 @@ def mix(motion_rows: np.ndarray, audio_rows: np.ndarray, ratio: "tuple[float, fl
         out = np.sqrt(a_w * audio ** 2 + m_w * motion ** 2)
     else:
         n = motion.shape[-1] if motion.ndim else 1
-        out = duck_mix(motion, audio, a_w, locus_kernel(positions, n, p.duck_locus_radius_m), p)
+        if kernel is None:
+            kernel = locus_kernel(positions, n, p.duck_locus_radius_m)
+        out = duck_mix(motion, audio, a_w, kernel, p)
     return limit_power(np.clip(out, 0.0, 100.0), power_limit)

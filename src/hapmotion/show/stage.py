@@ -24,7 +24,7 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
-from ..audio.mix import check_ratio, limit_power, mix
+from ..audio.mix import check_ratio, limit_power, locus_kernel, mix
 from ..audio.params import MIX_RULES, AudioParams, params_for_preset
 from ..errors import UsageError
 from ..layout import Layout
@@ -117,6 +117,9 @@ class OutputStage:
         self.audio_params: AudioParams = params_for_preset(audio_preset)
         self.power_limit = power_limit
         self.positions = positions
+        # the duck rule's closeness of motors, (N, N): fixed for the stage, so made once, not on every row
+        self._kernel = locus_kernel(positions, self.n, self.audio_params.duck_locus_radius_m)
+        self._silence = np.zeros(self.n)
         self.mirror_map = np.arange(self.n) if mirror_map is None else np.asarray(mirror_map)
         self.comfort = comfort
         self.cue_list = cues
@@ -201,7 +204,7 @@ class OutputStage:
             return np.asarray(incoming, dtype=np.float64)
         if self.mode == "multimodal":
             return mix(incoming, music, ratio=self.ratio, power_limit=self.power_limit, rule=self.rule,
-                       positions=self.positions, params=self.audio_params)
+                       params=self.audio_params, kernel=self._kernel)
         chosen = incoming if self.mode == "motion" else music
         return limit_power(np.clip(chosen, 0.0, 100.0), self.power_limit)
 
@@ -237,7 +240,7 @@ class OutputStage:
         when the music plays alone); the cue layer and the comfort limiter move on by one row."""
         if not math.isfinite(t):
             raise ValueError(f"show time must be a finite number of seconds, not {t!r}")
-        music = self.music.row(t) if self.music is not None else np.zeros(self.n)  # no music: silence
+        music = self.music.row(t) if self.music is not None else self._silence
         if self.mode == "rows":
             row = np.array(incoming, dtype=np.float64)
         elif self.mode == "audio":
