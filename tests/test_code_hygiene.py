@@ -72,7 +72,7 @@ def test_no_module_of_the_package_is_over_600_lines():
 
 
 LAYERS = ("errors", "json_scan", "limits", "filesafety", "skeleton", "motion", "motion_files", "body", "track",
-          "bhaptics.devices", "bhaptics.tick", "layout", "bhaptics", "renderer", "audio", "track_files", "show",
+          "bhaptics.wearables", "bhaptics.devices", "bhaptics.tick", "layout", "rig", "bhaptics", "renderer", "audio", "track_files", "show",
           "live", "audience", "viewer", "metrics", "cli", "console", "__main__")
 """The package from the ground up (docs/CONTRACTS.md): a module may import its own layer and the ones before it.
 The bHaptics device catalogue and the Player's tick are vendor facts under the renderer layout; the rest of

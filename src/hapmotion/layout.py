@@ -1,10 +1,16 @@
 """The renderer layout as data: which bHaptics devices the motion renderer drives, their grids, their column order
 in a track and where they sit on the body.
 
-A renderer layout is a JSON file (``hapmotion/data/x40_shoulders.json`` is the default: TactSuit X40 + two Tactosy sleeves
-worn on the shoulders). Another vest with the same kinds of charts (a front grid, a back grid, shoulder grids) is a
-new file, not new code. Each device's name is a bHaptics position with its motor count in the bHaptics device
-catalogue (:mod:`hapmotion.bhaptics.devices`).
+The default layout -- the body chart every show is rendered on -- is a view of two wearable files
+(:mod:`hapmotion.bhaptics.wearables`): the TactSuit X40 and the two Tactosy sleeves worn on the shoulders, whose
+``renderer_grid`` sections give each device's grid and spans and whose motors give the SDK2 packing
+(:func:`default_layout`). ``hapmotion/data/x40_shoulders.json`` is the same layout written as a layout file (the form
+``--layout`` reads; a test keeps the two equal). Another vest with the same kinds of charts (a front grid, a back
+grid, shoulder grids) is a new file, not new code. Each device's name is a bHaptics position with its motor count
+in the bHaptics device catalogue (:mod:`hapmotion.bhaptics.devices`).
+
+What a wearer actually owns is a *rig* (:mod:`hapmotion.rig`): a layout may carry one (``Layout.rig``), and the rows
+rendered on the layout's body chart are then sent to the rig's motors.
 
 Each device is a grid of ``rows x cols`` actuators addressed ``index = row * cols + col`` (bHaptics), mapped onto
 one *chart* of the body surface:
@@ -18,13 +24,15 @@ one *chart* of the body surface:
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
-from importlib import resources
+from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from .bhaptics.devices import bhaptics_devices
+from .bhaptics.wearables import bundled_wearables
 from .body.model import BodyModel
 from .errors import InputError
 from .limits import LimitsArg, as_limits, checked_json_text, parse_json_text
@@ -33,8 +41,10 @@ CHART_FRONT, CHART_BACK, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT = 0, 1, 2, 3
 CHART_NAMES = ("front", "back", "shoulder_left", "shoulder_right")
 
 DEFAULT_LAYOUT_NAME = "x40_shoulders"
-"""The bundled layout's name (``hapmotion/data/x40_shoulders.json``): what a track or sink is for when none is
-named."""
+"""The default layout's name: what a track or sink is for when none is named."""
+
+BODY_CHART_WEARABLES = ("x40", "tactosy-shoulders")
+"""The wearable files the default layout (the body chart) is made of, in column order."""
 
 
 @dataclass(frozen=True)
@@ -63,6 +73,8 @@ class Layout:
 
     name: str
     devices: tuple[Device, ...]
+    rig: Any = field(default=None, compare=False)
+    """The wearables the rows are played on (a :class:`hapmotion.rig.Rig`); ``None``: the layout's own devices."""
 
     @property
     def actuators(self) -> tuple[str, ...]:
@@ -108,6 +120,25 @@ class Layout:
                         out[i] = other.offset + r * other.cols + c
         return out
 
+    def places(self) -> tuple[tuple[str, float, float], ...]:
+        """``(chart, across, height)`` per column, on the body chart the wearable files use
+        (:class:`hapmotion.bhaptics.wearables.Motor`): ``front``/``back`` with ``across`` from the wearer's left
+        (0) to right (1) and ``height`` from the collar (0) down; ``shoulder_left``/``shoulder_right`` with
+        ``across`` from front to back and ``height`` from the neck out."""
+        out = []
+        for d in self.devices:
+            chart = {CHART_FRONT: "front", CHART_BACK: "back", CHART_SHOULDER_LEFT: "shoulder_left",
+                     CHART_SHOULDER_RIGHT: "shoulder_right"}[d.chart]
+            for r in range(d.rows):
+                for c in range(d.cols):
+                    out.append((chart, c / (d.cols - 1) if d.cols > 1 else 0.5,
+                                r / (d.rows - 1) if d.rows > 1 else 0.5))
+        return tuple(out)
+
+    def with_rig(self, rig: Any) -> "Layout":
+        """This layout played on ``rig``."""
+        return Layout(self.name, self.devices, rig)
+
     # ------------------------------------------------------------------ geometry
     def positions(self, body: BodyModel | None = None) -> np.ndarray:
         """``(N, 3)`` actuator positions in body coordinates (x right, y up, z forward; metres, origin J_T).
@@ -151,12 +182,30 @@ def load_layout(path: "str | os.PathLike[str] | None" = None, limits: LimitsArg 
     :class:`~hapmotion.errors.InputError` naming the field when the file does not fit the schema.
     """
     if path is None:
-        source = f"{DEFAULT_LAYOUT_NAME}.json"
-        text = resources.files("hapmotion").joinpath(f"data/{source}").read_text()
-    else:
-        source = os.fspath(path)
-        text = checked_json_text(path, as_limits(limits), what="JSON layout")
-    doc = parse_json_text(source, text, what="JSON layout")
+        return default_layout()
+    source = os.fspath(path)
+    text = checked_json_text(path, as_limits(limits), what="JSON layout")
+    return parse_layout(source, parse_json_text(source, text, what="JSON layout"))
+
+
+@lru_cache(maxsize=1)
+def default_layout() -> Layout:
+    """The body chart: the layout the :data:`BODY_CHART_WEARABLES` files describe (their ``renderer_grid`` sections,
+    in file order, and their motors' SDK2 array slots), checked like any layout file."""
+    devices = []
+    for name in BODY_CHART_WEARABLES:
+        w = bundled_wearables()[name]
+        for grid in w.renderer_grid:
+            first = w.device_motors(grid["device"])[0]
+            devices.append(dict(grid, name=grid["device"], sdk2_position=first.sdk2_position,
+                                sdk2_offset=first.sdk2_slots[0] - first.index,
+                                sdk2_length=w.sdk2_lengths[grid["device"]]))
+    return parse_layout(f"data/wearables/{'+'.join(BODY_CHART_WEARABLES)}",
+                        {"name": DEFAULT_LAYOUT_NAME, "devices": devices})
+
+
+def parse_layout(source: str, doc: Any) -> Layout:
+    """A layout from its parsed JSON document ``doc`` (read from ``source``); InputError naming the field."""
     if not isinstance(doc, dict) or not isinstance(doc.get("devices"), list):
         raise InputError(source, "field devices", "expected an object with a list of devices")
     if len(doc["devices"]) > N_CHARTS:  # refused before any is read: one per chart
@@ -194,7 +243,7 @@ def load_layout(path: "str | os.PathLike[str] | None" = None, limits: LimitsArg 
             raise InputError(source, place, f"expected a unique device name without '_', found {dev.name!r}")
         if not any(dev.name in t.positions and t.n_motors == dev.size for t in bhaptics_devices().values()):
             raise InputError(source, place, f"expected a bHaptics position with {dev.size} motors (see "
-                             f"bhaptics_devices.json), found {dev.name!r}")
+                             f"docs/wearables.md), found {dev.name!r}")
         names.add(dev.name)
         if chart in seen_charts:
             raise InputError(source, place, f"expected one device per chart, found a second {CHART_NAMES[chart]}")

@@ -1,6 +1,6 @@
-"""The bHaptics device catalogue (``hapmotion/data/bhaptics_devices.json``, which names its sources): every device
-type that bHaptics patterns (``.tact``) name, the positions it covers (``VestFront``, ``ForearmL``, ``Head`` ...)
-and its motor points in panel coordinates.
+"""The bHaptics device catalogue: every device type that bHaptics patterns (``.tact``) name, the positions it covers
+(``VestFront``, ``ForearmL``, ``Head`` ...) and its motor points in panel coordinates. It is a view of the wearable
+files (:mod:`.wearables`): each type is the ``tact`` section of the wearable that owns it, with that file's sources.
 
 The ``.tact`` reader and writer, and the check of a renderer layout's device names
 (:func:`hapmotion.layout.load_layout`), use nothing else for motor counts and points.
@@ -8,12 +8,12 @@ The ``.tact`` reader and writer, and the check of a renderer layout's device nam
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from functools import lru_cache
-from importlib import resources
 
 import numpy as np
+
+from .wearables import bundled_wearables
 
 
 @dataclass(frozen=True)
@@ -36,28 +36,34 @@ class DeviceType:
         return int(self.points.shape[0])
 
 
-@lru_cache(maxsize=1)
-def _catalogue() -> dict:
-    """The parsed ``bhaptics_devices.json`` (read once)."""
-    return json.loads(resources.files("hapmotion").joinpath("data/bhaptics_devices.json").read_text())
+TYPE_ORDER = ("Tactot", "Tactosy", "Tactosy2", "Tactal", "TactVisor", "TactosyH", "Hand10", "TactosyF", "TactGlove")
+"""The order types are looked up in (the first that covers a position wins: a ``Head`` pattern of unknown motor count
+is a Tactal's); types of other wearable files follow in name order."""
+
+POSITION_ORDER = ("VestFront", "VestBack", "ForearmL", "ForearmR", "Left", "Right", "Head", "HandL", "HandR", "FootL",
+                  "FootR", "GloveL", "GloveR", "Racket")
+"""Every bHaptics position in the order tracks list them (vest, arms, head, hands, feet, gloves, racket)."""
 
 
 @lru_cache(maxsize=1)
 def bhaptics_devices() -> dict[str, DeviceType]:
-    """The bundled catalogue, by type name, in file order (vest first)."""
-    out = {}
-    for name, d in _catalogue()["devices"].items():
-        pts = np.asarray(d["points"], dtype=np.float64).reshape(-1, 2)
-        pts.setflags(write=False)
-        out[name] = DeviceType(name=name, positions=tuple(d["positions"]), points=pts, cols=int(d["cols"]),
-                               rows=int(d["rows"]), aliases=tuple(d.get("aliases", ())))
-    return out
+    """The catalogue, by type name, vest first: the ``tact`` section of every bundled wearable file."""
+    found = {}
+    for w in bundled_wearables().values():
+        if w.tact is not None:
+            d = w.tact
+            pts = np.asarray(d["points"], dtype=np.float64).reshape(-1, 2)
+            pts.setflags(write=False)
+            found[d["type"]] = DeviceType(name=d["type"], positions=tuple(d["positions"]), points=pts,
+                                          cols=int(d["cols"]), rows=int(d["rows"]), aliases=tuple(d.get("aliases", ())))
+    order = [t for t in TYPE_ORDER if t in found] + sorted(t for t in found if t not in TYPE_ORDER)
+    return {t: found[t] for t in order}
 
 
-@lru_cache(maxsize=1)
 def position_order() -> tuple[str, ...]:
-    """Every bHaptics position in the order tracks list them (vest, arms, head, hands, feet, gloves, racket)."""
-    return tuple(_catalogue()["position_order"])
+    """:data:`POSITION_ORDER`, plus the positions of any bundled wearable it lacks."""
+    extra = sorted({d for w in bundled_wearables().values() for d in w.devices} - set(POSITION_ORDER))
+    return POSITION_ORDER + tuple(extra)
 
 
 def device_type(name: str) -> "DeviceType | None":

@@ -1,0 +1,270 @@
+"""Every bHaptics wearable as data: one JSON file per wearable (``hapmotion/data/wearables/*.json``), each motor with
+its place on the body chart and its SDK addressing. ``docs/wearables.md`` lists them with their sources.
+
+A wearable file holds
+
+- ``name`` (what ``--rig`` calls it), ``title``, ``aliases``;
+- ``devices``: the bHaptics positions it covers (``VestFront``, ``ForearmL``, ``GloveR`` ...), each with its SDK2
+  array length (absent: the device has no SDK2 position);
+- ``motors``: per motor ``device`` and ``index`` (its number on that device), its body place -- ``limb`` (torso,
+  shoulder, forearm, hand, head, foot), ``side`` (the wearer's left, right or center), ``face`` (front, back, top,
+  around), ``across`` and ``height`` (0..1 on that limb's chart: on the torso ``across`` runs from the wearer's left
+  to right and ``height`` from the collar down; on a shoulder from front to back and from the neck out; on a
+  forearm around and along the arm; on a glove from thumb to little finger and from the fingertips to the wrist)
+  -- and its addressing: ``sdk1`` ``{position, index: [...]}`` (the SDK1 frame position and the dot indices it is
+  driven by: one for an X40 motor, the two or three slots of the 40-slot frame an X16 motor groups) and ``sdk2``
+  ``{position, index: [...]}`` (the SDK2 position and its slots in that position's array);
+- ``tact`` (the ``.tact`` layout type the wearable's patterns are authored on: type, aliases, positions, points;
+  the device catalogue of :mod:`.devices` is made of these) or ``tact_type`` (the name of another file's type);
+- ``renderer_grid`` (only the wearables the body chart is made of: the grid each device forms on the renderer's
+  charts, see :mod:`hapmotion.layout`);
+- ``sources`` and ``unconfirmed``: where each fact comes from, and what could not be confirmed.
+
+The checks here are the ones a left/right mistake would fail: a torso motor's ``side`` must agree with its
+``across``, a limb motor's ``side`` with its device (``...L`` left, ``...R`` right), every SDK slot is used once.
+A wearable that is not bundled is one more file of this shape: :func:`load_wearable` reads it from a path.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+from typing import Any, Optional
+
+import numpy as np
+
+from ..errors import InputError, UsageError
+
+LIMBS = ("torso", "shoulder", "forearm", "hand", "head", "foot")
+SIDES = ("left", "right", "center")
+FACES = ("front", "back", "top", "around")
+SDK2_POSITIONS = range(0, 10)
+"""SDK2 positions: Vest 0, ForearmL 1, ForearmR 2, Head 3, HandL 4, HandR 5, FootL 6, FootR 7, GloveL 8, GloveR 9
+(github.com/bhaptics/tact-js ``sdk/src/internal/position.ts``)."""
+
+MAX_MOTORS = 256
+"""Most motors one wearable file may list (the largest bHaptics wearable has 40)."""
+MAX_FILE_BYTES = 1_000_000
+
+
+@dataclass(frozen=True)
+class Motor:
+    """One motor of a wearable: its device and index, its place on the body chart and its SDK addressing."""
+
+    device: str
+    index: int
+    limb: str
+    side: str
+    face: str
+    across: float
+    height: float
+    sdk1_position: str
+    sdk1_slots: tuple[int, ...]
+    sdk2_position: int  # -1: none
+    sdk2_slots: tuple[int, ...]
+
+    @property
+    def chart(self) -> str:
+        """The body chart this motor sits on: ``front``/``back`` (torso), ``<limb>_<side>`` (limbs), ``head``."""
+        if self.limb == "torso":
+            return "back" if self.face == "back" else "front"
+        if self.limb == "head":
+            return "head"
+        return f"{self.limb}_{self.side}"
+
+
+@dataclass(frozen=True)
+class Wearable:
+    """A wearable read from its data file (:func:`load_wearable`)."""
+
+    name: str
+    title: str
+    aliases: tuple[str, ...]
+    motors: tuple[Motor, ...]
+    sdk2_lengths: dict  # device -> SDK2 array length (absent: no SDK2 position)
+    tact_type: str
+    tact: Optional[dict]
+    renderer_grid: tuple[dict, ...]
+    sources: tuple[str, ...]
+    unconfirmed: tuple[str, ...]
+    source: str
+
+    @property
+    def devices(self) -> tuple[str, ...]:
+        """The bHaptics positions this wearable covers, in file order."""
+        return tuple(dict.fromkeys(m.device for m in self.motors))
+
+    def device_motors(self, device: str) -> tuple[Motor, ...]:
+        """Motors of one device, by index."""
+        return tuple(sorted((m for m in self.motors if m.device == device), key=lambda m: m.index))
+
+    def places(self) -> tuple[tuple[str, float, float], ...]:
+        """``(chart, across, height)`` per motor, in file order."""
+        return tuple((m.chart, m.across, m.height) for m in self.motors)
+
+
+def _fail(source: str, place: str, problem: str) -> InputError:
+    return InputError(source, place, problem)
+
+
+def _num(v: Any, source: str, place: str) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) or not 0.0 <= v <= 1.0:
+        raise _fail(source, place, f"expected a number in 0..1, found {v!r}")
+    return float(v)
+
+
+def _ints(v: Any, source: str, place: str, hi: int) -> tuple[int, ...]:
+    if not isinstance(v, list) or not v or len(v) > 8 or not all(
+            isinstance(x, int) and not isinstance(x, bool) and 0 <= x < hi for x in v):
+        raise _fail(source, place, f"expected a list of 1..8 whole numbers in 0..{hi - 1}, found {str(v)[:40]}")
+    return tuple(v)
+
+
+def _motor(d: Any, k: int, source: str, lengths: dict) -> Motor:
+    place = f"field motors[{k}]"
+    if not isinstance(d, dict):
+        raise _fail(source, place, "expected an object")
+    for key, allowed in (("limb", LIMBS), ("side", SIDES), ("face", FACES)):
+        if d.get(key) not in allowed:
+            raise _fail(source, f"{place}.{key}", f"expected one of {', '.join(allowed)}, found {d.get(key)!r}")
+    device = d.get("device")
+    if not isinstance(device, str) or device not in lengths:
+        raise _fail(source, f"{place}.device", f"expected one of the file's devices {', '.join(lengths)}, "
+                                               f"found {device!r}")
+    index = d.get("index")
+    if not isinstance(index, int) or isinstance(index, bool) or not 0 <= index < MAX_MOTORS:
+        raise _fail(source, f"{place}.index", f"expected a whole number 0..{MAX_MOTORS - 1}, found {index!r}")
+    across = _num(d.get("across"), source, f"{place}.across")
+    height = _num(d.get("height"), source, f"{place}.height")
+    sdk1 = d.get("sdk1")
+    if not isinstance(sdk1, dict) or not isinstance(sdk1.get("position"), str):
+        raise _fail(source, f"{place}.sdk1", "expected {position, index: [...]}")
+    slots1 = _ints(sdk1.get("index"), source, f"{place}.sdk1.index", 64)
+    sdk2 = d.get("sdk2")
+    if sdk2 is None:
+        pos2, slots2 = -1, ()
+    else:
+        if not isinstance(sdk2, dict) or sdk2.get("position") not in SDK2_POSITIONS or lengths[device] is None:
+            raise _fail(source, f"{place}.sdk2", "expected {position: 0..9, index: [...]} on a device with an "
+                                                  "sdk2_length")
+        pos2 = int(sdk2["position"])
+        slots2 = _ints(sdk2.get("index"), source, f"{place}.sdk2.index", lengths[device])
+    m = Motor(device, index, d["limb"], d["side"], d["face"], across, height, sdk1["position"], slots1, pos2, slots2)
+    # the checks a left/right mistake fails
+    if m.limb == "torso":
+        want = "left" if across < 0.5 else "right" if across > 0.5 else "center"
+        if m.side != want:
+            raise _fail(source, f"{place}.side", f"expected {want} for a torso motor at across {across:g} (0 is "
+                                                 f"the wearer's left), found {m.side}")
+        if m.face not in ("front", "back"):
+            raise _fail(source, f"{place}.face", f"expected front or back for a torso motor, found {m.face}")
+    elif m.limb != "head":
+        want = {"L": "left", "R": "right"}.get(device[-1:] if device not in ("Left", "Right") else device[0])
+        if m.side != want:
+            raise _fail(source, f"{place}.side", f"expected {want} for a motor of {device}, found {m.side}")
+    return m
+
+
+def load_wearable(path: "str | os.PathLike[str]", *, text: Optional[str] = None) -> Wearable:
+    """Read one wearable file; :class:`~hapmotion.errors.InputError` naming the field when it does not fit."""
+    source = os.fspath(path)
+    if text is None:
+        p = Path(source)
+        try:
+            if p.stat().st_size > MAX_FILE_BYTES:
+                raise _fail(source, None, f"expected a wearable file of at most {MAX_FILE_BYTES} bytes")
+            text = p.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as err:
+            raise _fail(source, None, f"expected a readable wearable JSON file ({err.__class__.__name__})") from None
+    try:
+        doc = json.loads(text)
+    except ValueError as err:
+        raise _fail(source, f"line {getattr(err, 'lineno', '?')}", "expected wearable JSON") from None
+    if not isinstance(doc, dict):
+        raise _fail(source, None, "expected a JSON object")
+    name = doc.get("name")
+    if not isinstance(name, str) or not name or "+" in name or len(name) > 60:
+        raise _fail(source, "field name", f"expected a name without '+', found {name!r}")
+    devices = doc.get("devices")
+    if not isinstance(devices, dict) or not devices or not all(
+            isinstance(k, str) and k and "_" not in k and isinstance(v, dict) for k, v in devices.items()):
+        raise _fail(source, "field devices", "expected an object: bHaptics position -> {sdk2_length}")
+    lengths = {}
+    for dev, info in devices.items():
+        n = info.get("sdk2_length")
+        if n is not None and (not isinstance(n, int) or isinstance(n, bool) or not 1 <= n <= 64):
+            raise _fail(source, f"field devices.{dev}.sdk2_length", f"expected a whole number 1..64, found {n!r}")
+        lengths[dev] = n
+    raw = doc.get("motors")
+    if not isinstance(raw, list) or not 1 <= len(raw) <= MAX_MOTORS:
+        raise _fail(source, "field motors", f"expected a list of 1..{MAX_MOTORS} motors")
+    motors = tuple(_motor(d, k, source, lengths) for k, d in enumerate(raw))
+    seen1: set = set()
+    seen2: set = set()
+    for k, m in enumerate(motors):
+        for s in m.sdk1_slots:
+            if (m.sdk1_position, s) in seen1:
+                raise _fail(source, f"field motors[{k}].sdk1", f"expected each SDK1 slot used once, found "
+                                                               f"{m.sdk1_position} {s} twice")
+            seen1.add((m.sdk1_position, s))
+        for s in m.sdk2_slots:
+            if (m.sdk2_position, s) in seen2:
+                raise _fail(source, f"field motors[{k}].sdk2", f"expected each SDK2 slot used once, found "
+                                                               f"position {m.sdk2_position} slot {s} twice")
+            seen2.add((m.sdk2_position, s))
+    for dev in lengths:
+        idx = sorted(m.index for m in motors if m.device == dev)
+        if idx != list(range(len(idx))) or not idx:
+            raise _fail(source, "field motors", f"expected {dev}'s motors numbered 0..n-1 once each")
+    tact = doc.get("tact")
+    tact_type = tact.get("type") if isinstance(tact, dict) else doc.get("tact_type", "")
+    if not isinstance(tact_type, str):
+        raise _fail(source, "field tact_type", "expected the name of a .tact layout type")
+    texts = {}
+    for key in ("aliases", "sources", "unconfirmed"):
+        v = doc.get(key, [])
+        if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
+            raise _fail(source, f"field {key}", "expected a list of texts")
+        texts[key] = tuple(v)
+    grid = doc.get("renderer_grid", [])
+    if not isinstance(grid, list) or not all(isinstance(g, dict) for g in grid):
+        raise _fail(source, "field renderer_grid", "expected a list of objects")
+    return Wearable(name=name, title=str(doc.get("title", name)), aliases=texts["aliases"], motors=motors,
+                    sdk2_lengths=lengths, tact_type=tact_type, tact=tact if isinstance(tact, dict) else None,
+                    renderer_grid=tuple(grid), sources=texts["sources"], unconfirmed=texts["unconfirmed"],
+                    source=source)
+
+
+@lru_cache(maxsize=1)
+def bundled_wearables() -> dict[str, Wearable]:
+    """The wearables shipped in ``hapmotion/data/wearables``, by name, in name order."""
+    folder = resources.files("hapmotion").joinpath("data/wearables")
+    out = {}
+    for entry in sorted(folder.iterdir(), key=lambda e: e.name):
+        if entry.name.endswith(".json"):
+            w = load_wearable(f"data/wearables/{entry.name}", text=entry.read_text(encoding="utf-8"))
+            out[w.name] = w
+    return out
+
+
+def find_wearable(name: str) -> Wearable:
+    """A bundled wearable by name or alias (case and ``_``/``-`` tolerated), or a wearable file by path (a name
+    ending in ``.json``); :class:`~hapmotion.errors.UsageError` listing the names when none fits."""
+    text = name.strip()
+    if text.lower().endswith(".json"):
+        if not Path(text).is_file():
+            raise UsageError(f"wearable file {text} not found")
+        return load_wearable(text)
+    key = text.lower().replace("_", "-")
+    for w in bundled_wearables().values():
+        if key == w.name or key in (a.lower() for a in w.aliases):
+            return w
+    raise UsageError(f"unknown wearable {name!r}: expected one of {', '.join(bundled_wearables())} "
+                     "(or a wearable .json file)")
+
+
+__all__ = ["FACES", "LIMBS", "Motor", "SIDES", "Wearable", "bundled_wearables", "find_wearable", "load_wearable"]
