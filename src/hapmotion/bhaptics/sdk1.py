@@ -20,8 +20,10 @@ SDK1_PATH = "/v2/feedbacks"
 
 # SDK1 frame positions (the position names of the clients above). "Vest" is deliberately absent: bHaptics staff say
 # frames go to VestFront and VestBack separately (bhaptics/haptic-library issue #216).
+# "Left"/"Right" are the first Tactosy's (20-motor) arm positions, deprecated but still named by the SDK1 clients.
 V2_POSITIONS: frozenset[str] = frozenset({
     "VestFront", "VestBack", "ForearmL", "ForearmR", "Head", "HandL", "HandR", "FootL", "FootR", "GloveL", "GloveR",
+    "Left", "Right",
 })
 
 
@@ -44,7 +46,7 @@ class V2FrameTemplate:
         tail = f'],"pathPoints":[],"durationMillis":{self.duration_ms}}}}}'  # closes dotPoints, Frame, the Submit
         cols: list[int] = []
         texts: list[tuple[str, str]] = []  # per dot: text before its intensity, text after it
-        for device, device_cols in dmap.devices.items():
+        for device, device_cols in dmap.sdk1_devices.items():  # a rig's slots when the layout has one
             if device not in V2_POSITIONS or not len(device_cols):
                 continue
             key = json.dumps(f"{key_prefix}_{device}")
@@ -60,8 +62,9 @@ class V2FrameTemplate:
         self._dots = np.array([f"{before}{v}{after}" for before, after in texts for v in range(101)], dtype=object)
 
     def message(self, row: np.ndarray) -> str:
-        """The request that plays ``row`` ((N,) 0..100 floats of the device map's columns; NaN counts as 0)."""
-        v = row[self._cols]  # a copy (fancy indexing), changed in place below
+        """The request that plays ``row`` ((N,) 0..100 floats of the device map's columns; NaN counts as 0), projected
+        onto the rig's motors when the device map has a rig."""
+        v = self.dmap.player_row(row)[self._cols]  # a copy (fancy indexing), changed in place below
         v[np.isnan(v)] = 0.0  # what player_json.to_int_percent does, without its slower nan_to_num and clip
         np.maximum(v, 0.0, out=v)
         np.minimum(v, 100.0, out=v)

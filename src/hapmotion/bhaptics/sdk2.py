@@ -45,7 +45,9 @@ def v3_auth_message(workspace_id: str, api_key: str, version: int = 1) -> str:
 def v3_dot_messages(row: np.ndarray, dmap: DeviceMap, duration_ms: int, first_request_id: int) -> list[str]:
     """``SdkPlayDotMode`` messages for one row, one per SDK2 position: for the X40 layout position 0 with the
     40-value vest array (VestFront 0..19, VestBack 20..39), then ForearmL (1) and ForearmR (2) with 6 values each.
-    Request ids count up from ``first_request_id``."""
+    Request ids count up from ``first_request_id``. With a rig, the row is first projected onto its motors and each
+    wearable's SDK2 position gets its own array (an X16's 16 motors on the 40 slots they group, gloves on 8 and 9)."""
+    row = dmap.player_row(row)
     out = []
     rid = first_request_id
     for position, length, parts in sorted(dmap.sdk2, key=lambda p: p[0]):

@@ -1,0 +1,276 @@
+"""A rig: the wearables one wearer owns, and how rows rendered on the body chart reach their motors.
+
+Every show is rendered once on the body chart (the default layout, :func:`hapmotion.layout.default_layout`: the
+X40's two 4 x 5 panels and two 3 x 2 shoulder grids, 52 places). A rig (``--rig x40+tactosy-shoulders``, ``air``,
+``pro+tactosy``, ``x16``, ``pro+gloves`` ...) is one or more wearable files (:mod:`hapmotion.bhaptics.wearables`);
+:meth:`Rig.projection` maps each body-chart place onto the rig's motors:
+
+- a place goes to the rig's motors on the same chart (front, back, a shoulder), or, when the rig has none there, to
+  the nearest chart it has: a shoulder's places to that side's forearm sleeve (same across/height), and with no
+  sleeve at all onto the vest's collar row at that side (a place on the shoulder's front half to the front panel,
+  on its back half to the back panel, the top to both, half each), so a rig without sleeves loses nothing the vest
+  can show;
+- on that chart the place is split over the motors around it by the phantom split the renderer uses (bilinear
+  weights ``w`` of the enclosing grid cell; a place within 0.001 of a motor is that motor's alone): with the
+  ``paper`` split amplitudes add (``I_m = sum_i w_im I_i``), with the ``energy`` split energies do
+  (``I_m = sqrt(sum_i w_im I_i^2)``: the energy centroid stays on the place, Israr & Poupyrev, "Tactile Brush", CHI
+  2011), each clipped at 100;
+- each motor's value goes to every SDK slot it is addressed by (an X16 motor is two or three slots of the 40-slot
+  frame), so the rig's rows are in SDK1 slot order, one column per ``<position>_<slot>``.
+
+Mirroring happens on the body chart (the renderer's mirror map), so it is right on every rig. On the X40 +
+shoulder Tactosy rig every place is one motor's and the projection is the identity: the same numbers as the body
+chart. :meth:`Rig.lift` runs the same split the other way: a pattern authored for one wearable (an X40 pattern, an
+old 20-motor Tactosy Left/Right pattern) is put on the body chart, from where any rig plays it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Optional, Sequence
+
+import numpy as np
+
+from .bhaptics.wearables import Motor, Wearable, bundled_wearables, find_wearable
+from .errors import UsageError
+from .layout import Layout, default_layout
+
+DEFAULT_RIG = "x40+tactosy-shoulders"
+"""The paper's rig, the one the body chart is made of."""
+
+SNAP = 1e-3
+"""A place within this (chart units) of a motor's row or column is on it (the files round places to 4 decimals)."""
+
+FOLDS = {
+    "shoulder_left": ("shoulder_left", "forearm_left", "torso"),
+    "shoulder_right": ("shoulder_right", "forearm_right", "torso"),
+    "forearm_left": ("forearm_left", "shoulder_left", "torso"),
+    "forearm_right": ("forearm_right", "shoulder_right", "torso"),
+}
+"""Where a place of a chart goes when the rig has no motor there, in order of preference (``torso``: the vest's
+collar row at that side, see the module docstring). Other charts go to themselves only."""
+
+
+def _axis(x: float, grid: np.ndarray) -> list[tuple[int, float]]:
+    """Linear weights of ``x`` between the two grid values around it (clamped at the ends; snapped onto a value
+    within :data:`SNAP`)."""
+    near = np.flatnonzero(np.abs(grid - x) <= SNAP)
+    if len(near):
+        return [(int(near[0]), 1.0)]
+    if len(grid) == 1 or x <= grid[0]:
+        return [(0, 1.0)]
+    if x >= grid[-1]:
+        return [(len(grid) - 1, 1.0)]
+    i = int(np.searchsorted(grid, x, side="right")) - 1
+    f = (x - grid[i]) / (grid[i + 1] - grid[i])
+    return [(i, 1.0 - f), (i + 1, f)]
+
+
+def _split(across: float, height: float, motors: Sequence[tuple[int, float, float]]) -> dict[int, float]:
+    """Bilinear weights (summing to 1) of a place over ``motors`` ``(column, across, height)`` of one chart. Motors
+    that do not form a full grid (a glove) take the place whole at the nearest motor."""
+    us = np.unique(np.round([m[1] for m in motors], 6))
+    vs = np.unique(np.round([m[2] for m in motors], 6))
+    at = {(round(m[1], 6), round(m[2], 6)): m[0] for m in motors}
+    if len(us) * len(vs) != len(motors) or len(at) != len(motors):
+        d = [np.hypot(m[1] - across, m[2] - height) for m in motors]
+        return {motors[int(np.argmin(d))][0]: 1.0}
+    out: dict[int, float] = {}
+    for iu, wu in _axis(across, us):
+        for iv, wv in _axis(height, vs):
+            if wu * wv > 0:
+                col = at[(us[iu], vs[iv])]
+                out[col] = out.get(col, 0.0) + wu * wv
+    return out
+
+
+def _targets(chart: str, across: float, height: float, have: set) -> list[tuple[str, float, float, float]]:
+    """``(chart, across, height, share)`` a place goes to on a rig with motors on the charts ``have``."""
+    for target in FOLDS.get(chart, (chart,)):
+        if target == "torso":
+            side_u = 0.0 if chart.endswith("_left") else 1.0
+            faces = ["front"] if across < 0.5 - SNAP else ["back"] if across > 0.5 + SNAP else ["front", "back"]
+            if chart.startswith("forearm_"):
+                faces = ["front", "back"]  # around the arm: no front or back to keep
+            faces = [f for f in faces if f in have] or [f for f in ("front", "back") if f in have]
+            if faces:
+                return [(f, side_u, 0.0, 1.0 / len(faces)) for f in faces]
+        elif target in have:
+            return [(target, across, height, 1.0)]
+    return []
+
+
+def transfer(src: Sequence[tuple[str, float, float]], dst: Sequence[tuple[str, float, float]]) -> np.ndarray:
+    """``(len(src), len(dst))`` weights: row ``i`` splits place ``src[i]`` over the places ``dst`` (each row sums
+    to 1, or to 0 when ``dst`` has nothing the place can go to)."""
+    by_chart: dict[str, list[tuple[int, float, float]]] = {}
+    for j, (chart, u, v) in enumerate(dst):
+        by_chart.setdefault(chart, []).append((j, u, v))
+    w = np.zeros((len(src), len(dst)))
+    for i, (chart, u, v) in enumerate(src):
+        for target, tu, tv, share in _targets(chart, u, v, set(by_chart)):
+            for j, wj in _split(tu, tv, by_chart[target]).items():
+                w[i, j] += share * wj
+    return w
+
+
+@dataclass(frozen=True)
+class Projection:
+    """Rows on one set of places to rows on another: ``(T, N)`` or ``(N,)`` 0..100 in, ``(T, M)`` / ``(M,)`` out.
+
+    ``weights`` ``(N, K)`` split each input place over ``K`` motors (:func:`transfer`); ``slot_motor`` ``(M,)`` is
+    the motor each output column takes its value from. ``identity`` ``(M,)``: the input column each output column
+    is (a plain copy, when every place is exactly one motor's), else ``None``."""
+
+    ids: tuple[str, ...]
+    weights: np.ndarray
+    slot_motor: np.ndarray
+    energy: bool
+    identity: Optional[np.ndarray]
+
+    def __call__(self, rows: np.ndarray) -> np.ndarray:
+        rows = np.asarray(rows, dtype=np.float64)
+        if self.identity is not None:
+            return rows[..., self.identity]
+        x = np.nan_to_num(np.clip(rows, 0.0, 100.0))
+        motors = np.sqrt((x * x) @ self.weights) if self.energy else x @ self.weights
+        return np.minimum(motors, 100.0)[..., self.slot_motor]
+
+
+def _identity(weights: np.ndarray, slot_motor: np.ndarray) -> Optional[np.ndarray]:
+    """The input column of each output column when the map is a plain copy, else None."""
+    ones = weights == 1.0
+    if not (((weights == 0.0) | ones).all() and (ones.sum(axis=0) == 1).all() and (ones.sum(axis=1) <= 1).all()):
+        return None
+    return np.argmax(ones, axis=0)[slot_motor]
+
+
+@dataclass(frozen=True)
+class Rig:
+    """One or more wearables worn together (:func:`parse_rig`)."""
+
+    wearables: tuple[Wearable, ...]
+    energy: bool = True
+    """Combine by energies (the ``energy`` phantom split) or amplitudes (the ``paper`` split)."""
+
+    @property
+    def name(self) -> str:
+        return "+".join(w.name for w in self.wearables)
+
+    @cached_property
+    def motors(self) -> tuple[Motor, ...]:
+        return tuple(m for w in self.wearables for m in w.motors)
+
+    @cached_property
+    def slots(self) -> tuple[tuple[str, int, int], ...]:
+        """Output columns ``(SDK1 position, slot, motor)`` by position (in wearable order), then slot."""
+        by_pos: dict[str, list[tuple[int, int]]] = {}
+        for k, m in enumerate(self.motors):
+            for s in m.sdk1_slots:
+                by_pos.setdefault(m.sdk1_position, []).append((s, k))
+        return tuple((pos, s, k) for pos, pairs in by_pos.items() for s, k in sorted(pairs))
+
+    @property
+    def actuators(self) -> tuple[str, ...]:
+        """Output column ids ``<position>_<slot>`` (``VestFront_0`` ... ``GloveR_5``): what a rig's track holds."""
+        return tuple(f"{pos}_{s}" for pos, s, _ in self.slots)
+
+    def projection(self, layout: Optional[Layout] = None) -> Projection:
+        """Rows on ``layout``'s body chart (default: the default layout) to rows of this rig's slots."""
+        layout = layout or default_layout()
+        weights = transfer(layout.places(), [(m.chart, m.across, m.height) for m in self.motors])
+        slot_motor = np.array([k for _, _, k in self.slots], dtype=np.intp)
+        return Projection(self.actuators, weights, slot_motor, self.energy, _identity(weights, slot_motor))
+
+    def sdk2_groups(self) -> tuple:
+        """Per SDK2 position ``(position, array length, ((array slot, output column), ...))``."""
+        groups: dict[int, tuple[int, list]] = {}
+        col = {(pos, s): c for c, (pos, s, _) in enumerate(self.slots)}
+        for w in self.wearables:
+            for m in w.motors:
+                if m.sdk2_position < 0:
+                    continue
+                length, parts = groups.setdefault(m.sdk2_position, (w.sdk2_lengths[m.device], []))
+                for s1, s2 in zip(m.sdk1_slots, m.sdk2_slots):
+                    parts.append((s2, col[(m.sdk1_position, s1)]))
+        return tuple((pos, length, tuple(sorted(parts))) for pos, (length, parts) in sorted(groups.items()))
+
+    def charts(self) -> set:
+        return {m.chart for m in self.motors}
+
+
+def parse_rig(text: str, *, energy: bool = True) -> Rig:
+    """A rig from ``a+b+...`` (wearable names, aliases or wearable ``.json`` files); UsageError when a name is
+    unknown or two wearables claim the same bHaptics position."""
+    parts = [p for p in str(text).split("+")]
+    if not parts or any(not p.strip() for p in parts):
+        raise UsageError(f"--rig {text!r}: expected wearables joined by '+', e.g. {DEFAULT_RIG} or pro+gloves")
+    wearables = tuple(find_wearable(p) for p in parts)
+    owner: dict[str, str] = {}
+    for w in wearables:
+        for d in {m.sdk1_position for m in w.motors}:
+            if d in owner:
+                raise UsageError(f"--rig {text!r}: {owner[d]} and {w.name} are both on {d}; a rig has one "
+                                 "wearable per bHaptics position")
+            owner[d] = w.name
+    return Rig(wearables, energy=energy)
+
+
+def default_rig(energy: bool = True) -> Rig:
+    """:data:`DEFAULT_RIG`."""
+    return parse_rig(DEFAULT_RIG, energy=energy)
+
+
+# ------------------------------------------------------------------------------------------ patterns to the chart
+def _pattern_places(device: str, n: int) -> Optional[list[tuple[str, float, float]]]:
+    """Body places of ``device``'s ``n`` slots for a pattern authored for it: the bundled wearable that covers
+    ``device`` with ``n`` slots (forearm sleeves before shoulder ones: Designer's sleeve patterns are made for
+    forearms), each slot at its motor's place; None when no wearable has it."""
+    order = sorted(bundled_wearables().values(), key=lambda w: (w.name == "tactosy-shoulders", w.name))
+    for w in order:
+        motors = [m for m in w.motors if m.sdk1_position == device]
+        slots = {s: m for m in motors for s in m.sdk1_slots}
+        if motors and sorted(slots) == list(range(n)):
+            return [(slots[s].chart, slots[s].across, slots[s].height) for s in range(n)]
+    return None
+
+
+def lift(ids: Sequence[str], rows: np.ndarray, layout: Optional[Layout] = None, *, energy: bool = True
+         ) -> tuple[np.ndarray, list[str]]:
+    """Rows of any bHaptics devices (``ids`` like ``Left_7``, ``VestFront_3``) on ``layout``'s body chart: columns
+    the chart has are taken as they are; other devices are put on the chart through their wearable's places and the
+    phantom split (an old 20-motor Tactosy Left/Right pattern onto the shoulder grids). Returns ``((T, N) rows,
+    the devices that have no place on the chart)``."""
+    layout = layout or default_layout()
+    chart_ids = layout.actuators
+    index = {a: i for i, a in enumerate(chart_ids)}
+    rows = np.asarray(rows, dtype=np.float64).reshape(len(rows), len(ids))
+    out = np.zeros((rows.shape[0], len(chart_ids)))
+    energy_sum = np.zeros_like(out)
+    devices: dict[str, list[tuple[int, int]]] = {}
+    for c, a in enumerate(ids):
+        dev, _, k = a.rpartition("_")
+        if a in index:
+            out[:, index[a]] = np.maximum(out[:, index[a]], rows[:, c])
+        elif k.isdigit():
+            devices.setdefault(dev, []).append((int(k), c))
+    missing = []
+    places = layout.places()
+    for dev, cols in devices.items():
+        cols.sort()
+        src = _pattern_places(dev, len(cols)) if [k for k, _ in cols] == list(range(len(cols))) else None
+        w = transfer(src, places) if src is not None else None
+        if w is None or not w.any():
+            missing.append(dev)
+            continue
+        x = np.clip(np.nan_to_num(rows[:, [c for _, c in cols]]), 0.0, 100.0)
+        energy_sum += (x * x) @ w if energy else x @ w
+    if energy:
+        out = np.sqrt(out * out + energy_sum)
+    else:
+        out = out + energy_sum
+    return np.minimum(out, 100.0), missing
+
+
+__all__ = ["DEFAULT_RIG", "FOLDS", "Projection", "Rig", "default_rig", "lift", "parse_rig", "transfer"]
