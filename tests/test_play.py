@@ -267,8 +267,8 @@ def test_a_slow_track_is_played_with_each_row_repeated_exactly():
     (["/nonexistent/x.tact", "--sink", "player"], "/nonexistent/x.tact: expected a track file"),
     ([str(HEARTBEAT), "--sink", "player", "--speed", "0"], "--speed must be a number above 0"),
     ([str(HEARTBEAT), "--sink", "speaker"], "--sink 'speaker': expected"),
-    ([str(TACT / "FeedbackFiles_Tactosy_BowShoot.tact"), "--sink", "player"],
-     "it holds only Left, Right, which the session layout lacks"),
+    ([str(TACT / "Feedbacks_allPointL.tact"), "--sink", "player"],
+     "it holds only HandL, HandR, which the session layout lacks"),
     ([str(HEARTBEAT)], "Missing option '--sink'"),
     ([str(HEARTBEAT), "--sink", "nats://127.0.0.1:4222/show"], "only 'hapmotion live' publishes one"),
 ])

@@ -15,8 +15,8 @@ X40's two 4 x 5 panels and two 3 x 2 shoulder grids, 52 places). A rig (``--rig 
   ``paper`` split amplitudes add (``I_m = sum_i w_im I_i``), with the ``energy`` split energies do
   (``I_m = sqrt(sum_i w_im I_i^2)``: the energy centroid stays on the place, Israr & Poupyrev, "Tactile Brush", CHI
   2011), each clipped at 100;
-- each motor's value goes to every SDK slot it is addressed by (an X16 motor is two or three slots of the 40-slot
-  frame), so the rig's rows are in SDK1 slot order, one column per ``<position>_<slot>``.
+- a rig's rows hold one column per motor (``<device>_<index>``); the Player's messages and ``.tact`` files send each
+  motor's value on every SDK slot it is addressed by (an X16 motor is two or three slots of the 40-slot frame).
 
 Mirroring happens on the body chart (the renderer's mirror map), so it is right on every rig. On the X40 +
 shoulder Tactosy rig every place is one motor's and the projection is the identity: the same numbers as the body
@@ -35,6 +35,7 @@ import numpy as np
 from .bhaptics.wearables import Motor, Wearable, bundled_wearables, find_wearable
 from .errors import UsageError
 from .layout import Layout, default_layout
+from .track import HapticTrack
 
 DEFAULT_RIG = "x40+tactosy-shoulders"
 """The paper's rig, the one the body chart is made of."""
@@ -117,15 +118,14 @@ def transfer(src: Sequence[tuple[str, float, float]], dst: Sequence[tuple[str, f
 
 @dataclass(frozen=True)
 class Projection:
-    """Rows on one set of places to rows on another: ``(T, N)`` or ``(N,)`` 0..100 in, ``(T, M)`` / ``(M,)`` out.
+    """Rows on one set of places to rows of a rig's motors: ``(T, N)`` or ``(N,)`` 0..100 in, ``(T, K)`` /
+    ``(K,)`` out.
 
-    ``weights`` ``(N, K)`` split each input place over ``K`` motors (:func:`transfer`); ``slot_motor`` ``(M,)`` is
-    the motor each output column takes its value from. ``identity`` ``(M,)``: the input column each output column
-    is (a plain copy, when every place is exactly one motor's), else ``None``."""
+    ``weights`` ``(N, K)`` split each input place over the ``K`` motors (:func:`transfer`). ``identity`` ``(K,)``:
+    the input column each motor is (a plain copy, when every place is exactly one motor's), else ``None``."""
 
     ids: tuple[str, ...]
     weights: np.ndarray
-    slot_motor: np.ndarray
     energy: bool
     identity: Optional[np.ndarray]
 
@@ -135,15 +135,15 @@ class Projection:
             return rows[..., self.identity]
         x = np.nan_to_num(np.clip(rows, 0.0, 100.0))
         motors = np.sqrt((x * x) @ self.weights) if self.energy else x @ self.weights
-        return np.minimum(motors, 100.0)[..., self.slot_motor]
+        return np.minimum(motors, 100.0)
 
 
-def _identity(weights: np.ndarray, slot_motor: np.ndarray) -> Optional[np.ndarray]:
+def _identity(weights: np.ndarray) -> Optional[np.ndarray]:
     """The input column of each output column when the map is a plain copy, else None."""
     ones = weights == 1.0
     if not (((weights == 0.0) | ones).all() and (ones.sum(axis=0) == 1).all() and (ones.sum(axis=1) <= 1).all()):
         return None
-    return np.argmax(ones, axis=0)[slot_motor]
+    return np.argmax(ones, axis=0)
 
 
 @dataclass(frozen=True)
@@ -173,27 +173,35 @@ class Rig:
 
     @property
     def actuators(self) -> tuple[str, ...]:
-        """Output column ids ``<position>_<slot>`` (``VestFront_0`` ... ``GloveR_5``): what a rig's track holds."""
+        """Motor ids ``<device>_<index>`` (an Air: ``VestFront_0`` ... ``VestFront_7``): what a rig's track holds."""
+        return tuple(f"{m.device}_{m.index}" for m in self.motors)
+
+    @property
+    def slot_ids(self) -> tuple[str, ...]:
+        """SDK1 slot ids ``<position>_<slot>`` (an Air: ``VestFront_0`` ... ``VestFront_19``, the 40-slot frame)."""
         return tuple(f"{pos}_{s}" for pos, s, _ in self.slots)
 
+    @cached_property
+    def slot_motor(self) -> np.ndarray:
+        """``(S,)``: the motor (column of :attr:`actuators`) each SDK1 slot plays."""
+        return np.array([k for _, _, k in self.slots], dtype=np.intp)
+
     def projection(self, layout: Optional[Layout] = None) -> Projection:
-        """Rows on ``layout``'s body chart (default: the default layout) to rows of this rig's slots."""
+        """Rows on ``layout``'s body chart (default: the default layout) to rows of this rig's motors."""
         layout = layout or default_layout()
         weights = transfer(layout.places(), [(m.chart, m.across, m.height) for m in self.motors])
-        slot_motor = np.array([k for _, _, k in self.slots], dtype=np.intp)
-        return Projection(self.actuators, weights, slot_motor, self.energy, _identity(weights, slot_motor))
+        return Projection(self.actuators, weights, self.energy, _identity(weights))
 
     def sdk2_groups(self) -> tuple:
-        """Per SDK2 position ``(position, array length, ((array slot, output column), ...))``."""
+        """Per SDK2 position ``(position, array length, ((array slot, motor column), ...))``."""
         groups: dict[int, tuple[int, list]] = {}
-        col = {(pos, s): c for c, (pos, s, _) in enumerate(self.slots)}
+        k = 0
         for w in self.wearables:
             for m in w.motors:
-                if m.sdk2_position < 0:
-                    continue
-                length, parts = groups.setdefault(m.sdk2_position, (w.sdk2_lengths[m.device], []))
-                for s1, s2 in zip(m.sdk1_slots, m.sdk2_slots):
-                    parts.append((s2, col[(m.sdk1_position, s1)]))
+                if m.sdk2_position >= 0:
+                    length, parts = groups.setdefault(m.sdk2_position, (w.sdk2_lengths[m.device], []))
+                    parts.extend((s2, k) for s2 in m.sdk2_slots)
+                k += 1
         return tuple((pos, length, tuple(sorted(parts))) for pos, (length, parts) in sorted(groups.items()))
 
     def charts(self) -> set:
@@ -209,7 +217,7 @@ def parse_rig(text: str, *, energy: bool = True) -> Rig:
     wearables = tuple(find_wearable(p) for p in parts)
     owner: dict[str, str] = {}
     for w in wearables:
-        for d in {m.sdk1_position for m in w.motors}:
+        for d in {m.sdk1_position for m in w.motors} | {m.device for m in w.motors}:
             if d in owner:
                 raise UsageError(f"--rig {text!r}: {owner[d]} and {w.name} are both on {d}; a rig has one "
                                  "wearable per bHaptics position")
@@ -273,4 +281,51 @@ def lift(ids: Sequence[str], rows: np.ndarray, layout: Optional[Layout] = None, 
     return np.minimum(out, 100.0), missing
 
 
-__all__ = ["DEFAULT_RIG", "FOLDS", "Projection", "Rig", "default_rig", "lift", "parse_rig", "transfer"]
+def lift_track(track: HapticTrack, layout: Optional[Layout] = None) -> tuple[HapticTrack, list[str]]:
+    """``track`` on ``layout``'s body chart (default: the default layout): unchanged when its devices are all the
+    chart's, else through :func:`lift`. Devices with no place on the chart are returned by name and kept as they
+    are after the chart's columns (so whoever plays the track notes them as it notes any device it lacks)."""
+    layout = layout or default_layout()
+    devices = {a.rpartition("_")[0] for a in track.actuators}
+    chart_devices = {d.name for d in layout.devices}
+    if devices <= chart_devices:
+        return track, []
+    rows, missing = lift(track.actuators, track.intensities, layout)
+    if not devices & chart_devices and set(missing) == devices:
+        return track, missing  # nothing reaches the body chart: the caller says so about the track as it is
+    keep = [i for i, a in enumerate(track.actuators) if a.rpartition("_")[0] in missing]
+    ids = tuple(layout.actuators) + tuple(track.actuators[i] for i in keep)
+    meta = dict(track.meta, lifted_from=track.layout)
+    return HapticTrack(np.hstack([rows, track.intensities[:, keep]]), track.fps, ids, layout=layout.name, meta=meta,
+                       debug=dict(track.debug)), missing
+
+
+def rig_track(track: HapticTrack, layout: Layout, *, slots: bool = False) -> HapticTrack:
+    """``track`` (on ``layout``'s body chart, or a pattern of any wearable: :func:`lift_track`) played on
+    ``layout.rig``: one column per motor (``rig.actuators``), or with ``slots`` per SDK1 slot (``rig.slot_ids``:
+    what the Player and a ``.tact`` file address, an X16 motor on each slot it groups); layout name the rig's. A
+    layout without a rig gives the track back as it is."""
+    rig = layout.rig
+    if rig is None:
+        return track
+    on_chart, missing = lift_track(track, layout)
+    if on_chart is track and missing:
+        raise UsageError(f"the track's devices ({', '.join(missing)}) have no place on the body chart, so the rig "
+                         f"{rig.name} cannot play them")
+    index = {a: i for i, a in enumerate(on_chart.actuators)}
+    chart = np.zeros((on_chart.n_frames, len(layout.actuators)))
+    for j, a in enumerate(layout.actuators):  # by id: a vest-only pattern has only the vest's columns
+        if a in index:
+            chart[:, j] = on_chart.intensities[:, index[a]]
+    rows = rig.projection(layout)(chart)
+    meta = dict(on_chart.meta, rig=rig.name, body_chart=layout.name)
+    if missing:
+        meta["left_out"] = missing
+    if slots:
+        return HapticTrack(rows[:, rig.slot_motor], track.fps, rig.slot_ids, layout=rig.name, meta=meta,
+                           debug=dict(on_chart.debug))
+    return HapticTrack(rows, track.fps, rig.actuators, layout=rig.name, meta=meta, debug=dict(on_chart.debug))
+
+
+__all__ = ["DEFAULT_RIG", "FOLDS", "Projection", "Rig", "default_rig", "lift", "lift_track", "parse_rig", "rig_track",
+           "transfer"]

@@ -40,6 +40,9 @@ BVH = MOTION / "dataset-1_byebye_happy_001.bvh"
 
 V2_SIZES = {"VestFront": 20, "VestBack": 20, "ForearmL": 6, "ForearmR": 6}
 V3_SIZES = {0: 40, 1: 6, 2: 6}
+V2_ALL_SIZES = {**V2_SIZES, "Left": 20, "Right": 20, "Head": 6, "HandL": 3, "HandR": 3, "FootL": 3, "FootR": 3,
+                "GloveL": 6, "GloveR": 6}
+"""Every SDK1 frame position and its most dots (index 0..n-1): docs/wearables.md lists the sources."""
 
 
 def ci(obj: dict, key: str) -> Any:
@@ -84,8 +87,10 @@ class _Server:
 class FakePlayerSdk1(_Server):
     """SDK1 Player. ``errors`` lists every rule a message broke (tests assert it stays empty)."""
 
-    def __init__(self, port: int = 0, close_after: Optional[int] = None, stop_reading_after: Optional[int] = None):
+    def __init__(self, port: int = 0, close_after: Optional[int] = None, stop_reading_after: Optional[int] = None,
+                 sizes: Optional[dict[str, int]] = None):
         self.port = port
+        self.sizes = sizes or V2_SIZES  # the positions (and their dot counts) this Player's devices have
         self.close_after = close_after  # close each connection after this many requests (a Player restart)
         # after this many requests in all, the Player hangs: it keeps every connection (and accepts new ones) but
         # never reads again, so its kernel buffers fill up unseen and pings go unanswered
@@ -127,7 +132,7 @@ class FakePlayerSdk1(_Server):
             self.check(text, conn)
             status = {"RegisteredKeys": self.registered, "ActiveKeys": sorted(self.state),
                       "ConnectedDeviceCount": 3, "ConnectedPositions": ["Vest", "ForearmL", "ForearmR"],
-                      "Status": {p: self._status(p) for p in V2_SIZES}}
+                      "Status": {p: self._status(p) for p in self.sizes}}
             try:
                 await ws.send(json.dumps(status))
             except ConnectionClosed:
@@ -143,7 +148,7 @@ class FakePlayerSdk1(_Server):
         for key, values in self.state.items():
             if key.endswith(position):
                 return values
-        return [0] * V2_SIZES[position]
+        return [0] * self.sizes[position]
 
     def check(self, text: Any, conn: dict) -> None:
         now = time.perf_counter()
@@ -181,16 +186,16 @@ class FakePlayerSdk1(_Server):
             self.errors.append("frame submit without Key/Frame")
             return
         pos = ci(frame, "position")
-        if pos not in V2_SIZES:
+        if pos not in self.sizes:
             self.errors.append(f"position {pos!r}")
             return
         dur = ci(frame, "durationMillis")
         if not _is_int(dur) or not 20 <= dur <= 100_000:  # tact-js v1 validation range (docs §2.4)
             self.errors.append(f"durationMillis {dur!r}")
-        values = [0] * V2_SIZES[pos]
+        values = [0] * self.sizes[pos]
         for dot in ci(frame, "dotPoints") or []:
             idx, inten = ci(dot, "index"), ci(dot, "intensity")
-            if not _is_int(idx) or not 0 <= idx < V2_SIZES[pos]:
+            if not _is_int(idx) or not 0 <= idx < self.sizes[pos]:
                 self.errors.append(f"{pos} dot index {idx!r}")
                 continue
             if not _is_int(inten) or not 0 <= inten <= 100:
@@ -240,8 +245,9 @@ def self_signed_cert(folder: Path) -> tuple[Path, Path]:
 class FakePlayerSdk2(_Server):
     """SDK2 Player on ``wss://127.0.0.1:PORT/v3/feedback`` with a self-signed certificate."""
 
-    def __init__(self, cert: tuple[Path, Path], port: int = 0):
+    def __init__(self, cert: tuple[Path, Path], port: int = 0, sizes: Optional[dict[int, int]] = None):
         self.port = port
+        self.sizes = sizes or V3_SIZES  # SDK2 position -> the motor array length of the device there
         self.ssl_context = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)
         self.ssl_context.load_cert_chain(str(cert[0]), str(cert[1]))
         self.errors: list[str] = []
@@ -308,10 +314,10 @@ class FakePlayerSdk2(_Server):
             self.errors.append("dot payload")
             return
         pos, values, dur, rid = p.get("position"), p.get("motorValues"), p.get("durationMillis"), p.get("requestId")
-        if pos not in V3_SIZES:
+        if pos not in self.sizes:
             self.errors.append(f"position {pos!r}")
             return
-        if not isinstance(values, list) or len(values) != V3_SIZES[pos]:
+        if not isinstance(values, list) or len(values) != self.sizes[pos]:
             self.errors.append(f"position {pos}: {len(values) if isinstance(values, list) else values!r} values")
             return
         if not all(_is_int(v) and 0 <= v <= 100 for v in values):

@@ -18,7 +18,9 @@ class DeviceMap:
     ``VestFront_k`` (the layout's own devices: what OSC out, the broadcast and the recorder see).
 
     What the Player gets: ``project`` (``None``, or a :class:`hapmotion.rig.Projection` from the ``(n,)`` row to the
-    rig's ``(m,)`` slot row), ``player_devices`` (SDK1 position -> columns of that projected row, in dot index order)
+    rig's ``(k,)`` motor row), ``player_devices`` (SDK1 position -> the column of that projected row each dot plays, in
+    dot index order: an X16 motor's column on each of its slots; a slot no motor drives plays an extra column that is
+    always 0)
     and ``sdk2``, per SDK2 position ``(position, array length, ((offset, columns), ...))``: for the X40, position 0
     holds VestFront at offset 0 and VestBack at offset 20 of a 40-value array.
     """
@@ -36,10 +38,13 @@ class DeviceMap:
         rig = getattr(layout, "rig", None)
         if rig is not None:
             proj = rig.projection(layout)
+            silent = len(rig.motors)  # the projected row gets one more column, always 0, for slots no motor drives
             player: dict[str, list[int]] = {}
-            for col, (pos, _, _) in enumerate(rig.slots):
-                player.setdefault(pos, []).append(col)
-            sdk2 = tuple((pos, length, tuple((slot, np.array([col], dtype=np.intp)) for slot, col in parts))
+            for pos, slot, motor in rig.slots:  # each slot plays its motor's column of the projected row
+                cols = player.setdefault(pos, [])
+                cols.extend([silent] * (slot + 1 - len(cols)))
+                cols[slot] = motor
+            sdk2 = tuple((pos, length, tuple((slot, np.array([motor], dtype=np.intp)) for slot, motor in parts))
                          for pos, length, parts in rig.sdk2_groups())
             return cls(tuple(layout.actuators), devices, sdk2, proj,
                        {p: np.array(c, dtype=np.intp) for p, c in player.items()})
@@ -57,7 +62,10 @@ class DeviceMap:
 
     def player_row(self, row: np.ndarray) -> np.ndarray:
         """The row the Player's messages are made from: ``row`` itself, or its projection onto the rig."""
-        return row if self.project is None else self.project(row)
+        if self.project is None:
+            return row
+        out = self.project(row)
+        return np.concatenate([out, np.zeros(out.shape[:-1] + (1,))], axis=-1)
 
     @property
     def sdk1_devices(self) -> dict[str, np.ndarray]:

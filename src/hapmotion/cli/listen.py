@@ -10,7 +10,7 @@ import click
 from ..show.comfort import Comfort
 from .audience_options import seat_security_options
 from .show_options import (comfort_options, cues_option, layout_option, method_option, mirror_option, mode_option,
-                           param_option, parse_param_overrides, preset_option, read_cues, split_values)
+                           param_option, parse_param_overrides, preset_option, read_cues, rig_option, split_values)
 
 HELP = """Render a show published with `hapmotion live ... --sink nats://HOST:PORT/SHOW` on this seat's vest.
 
@@ -49,6 +49,7 @@ Examples:
 @mode_option
 @param_option
 @layout_option
+@rig_option
 @click.option("--zone-off", "zones_off", metavar="ZONE[,ZONE]", multiple=True,
               help="Devices (VestBack, ForearmL, ...) or actuators (VestFront_5) that stay off.")
 @click.option("--stats", "show_stats", is_flag=True, help="Print frame counts and latency every second.")
@@ -57,7 +58,7 @@ Examples:
 @comfort_options
 def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Optional[bool], method: Optional[str],
             preset: Optional[str], mode: Optional[str], params: tuple[str, ...], layout_file: Optional[str],
-            zones_off: tuple[str, ...], show_stats: bool, quiet: bool, cues: Optional[str],
+            rig: Optional[str], zones_off: tuple[str, ...], show_stats: bool, quiet: bool, cues: Optional[str],
             comfort: Comfort, security) -> None:
     from ..audience import Seat, run_listen
     from ..audience.listener import parse_show_url
@@ -65,8 +66,14 @@ def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Opti
 
     setup_logging("listen", quiet)
     parse_show_url(show_url)  # a usage error before anything connects
+    layout = layout_file
+    if rig is not None:  # the seat's own wearables; the energy split unless the seat asks for the paper preset
+        from ..layout import load_layout
+        from ..rig import parse_rig
+
+        layout = load_layout(layout_file).with_rig(parse_rig(rig, energy=preset != "paper"))
     seat = Seat(method=method, preset=preset, mirror=mirror, mode=mode, overrides=parse_param_overrides(params),
-                layout=layout_file, zones_off=split_values(zones_off), comfort=comfort, delay_s=delay_ms / 1000.0)
+                layout=layout, zones_off=split_values(zones_off), comfort=comfort, delay_s=delay_ms / 1000.0)
     sessions: list = []
 
     def ready(engine) -> None:

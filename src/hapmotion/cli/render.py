@@ -10,6 +10,7 @@ from typing import Optional
 import click
 
 from ..errors import UsageError
+from ..rig import rig_track
 from ..show.settings import Show
 from ..track_files.sniff import is_track_file
 from .motion_options import CLI_SPELLING, motion_options, read_motion, read_track
@@ -63,11 +64,18 @@ def command(motion_file: Optional[str], output: str, show: Show, motion_opts: di
         track = render_show(show, motion, progress=update)
     finally:
         close()
+    # on the --rig wearables (none: the body chart as rendered); a .tact file holds the slots bHaptics addresses
+    track = rig_track(track, show.load_layout(), slots=out_path.suffix.lower() == ".tact")
     written = save_track(track, out_path)
     peak = float(track.intensities.max()) if track.n_frames else 0.0
     also = f" and {', '.join(p.name for p in written[1:])}" if len(written) > 1 else ""
     click.echo(f"wrote {out_path}{also} ({track.n_frames} frames at {track.fps:g} fps, {track.duration:.2f} s, "
                f"mode {mode}, peak {peak:.0f}%)")
+
+
+def rig_of(show: Show) -> bool:
+    """Whether ``show`` is played on a ``--rig``."""
+    return getattr(show.layout, "rig", None) is not None
 
 
 def convert_track(path: str, output: str, show: Show, motion_opts: dict) -> None:
@@ -78,7 +86,7 @@ def convert_track(path: str, output: str, show: Show, motion_opts: dict) -> None
              if v is not None and k != "limits"]
     if given:
         raise UsageError(f"{given[0]} is a motion reader option; {path} is a haptic track or pattern")
-    if dataclasses.replace(show, fps=None) != Show():
+    if dataclasses.replace(show, fps=None, layout=None if rig_of(show) else show.layout) != Show():
         raise UsageError(f"{path} is a haptic track or pattern: render converts it as it is (only -o, --fps and "
                          "--limit apply); play it with cues or comfort limits with 'hapmotion play'")
     from ..track_files import save_track  # as in command(): the track files load with what they write
@@ -86,6 +94,8 @@ def convert_track(path: str, output: str, show: Show, motion_opts: dict) -> None
     track = read_track(path, **motion_opts)
     if show.fps is not None:
         track = track.resample(show.fps)
+    if rig_of(show):  # a pattern of one wearable played on another, through the body chart
+        track = rig_track(track, show.load_layout(), slots=Path(output).suffix.lower() == ".tact")
     written = save_track(track, Path(output))
     also = f" and {', '.join(p.name for p in written[1:])}" if len(written) > 1 else ""
     click.echo(f"wrote {output}{also} ({track.n_frames} frames at {track.fps:g} fps, {track.duration:.2f} s, "

@@ -67,12 +67,19 @@ layout_option = click.option(
     "--layout", "layout_file", type=click.Path(dir_okay=False, exists=True), default=None,
     help="Device layout JSON (default: X40 + two shoulder Tactosy).")
 
+rig_option = click.option(
+    "--rig", default=None, metavar="WEARABLES",
+    help="The wearables played on, joined by '+': x40+tactosy-shoulders (the body chart itself), x40+tactosy, air, "
+         "x16, pro, pro+tactosy, pro+gloves, ... or a wearable .json file (docs/wearables.md) [default: the layout's "
+         "own devices].")
+
 SHOW_OPTIONS: dict[str, Callable[..., Any]] = {
     "method": method_option(),
     "preset": preset_option(),
     "mirror": mirror_option,
     "param": param_option,
     "layout": layout_option,
+    "rig": rig_option,
     "fps": click.option("--fps", type=float, default=None,
                         help="Render rate, frames per second (1..1000) [default: the motion's own rate; a live "
                              "stream's 60; 60 for the music alone]."),
@@ -93,7 +100,7 @@ SHOW_OPTIONS: dict[str, Callable[..., Any]] = {
 """Every option of a :class:`Show`, in the order ``--help`` lists them; :func:`show_options` takes a subset."""
 
 _KWARGS = {"method": "method", "preset": "preset", "mirror": "mirror", "param": "params", "layout": "layout_file",
-           "fps": "fps", "audio": "audio_file", "audio_offset": "audio_offset", "mode": "mode", "mix": "mix_ratio",
+           "rig": "rig", "fps": "fps", "audio": "audio_file", "audio_offset": "audio_offset", "mode": "mode", "mix": "mix_ratio",
            "mix_rule": "mix_rule", "length": "length", "cues": "cues"}
 
 
@@ -103,6 +110,8 @@ def show_options(*names: str, comfort: bool = True) -> Callable[[Callable[..., A
     does not take keep the :class:`Show` defaults. A ``--cues`` file is read within the command's ``--limit``
     values (put :func:`~hapmotion.cli.motion_options.motion_options` above this decorator)."""
     chosen = list(names or SHOW_OPTIONS)
+    if "layout" in chosen and "rig" not in chosen:  # where a layout is chosen, the rig it plays on is too
+        chosen.insert(chosen.index("layout") + 1, "rig")
     unknown = [n for n in chosen if n not in SHOW_OPTIONS]
     if unknown:
         raise ValueError(f"unknown show options {unknown}")
@@ -153,11 +162,21 @@ def _build_show(given: dict[str, Any], comfort: Comfort, limits: Optional[Sequen
     if "mirror" in overrides and fields.get("mirror") is not None and overrides["mirror"] != fields["mirror"]:
         raise UsageError("--param mirror=... and --mirror/--no-mirror disagree: give one of them")
     try:
-        return Show(**fields)
+        show = Show(**fields)
     except UsageError as exc:
         if str(exc).startswith("unknown preset"):
             raise UsageError(f"--preset: {exc}") from None
         raise
+    return with_rig(show, given.get("rig"))
+
+
+def with_rig(show: Show, rig: Optional[str]) -> Show:
+    """``show`` played on the ``--rig`` wearables (None: as it is), combined by the preset's phantom split."""
+    if rig is None:
+        return show
+    from ..rig import parse_rig  # lazy: a rig's wearable files are read only when --rig is given
+
+    return show.replace(layout=show.load_layout().with_rig(parse_rig(rig, energy=show.params().phantom == "energy")))
 
 
 def parse_param_overrides(items: Sequence[str]) -> dict[str, Any]:

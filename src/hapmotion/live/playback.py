@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import InputError, UsageError
 from ..limits import LimitsArg
+from ..rig import lift_track
 from ..show.cues import Cue, pattern_rows
 from ..show.settings import Show
 from ..show.stage import OutputStage
@@ -191,6 +192,7 @@ async def play(
         log.info("%s: %g rows/s played at %g rows/s (%s)", name, track.fps, fps,
                  "each row repeated" if fps > track.fps else "resampled, peaks kept")
         track = track.resample(fps)
+    track, _ = lift_track(track, session_layout)  # another wearable's pattern onto the body chart (docs/wearables.md)
     rows = layout_rows(track, session_layout.actuators, name)
     stage = OutputStage.identity(session_layout.actuators, fps, mirror_map=session_layout.mirror_map(),
                                  comfort=show.comfort, cues=show.load_cues(limits))
