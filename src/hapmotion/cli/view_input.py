@@ -10,6 +10,7 @@ from typing import Callable, Optional, Sequence
 
 from ..errors import InputError, UsageError
 from ..motion import Motion
+from ..rig import rig_track
 from ..show import Show, render_variants
 from ..track import HapticTrack
 from ..track_files.sniff import is_track_file
@@ -48,7 +49,8 @@ def read_view_input(path: "str | os.PathLike[str]", show: Show, *, methods: Sequ
             raise UsageError(f"{p}: a saved track has one method and preset; --methods/--presets need a motion file")
         track = (read_track or load_track)(p)
         notes = [] if track.debug else ["saved track without renderer debug data: no dynamic point, no motion energy"]
-        return ViewInput(render_variants(show, None, methods, presets, modes, motion_tracks=[track]), None, p, notes)
+        tracks = render_variants(show, None, methods, presets, modes, motion_tracks=[track])
+        return ViewInput([rig_track(t, show.load_layout()) for t in tracks], None, p, notes)
     motion = read_motion(p)
     combos = len(methods) * len(presets)
     update, close = progress(motion.n_frames * combos, "rendering") if progress else (None, None)
@@ -57,4 +59,5 @@ def read_view_input(path: "str | os.PathLike[str]", show: Show, *, methods: Sequ
     finally:
         if close is not None:
             close()
-    return ViewInput(tracks, motion, p)
+    # drawn on the --rig wearables when there are some (rig_track leaves a show without a rig as it is)
+    return ViewInput([rig_track(t, show.load_layout()) for t in tracks], motion, p)

@@ -6,18 +6,23 @@ side (each sleeve on its own side, at the top of the chest), then the back as so
 sees it. This follows bHaptics addressing (the layout stored in every ``.tact`` file of type ``Tactot``, e.g.
 GitHub ``bhaptics/tact-python`` ``CenterX.tact``): vest ``index = row * 4 + col``, row 0 at the collar, col 0 at the
 wearer's left on *both* panels; the sleeves' columns run front to back, row 0 nearer the neck
-(``hapmotion/data/x40_shoulders.json``).
+(the wearable files ``x40.json`` and ``tactosy-shoulders.json``).
+
+A track rendered for a rig (``--rig air``, ``pro+gloves``: :mod:`hapmotion.rig`) is drawn as that rig: one panel per
+device of its wearables, each motor where its wearable file puts it, labelled in the wearer's terms
+(:func:`rig_panels`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Optional, Sequence
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import HapMotionError, InputError
 from ..layout import CHART_BACK, CHART_FRONT, CHART_NAMES, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, Layout, load_layout
+from ..rig import DEFAULT_RIG, Rig, parse_rig
 
 PANEL_TEXT = {
     # Vest panels: col 0 is the wearer's left on BOTH panels, so both are drawn with the wearer's left on the left:
@@ -26,7 +31,7 @@ PANEL_TEXT = {
                   left="wearer's LEFT", right="wearer's RIGHT", top="collar", bottom="belly"),
     "back": dict(title="BACK (wearer's left | right)", subtitle="seen from behind the wearer",
                  left="wearer's LEFT", right="wearer's RIGHT", top="collar", bottom="waist"),
-    # Sleeves on the shoulders: columns front (0) to back, row 0 nearer the neck (layout file x40_shoulders.json).
+    # Sleeves on the shoulders: columns front (0) to back, row 0 nearer the neck (wearable tactosy-shoulders.json).
     "shoulder_left": dict(title="LEFT SHOULDER", subtitle="sleeve ForearmL", left="front", right="back",
                           top="neck side", bottom="arm side"),
     "shoulder_right": dict(title="RIGHT SHOULDER", subtitle="sleeve ForearmR", left="front", right="back",
@@ -85,13 +90,74 @@ class BodyPanel:
         return self.x + self.w / 2
 
 
-def body_layout(actuators: Sequence[str], layout: Layout | None = None) -> tuple[list[BodyPanel], list[BodyCell]]:
+# ------------------------------------------------------------------------------------------ a rig's panels
+_LIMB_WORDS = {"shoulder": "shoulder sleeve", "forearm": "forearm sleeve", "hand": "hand", "foot": "foot"}
+_AROUND = {"shoulder": ("front", "back", "neck side", "arm side"), "forearm": ("one edge", "other edge", "elbow end",
+           "wrist end"), "foot": ("", "", "", ""), "head": ("wearer's LEFT", "wearer's RIGHT", "", "")}
+
+
+def _rig_of(name: Optional[str], actuators: Sequence[str]) -> Optional[Rig]:
+    """The rig a track's layout name names, when the track's columns are its motors (else None)."""
+    if not name or name == DEFAULT_RIG:
+        return None
+    try:
+        rig = parse_rig(name)
+    except HapMotionError:
+        return None
+    return rig if tuple(rig.actuators) == tuple(actuators) else None
+
+
+def rig_panels(name: Optional[str], actuators: Sequence[str]) -> list[dict]:
+    """The page's panels for a track rendered on the rig ``name`` (``[]`` for any other track): per device of its
+    wearables ``{name, rows, cols, place, title, subtitle, left, right, top, bottom}``, the wearer's left-side
+    devices, then the vest's front, the right side, the back, and the head, each motor at ``index = row * cols +
+    col`` as its wearable file numbers it."""
+    rig = _rig_of(name, actuators)
+    if rig is None:
+        return []
+    out = []
+    for w in rig.wearables:
+        short = w.title.replace("bHaptics ", "").split(",")[0]  # "TactSuit Pro", "Tactosy2 for arms"
+        for device in w.devices:
+            motors = w.device_motors(device)
+            m0 = motors[0]
+            heights = sorted({round(m.height, 4) for m in motors})
+            rows = len(heights) if len(motors) % len(heights) == 0 and m0.limb != "hand" else 1
+            cols = len(motors) // rows
+            if m0.limb == "torso":
+                back = m0.face == "back"
+                text = dict(title=f"{'BACK' if back else 'FRONT'} (wearer's left | right)",
+                            subtitle=f"{short}, {len(motors)} motors", left="wearer's LEFT",
+                            right="wearer's RIGHT", top="collar", bottom="waist" if back else "belly")
+                place, order = ("back", 3) if back else ("front", 1)
+            elif m0.limb == "head":
+                left, right, top, bottom = _AROUND["head"]
+                text = dict(title="HEAD", subtitle=short, left=left, right=right, top=top, bottom=bottom)
+                place, order = "back", 4
+            else:
+                side = m0.side
+                left, right, top, bottom = _AROUND.get(m0.limb, ("", "", "", ""))
+                if m0.limb == "hand" and any(getattr(m, "finger", None) for m in motors) or device.startswith("Glove"):
+                    left, right, top, bottom = "thumb", "wrist", "", ""
+                text = dict(title=f"{side.upper()} {_LIMB_WORDS.get(m0.limb, m0.limb).upper()}",
+                            subtitle=f"{short} ({device})", left=left, right=right, top=top, bottom=bottom)
+                place, order = "front", 0 if side == "left" else 2
+            out.append((order, dict(name=device, rows=rows, cols=cols, place=place, **text)))
+    return [d for _, d in sorted(out, key=lambda x: x[0])]
+
+
+def body_layout(actuators: Sequence[str], layout: Layout | None = None, rig: Optional[str] = None
+                ) -> tuple[list[BodyPanel], list[BodyCell]]:
     """Panels and cells of the body drawing for a track whose columns are ``actuators``.
 
-    A device of ``layout`` (default: the bundled one) is drawn when all its ids are among the columns; columns of
-    other devices are left out. Returns ``([], [])`` when no device of the layout is in the track (a track of some
-    other layout: the caller says so instead of drawing).
+    A track rendered on the rig ``rig`` (its layout name, e.g. ``air``) is drawn as that rig (:func:`rig_panels`).
+    Otherwise a device of ``layout`` (default: the bundled one) is drawn when all its ids are among the columns;
+    columns of other devices are left out. Returns ``([], [])`` when no device of the layout is in the track (a
+    track of some other layout: the caller says so instead of drawing).
     """
+    panels_of_rig = rig_panels(rig, actuators)
+    if panels_of_rig:
+        return _grid_layout(actuators, panels_of_rig)
     if layout is None:
         try:
             layout = load_layout()
@@ -122,19 +188,42 @@ def body_layout(actuators: Sequence[str], layout: Layout | None = None) -> tuple
     return panels, cells
 
 
+def _grid_layout(actuators: Sequence[str], devices: list[dict]) -> tuple[list[BodyPanel], list[BodyCell]]:
+    """Panels side by side, front row then back row, from the page's panel dicts."""
+    col_of = {a: i for i, a in enumerate(actuators)}
+    panels: list[BodyPanel] = []
+    cells: list[BodyCell] = []
+    x = 0.0
+    for d in devices:
+        x0 = x + EDGE_ROOM
+        w = d["cols"] * (CELL_W + CELL_GAP) - CELL_GAP
+        h = d["rows"] * (CELL_H + CELL_GAP) - CELL_GAP
+        text = {k: d[k] for k in ("title", "subtitle", "left", "right", "top", "bottom")}
+        panels.append(BodyPanel(d["name"], d["place"], x0, -h, w, h, text))
+        for k in range(d["rows"] * d["cols"]):
+            r, c = divmod(k, d["cols"])
+            aid = f"{d['name']}_{k}"
+            cells.append(BodyCell(col_of[aid], aid, d["name"], k, x0 + c * (CELL_W + CELL_GAP),
+                                  -(r + 1) * (CELL_H + CELL_GAP) + CELL_GAP, CELL_W, CELL_H))
+        x = x0 + w + EDGE_ROOM + PANEL_GAP
+    return panels, cells
+
+
 def _value_text(v: float) -> str:
     """A cell's number: one decimal below 10 (a motor that ran a moment shows "<0.1", never "0.0"), else whole."""
     return "<0.1" if v < 0.05 else f"{v:.1f}" if v < 9.95 else f"{v:.0f}"
 
 
-def draw_body(ax, values: np.ndarray, actuators: Sequence[str], cmap, norm, *, fmt=None) -> list[BodyCell]:
+def draw_body(ax, values: np.ndarray, actuators: Sequence[str], cmap, norm, *, fmt=None,
+              rig: Optional[str] = None) -> list[BodyCell]:
     """Draw the body on matplotlib axes ``ax``: one rectangle per actuator coloured by ``values`` (``(N,)``, Player
     units, one per track column) through ``cmap``/``norm``, its index top left and its value bottom right, each
     panel titled and its edges labelled. Each rectangle's ``gid`` is its actuator id. Returns the cells drawn
-    (``[]``, and nothing drawn, for a track of an unknown layout)."""
+    (``[]``, and nothing drawn, for a track of an unknown layout). ``rig``: the track's layout name, drawn as that
+    rig when it is one (:func:`rig_panels`)."""
     from matplotlib.patches import Rectangle
 
-    panels, cells = body_layout(actuators)
+    panels, cells = body_layout(actuators, rig=rig)
     fmt = fmt or _value_text
     ax.set_axis_off()
     if not cells:

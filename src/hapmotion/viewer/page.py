@@ -43,7 +43,7 @@ from ..motion import Motion
 from ..track import HapticTrack
 from ..filesafety import atomic_path
 from . import packing
-from .bodymap import BODY_ORDER, BODY_ROW, PANEL_TEXT
+from .bodymap import BODY_ORDER, BODY_ROW, PANEL_TEXT, rig_panels
 from .colors import SCALE_TOPS, bright_from, page_colors
 from .curves import ENERGY_UNITS, track_motion_energy, triangle_vertices
 
@@ -130,6 +130,8 @@ def track_label(track: HapticTrack) -> str:
 
 def _device_panels(track: HapticTrack) -> list[dict]:
     """Grid and labels of each device of the track's layout, in track column order."""
+    if rig_panels(track.layout, track.actuators):  # rendered on a rig: its wearables, as their files place them
+        return rig_panels(track.layout, track.actuators)
     try:
         layout = load_layout() if track.layout in ("x40_shoulders", "", None) else load_layout(track.layout)
     except (InputError, OSError):

@@ -194,7 +194,7 @@ def _draw_body(fig, ax, track, inten, x0, x1) -> None:
     mean = inten.mean(axis=0)
     top = scale_top(float(mean.max()))
     cmap, norm = plot_cmap(), Normalize(vmin=0.5 * top / 100, vmax=top)
-    cells = draw_body(ax, mean, track.actuators, cmap, norm)
+    cells = draw_body(ax, mean, track.actuators, cmap, norm, rig=track.layout)
     mirror = (track.meta or {}).get("mirror")
     note = {True: "\nmirrored: the performer's left hand is felt on the wearer's right",
             False: "\nnot mirrored: the performer's left is the wearer's left"}.get(mirror, "")

@@ -1,0 +1,49 @@
+"""The viewer page and the plot draw the rig a track was rendered for, labelled in the wearer's terms."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hapmotion.layout import load_layout
+from hapmotion.rig import parse_rig, rig_track
+from hapmotion.track import HapticTrack
+from hapmotion.viewer.bodymap import body_layout, rig_panels
+from hapmotion.viewer.page import _device_panels
+
+LAYOUT = load_layout()
+
+
+def _rig_track(name: str) -> HapticTrack:
+    rows = np.zeros((3, LAYOUT.n_actuators))
+    rows[:, 0] = 70.0  # VestFront_0: the wearer's upper left chest
+    return rig_track(HapticTrack(rows, 30.0, LAYOUT.actuators, LAYOUT.name), LAYOUT.with_rig(parse_rig(name)))
+
+
+def test_an_air_is_drawn_as_two_panels_of_its_own_grid():
+    track = _rig_track("air")
+    panels = rig_panels(track.layout, track.actuators)
+    assert [(p["name"], p["rows"], p["cols"], p["place"]) for p in panels] == [("VestFront", 2, 4, "front"),
+                                                                                ("VestBack", 2, 4, "back")]
+    assert panels[0]["left"] == "wearer's LEFT" and "TactSuit Air" in panels[0]["subtitle"]
+    assert _device_panels(track) == panels  # the page uses the same panels
+
+
+def test_gloves_sleeves_and_the_visor_sit_on_their_sides():
+    track = _rig_track("pro+tactosy+gloves+tactvisor")
+    names = [p["name"] for p in rig_panels(track.layout, track.actuators)]
+    # the wearer's left-side devices first, then the chest, the right side, the back and the head
+    assert names[:2] == ["ForearmL", "GloveL"] and names[2] == "VestFront"
+    assert names[3:5] == ["ForearmR", "GloveR"] and names[5:] == ["VestBack", "Head"]
+    panels, cells = body_layout(track.actuators, rig=track.layout)
+    assert len(cells) == len(track.actuators) == 32 + 12 + 12 + 4
+    hot = [c for c in cells if track.intensities[0, c.column] > 0]
+    front = next(p for p in panels if p.device == "VestFront")
+    assert [c.actuator for c in hot] == ["VestFront_0"] and hot[0].x < front.center_x  # drawn on the wearer's left
+
+
+def test_a_body_chart_track_is_not_taken_for_a_rig():
+    rows = np.zeros((2, LAYOUT.n_actuators))
+    assert rig_panels(LAYOUT.name, LAYOUT.actuators) == []
+    assert rig_panels("x40+tactosy-shoulders", LAYOUT.actuators) == []
+    assert rig_panels("air", LAYOUT.actuators) == []  # the name of a rig, but not its columns
+    assert len(body_layout(HapticTrack(rows, 30.0, LAYOUT.actuators).actuators)[1]) == 52
