@@ -8,7 +8,7 @@ from hapmotion.layout import load_layout
 from hapmotion.rig import parse_rig, rig_track
 from hapmotion.track import HapticTrack
 from hapmotion.viewer.bodymap import body_layout, rig_panels
-from hapmotion.viewer.page import _device_panels
+from hapmotion.viewer.page import page_data
 
 LAYOUT = load_layout()
 
@@ -25,7 +25,7 @@ def test_an_air_is_drawn_as_two_panels_of_its_own_grid():
     assert [(p["name"], p["rows"], p["cols"], p["place"]) for p in panels] == [("VestFront", 2, 4, "front"),
                                                                                 ("VestBack", 2, 4, "back")]
     assert panels[0]["left"] == "wearer's LEFT" and "TactSuit Air" in panels[0]["subtitle"]
-    assert _device_panels(track) == panels  # the page uses the same panels
+    assert page_data([track], None)[0]["devices"] == panels  # the page draws the same panels
 
 
 def test_gloves_sleeves_and_the_visor_sit_on_their_sides():
