@@ -104,12 +104,17 @@ class Layout:
         """``(N,)`` int: column that column ``i`` goes to when the performer is mirrored left/right.
 
         Vest panels flip their columns (col -> cols-1-col); the two shoulder sleeves swap (same row and col: the
-        columns run front to back on both, so front stays front).
+        columns run front to back on both, so front stays front). Devices on no chart (a rig's motor layout,
+        :meth:`hapmotion.rig.Rig.motor_layout`) stay where they are.
         """
         out = np.arange(self.n_actuators)
-        left = self.chart_device(CHART_SHOULDER_LEFT)
-        right = self.chart_device(CHART_SHOULDER_RIGHT)
+        by_chart = {d.chart: d for d in self.devices}
+        left, right = by_chart.get(CHART_SHOULDER_LEFT), by_chart.get(CHART_SHOULDER_RIGHT)
         for d in self.devices:
+            if d.chart not in (CHART_FRONT, CHART_BACK, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT):
+                continue
+            if d.chart in (CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT) and (left is None or right is None):
+                continue
             for r in range(d.rows):
                 for c in range(d.cols):
                     i = d.offset + r * d.cols + c

@@ -34,7 +34,7 @@ import numpy as np
 
 from .bhaptics.wearables import Motor, Wearable, bundled_wearables, find_wearable
 from .errors import UsageError
-from .layout import Layout, default_layout
+from .layout import Device, Layout, default_layout
 from .track import HapticTrack
 
 DEFAULT_RIG = "x40+tactosy-shoulders"
@@ -160,7 +160,8 @@ class Rig:
 
     @cached_property
     def motors(self) -> tuple[Motor, ...]:
-        return tuple(m for w in self.wearables for m in w.motors)
+        """Every motor, by wearable, device (in file order) and index: the order of a rig's columns."""
+        return tuple(m for w in self.wearables for d in w.devices for m in w.device_motors(d))
 
     @cached_property
     def slots(self) -> tuple[tuple[str, int, int], ...]:
@@ -195,17 +196,39 @@ class Rig:
     def sdk2_groups(self) -> tuple:
         """Per SDK2 position ``(position, array length, ((array slot, motor column), ...))``."""
         groups: dict[int, tuple[int, list]] = {}
-        k = 0
-        for w in self.wearables:
-            for m in w.motors:
-                if m.sdk2_position >= 0:
-                    length, parts = groups.setdefault(m.sdk2_position, (w.sdk2_lengths[m.device], []))
-                    parts.extend((s2, k) for s2 in m.sdk2_slots)
-                k += 1
+        lengths = {m.device: w.sdk2_lengths[m.device] for w in self.wearables for m in w.motors}
+        for k, m in enumerate(self.motors):
+            if m.sdk2_position >= 0:
+                length, parts = groups.setdefault(m.sdk2_position, (lengths[m.device], []))
+                parts.extend((s2, k) for s2 in m.sdk2_slots)
         return tuple((pos, length, tuple(sorted(parts))) for pos, (length, parts) in sorted(groups.items()))
 
     def charts(self) -> set:
         return {m.chart for m in self.motors}
+
+    def grids(self) -> list[tuple[Wearable, str, int, int]]:
+        """``(wearable, device, rows, cols)`` per device, in rig order: the grid its motors form (``index = row *
+        cols + col``: as many rows as distinct heights when they divide the motors evenly, else one row)."""
+        out = []
+        for w in self.wearables:
+            for device in w.devices:
+                motors = w.device_motors(device)
+                rows = len({round(m.height, 4) for m in motors})
+                rows = rows if len(motors) % rows == 0 and motors[0].limb != "hand" else 1
+                out.append((w, device, rows, len(motors) // rows))
+        return out
+
+    def motor_layout(self) -> Layout:
+        """A layout whose columns are this rig's motors (``actuators``), one device per rig device: what is played
+        straight to the motors, with no body chart in between (``hapmotion check``'s test pattern)."""
+        devices, offset = [], 0
+        for w, device, rows, cols in self.grids():
+            first = w.device_motors(device)[0]
+            devices.append(Device(name=device, rows=rows, cols=cols, chart=-1, offset=offset,
+                                  sdk2_position=first.sdk2_position, sdk2_offset=0,
+                                  sdk2_length=w.sdk2_lengths[device] or 0, x_span=(0.0, 1.0), z_span=(0.0, 1.0)))
+            offset += rows * cols
+        return Layout(self.name, tuple(devices))
 
 
 def parse_rig(text: str, *, energy: bool = True) -> Rig:
@@ -223,6 +246,28 @@ def parse_rig(text: str, *, energy: bool = True) -> Rig:
                                  "wearable per bHaptics position")
             owner[d] = w.name
     return Rig(wearables, energy=energy)
+
+
+def rig_from_player(sdk2_names: Sequence[str] = (), sdk1_positions: Sequence[str] = ()) -> Optional[str]:
+    """The rig a Player's connected devices make, as ``--rig`` takes it, or None when it says nothing we know.
+
+    SDK2 ``ServerDevices`` names each device (``TactSuitX40``, ``Tactosy2_V3 (L)``): a wearable whose
+    ``player_names`` starts the name is connected. SDK1's ``ConnectedPositions`` only name positions (``Vest``,
+    ``ForearmL`` ...), so a vest is taken for an X40 and sleeves for Tactosy2 on the forearms."""
+    chosen: list[str] = []
+    for name in sdk2_names:
+        for w in bundled_wearables().values():
+            if any(str(name).lower().startswith(p.lower()) for p in w.player_names) and w.name not in chosen:
+                chosen.append(w.name)
+    if not chosen:
+        by_position = {"Vest": "x40", "ForearmL": "tactosy", "ForearmR": "tactosy", "Head": "tactal",
+                       "HandL": "tactosy-hands", "HandR": "tactosy-hands", "FootL": "tactosy-feet",
+                       "FootR": "tactosy-feet", "GloveL": "gloves", "GloveR": "gloves"}
+        for pos in sdk1_positions:
+            w = by_position.get(str(pos))
+            if w and w not in chosen:
+                chosen.append(w)
+    return "+".join(chosen) or None
 
 
 def default_rig(energy: bool = True) -> Rig:
@@ -327,5 +372,5 @@ def rig_track(track: HapticTrack, layout: Layout, *, slots: bool = False) -> Hap
     return HapticTrack(rows, track.fps, rig.actuators, layout=rig.name, meta=meta, debug=dict(on_chart.debug))
 
 
-__all__ = ["DEFAULT_RIG", "FOLDS", "Projection", "Rig", "default_rig", "lift", "lift_track", "parse_rig", "rig_track",
-           "transfer"]
+__all__ = ["DEFAULT_RIG", "FOLDS", "Projection", "Rig", "default_rig", "lift", "lift_track", "parse_rig", "rig_from_player",
+           "rig_track", "transfer"]

@@ -37,17 +37,7 @@ class DeviceMap:
         devices = {d.name: np.arange(d.offset, d.offset + d.size, dtype=np.intp) for d in layout.devices}
         rig = getattr(layout, "rig", None)
         if rig is not None:
-            proj = rig.projection(layout)
-            silent = len(rig.motors)  # the projected row gets one more column, always 0, for slots no motor drives
-            player: dict[str, list[int]] = {}
-            for pos, slot, motor in rig.slots:  # each slot plays its motor's column of the projected row
-                cols = player.setdefault(pos, [])
-                cols.extend([silent] * (slot + 1 - len(cols)))
-                cols[slot] = motor
-            sdk2 = tuple((pos, length, tuple((slot, np.array([motor], dtype=np.intp)) for slot, motor in parts))
-                         for pos, length, parts in rig.sdk2_groups())
-            return cls(tuple(layout.actuators), devices, sdk2, proj,
-                       {p: np.array(c, dtype=np.intp) for p, c in player.items()})
+            return cls.for_rig(rig, rig.projection(layout), tuple(layout.actuators), devices)
         groups: dict[int, tuple[int, list]] = {}
         for d in layout.devices:
             if d.sdk2_position >= 0:
@@ -55,6 +45,26 @@ class DeviceMap:
                 parts.append((d.sdk2_offset, devices[d.name]))
         sdk2 = tuple((pos, length, tuple(parts)) for pos, (length, parts) in groups.items())
         return cls(tuple(layout.actuators), devices, sdk2, None, devices)
+
+    @classmethod
+    def for_rig(cls, rig: Any, project: Any = None, actuators: Optional[tuple] = None,
+                devices: Optional[dict] = None) -> "DeviceMap":
+        """The Player side of a rig (:class:`hapmotion.rig.Rig`): rows are projected by ``project`` (a body-chart
+        projection), or are the rig's motors themselves (``project`` None: the columns ``rig.actuators``)."""
+        if project is None:
+            actuators = tuple(rig.actuators)
+            offsets = np.cumsum([0] + [r * c for _, _, r, c in rig.grids()])
+            devices = {d: np.arange(o, o + r * c, dtype=np.intp) for (_, d, r, c), o in zip(rig.grids(), offsets)}
+            project = _Motors()
+        silent = len(rig.motors)  # the projected row gets one more column, always 0, for slots no motor drives
+        player: dict[str, list[int]] = {}
+        for pos, slot, motor in rig.slots:  # each slot plays its motor's column of the projected row
+            cols = player.setdefault(pos, [])
+            cols.extend([silent] * (slot + 1 - len(cols)))
+            cols[slot] = motor
+        sdk2 = tuple((pos, length, tuple((slot, np.array([motor], dtype=np.intp)) for slot, motor in parts))
+                     for pos, length, parts in rig.sdk2_groups())
+        return cls(actuators, devices, sdk2, project, {p: np.array(c, dtype=np.intp) for p, c in player.items()})
 
     @property
     def n(self) -> int:
@@ -71,3 +81,10 @@ class DeviceMap:
     def sdk1_devices(self) -> dict[str, np.ndarray]:
         """SDK1 position -> columns of :meth:`player_row`."""
         return self.devices if self.player_devices is None else self.player_devices
+
+
+class _Motors:
+    """The projection of rows that already are a rig's motors: the rows themselves (as floats)."""
+
+    def __call__(self, rows: np.ndarray) -> np.ndarray:
+        return np.asarray(rows, dtype=np.float64)

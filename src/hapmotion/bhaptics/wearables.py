@@ -3,7 +3,8 @@ its place on the body chart and its SDK addressing. ``docs/wearables.md`` lists 
 
 A wearable file holds
 
-- ``name`` (what ``--rig`` calls it), ``title``, ``aliases``;
+- ``name`` (what ``--rig`` calls it), ``title``, ``aliases``, ``player_names`` (how the Player's SDK2
+  ``ServerDevices`` names it: the start of its ``deviceName``);
 - ``devices``: the bHaptics positions it covers (``VestFront``, ``ForearmL``, ``GloveR`` ...), each with its SDK2
   array length (absent: the device has no SDK2 position);
 - ``motors``: per motor ``device`` and ``index`` (its number on that device), its body place -- ``limb`` (torso,
@@ -92,6 +93,7 @@ class Wearable:
     sources: tuple[str, ...]
     unconfirmed: tuple[str, ...]
     source: str
+    player_names: tuple[str, ...] = ()
 
     @property
     def devices(self) -> tuple[str, ...]:
@@ -225,7 +227,7 @@ def load_wearable(path: "str | os.PathLike[str]", *, text: Optional[str] = None)
     if not isinstance(tact_type, str):
         raise _fail(source, "field tact_type", "expected the name of a .tact layout type")
     texts = {}
-    for key in ("aliases", "sources", "unconfirmed"):
+    for key in ("aliases", "sources", "unconfirmed", "player_names"):
         v = doc.get(key, [])
         if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
             raise _fail(source, f"field {key}", "expected a list of texts")
@@ -236,7 +238,7 @@ def load_wearable(path: "str | os.PathLike[str]", *, text: Optional[str] = None)
     return Wearable(name=name, title=str(doc.get("title", name)), aliases=texts["aliases"], motors=motors,
                     sdk2_lengths=lengths, tact_type=tact_type, tact=tact if isinstance(tact, dict) else None,
                     renderer_grid=tuple(grid), sources=texts["sources"], unconfirmed=texts["unconfirmed"],
-                    source=source)
+                    source=source, player_names=texts["player_names"])
 
 
 @lru_cache(maxsize=1)

@@ -15,12 +15,14 @@ connected, then play a short labelled test pattern so the wearer can confirm whe
 
 \b
 For each device of the layout (vest front, vest back, left and right shoulder sleeve): all its motors, then the
-wearer's left and right column (edge), then the top and bottom row (front and back edge on a shoulder). Each
-step's label is printed as it plays; the check ends with turn-off.
+wearer's left and right column (edge), then the top and bottom row (front and back edge on a shoulder). With --rig,
+each device of each wearable instead (gloves: thumb, little finger, wrist). Each step's label is printed as it
+plays; the check ends with turn-off. The report names the rig the connected devices make.
 \b
 Examples:
   hapmotion check --sink player
   hapmotion check --sink player-v3 --workspace-id APP --api-key KEY --step-ms 800
+  hapmotion check --rig pro+gloves --sink player
 """
 
 
@@ -45,7 +47,7 @@ def command(sinks: tuple[str, ...], step_ms: int, gap_ms: int, intensity: float,
     import asyncio
 
     from ..bhaptics.device_map import DeviceMap
-    from ..live.player_check import CHECK_FPS, pattern_steps, pattern_track, probe_player
+    from ..live.player_check import CHECK_FPS, pattern_steps, pattern_track, probe_player, rig_pattern_steps
     from ..live.playback import run_play
     from ..live.kinds import build_sink
     from ..live.urls import parse_sink
@@ -53,7 +55,11 @@ def command(sinks: tuple[str, ...], step_ms: int, gap_ms: int, intensity: float,
 
     setup_logging("check", quiet=True)  # the check prints its own lines; the session's warnings still show
     layout = show.load_layout()
-    dmap = DeviceMap.from_layout(layout)
+    rig = layout.rig
+    if rig is not None:  # the rig's own motors, every device of every wearable, with no body chart in between
+        layout = rig.motor_layout()
+        show = show.replace(layout=layout)
+    dmap = DeviceMap.from_layout(layout) if rig is None else DeviceMap.for_rig(rig)
     objs = [build_sink(parse_sink(s), dmap=dmap, layout_name=layout.name, fps=CHECK_FPS, workspace_id=workspace_id,
                        api_key=api_key, meta={"mode": "check"}) for s in sinks]
     reports = [r for r in (asyncio.run(probe_player(s, layout)) for s in objs) if r is not None]
@@ -65,7 +71,7 @@ def command(sinks: tuple[str, ...], step_ms: int, gap_ms: int, intensity: float,
         raise click.exceptions.Exit(1)  # nothing to play to
     if no_pattern:
         return
-    steps = pattern_steps(layout)
+    steps = pattern_steps(layout) if rig is None else rig_pattern_steps(rig)
     track, marks = pattern_track(layout, steps, step_s=step_ms / 1000.0, gap_s=gap_ms / 1000.0,
                                  intensity=intensity)
     click.echo(f"check: test pattern, {len(steps)} steps of {step_ms} ms (Ctrl-C stops):")

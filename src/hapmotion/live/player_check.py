@@ -13,6 +13,11 @@ Two parts:
   - SDK2 (``/v3/feedback``) sends ``ServerDevices`` after the auth: a list of ``{position, deviceName, connected,
     battery, ...}`` (SDK2 position 0 the vest, 1/2 the left/right sleeve, as in the layout's ``sdk2_position``).
 
+* With a rig (``--rig``), :func:`rig_pattern_steps` makes the pattern from the rig's wearable files instead, played
+  straight to its motors (:meth:`hapmotion.rig.Rig.motor_layout`): every device of every wearable, gloves and
+  visors too, labelled in the wearer's terms; :meth:`PlayerReport.rig` says which rig the Player's connected
+  devices make.
+
 * :func:`pattern_steps` and :func:`pattern_track` make the labelled test pattern from the layout's geometry alone
   (``Layout.positions``: x to the wearer's right, y up, z forward): for each device, all its motors, then its
   wearer's-left and wearer's-right column, then its top and bottom row (a shoulder sleeve, flat on the shoulder:
@@ -30,6 +35,7 @@ import numpy as np
 from websockets.asyncio.client import connect
 
 from ..layout import CHART_BACK, CHART_FRONT, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, Layout
+from ..rig import Rig, rig_from_player
 from ..track import HapticTrack
 from .sinks import PlayerSdk1Sink, PlayerSdk2Sink, Sink
 from ..bhaptics.player_json import get_ci
@@ -90,6 +96,45 @@ def pattern_steps(layout: Layout) -> list[PatternStep]:
     return steps
 
 
+_EDGES = {
+    # limb: (low across, high across, low height, high height) in the wearer's terms
+    "torso": ("wearer's left column", "wearer's right column", "top row (collar)", "bottom row"),
+    "shoulder": ("front edge", "back edge", "edge nearer the neck", "edge over the arm"),
+    "forearm": ("one edge (column 0)", "other edge", "row 0 (elbow end)", "last row (wrist end)"),
+    "head": ("wearer's left end", "wearer's right end", "", ""),
+    "foot": ("one end (motor 0)", "other end", "", ""),
+    "hand": ("", "", "", ""),
+}
+
+
+def rig_pattern_steps(rig: Rig) -> list[PatternStep]:
+    """The test pattern of a rig, on its motors (columns of ``rig.actuators``): per device of every wearable, all
+    its motors, then its edges in the wearer's terms (a vest's left and right column and top and bottom row; a
+    glove's thumb, little finger and wrist; a visor's left and right end)."""
+    steps = []
+    col = {id(m): k for k, m in enumerate(rig.motors)}
+    for w, device, _, _ in rig.grids():
+        motors = w.device_motors(device)
+        m0 = motors[0]
+        short = w.title.replace("bHaptics ", "").split(",")[0]
+        where = {"torso": "back" if m0.face == "back" else "front", "head": "head"}.get(m0.limb, f"{m0.side} {m0.limb}")
+        name = f"{short} {where} ({device})"
+        steps.append(PatternStep(f"{name}, all motors", device, tuple(col[id(m)] for m in motors)))
+        if device.startswith("Glove"):
+            for idx, finger in ((0, "thumb"), (4, "little finger"), (5, "wrist")):
+                steps.append(PatternStep(f"{name}, {finger}", device, (col[id(motors[idx])],)))
+            continue
+        words = _EDGES.get(m0.limb, ("", "", "", ""))
+        for k, attr in enumerate(("across", "height")):
+            values = np.array([getattr(m, attr) for m in motors])
+            if np.ptp(values) <= 1e-6 or not words[2 * k]:
+                continue
+            for word, target in ((words[2 * k], values.min()), (words[2 * k + 1], values.max())):
+                picked = tuple(col[id(m)] for m, v in zip(motors, values) if abs(v - target) <= 1e-6)
+                steps.append(PatternStep(f"{name}, {word}", device, picked))
+    return steps
+
+
 def pattern_track(layout: Layout, steps: Sequence[PatternStep], *, step_s: float = 0.5, gap_s: float = 0.25,
                intensity: float = 60.0, lead_s: float = 0.2) -> tuple[HapticTrack, dict[int, str]]:
     """The test pattern as a track at :data:`CHECK_FPS` (``lead_s`` of silence, then each step ``step_s`` on at
@@ -131,7 +176,17 @@ class PlayerReport:
         out += [f"  {d}" for d in self.details]
         for device, ok in self.layout_devices.items():
             out.append(f"  {device}: " + ("connected" if ok else "NOT connected: its steps will not be felt"))
+        rig = self.rig()
+        if rig:
+            out.append(f"  these devices make the rig {rig} (play, live and listen take it with --rig {rig})")
         return out
+
+    def rig(self) -> Optional[str]:
+        """The rig the connected devices make (``--rig`` text; :func:`hapmotion.rig.rig_from_player`), or None."""
+        if not self.answered:
+            return None
+        sdk2 = [d.split(":", 1)[0] for d in self.details if ": SDK2 position" in d and "not connected" not in d]
+        return rig_from_player(sdk2, [] if sdk2 else self.connected)
 
     def read_sdk1_status(self, status: dict, layout: Layout) -> None:
         """Take in the Player's SDK1 status object (:func:`~hapmotion.bhaptics.sdk1.parse_v2_status`): its
