@@ -4,6 +4,7 @@ tracks, on a rendered synthetic motion and on the bundled music."""
 from __future__ import annotations
 
 import json
+from importlib import resources
 
 import numpy as np
 import pytest
@@ -81,7 +82,7 @@ def test_audio_mode_without_motion_uses_fps_and_the_layout(clicks_wav):
 
 
 def test_audio_mode_on_a_custom_layout(clicks_wav, tmp_path):
-    doc = json.loads((hapmotion.layout.resources.files("hapmotion") / "data" / "x40_shoulders.json").read_text())
+    doc = json.loads((resources.files("hapmotion") / "data" / "x40_shoulders.json").read_text())
     doc["name"] = "wide_vest"
     for device in doc["devices"][:2]:
         device["x_span"] = [-0.9, 0.9]
