@@ -152,3 +152,42 @@ def test_every_command_takes_the_rig_option(command, capsys):
             "view": [str(PUNCH), "-o", "/nonexistent/v.html"], "plot": [str(PUNCH), "-o", "/nonexistent/p.png"],
             "listen": ["nats://127.0.0.1:4222/show", "--unsigned", "--sink", "player"]}[command]
     _one_line_error(capsys, [command, *args, "--rig", "air+nothing"], "unknown wearable 'nothing'")
+
+
+# ------------------------------------------------------------------------------------------ live on a rig
+def test_live_on_an_air_sends_the_projected_rows_and_records_the_body_chart(tmp_path):
+    """A replayed recording, live, on an Air: the Player gets the Air's grouped dots on both panels, sides kept
+    (the performer's punching hand is felt on the mirrored side, as on the X40); the recorder keeps the body
+    chart, from which any rig plays the take later."""
+    from hapmotion.live import live
+
+    clip = tmp_path / "punch.bvh"
+    clip.write_bytes(PUNCH.read_bytes())
+    take = tmp_path / "take.csv"
+    show = Show(layout=LAYOUT.with_rig(parse_rig("air")))
+
+    async def run():
+        player = await FakePlayerSdk1().start()
+        try:
+            await live(show, f"replay:{clip}", [player.url(), f"record:{take}"], speed=4.0, handle_signals=False)
+        finally:
+            await player.stop()
+        return player
+
+    player = asyncio.run(run())
+    assert player.errors == [] and player.turn_off_all
+    frames = [v for _, pos, v, _ in player.frames if pos in ("VestFront", "VestBack")]
+    assert frames and max(max(v) for v in frames) > 30
+    for v in frames:
+        for c in range(4):
+            assert v[c] == v[4 + c] and v[8 + c] == v[12 + c] == v[16 + c]
+    recorded = hapmotion.load_track(take)
+    assert recorded.actuators == LAYOUT.actuators  # the body chart
+    # the Player's per-side energy follows the recording's (the Air keeps each side's share within 1 dB)
+    air = parse_rig("air").projection(LAYOUT)(recorded.intensities)
+    motors = parse_rig("air").motors
+    left = np.array([m.side == "left" for m in motors])
+    ref = recorded.intensities ** 2
+    ref_left = ref[:, [i for i, (c, u, _) in enumerate(LAYOUT.places()) if u < 0.5 and c in ("front", "back")
+                       or c == "shoulder_left"]].sum()
+    assert abs(10 * np.log10((air[:, left] ** 2).sum() / ref_left)) < 1.0
