@@ -190,3 +190,20 @@ def test_the_default_rig_sends_what_the_layout_alone_sends():
     rigged = DeviceMap.from_layout(LAYOUT.with_rig(parse_rig(DEFAULT_RIG)))
     assert v2_frame_message(row, plain, 60) == v2_frame_message(row, rigged, 60)
     assert v3_dot_messages(row, plain, 60, 1) == v3_dot_messages(row, rigged, 60, 1)
+
+
+def test_a_rigs_own_track_goes_back_to_the_body_chart_through_its_motors_places():
+    """An Air track's VestFront_5 is the Air's motor 5 (row 1, column 1), not the X40's motor 5: it lands on the
+    X40's lower rows of column 1, whether the track names its rig (JSON, NPZ) or not (CSV: by its motor count)."""
+    from hapmotion.rig import lift_track
+    from hapmotion.track import HapticTrack
+
+    air = parse_rig("air")
+    rows = np.zeros((2, len(air.actuators)))
+    rows[:, air.actuators.index("VestFront_5")] = 60.0
+    for name in ("air", "x40_shoulders"):
+        chart, missing = lift_track(HapticTrack(rows, 30.0, air.actuators, layout=name), LAYOUT)
+        assert missing == [] and chart.actuators == IDS
+        on = {a for a, v in zip(IDS, chart.intensities[0]) if v > 0}
+        assert on <= {"VestFront_9", "VestFront_13", "VestFront_17", "VestFront_5"} and "VestFront_13" in on
+        assert (chart.intensities[0] ** 2).sum() == pytest.approx(3600.0)  # its energy, kept

@@ -33,7 +33,7 @@ from typing import Optional, Sequence
 import numpy as np
 
 from .bhaptics.wearables import Motor, Wearable, bundled_wearables, find_wearable
-from .errors import UsageError
+from .errors import InputError, UsageError
 from .layout import Device, Layout, default_layout
 from .track import HapticTrack
 
@@ -276,44 +276,74 @@ def default_rig(energy: bool = True) -> Rig:
 
 
 # ------------------------------------------------------------------------------------------ patterns to the chart
-def _pattern_places(device: str, n: int) -> Optional[list[tuple[str, float, float]]]:
-    """Body places of ``device``'s ``n`` slots for a pattern authored for it: the bundled wearable that covers
-    ``device`` with ``n`` slots (forearm sleeves before shoulder ones: Designer's sleeve patterns are made for
-    forearms), each slot at its motor's place; None when no wearable has it."""
+def _pattern_places(device: str, n: int, rig: Optional[Rig] = None) -> Optional[list[tuple[str, float, float]]]:
+    """Body places of ``device``'s ``n`` columns: the motors of ``rig`` when the track was rendered for it (its
+    columns are its motors), else the bundled wearable that covers ``device`` with ``n`` SDK1 slots (a pattern
+    authored for it; forearm sleeves before shoulder ones: Designer's sleeve patterns are made for forearms), or,
+    failing that, with ``n`` motors (a track of one wearable's motors: an Air's ``VestFront_0..7``); None when no
+    wearable has it."""
+    if rig is not None:
+        motors = [m for m in rig.motors if m.device == device]
+        if len(motors) == n:
+            return [(m.chart, m.across, m.height) for m in motors]
     order = sorted(bundled_wearables().values(), key=lambda w: (w.name == "tactosy-shoulders", w.name))
     for w in order:
         motors = [m for m in w.motors if m.sdk1_position == device]
         slots = {s: m for m in motors for s in m.sdk1_slots}
         if motors and sorted(slots) == list(range(n)):
             return [(slots[s].chart, slots[s].across, slots[s].height) for s in range(n)]
+    for w in order:
+        motors = [m for m in w.motors if m.device == device]
+        if len(motors) == n:
+            return [(m.chart, m.across, m.height) for m in sorted(motors, key=lambda m: m.index)]
     return None
 
 
-def lift(ids: Sequence[str], rows: np.ndarray, layout: Optional[Layout] = None, *, energy: bool = True
-         ) -> tuple[np.ndarray, list[str]]:
-    """Rows of any bHaptics devices (``ids`` like ``Left_7``, ``VestFront_3``) on ``layout``'s body chart: columns
-    the chart has are taken as they are; other devices are put on the chart through their wearable's places and the
-    phantom split (an old 20-motor Tactosy Left/Right pattern onto the shoulder grids). Returns ``((T, N) rows,
-    the devices that have no place on the chart)``."""
+def _track_rig(name: str, ids: Sequence[str]) -> Optional[Rig]:
+    """The rig a track's layout name names when the track's columns are its motors (not the body chart's own)."""
+    if not name or name == DEFAULT_RIG or "+" not in name and name not in bundled_wearables():
+        return None
+    try:
+        rig = parse_rig(name)
+    except (UsageError, InputError):
+        return None
+    return rig if tuple(rig.actuators) == tuple(ids) else None
+
+
+def lift(ids: Sequence[str], rows: np.ndarray, layout: Optional[Layout] = None, *, energy: bool = True,
+         rig: Optional[Rig] = None) -> tuple[np.ndarray, list[str]]:
+    """Rows of any bHaptics devices (``ids`` like ``Left_7``, ``VestFront_3``) on ``layout``'s body chart: a device
+    with all the chart's columns of it is taken as it is; any other is put on the chart through the places of its
+    wearable's motors (``rig``'s, when the rows were rendered for it) and the phantom split (an old 20-motor Tactosy
+    Left/Right pattern onto the shoulder grids; an Air's 8 front motors onto the X40's front). Returns ``((T, N)
+    rows, the devices that have no place on the chart)``."""
     layout = layout or default_layout()
     chart_ids = layout.actuators
     index = {a: i for i, a in enumerate(chart_ids)}
+    sizes = {d.name: d.size for d in layout.devices}
     rows = np.asarray(rows, dtype=np.float64).reshape(len(rows), len(ids))
     out = np.zeros((rows.shape[0], len(chart_ids)))
     energy_sum = np.zeros_like(out)
     devices: dict[str, list[tuple[int, int]]] = {}
     for c, a in enumerate(ids):
         dev, _, k = a.rpartition("_")
-        if a in index:
-            out[:, index[a]] = np.maximum(out[:, index[a]], rows[:, c])
-        elif k.isdigit():
+        if k.isdigit():
             devices.setdefault(dev, []).append((int(k), c))
     missing = []
     places = layout.places()
     for dev, cols in devices.items():
         cols.sort()
-        src = _pattern_places(dev, len(cols)) if [k for k, _ in cols] == list(range(len(cols))) else None
+        whole = [k for k, _ in cols] == list(range(len(cols)))
+        if rig is None and whole and sizes.get(dev) == len(cols):  # the chart's own device: as it is
+            for k, c in cols:
+                out[:, index[f"{dev}_{k}"]] = np.maximum(out[:, index[f"{dev}_{k}"]], rows[:, c])
+            continue
+        src = _pattern_places(dev, len(cols), rig) if whole else None
         w = transfer(src, places) if src is not None else None
+        if (w is None or not w.any()) and all(f"{dev}_{k}" in index for k, _ in cols):
+            for k, c in cols:  # some of the chart's own columns, of no other wearable: as they are
+                out[:, index[f"{dev}_{k}"]] = np.maximum(out[:, index[f"{dev}_{k}"]], rows[:, c])
+            continue
         if w is None or not w.any():
             missing.append(dev)
             continue
@@ -333,9 +363,12 @@ def lift_track(track: HapticTrack, layout: Optional[Layout] = None) -> tuple[Hap
     layout = layout or default_layout()
     devices = {a.rpartition("_")[0] for a in track.actuators}
     chart_devices = {d.name for d in layout.devices}
-    if devices <= chart_devices:
+    rig = _track_rig(track.layout, track.actuators)
+    sizes = {d.name: d.size for d in layout.devices}
+    counts = {d: sum(1 for a in track.actuators if a.rpartition("_")[0] == d) for d in devices}
+    if rig is None and devices <= chart_devices and all(counts[d] == sizes[d] for d in devices):
         return track, []
-    rows, missing = lift(track.actuators, track.intensities, layout)
+    rows, missing = lift(track.actuators, track.intensities, layout, rig=rig)
     if not devices & chart_devices and set(missing) == devices:
         return track, missing  # nothing reaches the body chart: the caller says so about the track as it is
     keep = [i for i, a in enumerate(track.actuators) if a.rpartition("_")[0] in missing]
