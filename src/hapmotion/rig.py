@@ -361,6 +361,8 @@ def lift_track(track: HapticTrack, layout: Optional[Layout] = None) -> tuple[Hap
     chart's, else through :func:`lift`. Devices with no place on the chart are returned by name and kept as they
     are after the chart's columns (so whoever plays the track notes them as it notes any device it lacks)."""
     layout = layout or default_layout()
+    if tuple(track.actuators) == tuple(layout.actuators) and track.layout == layout.name:
+        return track, []  # already on it (a rig's motor layout too: check's pattern)
     devices = {a.rpartition("_")[0] for a in track.actuators}
     chart_devices = {d.name for d in layout.devices}
     rig = _track_rig(track.layout, track.actuators)
