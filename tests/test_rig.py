@@ -207,3 +207,18 @@ def test_a_rigs_own_track_goes_back_to_the_body_chart_through_its_motors_places(
         on = {a for a, v in zip(IDS, chart.intensities[0]) if v > 0}
         assert on <= {"VestFront_9", "VestFront_13", "VestFront_17", "VestFront_5"} and "VestFront_13" in on
         assert (chart.intensities[0] ** 2).sum() == pytest.approx(3600.0)  # its energy, kept
+
+
+@pytest.mark.parametrize("clip, preset", [("60_12_scaled.bvh", "felt"), ("gBR_sBM_cAll_d04_mBR0_ch03.pkl", "paper"),
+                                          ("dataset-2_wave-both-hands_normal_001.bvh", "energy")])
+def test_the_paper_rig_renders_the_same_numbers_on_real_recordings(clip, preset):
+    from support.data import MOTION
+
+    from hapmotion.rig import rig_track
+    from hapmotion.show import Show, render_show
+
+    motion = hapmotion.load_motion(MOTION / clip)
+    plain = render_show(Show(preset=preset), motion)
+    rigged = rig_track(plain, LAYOUT.with_rig(parse_rig(DEFAULT_RIG, energy=preset != "paper")))
+    assert rigged.actuators == plain.actuators and np.array_equal(rigged.intensities, plain.intensities)
+    assert plain.intensities.max() > 0

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -191,3 +192,15 @@ def test_live_on_an_air_sends_the_projected_rows_and_records_the_body_chart(tmp_
     ref_left = ref[:, [i for i, (c, u, _) in enumerate(LAYOUT.places()) if u < 0.5 and c in ("front", "back")
                        or c == "shoulder_left"]].sum()
     assert abs(10 * np.log10((air[:, left] ** 2).sum() / ref_left)) < 1.0
+
+
+def test_a_wearable_file_on_the_command_line(tmp_path):
+    """Adding a wearable is one file: a copy of the Pro with its own name renders like the Pro, by path."""
+    doc = json.loads((Path(hapmotion.__file__).parent / "data" / "wearables" / "pro.json").read_text())
+    doc["name"], doc["aliases"] = "my-vest", []
+    path = tmp_path / "my-vest.json"
+    path.write_text(json.dumps(doc))
+    _render(tmp_path, "--rig", f"{path}+gloves", "-o", str(tmp_path / "mine.csv"))
+    _render(tmp_path, "--rig", "pro+gloves", "-o", str(tmp_path / "pro.csv"))
+    mine, pro = hapmotion.load_track(tmp_path / "mine.csv"), hapmotion.load_track(tmp_path / "pro.csv")
+    assert mine.actuators == pro.actuators and np.array_equal(mine.intensities, pro.intensities)
