@@ -204,3 +204,37 @@ def test_a_wearable_file_on_the_command_line(tmp_path):
     _render(tmp_path, "--rig", "pro+gloves", "-o", str(tmp_path / "pro.csv"))
     mine, pro = hapmotion.load_track(tmp_path / "mine.csv"), hapmotion.load_track(tmp_path / "pro.csv")
     assert mine.actuators == pro.actuators and np.array_equal(mine.intensities, pro.intensities)
+
+
+def test_play_takes_the_rig_from_the_players_devices(capsys):
+    """``--rig player://HOST:PORT``: the Player reports a vest and two gloves, so the X40 pattern plays on an X40
+    and the gloves get their (silent: nothing on the body chart reaches them) frames."""
+    from hapmotion.cli import play as play_cli
+
+    cli.add_command(play_cli.command, "play")
+
+    async def run():
+        player = await FakePlayerSdk1(sizes=V2_ALL_SIZES, connected=["Vest", "GloveL", "GloveR"]).start()
+        url = player.url()
+        code = await asyncio.to_thread(main, ["play", str(TACT / "FeedbackFiles_Vest_Heartbeat.tact"), "--rig", url,
+                                              "--sink", url])
+        await player.stop()
+        return code, player
+
+    code, player = asyncio.run(run())
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "rig: x40+gloves (the Player's connected devices)" in err
+    assert player.errors == []
+    positions = {pos for _, pos, _, _ in player.frames}
+    assert {"VestFront", "VestBack", "GloveL", "GloveR"} <= positions
+    # the question to the Player was a turn-off on the body chart's devices: the only sleeve frames are silent
+    assert all(not any(v) for _, pos, v, _ in player.frames if pos.startswith("Forearm"))
+    assert max(max(v) for _, pos, v, _ in player.frames if pos == "VestFront") > 0
+
+
+def test_a_rig_from_an_absent_player_is_one_line(capsys):
+    from support.live_fakes import free_port
+
+    _one_line_error(capsys, ["render", str(PUNCH), "--rig", f"player://127.0.0.1:{free_port()}", "-o", "/tmp/x.csv"],
+                    "cannot ask the Player for its devices")

@@ -23,7 +23,7 @@ import ssl
 import subprocess
 import time
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any, Optional, Sequence
 
 import numpy as np
 import pytest
@@ -88,8 +88,9 @@ class FakePlayerSdk1(_Server):
     """SDK1 Player. ``errors`` lists every rule a message broke (tests assert it stays empty)."""
 
     def __init__(self, port: int = 0, close_after: Optional[int] = None, stop_reading_after: Optional[int] = None,
-                 sizes: Optional[dict[str, int]] = None):
+                 sizes: Optional[dict[str, int]] = None, connected: Sequence[str] = ("Vest", "ForearmL", "ForearmR")):
         self.port = port
+        self.connected = list(connected)  # what its status reports as ConnectedPositions
         self.sizes = sizes or V2_SIZES  # the positions (and their dot counts) this Player's devices have
         self.close_after = close_after  # close each connection after this many requests (a Player restart)
         # after this many requests in all, the Player hangs: it keeps every connection (and accepts new ones) but
@@ -131,7 +132,7 @@ class FakePlayerSdk1(_Server):
             self.requests += 1
             self.check(text, conn)
             status = {"RegisteredKeys": self.registered, "ActiveKeys": sorted(self.state),
-                      "ConnectedDeviceCount": 3, "ConnectedPositions": ["Vest", "ForearmL", "ForearmR"],
+                      "ConnectedDeviceCount": len(self.connected), "ConnectedPositions": self.connected,
                       "Status": {p: self._status(p) for p in self.sizes}}
             try:
                 await ws.send(json.dumps(status))

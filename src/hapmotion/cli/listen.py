@@ -10,7 +10,8 @@ import click
 from ..show.comfort import Comfort
 from .audience_options import seat_security_options
 from .show_options import (comfort_options, cues_option, layout_option, method_option, mirror_option, mode_option,
-                           param_option, parse_param_overrides, preset_option, read_cues, rig_option, split_values)
+                           param_option, parse_param_overrides, preset_option, read_cues, rig_of, rig_option,
+                           split_values)
 
 HELP = """Render a show published with `hapmotion live ... --sink nats://HOST:PORT/SHOW` on this seat's vest.
 
@@ -69,9 +70,9 @@ def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Opti
     layout = layout_file
     if rig is not None:  # the seat's own wearables; the energy split unless the seat asks for the paper preset
         from ..layout import load_layout
-        from ..rig import parse_rig
 
-        layout = load_layout(layout_file).with_rig(parse_rig(rig, energy=preset != "paper"))
+        layout = load_layout(layout_file)
+        layout = layout.with_rig(rig_of(rig, layout, energy=preset != "paper"))
     seat = Seat(method=method, preset=preset, mirror=mirror, mode=mode, overrides=parse_param_overrides(params),
                 layout=layout, zones_off=split_values(zones_off), comfort=comfort, delay_s=delay_ms / 1000.0)
     sessions: list = []

@@ -70,8 +70,8 @@ layout_option = click.option(
 rig_option = click.option(
     "--rig", default=None, metavar="WEARABLES",
     help="The wearables played on, joined by '+': x40+tactosy-shoulders (the body chart itself), x40+tactosy, air, "
-         "x16, pro, pro+tactosy, pro+gloves, ... or a wearable .json file (docs/wearables.md) [default: the layout's "
-         "own devices].")
+         "x16, pro, pro+tactosy, pro+gloves, ... or a wearable .json file (docs/wearables.md); player[://HOST:PORT]: "
+         "the devices that SDK1 Player reports [default: the layout's own devices].")
 
 SHOW_OPTIONS: dict[str, Callable[..., Any]] = {
     "method": method_option(),
@@ -174,9 +174,21 @@ def with_rig(show: Show, rig: Optional[str]) -> Show:
     """``show`` played on the ``--rig`` wearables (None: as it is), combined by the preset's phantom split."""
     if rig is None:
         return show
+    layout = show.load_layout()
+    return show.replace(layout=layout.with_rig(rig_of(rig, layout, energy=show.params().phantom == "energy")))
+
+
+def rig_of(text: str, layout: Any, *, energy: bool) -> Any:
+    """The :class:`~hapmotion.rig.Rig` a ``--rig`` value names: wearables joined by '+', or ``player[://HOST:PORT]``
+    (the devices that SDK1 Player reports connected; the rig is printed)."""
     from ..rig import parse_rig  # lazy: a rig's wearable files are read only when --rig is given
 
-    return show.replace(layout=show.load_layout().with_rig(parse_rig(rig, energy=show.params().phantom == "energy")))
+    if text.strip().startswith("player"):
+        from ..live.player_check import rig_of_player  # lazy: asks the Player before the show
+
+        text = rig_of_player(text.strip(), layout)
+        click.echo(f"rig: {text} (the Player's connected devices)", err=True)
+    return parse_rig(text, energy=energy)
 
 
 def parse_param_overrides(items: Sequence[str]) -> dict[str, Any]:

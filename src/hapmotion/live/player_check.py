@@ -34,6 +34,7 @@ from typing import Any, Optional, Sequence
 import numpy as np
 from websockets.asyncio.client import connect
 
+from ..errors import UsageError
 from ..layout import CHART_BACK, CHART_FRONT, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, Layout
 from ..rig import Rig, rig_from_player
 from ..track import HapticTrack
@@ -227,6 +228,28 @@ class PlayerReport:
                 by_position[pos] = by_position.get(pos, False) or ok
         for d in layout.devices:
             self.layout_devices[d.name] = by_position.get(d.sdk2_position, False)
+
+
+def rig_of_player(spec: str, layout: Layout, timeout: float = 2.0) -> str:
+    """The rig the SDK1 Player at ``spec`` (``player`` or ``player://HOST:PORT``) says is connected, as ``--rig``
+    text; :class:`~hapmotion.errors.UsageError` when it cannot be asked or names nothing hapmotion knows."""
+    from ..bhaptics.device_map import DeviceMap  # lazy: only a --rig player asks a Player before the show
+    from .kinds import build_sink
+    from .urls import parse_sink
+
+    ep = parse_sink(spec)
+    if ep.kind != "player":
+        raise UsageError(f"--rig {spec}: expected player[://HOST:PORT] to take the rig from the SDK1 Player's "
+                         "devices (or wearables joined by '+')")
+    sink = build_sink(ep, dmap=DeviceMap.from_layout(layout), layout_name=layout.name, fps=CHECK_FPS)
+    report = asyncio.run(probe_player(sink, layout, timeout))
+    if report is None or not report.reachable:
+        raise UsageError(f"--rig {spec}: cannot ask the Player for its devices ({report.error if report else 'not a Player'})")
+    rig = report.rig()
+    if rig is None:
+        raise UsageError(f"--rig {spec}: the Player reports no device hapmotion knows "
+                         f"({', '.join(report.connected) or 'none connected'})")
+    return rig
 
 
 async def probe_player(sink: Sink, layout: Layout, timeout: float = 2.0) -> Optional[PlayerReport]:
