@@ -10,17 +10,19 @@ X40's two 4 x 5 panels and two 3 x 2 shoulder grids, 52 places). A rig (``--rig 
   sleeve at all onto the vest's collar row at that side (a place on the shoulder's front half to the front panel,
   on its back half to the back panel, the top to both, half each), so a rig without sleeves loses nothing the vest
   can show;
-- on that chart the place is split over the motors around it by the phantom split the renderer uses (bilinear
-  weights ``w`` of the enclosing grid cell; a place within 0.001 of a motor is that motor's alone): with the
-  ``paper`` split amplitudes add (``I_m = sum_i w_im I_i``), with the ``energy`` split energies do
-  (``I_m = sqrt(sum_i w_im I_i^2)``: the energy centroid stays on the place, Israr & Poupyrev, "Tactile Brush", CHI
-  2011), each clipped at 100;
+- on that chart the place is split over the motors around it by a phantom split: the bilinear weights ``w`` of
+  the enclosing grid cell (a place within 0.001 of a motor is that motor's alone). With the ``energy`` split (the
+  renderer's, :mod:`hapmotion.renderer.steps.phantom`) energies add, ``I_m = sqrt(sum_i w_im I_i^2)``: the energy
+  and its centroid stay where they were (Israr & Poupyrev, "Tactile Brush", CHI 2011). With the ``paper`` preset
+  amplitudes add, ``I_m = sum_i w_im I_i``: the paper's 1D rule ``K(1-a)``, ``K a`` along each axis (its 2D
+  main-node rule is not used here: the places are already motors, and a bilinear split keeps the amplitude's
+  centroid). Each motor is clipped at 100;
 - a rig's rows hold one column per motor (``<device>_<index>``); the Player's messages and ``.tact`` files send each
   motor's value on every SDK slot it is addressed by (an X16 motor is two or three slots of the 40-slot frame).
 
 Mirroring happens on the body chart (the renderer's mirror map), so it is right on every rig. On the X40 +
 shoulder Tactosy rig every place is one motor's and the projection is the identity: the same numbers as the body
-chart. :meth:`Rig.lift` runs the same split the other way: a pattern authored for one wearable (an X40 pattern, an
+chart. :func:`lift` runs the same split the other way: a pattern authored for one wearable (an X40 pattern, an
 old 20-motor Tactosy Left/Right pattern) is put on the body chart, from where any rig plays it.
 """
 
