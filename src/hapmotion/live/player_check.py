@@ -34,11 +34,14 @@ from typing import Any, Optional, Sequence
 import numpy as np
 from websockets.asyncio.client import connect
 
+from ..bhaptics.device_map import DeviceMap
 from ..errors import UsageError
 from ..layout import CHART_BACK, CHART_FRONT, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, Layout
 from ..rig import Rig, rig_from_player
 from ..track import HapticTrack
+from .kinds import build_sink
 from .sinks import PlayerSdk1Sink, PlayerSdk2Sink, Sink
+from .urls import parse_sink
 from ..bhaptics.player_json import get_ci
 from ..bhaptics.tick import PLAYER_TICK_FPS
 
@@ -233,10 +236,6 @@ class PlayerReport:
 def rig_of_player(spec: str, layout: Layout, timeout: float = 2.0) -> str:
     """The rig the SDK1 Player at ``spec`` (``player`` or ``player://HOST:PORT``) says is connected, as ``--rig``
     text; :class:`~hapmotion.errors.UsageError` when it cannot be asked or names nothing hapmotion knows."""
-    from ..bhaptics.device_map import DeviceMap  # lazy: only a --rig player asks a Player before the show
-    from .kinds import build_sink
-    from .urls import parse_sink
-
     ep = parse_sink(spec)
     if ep.kind != "player":
         raise UsageError(f"--rig {spec}: expected player[://HOST:PORT] to take the rig from the SDK1 Player's "
