@@ -17,8 +17,16 @@ from ..layout import Layout, load_layout
 from ..motion import Motion
 from ..track import HapticTrack
 from . import packed
-from .kernel import render_frames
 from .params import DEFAULT_PRESET, METHODS, Params, alpha_at, get_preset
+
+
+def _kernel():
+    """The compiled frame loop, imported on first use: importing it loads numba (about 0.15 s), which every
+    command's start-up (``hapmotion --help``) would otherwise pay through the show's settings."""
+    from .kernel import render_frames
+
+    return render_frames
+
 
 _RENDER_IDX = np.array([JOINT_INDEX[n] for n in RENDER_JOINTS], dtype=np.intp)
 """Rows of the canonical 32 joints that the frame loop receives, in ``RENDER_JOINTS`` order."""
@@ -156,6 +164,7 @@ class Renderer:
         self._dbg_f = np.zeros((1, packed.N_DEBUG_F))
         self._dbg_i = np.zeros((1, packed.N_DEBUG_I), dtype=np.int8)
         self._frame = np.zeros((1, packed.N_RENDER_JOINTS, 3))
+        self._render_frames = _kernel()
 
     @property
     def actuators(self) -> tuple[str, ...]:
@@ -181,7 +190,7 @@ class Renderer:
         if f.shape != (32, 3):
             raise ValueError(f"frame must be (32, 3), got {f.shape}")
         self._frame[0] = f[_RENDER_IDX]
-        render_frames(self._frame, self._prm, self._surf, self._charts, self._mirror, self._state,
+        self._render_frames(self._frame, self._prm, self._surf, self._charts, self._mirror, self._state,
                         self._out, self._dbg_f, self._dbg_i)
         return self._out[0].copy()
 
@@ -203,7 +212,7 @@ class Renderer:
         out = np.zeros((n, self.layout.n_actuators))
         dbg_f = np.zeros((n, packed.N_DEBUG_F))
         dbg_i = np.zeros((n, packed.N_DEBUG_I), dtype=np.int8)
-        render_frames(joints, self._prm, self._surf, self._charts, self._mirror, self._state, out, dbg_f, dbg_i)
+        self._render_frames(joints, self._prm, self._surf, self._charts, self._mirror, self._state, out, dbg_f, dbg_i)
         return out, _debug_dict(dbg_f, dbg_i)
 
 
@@ -236,7 +245,7 @@ def render(
     for start in range(0, n, chunk):
         stop = min(n, start + chunk)
         joints = np.ascontiguousarray(motion.positions[start:stop, _RENDER_IDX, :], dtype=np.float64)
-        render_frames(joints, r._prm, r._surf, r._charts, r._mirror, r._state, intensities[start:stop],
+        r._render_frames(joints, r._prm, r._surf, r._charts, r._mirror, r._state, intensities[start:stop],
                       dbg_f[start:stop], dbg_i[start:stop])
         if progress is not None:
             progress(stop - start)
