@@ -39,16 +39,14 @@ def body_frames(motion) -> tuple[np.ndarray, np.ndarray]:
     Returns ``(origin (T, 3) world m, axes (T, 3, 3))`` where ``axes[t]`` rows are right, up, forward.
     Degenerate frames reuse the previous frame's axes.
     """
-    sl = np.ascontiguousarray(motion.joint("SHOULDER_LEFT"))
-    sr = np.ascontiguousarray(motion.joint("SHOULDER_RIGHT"))
-    pelvis = np.ascontiguousarray(motion.joint("PELVIS"))
-    neck = np.ascontiguousarray(motion.joint("NECK"))
-    origin = np.ascontiguousarray(motion.joint("SPINE_NAVEL"))
-    axes = np.empty((sl.shape[0], 3, 3))
+    # the joints' (T, 3) views go to the compiled pass as they are: copying the five of them first took longer than
+    # the pass itself
     from .frame_compiled import frames_kernel  # numba on first use: see the module docstring
 
-    frames_kernel(sl, sr, pelvis, neck, DEFAULT_AXES, axes)
-    return origin.copy(), axes
+    sl = motion.joint("SHOULDER_LEFT")
+    axes = np.empty((sl.shape[0], 3, 3))
+    frames_kernel(sl, motion.joint("SHOULDER_RIGHT"), motion.joint("PELVIS"), motion.joint("NECK"), DEFAULT_AXES, axes)
+    return np.array(motion.joint("SPINE_NAVEL"), dtype=np.float64, order="C"), axes
 
 
 def points_to_body(points: np.ndarray, origin: np.ndarray, axes: np.ndarray) -> np.ndarray:
