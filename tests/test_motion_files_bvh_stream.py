@@ -12,6 +12,7 @@ import pytest
 import hapmotion
 from hapmotion.errors import InputError
 from hapmotion.motion_files import bvh as bvh_mod
+from hapmotion.motion_files.bvh_kinematics import forward_kinematics
 from hapmotion.motion_files.bvh_text import channel_blocks, parse_bvh, read_head
 from hapmotion.motion_files.options import ReaderOptions
 from support.data import MOTION
@@ -76,10 +77,8 @@ def test_blocks_join_into_the_whole_file_table(block):
 def test_tpose_steps_equal_numpy_on_real_files():
     for path in (CMU, MOTION / "60_12_scaled.bvh"):
         bvh = whole_file_channels(path)
-        skel, mapping = bvh_mod.map_joints(bvh)
+        _, mapping = bvh_mod.map_joints(bvh)
         canon = list(mapping)
-        from hapmotion.motion_files.bvh_kinematics import forward_kinematics
-
         world = forward_kinematics(bvh, [bvh.index(mapping[c]) for c in canon])
         rel = world - world[:, canon.index("PELVIS")][:, None, :]
         expected = np.linalg.norm(np.diff(rel, axis=0), axis=2).max(axis=1)

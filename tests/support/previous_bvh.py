@@ -5,6 +5,7 @@ numpy arrays, and a copied Motion. Kept only so that tests can check the streami
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 
@@ -14,7 +15,7 @@ from hapmotion.motion_files.bvh import choose_scale, is_tpose, map_joints, stand
 from hapmotion.motion_files.bvh_kinematics import forward_kinematics
 from hapmotion.motion_files.bvh_text import BvhFile, read_head
 from hapmotion.motion_files.number_table import OK, parse_table
-from hapmotion.motion_files.options import ReaderOptions, snap_rate
+from hapmotion.motion_files.options import snap_rate
 from hapmotion.motion_files.up_axis import apply_up_axis, detect_up_axis
 from hapmotion.skeleton.derived import derive_missing
 from hapmotion.skeleton.joints import JOINT_INDEX, N_JOINTS
@@ -23,7 +24,7 @@ from hapmotion.skeleton.joints import JOINT_INDEX, N_JOINTS
 def whole_file_channels(path) -> BvhFile:
     """The channel table parsed from the whole file's bytes in one call (no blocks)."""
     head = read_head(path)
-    raw = open(path, "rb").read()
+    raw = Path(path).read_bytes()
     values, status, *_ = parse_table(np.frombuffer(raw, dtype=np.uint8, offset=head.data_start), head.n_frames,
                                      head.n_channels)
     assert status == OK
@@ -68,5 +69,3 @@ def read_bvh_previous(path, up: str | None = None):
         raise InputError(path, None, "no frames")
     return new_motion(positions, rate, source=path, derived=derived)
 
-
-__all__ = ["read_bvh_previous", "tpose_numpy", "whole_file_channels", "ReaderOptions"]

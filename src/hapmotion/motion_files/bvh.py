@@ -238,10 +238,11 @@ def largest_steps(world, cols, pelvis):
             dy = (world[t + 1, c, 1] - world[t + 1, pelvis, 1]) - (world[t, c, 1] - world[t, pelvis, 1])
             dz = (world[t + 1, c, 2] - world[t + 1, pelvis, 2]) - (world[t, c, 2] - world[t, pelvis, 2])
             d = np.sqrt((dx * dx + dy * dy) + dz * dz)
-            if d > best or d != d:  # NaN wins, as in numpy's max
+            if np.isnan(d):  # NaN wins, as in numpy's max
                 best = d
-                if d != d:
-                    break
+                break
+            if d > best:
+                best = d
         out[t] = best
     return out
 
