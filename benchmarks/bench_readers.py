@@ -68,8 +68,9 @@ def peak_rows(tmp: Path) -> None:
     n = long_bvh(DATA / "01_01.bvh", hour, 3600 * 120)
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1] / "src") + os.pathsep
            + os.environ.get("PYTHONPATH", "")}
-    small, _ = (float(v) for v in subprocess.run([sys.executable, "-c", PEAK_PROBE, str(DATA / "01_01.bvh")], env=env,
-                                                 capture_output=True, text=True, check=True).stdout.split())
+    for _ in range(2):  # the first run may compile (an edited source invalidates numba's cache); the second does not
+        small, _ = (float(v) for v in subprocess.run([sys.executable, "-c", PEAK_PROBE, str(DATA / "01_01.bvh")],
+                                                     env=env, capture_output=True, text=True, check=True).stdout.split())
     peak, result = (float(v) for v in subprocess.run([sys.executable, "-c", PEAK_PROBE, str(hour)], env=env,
                                                      capture_output=True, text=True, check=True).stdout.split())
     extra = peak - small - result
