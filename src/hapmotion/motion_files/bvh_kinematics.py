@@ -158,7 +158,8 @@ def fk_plan(joints: list[BvhJoint], wanted: list[int], columns: Optional[list[in
 def fk_into(plan: FkPlan, channels: np.ndarray, out: np.ndarray, t0: int = 0) -> None:
     """Positions (file units) of ``channels`` ((C, T) degrees and file units) into ``out[t0:t0 + T]`` ((N, W, 3)
     float64, C-ordered), in the columns of ``plan``; other columns are left as they are."""
-    _fk_kernel(np.ascontiguousarray(channels, dtype=np.float64), *plan.arrays, out, t0)
+    # a block's (C, n) slice of a wider table goes in as it is (numba reads it with its strides): no copy
+    _fk_kernel(np.asarray(channels, dtype=np.float64), *plan.arrays, out, t0)
     for k, first in plan.duplicates:
         out[t0:t0 + channels.shape[1], k] = out[t0:t0 + channels.shape[1], first]
 
