@@ -1,6 +1,7 @@
 """Start-up: what a user waits for before any work, each figure beside its target.
 
-    python -m benchmarks.bench_startup
+    python -m benchmarks.bench_startup            (--src DIR: the commands of another source tree, such as a checkout
+                                                   of an earlier commit, for before/after figures)
 
 Every figure is a fresh ``hapmotion`` process (``python -m hapmotion``, as the installed script runs it), best and
 median of 5 on this shared machine (the load average is printed):
@@ -15,6 +16,7 @@ median of 5 on this shared machine (the load average is printed):
 
 from __future__ import annotations
 
+import argparse
 import os
 import resource
 import statistics
@@ -54,7 +56,10 @@ def row(name: str, value: str, target: str, ok: bool | None) -> None:
 
 
 def main() -> None:
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src") + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--src", type=Path, default=ROOT / "src", help="source tree to start (default: this checkout's)")
+    src = ap.parse_args().src
+    env = {**os.environ, "PYTHONPATH": str(src) + os.pathsep + os.environ.get("PYTHONPATH", "")}
     print(f"start-up benchmark: {os.cpu_count()} cores shared with other work, load average "
           f"{os.getloadavg()[0]:.1f} at the start")
     subprocess.run(hapmotion_cmd("info", str(SMALL_BVH)), env=env, stdout=subprocess.DEVNULL, check=True)  # warm

@@ -10,9 +10,9 @@ three can be checked against the limits (:func:`hapmotion.limits.check_json_byte
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
 QUOTE, BACKSLASH, COMMA = 34, 92, 44  # '"', '\\', ','
@@ -41,7 +41,6 @@ class JsonShape:
         return CONTAINER_BYTES * self.containers + VALUE_BYTES * self.values
 
 
-@numba.njit(cache=True, nogil=True)
 def _scan(buf):
     depth = 0
     deepest = 0
@@ -87,8 +86,17 @@ def _scan(buf):
     return deepest, containers, commas, longest, longest_at
 
 
+@functools.cache
+def _compiled_scan():
+    """:func:`_scan` compiled by numba (cached on disk). numba is imported here, on first use: the limits import
+    this module, and every command's start-up (``hapmotion --help``) would otherwise pay about 0.15 s for it."""
+    import numba
+
+    return numba.njit(cache=True, nogil=True)(_scan)
+
+
 def scan_json(raw: bytes) -> JsonShape:
     """Nesting depth, value counts and longest number of JSON text ``raw`` (brackets and digits inside strings are
     not counted)."""
-    deepest, containers, commas, longest, longest_at = _scan(np.frombuffer(raw, dtype=np.uint8))
+    deepest, containers, commas, longest, longest_at = _compiled_scan()(np.frombuffer(raw, dtype=np.uint8))
     return JsonShape(int(deepest), int(containers), int(commas) + int(containers) + 1, int(longest), int(longest_at))

@@ -20,8 +20,10 @@ import soundfile as sf
 
 from ..errors import InputError
 
-BLOCK_FRAMES = 65536
-"""Frames read per block (1.5 s at 44.1 kHz; 1.5 MB for 6 channels of float32)."""
+BLOCK_FRAMES = 1 << 19
+"""Frames read per block (12 s at 44.1 kHz; 12 MB for 6 channels of float32). Every step of the analysis carries
+its state across blocks, so the block size changes no number; larger blocks spend less time per call (an hour at
+22.05 kHz is 150 blocks instead of 1,200, each with three filter calls)."""
 
 MIN_SAMPLE_RATE = 4000
 """Lowest sample rate the analysis supports: its anti-alias corner (1.8 kHz) must sit below Nyquist."""

@@ -10,8 +10,6 @@ from typing import Optional
 
 import click
 
-from ..live.sinks.ws_client import WebSocketClientSink
-
 
 class _StderrHandler(logging.StreamHandler):
     """Writes to whatever ``sys.stderr`` is at the time of the message (tests and embedders swap it)."""
@@ -48,6 +46,10 @@ def _not_pythonosc(record: logging.LogRecord) -> bool:
 def silent_devices(sinks) -> list:
     """The device sinks (the bHaptics Player links, SDK1 and SDK2) that never delivered a single frame: the Player
     was never reached, or it never confirmed reading what was written."""
+    # Imported here, not at the top: the live package loads the whole show (the audio analysis, scipy), which
+    # every command's start-up (``--help``, ``info``) would otherwise pay for; only a finished session needs it.
+    from ..live.sinks.ws_client import WebSocketClientSink
+
     return [s for s in sinks if isinstance(s, WebSocketClientSink) and s.stats.sent == 0]
 
 

@@ -12,6 +12,7 @@ import math
 import os
 from typing import Optional
 
+import numba
 import numpy as np
 
 from ..errors import InputError
@@ -20,19 +21,19 @@ from ..motion import Motion, new_motion
 from ..skeleton import naming as skeletons
 from ..skeleton.derived import derive_missing, missing_needed
 from ..skeleton.joints import JOINT_INDEX, JOINTS, N_JOINTS, PARENTS
-from .bvh_kinematics import forward_kinematics, rest_positions
-from .bvh_text import BvhFile, parse_bvh
+from .bvh_kinematics import fk_into, fk_plan, rest_positions
+from .bvh_text import BvhFile, BvhHead, channel_blocks, read_head
 from .joint_map import MAP_EXAMPLE, load_joint_map
 from .options import FPS_RANGE, ReaderOptions, fps_in_range, skip_count, snap_rate
 from .units import UNITS, resolve_scale
-from .up_axis import apply_up_axis, detect_up_axis
+from .up_axis import apply_up_axis, detect_up_axis, normalise_up
 
 # ----------------------------------------------------------------------------------------------------- mapping
 
 _NEEDED_HINT = "hands, shoulders and a pelvis (or hips)"
 
 
-def map_joints(bvh: BvhFile, user_map: Optional[dict[str, str]] = None,
+def map_joints(bvh: BvhFile | BvhHead, user_map: Optional[dict[str, str]] = None,
                map_source: str = "joint map") -> tuple[Optional[skeletons.Skeleton], dict[str, str]]:
     """(known skeleton or None, canonical name -> BVH joint name).
 
@@ -63,7 +64,7 @@ def map_joints(bvh: BvhFile, user_map: Optional[dict[str, str]] = None,
     return skel, mapping
 
 
-def unmatched_message(missing: list[str], bvh: BvhFile, mapping: dict[str, str]) -> str:
+def unmatched_message(missing: list[str], bvh: BvhFile | BvhHead, mapping: dict[str, str]) -> str:
     """A short explanation for a skeleton whose needed joints were not found: the joints, the closest candidates
     (at most three each, shortened) and how to write a joint map. Never lists the whole skeleton.
 
@@ -101,30 +102,37 @@ def read_bvh(path: str | os.PathLike[str], options: ReaderOptions = ReaderOption
     overrides the leading T-pose detection; ``fps`` overrides ``Frame Time``; ``up`` names the file's up axis
     (otherwise detected: :func:`~hapmotion.motion_files.up_axis.detect_up_axis`); ``joint_map`` names joints the
     automatic matching misses; ``limits`` bounds the sizes.
+
+    Memory stays near the size of the result, ``(T, 32, 3)`` float64: the MOTION rows are read a block at a time
+    (:func:`~.bvh_text.channel_blocks`) and each block's positions are computed straight into the result, which
+    every later step (up axis, units, derived joints) changes in place.
     """
     path = os.fspath(path)
     fps, up = options.fps, options.up
     user_map = load_joint_map(options.joint_map) if options.joint_map is not None else None
     map_source = os.fspath(options.joint_map) if isinstance(options.joint_map, (str, os.PathLike)) else "joint map"
-    bvh = parse_bvh(path, options.limits)
-    file_fps = 1.0 / bvh.frame_time  # inf for a subnormal Frame Time
+    head = read_head(path, options.limits)
+    file_fps = 1.0 / head.frame_time  # inf for a subnormal Frame Time
     if fps is None and not fps_in_range(file_fps):
-        raise InputError(path, f"line {bvh.frame_time_line}", f"expected 'Frame Time: <seconds>' giving {FPS_RANGE}, "
-                         f"found '{bvh.frame_time_text[:60]}' ({file_fps:.6g} fps)")
+        raise InputError(path, f"line {head.frame_time_line}", f"expected 'Frame Time: <seconds>' giving {FPS_RANGE}, "
+                         f"found '{head.frame_time_text[:60]}' ({file_fps:.6g} fps)")
     rate = fps if fps is not None else snap_rate(file_fps, 5e-4)  # Frame Time has ~5 digits
-    check_frames(path, f"line {bvh.frame_time_line}", bvh.n_frames, rate, options.limits)
-    skel, mapping = map_joints(bvh, user_map, map_source)
+    check_frames(path, f"line {head.frame_time_line}", head.n_frames, rate, options.limits)
+    skel, mapping = map_joints(head, user_map, map_source)
     notes: list[str] = []
 
     missing = missing_needed(mapping)
     if missing:
-        raise InputError(path, "joints " + ", ".join(missing), unmatched_message(missing, bvh, mapping))
+        raise InputError(path, "joints " + ", ".join(missing), unmatched_message(missing, head, mapping))
 
     canon = list(mapping)
-    wanted = [bvh.index(mapping[c]) for c in canon]
-    world = forward_kinematics(bvh, wanted)
+    cols = [JOINT_INDEX[c] for c in canon]
+    positions = np.full((head.n_frames, N_JOINTS, 3), np.nan)
+    plan = fk_plan(head.joints, [head.index(mapping[c]) for c in canon], cols)
+    for start, block in channel_blocks(head, options.limits):
+        fk_into(plan, block, positions, start)
     if up is None:
-        evidence = detect_up_axis(world, canon)
+        evidence = detect_up_axis(_columns(positions, cols, 2000), canon)
         up = evidence.axis
         up_text = f"{'+' if not up.startswith('-') else ''}{up.upper()} (detected: {evidence.reason})"
         if evidence.weak:
@@ -132,24 +140,25 @@ def read_bvh(path: str | os.PathLike[str], options: ReaderOptions = ReaderOption
                          f"{up_text.split(' ')[0]}, give the up option (--up) if that is wrong")
     else:
         up_text = f"{'+' if not up.startswith('-') else ''}{up.upper()} (option)"
-    world = apply_up_axis(world, up)
+    if (normalise_up(up) or "y") != "y":
+        for start in range(0, head.n_frames, _STEP_FRAMES):  # in place, a slice of frames at a time
+            part = positions[start:start + _STEP_FRAMES]
+            part[:, cols] = apply_up_axis(part[:, cols], up)
 
-    skip = skip_count(options.skip_frames, world.shape[0], path)
+    skip = skip_count(options.skip_frames, positions.shape[0], path)
     if skip is None:
-        skip = detect_tpose(world, canon)
+        skip = detect_tpose(positions, canon, columns=cols)
         if skip:
             notes.append(f"skipped {skip} leading T-pose frame{'s' if skip > 1 else ''} (frames 0-{skip - 1})"
                          if skip > 1 else "skipped the leading T-pose frame 0")
     elif skip:
         notes.append(f"skipped the first {skip} frames (option skip_frames)")
-    world = world[skip:]
+    positions = positions[skip:]
 
-    height_units = standing_height(world, canon)
+    height_units = standing_height(_columns(positions, cols, 2000), canon)
     metres, unit_text = choose_scale(height_units, skel, options.units, options.scale, path, notes)
-    world *= metres
+    positions *= metres
 
-    positions = np.full((world.shape[0], N_JOINTS, 3), np.nan)
-    positions[:, [JOINT_INDEX[c] for c in canon]] = world
     derived, derived_from = derive_missing(positions)
 
     if fps is not None:
@@ -157,9 +166,9 @@ def read_bvh(path: str | os.PathLike[str], options: ReaderOptions = ReaderOption
     if skel is not None:
         skeleton = skel.name
     elif user_map:
-        skeleton = f"BVH ({len(bvh.names)} joints, {len(user_map)} named by the joint map, the rest by name)"
+        skeleton = f"BVH ({len(head.names)} joints, {len(user_map)} named by the joint map, the rest by name)"
     else:
-        skeleton = f"generic BVH ({len(bvh.names)} joints, matched by name and position)"
+        skeleton = f"generic BVH ({len(head.names)} joints, matched by name and position)"
     meta = {
         "format": "BVH",
         "skeleton": skeleton,
@@ -169,37 +178,73 @@ def read_bvh(path: str | os.PathLike[str], options: ReaderOptions = ReaderOption
         "source_joints": {c: mapping[c] for c in JOINTS if c in mapping},
         "derived_from": derived_from,
         "skipped_frames": skip,
-        "frames_in_file": bvh.n_frames,
+        "frames_in_file": head.n_frames,
         "fps_in_file": file_fps,
-        "source_joints_available": bvh.names,
+        "source_joints_available": head.names,
         "notes": notes,
     }
-    return new_motion(positions, rate, source=path, derived=derived, meta=meta)
+    return new_motion(positions, rate, source=path, derived=derived, meta=meta, take=True)
+
+
+_STEP_FRAMES = 65536
+"""Frames changed at a time where a step needs a temporary copy (the up axis rotation): bounded memory."""
+
+
+def _columns(positions: np.ndarray, cols: list[int], max_frames: int) -> np.ndarray:
+    """``positions[::step][:, cols]`` with the step the up-axis and height estimates take for at most
+    ``max_frames`` frames (``T // max_frames``), so that they see the same frames as on the whole array, without
+    copying it."""
+    return positions[:: max(1, positions.shape[0] // max_frames)][:, cols]
 
 
 # ---------------------------------------------------------------------------------------------- T-pose, units
 
 
-def detect_tpose(world: np.ndarray, canon: list[str], max_lead: int = 12) -> int:
+def detect_tpose(world: np.ndarray, canon: list[str], max_lead: int = 12,
+                 columns: Optional[list[int]] = None) -> int:
     """Number of artificial leading frames: frame 0 is a T-pose and the motion jumps out of it.
 
-    ``world`` is ``(T, K, 3)`` with columns named by ``canon``. Frame 0 must look like a T-pose
+    ``world`` is ``(T, K, 3)`` with columns named by ``canon`` (or, given ``columns``, ``world[:, columns[k]]`` is
+    ``canon[k]``). Frame 0 must look like a T-pose
     (:func:`is_tpose`). The leading frames are then the run of transitions from frame 0 whose pose change (largest
     pelvis-relative joint displacement between two frames) exceeds the 99th percentile of the clip's later
     transitions: faster than anything the performer does afterwards. cgspeed CMU files give 1 (frame 0 jumps to
     frame 1), the rescaled salsa file 4 (its T-pose blends into the motion over frames 0-3), the Bandai files 0.
     Returns 0 when nothing fits.
     """
-    idx = {c: k for k, c in enumerate(canon)}
+    columns = list(range(len(canon))) if columns is None else columns
+    idx = {c: columns[k] for k, c in enumerate(canon)}
     if "PELVIS" not in idx or world.shape[0] < 4 * max_lead or not is_tpose(world[0], idx):
         return 0
-    rel = world - world[:, idx["PELVIS"]][:, None, :]
-    step = np.linalg.norm(np.diff(rel, axis=0), axis=2).max(axis=1)  # (T-1,)
+    step = largest_steps(world, np.array(columns, dtype=np.int64), idx["PELVIS"])  # (T-1,)
     natural = np.percentile(step[max_lead:], 99)
     run = 0
     while run < max_lead and step[run] > natural:
         run += 1
     return run
+
+
+@numba.njit(cache=True, nogil=True)
+def largest_steps(world, cols, pelvis):
+    """``(T-1,)`` the largest change of a joint's position relative to the pelvis between consecutive frames, over
+    the columns ``cols`` of ``world`` ((T, J, 3)). Equals ``norm(diff(world[:, cols] - pelvis), axis=2).max(1)``
+    number for number (numpy sums the three squares in the same order) without its four ``(T, K, 3)`` copies."""
+    n = world.shape[0]
+    out = np.empty(max(n - 1, 0))
+    for t in range(n - 1):
+        best = -np.inf
+        for c in cols:
+            dx = (world[t + 1, c, 0] - world[t + 1, pelvis, 0]) - (world[t, c, 0] - world[t, pelvis, 0])
+            dy = (world[t + 1, c, 1] - world[t + 1, pelvis, 1]) - (world[t, c, 1] - world[t, pelvis, 1])
+            dz = (world[t + 1, c, 2] - world[t + 1, pelvis, 2]) - (world[t, c, 2] - world[t, pelvis, 2])
+            d = np.sqrt((dx * dx + dy * dy) + dz * dz)
+            if np.isnan(d):  # NaN wins, as in numpy's max
+                best = d
+                break
+            if d > best:
+                best = d
+        out[t] = best
+    return out
 
 
 def is_tpose(frame: np.ndarray, idx: dict[str, int]) -> bool:

@@ -15,6 +15,7 @@ Conventions (the Biovision format as the CMU, Daz and Bandai Namco exports write
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Optional
 
 import numba
@@ -44,8 +45,8 @@ def position_columns(joint: BvhJoint) -> list[int]:
 
 
 @numba.njit(cache=True, nogil=True)
-def _fk_kernel(channels, parent, offset, pos_col, rot_start, rot_col, rot_axis, need_rot, out_slot, out):
-    """World positions of a chain of joints, frame by frame, into ``out`` ((T, W, 3)).
+def _fk_kernel(channels, parent, offset, pos_col, rot_start, rot_col, rot_axis, need_rot, out_slot, out, t0):
+    """World positions of a chain of joints, frame by frame, into ``out[t0:t0 + T]`` ((T', W, 3)).
 
     Joints are numbered 0..J-1 parents-first: ``parent`` (J,) (-1 = root), ``offset`` (J, 3), ``pos_col`` (J, 3)
     (position channel replacing the OFFSET component, -1 = none), rotation channels ``rot_col`` / ``rot_axis``
@@ -84,7 +85,7 @@ def _fk_kernel(channels, parent, offset, pos_col, rot_start, rot_col, rot_axis, 
                 v0, v1, v2 = pos[p, 0] + v0, pos[p, 1] + v1, pos[p, 2] + v2
             pos[j, 0], pos[j, 1], pos[j, 2] = v0, v1, v2
             if out_slot[j] >= 0:
-                out[t, out_slot[j], 0], out[t, out_slot[j], 1], out[t, out_slot[j], 2] = v0, v1, v2
+                out[t0 + t, out_slot[j], 0], out[t0 + t, out_slot[j], 1], out[t0 + t, out_slot[j], 2] = v0, v1, v2
             if need_rot[j]:
                 for r in range(rot_start[j], rot_start[j + 1]):
                     h = channels[rot_col[r], t] * half_angle
@@ -110,14 +111,21 @@ def _fk_kernel(channels, parent, offset, pos_col, rot_start, rot_col, rot_axis, 
                     rot[j, 0], rot[j, 1], rot[j, 2], rot[j, 3] = w, x, y, z
 
 
-def forward_kinematics(bvh: BvhFile, wanted: list[int], channels: Optional[np.ndarray] = None) -> np.ndarray:
-    """World positions ``(T, len(wanted), 3)`` (file units) of the joints ``wanted`` (indices into ``bvh.joints``).
+@dataclass(frozen=True)
+class FkPlan:
+    """The compiled pass's tables for some wanted joints of a hierarchy (:func:`fk_plan`): the chain of joints to
+    compute (the wanted ones and their ancestors, parents first) and the ``out`` column of each wanted one."""
 
-    ``channels`` ((C, T), default ``bvh.channels``) may be a frame slice. Only the wanted joints and their
-    ancestors are computed (rotations only for ancestors), so fingers and toes cost nothing when unused.
-    """
-    channels = bvh.channels if channels is None else channels
-    joints = bvh.joints
+    arrays: tuple  # parent, offset, pos_col, rot_start, rot_col, rot_axis, need_rot, out_slot (see _fk_kernel)
+    duplicates: tuple  # (column, column it copies): a joint wanted in two columns is computed once
+
+
+def fk_plan(joints: list[BvhJoint], wanted: list[int], columns: Optional[list[int]] = None) -> FkPlan:
+    """Tables for the positions of ``joints[wanted[k]]`` into column ``columns[k]`` of the output (default ``k``).
+
+    Only the wanted joints and their ancestors are computed (rotations only for ancestors), so fingers and toes
+    cost nothing when unused."""
+    columns = list(range(len(wanted))) if columns is None else columns
     need_pos: set[int] = set()
     need_rot: set[int] = set()
     for j in wanted:
@@ -131,23 +139,40 @@ def forward_kinematics(bvh: BvhFile, wanted: list[int], channels: Optional[np.nd
     slot = {j: i for i, j in enumerate(chain)}
     rots = [rotation_columns(joints[j]) if j in need_rot else [] for j in chain]
     out_slot = np.full(len(chain), -1, dtype=np.int64)
-    out = np.empty((channels.shape[1], len(wanted), 3))
     duplicates = []
     for k, j in enumerate(wanted):
         if out_slot[slot[j]] < 0:
-            out_slot[slot[j]] = k
+            out_slot[slot[j]] = columns[k]
         else:  # the same joint wanted twice: copied after the pass
-            duplicates.append((k, int(out_slot[slot[j]])))
-    _fk_kernel(np.ascontiguousarray(channels, dtype=np.float64),
-               np.array([slot[joints[j].parent] if joints[j].parent >= 0 else -1 for j in chain], dtype=np.int64),
-               np.array([[float(v) for v in joints[j].offset] for j in chain], dtype=np.float64).reshape(-1, 3),
-               np.array([position_columns(joints[j]) for j in chain], dtype=np.int64).reshape(-1, 3),
-               np.cumsum([0] + [len(r) for r in rots]).astype(np.int64),
-               np.array([c for r in rots for c, _ in r], dtype=np.int64),
-               np.array([a for r in rots for _, a in r], dtype=np.int64),
-               np.array([j in need_rot for j in chain], dtype=np.bool_), out_slot, out)
-    for k, first in duplicates:
-        out[:, k] = out[:, first]
+            duplicates.append((columns[k], int(out_slot[slot[j]])))
+    arrays = (np.array([slot[joints[j].parent] if joints[j].parent >= 0 else -1 for j in chain], dtype=np.int64),
+              np.array([[float(v) for v in joints[j].offset] for j in chain], dtype=np.float64).reshape(-1, 3),
+              np.array([position_columns(joints[j]) for j in chain], dtype=np.int64).reshape(-1, 3),
+              np.cumsum([0] + [len(r) for r in rots]).astype(np.int64),
+              np.array([c for r in rots for c, _ in r], dtype=np.int64),
+              np.array([a for r in rots for _, a in r], dtype=np.int64),
+              np.array([j in need_rot for j in chain], dtype=np.bool_), out_slot)
+    return FkPlan(arrays, tuple(duplicates))
+
+
+def fk_into(plan: FkPlan, channels: np.ndarray, out: np.ndarray, t0: int = 0) -> None:
+    """Positions (file units) of ``channels`` ((C, T) degrees and file units) into ``out[t0:t0 + T]`` ((N, W, 3)
+    float64, C-ordered), in the columns of ``plan``; other columns are left as they are."""
+    # a block's (C, n) slice of a wider table goes in as it is (numba reads it with its strides): no copy
+    _fk_kernel(np.asarray(channels, dtype=np.float64), *plan.arrays, out, t0)
+    for k, first in plan.duplicates:
+        out[t0:t0 + channels.shape[1], k] = out[t0:t0 + channels.shape[1], first]
+
+
+def forward_kinematics(bvh: BvhFile, wanted: list[int], channels: Optional[np.ndarray] = None) -> np.ndarray:
+    """World positions ``(T, len(wanted), 3)`` (file units) of the joints ``wanted`` (indices into ``bvh.joints``).
+
+    ``channels`` ((C, T), default ``bvh.channels``) may be a frame slice. Only the wanted joints and their
+    ancestors are computed (rotations only for ancestors), so fingers and toes cost nothing when unused.
+    """
+    channels = bvh.channels if channels is None else channels
+    out = np.empty((channels.shape[1], len(wanted), 3))
+    fk_into(fk_plan(bvh.joints, wanted), channels, out)
     return out
 
 

@@ -20,8 +20,8 @@ from typing import Iterator, Optional
 import numpy as np
 
 from ..errors import InputError
-from ..limits import DEFAULT_LIMITS, InputLimits, check_frames, over_limit, read_bytes
-from .number_table import BAD_TOKEN, EXTRA_ROWS, OK, TRUNCATED, WRONG_COUNT, parse_table
+from ..limits import DEFAULT_LIMITS, InputLimits, check_file_size, check_frames, over_limit
+from .number_table import BAD_TOKEN, EXTRA_ROWS, OK, TRUNCATED, WRONG_COUNT, parse_block
 
 AXES = "XYZ"
 """The axis letters of channel names, in the order of the position and offset components."""
@@ -41,8 +41,45 @@ class BvhJoint:
     end_site: bool = False
 
 
+class _Hierarchy:
+    """What every parsed part of a BVH file answers about its joints (``joints`` is a list of :class:`BvhJoint`)."""
+
+    joints: list[BvhJoint]
+
+    @property
+    def names(self) -> list[str]:
+        """Names of the real joints (End Sites excluded), in file order."""
+        return [j.name for j in self.joints if not j.end_site]
+
+    @property
+    def n_channels(self) -> int:
+        return sum(len(j.channels) for j in self.joints)
+
+    def index(self, name: str) -> int:
+        for i, j in enumerate(self.joints):
+            if j.name == name:
+                return i
+        raise KeyError(name)
+
+
 @dataclass
-class BvhFile:
+class BvhHead(_Hierarchy):
+    """A BVH file up to its MOTION rows: the hierarchy, the declared frame count and frame time, and where the rows
+    start (:func:`read_head`); :func:`channel_blocks` then reads the rows a block at a time."""
+
+    path: str
+    joints: list[BvhJoint]
+    frame_time: float
+    n_frames: int  # as declared by "Frames:", checked against the limits and the file's size
+    motion_line: int  # 1-based line of the first MOTION data row
+    frame_time_line: int
+    frame_time_text: str
+    frames_line: int  # 1-based line of "Frames:"
+    data_start: int  # byte offset of the first MOTION data row
+
+
+@dataclass
+class BvhFile(_Hierarchy):
     """A parsed BVH file: hierarchy and raw channel values.
 
     ``channels`` is ``(C, T)`` float64 (one contiguous row per channel, C = total channels), in file units and
@@ -68,17 +105,6 @@ class BvhFile:
     @property
     def n_channels(self) -> int:
         return self.channels.shape[0]
-
-    @property
-    def names(self) -> list[str]:
-        """Names of the real joints (End Sites excluded), in file order."""
-        return [j.name for j in self.joints if not j.end_site]
-
-    def index(self, name: str) -> int:
-        for i, j in enumerate(self.joints):
-            if j.name == name:
-                return i
-        raise KeyError(name)
 
 
 # ------------------------------------------------------------------------------------------------------ parsing
@@ -206,14 +232,41 @@ _FRAMES = re.compile(r"^\s*Frames\s*:\s*(\S+)\s*$", re.I)
 _FRAME_TIME = re.compile(r"^\s*Frame\s+Time\s*:\s*(\S+)\s*$", re.I)
 
 
-def parse_bvh(path: str | os.PathLike[str], limits: InputLimits = DEFAULT_LIMITS) -> BvhFile:
-    """Parse a BVH file into its hierarchy and its ``(T, C)`` channel values. Raises :class:`InputError`.
+BLOCK_BYTES = 8 << 20
+"""Bytes of MOTION rows read and parsed at a time: the reader holds one block of text and its numbers, never the
+whole file (an hour of 120 fps motion is 320-570 MB of text)."""
+
+
+def read_head(path: str | os.PathLike[str], limits: InputLimits = DEFAULT_LIMITS) -> BvhHead:
+    """Read and check a BVH file up to its first MOTION row. Raises :class:`InputError`.
 
     Sizes are checked before anything is allocated: the file size, the joint count and nesting depth, and the
     ``Frames:`` count against ``limits`` and against what the file's bytes can hold."""
     path = os.fspath(path)
-    raw = read_bytes(path, limits)
-    m = _MOTION.search(raw)
+    check_file_size(path, limits)
+    try:
+        with open(path, "rb") as f:
+            size = os.fstat(f.fileno()).st_size
+            raw, m = _read_to_motion(f, limits)
+            return _head(path, raw, m, size, f, limits)
+    except OSError as err:
+        raise InputError(path, None, f"cannot read the file ({err.strerror or err})") from None
+
+
+def _read_to_motion(f, limits: InputLimits) -> tuple[bytes, Optional[re.Match]]:
+    """The file's first bytes, up to and including the MOTION line, and that line's match (None: there is none,
+    and ``raw`` is then the whole file). Reads 1 MB at a time; only whole lines are searched until the end."""
+    raw = b""
+    while True:
+        piece = f.read(1 << 20)
+        raw += piece
+        end = len(raw) if not piece else raw.rfind(b"\n") + 1
+        m = _MOTION.search(raw, 0, end)
+        if m is not None or not piece or len(raw) > limits.file_bytes:
+            return raw, m
+
+
+def _head(path: str, raw: bytes, m: Optional[re.Match], size: int, f, limits: InputLimits) -> BvhHead:
     if m is None:
         n_lines = raw.count(b"\n") + 1
         raise InputError(path, f"line {n_lines}", "expected a MOTION line after the HIERARCHY, found none")
@@ -228,6 +281,11 @@ def parse_bvh(path: str | os.PathLike[str], limits: InputLimits = DEFAULT_LIMITS
     line_no = motion_line
     while len(lines) < 2:
         start = pos + 1
+        while pos >= 0 and raw.find(b"\n", start) < 0:  # the line is not all read yet
+            piece = f.read(1 << 20)
+            if not piece:
+                break
+            raw += piece
         if pos < 0 or start >= len(raw):
             raise InputError(path, f"line {line_no + 1}",
                              f"expected a '{'Frame Time' if lines else 'Frames'}:' line, found the end of the file")
@@ -252,7 +310,7 @@ def parse_bvh(path: str | os.PathLike[str], limits: InputLimits = DEFAULT_LIMITS
     if n_channels:
         # Every value takes at least one digit and one separator, so the bytes after "Frame Time:" bound the
         # frame count; checking it first keeps a corrupt "Frames:" from allocating (n_channels, n_frames) floats.
-        most = max(0, len(raw) - data_start) // (2 * n_channels) + 1
+        most = max(0, min(size, limits.file_bytes + 1) - data_start) // (2 * n_channels) + 1
         if n_frames > most:
             raise InputError(path, f"line {frames_line}", f"Frames: says {n_frames} but the file holds at most "
                              f"{most} frames: truncated?")
@@ -262,24 +320,93 @@ def parse_bvh(path: str | os.PathLike[str], limits: InputLimits = DEFAULT_LIMITS
     if frame_time is None or not (frame_time > 0 and math.isfinite(frame_time)):
         raise InputError(path, f"line {time_line}",
                          f"expected 'Frame Time: <seconds>' with a positive number, found '{time_text.strip()[:60]}'")
-    first_data_line = time_line + 1
-    buf = np.frombuffer(raw, dtype=np.uint8, offset=min(data_start, len(raw)))
-    values, status, row, line, found, token = parse_table(buf, n_frames, n_channels)
-    at = f"line {first_data_line + line}"
-    if status == WRONG_COUNT:
-        raise InputError(path, at, f"expected {n_channels} channel values, found {found}")
-    if status == BAD_TOKEN:
-        low = token.lower().lstrip("+-")
-        kind = "a finite number" if low in ("nan", "inf", "infinity") or _is_float(token) else "a number"
-        raise InputError(path, at, f"expected {kind} as channel value {found + 1} of frame {row}, found '{token}'")
-    if status == EXTRA_ROWS:
-        raise InputError(path, at, f"expected {n_frames} frames (Frames: on line {frames_line}), found more")
-    if status == TRUNCATED:
-        raise InputError(path, at, f"expected {n_frames} frames (Frames: on line {frames_line}), found {row}: "
-                         "the file looks truncated")
-    assert status == OK, status
-    return BvhFile(path=path, joints=joints, frame_time=frame_time, channels=values, motion_line=first_data_line,
-                   frame_time_line=time_line, frame_time_text=time_text.strip())
+    return BvhHead(path=path, joints=joints, frame_time=frame_time, n_frames=n_frames, motion_line=time_line + 1,
+                   frame_time_line=time_line, frame_time_text=time_text.strip(), frames_line=frames_line,
+                   data_start=data_start)
+
+
+def channel_blocks(head: BvhHead, limits: InputLimits = DEFAULT_LIMITS,
+                   block_bytes: int = BLOCK_BYTES) -> Iterator[tuple[int, np.ndarray]]:
+    """The MOTION rows of ``head``'s file, a block at a time: ``(first frame, values (C, n) float64)``, in file
+    units and degrees (the array is only valid until the next block is asked for).
+
+    Raises :class:`InputError` naming the line of the first problem: a row with the wrong number of values, a value
+    that is not a finite number, more rows than ``Frames:`` says, or fewer (a truncated file). Memory: one block of
+    text and its numbers, whatever the file's length."""
+    n_cols = head.n_channels
+    n_frames = head.n_frames
+    done = 0  # rows read
+    lines = 0  # lines read (0-based line index of the next block's first line, from the first data row)
+    inf_error: Optional[InputError] = None  # a value that overflows to inf: reported if nothing else is wrong first
+    try:
+        f = open(head.path, "rb")
+    except OSError as err:
+        raise InputError(head.path, None, f"cannot read the file ({err.strerror or err})") from None
+    with f:
+        f.seek(head.data_start)
+        budget = max(0, limits.file_bytes + 1 - head.data_start)  # the file may have grown since its size was checked
+        carry = b""
+        while True:
+            piece = f.read(min(block_bytes, budget))
+            budget -= len(piece)
+            text = carry + piece
+            last = len(text) if not piece else text.rfind(b"\n") + 1
+            if piece and last == 0:  # not one whole line yet
+                carry = text
+                continue
+            carry = text[last:]
+            buf = np.frombuffer(text, dtype=np.uint8, count=last)
+            # a block holds at most one row a line (and every value takes a digit and a separator)
+            rows_here = min(text.count(b"\n", 0, last) + 1, last // (2 * n_cols) + 1) if n_cols and piece \
+                else n_frames
+            values, status, row, line, found, token, hard_inf = parse_block(buf, min(rows_here, n_frames - done),
+                                                                            n_cols)
+            if hard_inf is not None and inf_error is None:
+                r, c, bad_line, tok = hard_inf
+                inf_error = _token_error(head, head.motion_line + lines + bad_line, done + r, c, tok)
+            if status == OK or status == TRUNCATED and piece:
+                n = row
+                if inf_error is None and n:
+                    yield done, values[:, :n]
+                done += n
+                lines += line
+                if not piece:
+                    break
+                continue
+            at_line = head.motion_line + lines + line
+            if status == TRUNCATED:  # the end of the file
+                raise InputError(head.path, f"line {at_line}", f"expected {n_frames} frames (Frames: on line "
+                                 f"{head.frames_line}), found {done + row}: the file looks truncated")
+            if status == WRONG_COUNT:
+                raise InputError(head.path, f"line {at_line}", f"expected {n_cols} channel values, found {found}")
+            if status == BAD_TOKEN:
+                raise _token_error(head, at_line, done + row, found, token)
+            assert status == EXTRA_ROWS, status
+            raise InputError(head.path, f"line {at_line}", f"expected {n_frames} frames (Frames: on line "
+                             f"{head.frames_line}), found more")
+    if inf_error is not None:
+        raise inf_error
+
+
+def _token_error(head: BvhHead, line: int, row: int, col: int, token: str) -> InputError:
+    low = token.lower().lstrip("+-")
+    kind = "a finite number" if low in ("nan", "inf", "infinity") or _is_float(token) else "a number"
+    return InputError(head.path, f"line {line}", f"expected {kind} as channel value {col + 1} of frame {row}, "
+                      f"found '{token}'")
+
+
+def parse_bvh(path: str | os.PathLike[str], limits: InputLimits = DEFAULT_LIMITS) -> BvhFile:
+    """Parse a BVH file into its hierarchy and its ``(C, T)`` channel values. Raises :class:`InputError`.
+
+    Sizes are checked before anything is allocated: the file size, the joint count and nesting depth, and the
+    ``Frames:`` count against ``limits`` and against what the file's bytes can hold."""
+    head = read_head(path, limits)
+    values = np.empty((head.n_channels, head.n_frames), dtype=np.float64)
+    for start, block in channel_blocks(head, limits):
+        values[:, start:start + block.shape[1]] = block
+    return BvhFile(path=head.path, joints=head.joints, frame_time=head.frame_time, channels=values,
+                   motion_line=head.motion_line, frame_time_line=head.frame_time_line,
+                   frame_time_text=head.frame_time_text)
 
 
 def _is_float(text: str) -> bool:

@@ -163,13 +163,7 @@ def parse_rows(buf, n_rows, n_cols, out, hard):
     return OK, row, line, 0, 0, 0, n_hard
 
 
-def parse_table(buf: np.ndarray, n_rows: int, n_cols: int):
-    """Parse ``n_rows`` whitespace-separated rows of ``n_cols`` numbers from ``buf`` (uint8).
-
-    Returns ``(values, status, row, line, found, token)``: ``values`` ((n_cols, n_rows) float64, one row per
-    column of the text) is complete when ``status == OK``; otherwise ``row``/``line`` (0-based, within ``buf``),
-    ``found`` and ``token`` locate the first problem.
-    """
+def _parse(buf: np.ndarray, n_rows: int, n_cols: int):
     out = np.empty((n_cols, n_rows), dtype=np.float64)
     cap = 1024
     while True:
@@ -179,11 +173,42 @@ def parse_table(buf: np.ndarray, n_rows: int, n_cols: int):
             break
         cap *= 16
     token = bytes(buf[start:stop]).decode("utf-8", "replace") if stop > start else ""
+    return out, int(status), int(row), int(line), int(found), token, hard[:n_hard]
+
+
+def _convert_hard(buf: np.ndarray, out: np.ndarray, hard: np.ndarray):
+    """Convert the tokens ``hard`` left for ``float()`` into ``out``; the first one that is not finite ("1e999"
+    overflows to inf) stops it and comes back as ``(row, col, line, token)``, else None."""
+    for r, c, a, b in hard:
+        value = float(bytes(buf[a:b]))
+        if not math.isfinite(value):
+            bad_line = int(np.count_nonzero(buf[:a] == 10))
+            return int(r), int(c), bad_line, bytes(buf[a:b]).decode("ascii", "replace")
+        out[c, r] = value
+    return None
+
+
+def parse_table(buf: np.ndarray, n_rows: int, n_cols: int):
+    """Parse ``n_rows`` whitespace-separated rows of ``n_cols`` numbers from ``buf`` (uint8).
+
+    Returns ``(values, status, row, line, found, token)``: ``values`` ((n_cols, n_rows) float64, one row per
+    column of the text) is complete when ``status == OK``; otherwise ``row``/``line`` (0-based, within ``buf``),
+    ``found`` and ``token`` locate the first problem.
+    """
+    out, status, row, line, found, token, hard = _parse(buf, n_rows, n_cols)
     if status == OK:
-        for r, c, a, b in hard[:n_hard]:
-            value = float(bytes(buf[a:b]))
-            if not math.isfinite(value):  # "1e999" overflows to inf
-                bad_line = int(np.count_nonzero(buf[:a] == 10))
-                return out, BAD_TOKEN, int(r), bad_line, int(c), bytes(buf[a:b]).decode("ascii", "replace")
-            out[c, r] = value
-    return out, int(status), int(row), int(line), int(found), token
+        bad = _convert_hard(buf, out, hard)
+        if bad is not None:
+            r, c, bad_line, tok = bad
+            return out, BAD_TOKEN, r, bad_line, c, tok
+    return out, status, row, line, found, token
+
+
+def parse_block(buf: np.ndarray, n_rows: int, n_cols: int):
+    """:func:`parse_table` of one block of a longer text: ``TRUNCATED`` (the text ended before ``n_rows`` rows)
+    then means "``row`` rows read, the next block goes on", and a value that overflows to inf does not stop the
+    block. Returns ``(values, status, row, line, found, token, inf)`` where ``inf`` is ``(row, col, line, token)``
+    of the first such value, or None (``values`` is then complete for the rows read)."""
+    out, status, row, line, found, token, hard = _parse(buf, n_rows, n_cols)
+    inf = _convert_hard(buf, out, hard) if status in (OK, TRUNCATED) else None
+    return out, status, row, line, found, token, inf

@@ -20,12 +20,12 @@ frame by frame gives identical numbers: both run the same compiled loop.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from ..errors import UsageError
 
@@ -71,7 +71,6 @@ def new_state(n_actuators: int) -> np.ndarray:
     return np.zeros(int(n_actuators))
 
 
-@njit(cache=True)
 def _limit(rows, gain, max_level, max_duty, alpha, state, out):
     n_frames, n = rows.shape
     for t in range(n_frames):
@@ -88,6 +87,16 @@ def _limit(rows, gain, max_level, max_duty, alpha, state, out):
                     x = max(room, 0.0) * 100.0
             state[i] = avg + alpha * (x / 100.0 - avg)
             out[t, i] = x
+
+
+@functools.cache
+def _compiled_limit():
+    """:func:`_limit` compiled by numba (cached on disk like every kernel). numba is imported here, on first use,
+    not with the module: the show's settings import this module, and importing numba would cost every command's
+    start-up (``hapmotion --help``) about 0.15 s."""
+    from numba import njit
+
+    return njit(cache=True)(_limit)
 
 
 def limit_rows(rows: np.ndarray, comfort: Comfort, fps: float, state: np.ndarray | None = None
@@ -110,7 +119,7 @@ def limit_rows(rows: np.ndarray, comfort: Comfort, fps: float, state: np.ndarray
         raise ValueError(f"state {st.shape} does not fit {block.shape[1]} actuators")
     alpha = 1.0 - math.exp(-1.0 / (fps * comfort.window_s))
     out = np.empty_like(block)
-    _limit(block, float(comfort.gain), float(comfort.max_level), float(comfort.max_duty), alpha, st, out)
+    _compiled_limit()(block, float(comfort.gain), float(comfort.max_level), float(comfort.max_duty), alpha, st, out)
     return (out[0] if one else out), st
 
 
