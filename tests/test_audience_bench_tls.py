@@ -41,8 +41,16 @@ def test_the_secure_benchmark_server_refuses_a_plain_client(venue):
     async def plain():
         return await bench.open_light_connection(server.url, 1, [], {}, venue=None)
 
-    with socket.create_connection(("127.0.0.1", server.port), timeout=10) as sock:
-        info = bench._read_info(sock)
+    async def info_of_server():
+        sock = socket.socket()
+        sock.setblocking(False)
+        try:
+            await asyncio.get_running_loop().sock_connect(sock, ("127.0.0.1", server.port))
+            return await bench._read_info(sock)
+        finally:
+            sock.close()
+
+    info = asyncio.run(asyncio.wait_for(info_of_server(), 30))
     assert info["tls_required"] is True and info["auth_required"] is True
     # the plain CONNECT is taken for a failed TLS handshake: the connection is closed before any answer
     with pytest.raises(ConnectionError, match="closed by the server"):
