@@ -25,6 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:  # the benchmarks package lives beside tests/ (python -m pytest puts it there too)
     sys.path.insert(0, str(ROOT))
 from benchmarks import bench_audience as bench  # noqa: E402
+from benchmarks import bench_audience_load as load  # noqa: E402
 
 
 @pytest.fixture
@@ -39,14 +40,14 @@ def test_the_secure_benchmark_server_refuses_a_plain_client(venue):
     folder, server = venue
 
     async def plain():
-        return await bench.open_light_connection(server.url, 1, [], {}, venue=None)
+        return await load.open_light_connection(server.url, 1, [], {}, venue=None)
 
     async def info_of_server():
         sock = socket.socket()
         sock.setblocking(False)
         try:
             await asyncio.get_running_loop().sock_connect(sock, ("127.0.0.1", server.port))
-            return await bench._read_info(sock)
+            return await load.read_info(sock)
         finally:
             sock.close()
 
@@ -63,14 +64,14 @@ def test_the_load_generator_speaks_tls_with_the_seat_nkey_and_receives_signed_fr
 
     async def scenario():
         ages, marks = [], {"on": True}
-        conn = await bench.open_light_connection(tls_url, 2, ages, marks, venue=str(folder))
+        conn = await load.open_light_connection(tls_url, 2, ages, marks, venue=str(folder))
         ssl_object = conn.transport.get_extra_info("ssl_object")
         nc = await connect(server.url, name="test venue", auth=NatsAuth(nkey=str(folder / "venue.nk"),
                                                                           ca=str(folder / "ca.pem")))
         try:
-            signer = VenueSigner(bench.SHOW, load_private_key(folder / "venue.key"))
+            signer = VenueSigner(load.SHOW, load_private_key(folder / "venue.key"))
             frame = signer.seal("frame", encode_frame(7, 3, 0.05, 1.0e9, np.zeros((32, 3)), None))
-            await nc.publish(subject(bench.SHOW, "frame"), frame)
+            await nc.publish(subject(load.SHOW, "frame"), frame)
             await nc.flush()
             for _ in range(200):
                 if conn.count >= 2:
@@ -96,7 +97,7 @@ def test_the_load_generator_refuses_a_server_certificate_of_another_ca(venue, tm
     (folder / "ca.pem").write_bytes(Path(stranger["ca"]).read_bytes())  # the generator now trusts another CA
 
     async def attempt():
-        return await bench.open_light_connection(server.url.replace("nats://", "tls://"), 1, [], {},
+        return await load.open_light_connection(server.url.replace("nats://", "tls://"), 1, [], {},
                                                  venue=str(folder))
 
     with pytest.raises(ssl.SSLCertVerificationError):

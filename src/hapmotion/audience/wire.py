@@ -23,6 +23,10 @@ Subjects for a show ``SHOW`` (letters, digits, ``-`` and ``_``)::
     32     12*n_joints   skeleton (n_joints, 3) float32 metres, +Y up, canonical joint order; NaN = not tracked
     ...    4*n_music     the music's haptic row (N,) float32, 0..100, in the description's actuator order
 
+Version 2, the compact frame (the renderer's joints, the music as a palette), is :mod:`hapmotion.audience.compact`;
+a description of such a show, or of one published below its render rate, has version 2 and a ``frames`` object
+(``ShowDescription.frame_version``, ``frame_joints``, ``rate``).
+
 float32 because a frame goes to every seat 60 times a second: 384 bytes of skeleton instead of 768 for float64
 (and a fraction of JSON's size), while float32 resolves about 1 micrometre at 10 m, a thousand times finer than
 a body tracker's millimetre noise; the music's intensities (0..100) reach the Player as whole percents.
