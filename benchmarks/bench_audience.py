@@ -23,8 +23,8 @@ nats://127.0.0.1:PORT/bench`` on the first server), the light subscribers (by de
 subscriber, as every real seat has its own; with three servers spread evenly over them; read in bulk: see
 ``bench_audience_load.LightConnection``; frame age = arrival wall time minus the publisher's wall stamp; messages
 delivered against frames sent x N = loss), and the full seats (``hapmotion.audience.listen``, each rendering to
-its own fake bHaptics Player; frame age = the moment the encoded frame is written to the Player's socket minus the publisher's stamp of
-that frame's media time, delay 0).
+its own fake bHaptics Player; frame age = the moment the encoded frame is written to the Player's socket minus
+the publisher's stamp of that frame's media time, delay 0).
 
 Frames (``--frames``): today's (``full``: version 1, all 32 joints and the music row as float32, the show rendered
 and published at the publish rate, 60 or 30 fps, as ``live --fps RATE`` does) and ``compact`` (version 2: the 7
