@@ -264,3 +264,17 @@ def test_over_nats_a_compact_30hz_show_plays_at_60_fps_on_a_seat(nats_server, cl
     played = {round(f.t * 60): w for w, f in got}
     gaps = [played[k + 1] - played[k] for k in ks if k % 2 and k + 1 in played]
     assert abs(np.median(gaps) - 1 / 60) < 0.008
+
+
+def test_a_publisher_frames_and_rate_are_checked():
+    from hapmotion.audience.publisher import frames_choice
+    from hapmotion.errors import UsageError
+
+    assert frames_choice("compact", 30.0, 60.0, "--sink X") == (2, 30.0)
+    assert frames_choice("full", 60.0, 60.0, "--sink X") == (1, None)     # the render rate: nothing to interpolate
+    assert frames_choice("full", 20.0, 60.0, "--sink X") == (1, 20.0)
+    for frames, rate, message in [("bogus", None, "frames=bogus"), ("compact", 45.0, "rate=45"),
+                                  ("compact", 5.0, "rate=5"), ("compact", float("nan"), "rate=nan"),
+                                  ("compact", -30.0, "rate=-30")]:
+        with pytest.raises(UsageError, match=f"--sink X: {message}"):
+            frames_choice(frames, rate, 60.0, "--sink X")

@@ -299,8 +299,10 @@ def publisher_sink(ep: Endpoint, *, fps: float, show: Show, stage: OutputStage, 
         rate = None if rate is None else float(rate)
     except ValueError:
         raise UsageError(f"--sink {ep.text!r}: rate={rate}: expected frames per second") from None
+    frames = ep.option("frames", "full")
+    frames_choice(frames, rate, stage.fps, f"--sink {ep.text!r}")  # the error names the SINK as given
     desc = describe_show(name, show=show, stage=stage, layout=layout, body=body, stall_ms=stall_ms, mirror=mirror,
-                         frames=ep.option("frames", "full"), rate=rate)
+                         frames=frames, rate=rate)
     return NatsPublisherSink(server, desc, music=music, fps=fps, security=security)
 
 
