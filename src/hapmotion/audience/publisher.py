@@ -267,7 +267,8 @@ class NatsPublisherSink(Sink):
         self._closing = True
         try:
             if self.nc.is_connected:
-                await self.nc.publish(self._subjects["end"], self._event("end", t=float(self.seq / self.fps)))
+                end_t = float(self.seq * self._every / self.fps)  # the rendered frames' time, whatever the rate
+                await self.nc.publish(self._subjects["end"], self._event("end", t=end_t))
                 await self.nc.flush(timeout=1)
         except Exception as exc:
             self.warn_once("end", "could not announce the end (%s)", exc)
