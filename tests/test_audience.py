@@ -28,10 +28,13 @@ def motion():
     return hapmotion.load_motion(BVH).slice(0, 100)
 
 
-@pytest.mark.parametrize("secure", [False, True], ids=["rehearsal", "signed-tls"])
-def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_server, motion, secure, tmp_path):
+@pytest.mark.parametrize("secure,frames", [(False, "full"), (True, "full"), (False, "compact")],
+                         ids=["rehearsal", "signed-tls", "compact"])
+def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_server, motion, secure, frames,
+                                                                         tmp_path):
     """Three seats with different settings get what rendering locally gives; ``signed-tls``: the venue's server
-    configuration (TLS, NKeys, permissions), the show signed and every seat checking the signature."""
+    configuration (TLS, NKeys, permissions), the show signed and every seat checking the signature; ``compact``:
+    the show published in compact frames (the renderer's joints, the music as a palette): the same rows."""
     seats = {
         "venue": Seat(delay_s=0.08),
         "home": Seat(mirror=False, zones_off=("VestBack",), comfort=Comfort(gain=0.5), delay_s=0.2),
@@ -53,8 +56,8 @@ def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_se
             # the publisher stores the description, the seats join, then the recording plays
             with publishing(publisher):
                 # (a SINK is nats://: the venue's CA makes the connection TLS, as the server requires)
-                show_task, engine = await start_session(DelayedReplay(motion), [url.replace("tls://", "nats://")],
-                                                        audio=SONG)
+                sink = url.replace("tls://", "nats://") + ("?frames=compact" if frames == "compact" else "")
+                show_task, engine = await start_session(DelayedReplay(motion), [sink], audio=SONG)
             await asyncio.sleep(0)
             for name, seat in seats.items():
                 taps[name] = Tap()
@@ -77,6 +80,7 @@ def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_se
             venue.__exit__()
     if secure:
         assert all(s.trust.signed for s in sources.values())
+    assert all(s.desc.frame_version == (2 if frames == "compact" else 1) for s in sources.values())
     assert stats.stop_reason == "source ended"
     for name, seat in seats.items():
         mode = seat.mode or "multimodal"

@@ -95,7 +95,8 @@ def test_description_round_trip_and_checks():
     assert back == desc and back.rendering_facts() == desc.rendering_facts()
     obj = json.loads(desc.to_json())
     assert obj["protocol"] == "hapmotion-audience" and obj["version"] == 1 and len(obj["joints"]) == 32
-    for change, place in [({"version": 2}, "protocol"), ({"show": "other"}, "show"), ({"fps": 0}, "fps"),
+    for change, place in [({"version": 3}, "protocol"), ({"version": 2}, "frames"), ({"show": "other"}, "show"),
+                          ({"fps": 0}, "fps"),
                           ({"render": {"method": "mst"}}, "render.preset"),
                           ({"render": {**obj["render"], "mode": "multimodal"}}, "music"),
                           ({"body": {"shoulder_width": "wide"}}, "body.shoulder_width"),

@@ -1,6 +1,8 @@
 """The audience at scale: one show published on NATS, every seat rendering it locally with its own settings.
 
 * :mod:`~hapmotion.audience.wire` - subjects, the binary frame, events and the retained show description;
+* :mod:`~hapmotion.audience.compact` - the compact frame (the renderer's joints, the music as a palette);
+* :mod:`~hapmotion.audience.interpolation` - a seat's frames between those of a show published below its rate;
 * :mod:`~hapmotion.audience.publisher` - :class:`NatsPublisherSink` (``hapmotion live ... --sink nats://HOST/SHOW``);
 * :mod:`~hapmotion.audience.listener` - :func:`listen` / :func:`run_listen` (``hapmotion listen``);
 * :mod:`~hapmotion.audience.seat` - a seat's settings and the stage applying them;

@@ -49,12 +49,14 @@ from ..show.settings import Show
 from ..show.stage import OutputStage
 from ..show.timeline import RowTimeline
 from .clock import MediaClock
+from .compact import frame_decoder, missing_joints
 from .connection import NatsAuth, connect, connect_error, parse_server_url
 from .cue_gate import CueGate
 from .descriptions import DescriptionWatch
+from .interpolation import Upsampler
 from .seat import Seat, SeatSink, SeatStage
 from .signing import BadSignature, SeatTrust, Unsigned
-from .wire import ShowDescription, WireFrame, check_show_name, decode_event, decode_frame, subject
+from .wire import ShowDescription, WireFrame, check_show_name, decode_event, subject
 
 log = logging.getLogger("hapmotion.live")
 
@@ -178,7 +180,8 @@ class AudienceSource(Source):
         self._latest_media_t: Optional[float] = None
         self._subs: list[Subscription] = []
         self._timers: set[asyncio.TimerHandle] = set()
-        self._n_music = len(desc.actuators)
+        self._decode = frame_decoder(desc.frame_version, desc.frame_joints, len(desc.actuators))
+        self.upsampler = Upsampler(desc.fps, desc.frame_rate)
         self.published_at: OrderedDict[float, float] = OrderedDict()  # media time -> publisher wall time
         # submit time (perf_counter, the OutFrame's ``received``) -> publisher wall time: frame age at the device
         # when both machines' clocks agree (the benchmark, on one machine)
@@ -245,7 +248,7 @@ class AudienceSource(Source):
         if data is None:
             return
         try:
-            wf = decode_frame(data, self._n_music)
+            wf = self._decode(data)
         except ValueError as exc:
             faults.add("malformed", f"frame: {exc}")
             return
@@ -273,14 +276,17 @@ class AudienceSource(Source):
             return
         if self.mode != "motion" and wf.music is None:
             faults.add("no_music", "a frame without the music's row; its music is silent")
-        self.published_at[wf.media_t] = wf.wall_t
-        if len(self.published_at) > self.max_pending:
-            self.published_at.popitem(last=False)
-        due = self.clock.due(wf.media_t, arrival)
-        if len(self._heap) >= self.max_pending:
-            heapq.heappop(self._heap)
-            faults.add("overflow", f"more than {self.max_pending} frames waiting; the oldest is dropped")
-        heapq.heappush(self._heap, (due, next(self._count), wf))
+        # a show published below its render rate: the frames between the last one and this one first, every frame
+        # shifted by the interpolation's delay (the first between is due as this one arrives)
+        due = self.clock.due(wf.media_t, arrival) + self.upsampler.delay_s
+        for f in self.upsampler.feed(wf):
+            self.published_at[f.media_t] = f.wall_t
+            if len(self.published_at) > self.max_pending:
+                self.published_at.popitem(last=False)
+            if len(self._heap) >= self.max_pending:
+                heapq.heappop(self._heap)
+                faults.add("overflow", f"more than {self.max_pending} frames waiting; the oldest is dropped")
+            heapq.heappush(self._heap, (due - (wf.media_t - f.media_t), next(self._count), f))
         self._arrived.set()
 
     def _open(self, kind: str, data: bytes) -> Optional[bytes]:
@@ -356,6 +362,7 @@ class AudienceSource(Source):
             self.desc = desc
             self._last_seq = self._last_event_seq = None
             self.clock.reset()
+            self.upsampler.reset()
         else:
             log.info("%s: the show description changed (run %d); rebuilding the seat", self.name, desc.epoch)
             self.changed = desc
@@ -404,6 +411,10 @@ def seat_show(desc: ShowDescription, seat: Seat, cues: Optional[CueList] = None)
         layout = show.load_layout()
     except UsageError as exc:
         raise InputError(src, "render", str(exc)) from None
+    missing = missing_joints(desc.frame_joints)
+    if missing and mode != "audio":
+        raise InputError(src, "frames.joints", f"the show's frames lack {', '.join(missing)}, which this seat's "
+                                               f"renderer reads")
     if tuple(layout.actuators) != desc.actuators:
         raise InputError(src, "actuators", f"the show's {len(desc.actuators)} actuators ({desc.layout}) are not "
                                            f"this seat's layout {layout.name}")

@@ -35,9 +35,11 @@ from ..live.endpoint import Endpoint
 from ..show.settings import Show
 from ..show.stage import OutputStage
 from ..show.timeline import RowTimeline
+from ..skeleton.joints import JOINTS
+from .compact import FRAME_VERSIONS, compact_joints, frame_encoder
 from .connection import NatsAuth, connect, connect_error, description_bucket, open_bucket, parse_server_url
 from .signing import VenueSigner
-from .wire import ShowDescription, check_show_name, encode_event, encode_frame, subject
+from .wire import MAX_RATE_STEPS, ShowDescription, check_show_name, encode_event, subject
 
 __all__ = ["NatsPublisherSink", "PublisherSecurity", "connect", "describe_show", "description_bucket", "publishing"]
 
@@ -79,10 +81,28 @@ def publishing(security: PublisherSecurity) -> Iterator[PublisherSecurity]:
         PUBLISHER_SECURITY.reset(token)
 
 
+def frames_choice(frames: str, rate: Optional[float], fps: float, where: str) -> tuple[int, Optional[float]]:
+    """A publisher's ``frames`` (``full`` or ``compact``) and publish ``rate`` (None: the render rate) checked:
+    (frame version, rate or None); UsageError naming ``where`` otherwise."""
+    if frames not in FRAME_VERSIONS:
+        raise UsageError(f"{where}: frames={frames}: expected one of {', '.join(FRAME_VERSIONS)}")
+    if rate is None:
+        return FRAME_VERSIONS[frames], None
+    steps = fps / rate if rate > 0 else 0.0
+    if not (abs(steps - round(steps)) < 1e-6 and 1 <= round(steps) <= MAX_RATE_STEPS):
+        raise UsageError(f"{where}: rate={rate:g}: expected the show's {fps:g} fps divided by 1 to "
+                         f"{MAX_RATE_STEPS} (seats interpolate the frames between)")
+    return FRAME_VERSIONS[frames], None if round(steps) == 1 else float(rate)
+
+
 def describe_show(show_name: str, *, show: Show, stage: OutputStage, layout: Layout, body: Optional[BodyModel],
-                  stall_ms: float, mirror: bool, epoch: Optional[int] = None) -> ShowDescription:
+                  stall_ms: float, mirror: bool, epoch: Optional[int] = None, frames: str = "full",
+                  rate: Optional[float] = None) -> ShowDescription:
     """The description of a live show played through ``stage`` (see
-    :class:`~hapmotion.audience.wire.ShowDescription`): the stage's serialised form is what each seat rebuilds."""
+    :class:`~hapmotion.audience.wire.ShowDescription`): the stage's serialised form is what each seat rebuilds.
+    ``frames`` is ``full`` (version 1) or ``compact`` (:mod:`hapmotion.audience.compact`); ``rate`` the publish
+    rate (None: every rendered frame), the render rate divided by a whole number."""
+    frame_version, rate = frames_choice(frames, rate, stage.fps, f"nats://.../{show_name}")
     body = body or BodyModel.default()
     music = None
     if stage.mode != "motion":
@@ -93,7 +113,8 @@ def describe_show(show_name: str, *, show: Show, stage: OutputStage, layout: Lay
         layout=layout.name, actuators=tuple(layout.actuators),
         render={"method": show.method, "preset": show.preset, "mirror": bool(mirror), "mode": stage.mode,
                 "overrides": dict(show.overrides)},
-        body=body.to_dict(), music=music, stall_ms=float(stall_ms), issued=time.time())
+        body=body.to_dict(), music=music, stall_ms=float(stall_ms), issued=time.time(), frame_version=frame_version,
+        frame_joints=compact_joints() if frame_version == 2 else JOINTS, rate=rate)
 
 
 class NatsPublisherSink(Sink):
@@ -132,6 +153,9 @@ class NatsPublisherSink(Sink):
         self._guard: Optional[asyncio.Task] = None
         self._closing = False
         self._stored = self.signer.seal("description", description.to_json())
+        self._encode = frame_encoder(description.frame_version, description.frame_joints)
+        self._every = max(1, int(round(description.fps / description.frame_rate)))
+        self._rendered = 0
 
     async def start(self) -> None:
         try:
@@ -205,12 +229,15 @@ class NatsPublisherSink(Sink):
     async def deliver(self, frame: OutFrame) -> None:
         if frame.kind != "frame":
             return  # fade and turn-off rows are each seat's own business: a silent show fades on every seat
+        self._rendered += 1
+        if (self._rendered - 1) % self._every:
+            return  # published below the render rate: the seats interpolate this one
         if not self.nc.is_connected:
             self.stats.skipped += 1  # never buffered: a frame sent late would be stale
             return
         skeleton = frame.skeleton if frame.skeleton is not None and frame.skeleton.shape == (32, 3) else None
         music = self.music.row(frame.t) if self.music is not None else None
-        data = self.signer.seal("frame", encode_frame(self.description.epoch, self.seq, frame.t, time.time(),
+        data = self.signer.seal("frame", self._encode(self.description.epoch, self.seq, frame.t, time.time(),
                                                       skeleton, music))
         self.seq += 1
         try:
@@ -240,7 +267,8 @@ class NatsPublisherSink(Sink):
         self._closing = True
         try:
             if self.nc.is_connected:
-                await self.nc.publish(self._subjects["end"], self._event("end", t=float(self.seq / self.fps)))
+                end_t = float(self.seq * self._every / self.fps)  # the rendered frames' time, whatever the rate
+                await self.nc.publish(self._subjects["end"], self._event("end", t=end_t))
                 await self.nc.flush(timeout=1)
         except Exception as exc:
             self.warn_once("end", "could not announce the end (%s)", exc)
@@ -267,7 +295,15 @@ def publisher_sink(ep: Endpoint, *, fps: float, show: Show, stage: OutputStage, 
     if not name:
         raise UsageError(f"--sink {ep.text!r}: expected nats://HOST:PORT/SHOW (the show's name)")
     security = PUBLISHER_SECURITY.get() or PublisherSecurity()
-    desc = describe_show(name, show=show, stage=stage, layout=layout, body=body, stall_ms=stall_ms, mirror=mirror)
+    rate = ep.option("rate")
+    try:
+        rate = None if rate is None else float(rate)
+    except ValueError:
+        raise UsageError(f"--sink {ep.text!r}: rate={rate}: expected frames per second") from None
+    frames = ep.option("frames", "full")
+    frames_choice(frames, rate, stage.fps, f"--sink {ep.text!r}")  # the error names the SINK as given
+    desc = describe_show(name, show=show, stage=stage, layout=layout, body=body, stall_ms=stall_ms, mirror=mirror,
+                         frames=frames, rate=rate)
     return NatsPublisherSink(server, desc, music=music, fps=fps, security=security)
 
 

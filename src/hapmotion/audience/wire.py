@@ -23,6 +23,10 @@ Subjects for a show ``SHOW`` (letters, digits, ``-`` and ``_``)::
     32     12*n_joints   skeleton (n_joints, 3) float32 metres, +Y up, canonical joint order; NaN = not tracked
     ...    4*n_music     the music's haptic row (N,) float32, 0..100, in the description's actuator order
 
+Version 2, the compact frame (the renderer's joints, the music as a palette), is :mod:`hapmotion.audience.compact`;
+a description of such a show, or of one published below its render rate, has version 2 and a ``frames`` object
+(``ShowDescription.frame_version``, ``frame_joints``, ``rate``).
+
 float32 because a frame goes to every seat 60 times a second: 384 bytes of skeleton instead of 768 for float64
 (and a fraction of JSON's size), while float32 resolves about 1 micrometre at 10 m, a thousand times finer than
 a body tracker's millimetre noise; the music's intensities (0..100) reach the Player as whole percents.
@@ -48,6 +52,12 @@ from ..skeleton.joints import JOINTS
 
 PROTOCOL = "hapmotion-audience"
 VERSION = 1
+"""The description's version for a show of version-1 frames at its render rate (what every seat reads)."""
+VERSION_FRAMES = 2
+"""The description's version when it has a ``frames`` object (compact frames, or a publish rate below the render
+rate): a seat that knows only version 1 refuses it with one line instead of dropping every frame."""
+MAX_RATE_STEPS = 8
+"""A show may be published at its render rate divided by 1 to 8 (a seat interpolates the frames between)."""
 MAGIC = b"HM"
 KIND_FRAME = 1
 HEADER = struct.Struct("<2sBBHHIIdd")
@@ -188,23 +198,43 @@ class ShowDescription:
     issued: float = 0.0
     """The publisher's ``time.time()`` when it described the run: a seat refuses a description older than the one
     it plays (a replayed one)."""
+    frame_version: int = 1
+    """1: every joint, float32 music (module docstring); 2: compact frames (:mod:`hapmotion.audience.compact`)."""
+    frame_joints: tuple[str, ...] = JOINTS
+    """The joints each frame carries, canonical order (all 32 for version 1)."""
+    rate: Optional[float] = None
+    """Frames published per second: ``fps`` (None) or ``fps`` divided by 2..8, the seat interpolating between."""
     extra: dict[str, Any] = field(default_factory=dict, compare=False)
 
+    @property
+    def frame_rate(self) -> float:
+        """Frames per second on the wire."""
+        return self.fps if self.rate is None else self.rate
+
+    @property
+    def version(self) -> int:
+        return VERSION_FRAMES if (self.frame_version != 1 or self.rate is not None) else VERSION
+
     def to_json(self) -> bytes:
-        obj = {"protocol": PROTOCOL, "version": VERSION, "show": self.show, "epoch": self.epoch, "fps": self.fps,
+        frames = {}
+        if self.version == VERSION_FRAMES:
+            frames = {"frames": {"version": self.frame_version, "joints": list(self.frame_joints),
+                                 "rate": self.frame_rate}}
+        obj = {"protocol": PROTOCOL, "version": self.version, "show": self.show, "epoch": self.epoch, "fps": self.fps,
                "layout": self.layout, "actuators": list(self.actuators), "joints": list(JOINTS),
                "render": self.render, "body": self.body, "music": self.music, "stall_ms": self.stall_ms,
                "issued": self.issued,
                "encoding": {"frame": "header <2sBBHHIIdd (magic HM, version, kind, n_joints, n_music, epoch, "
                                      "seq, media_t, wall_t) + float32 LE skeleton (n_joints x 3) + music (n_music)",
                             "subjects": {k: subject(self.show, k) for k in ("frame", "cue", "end")}},
-               **self.extra}
+               **frames, **self.extra}
         return json.dumps(obj, separators=(",", ":")).encode()
 
     def rendering_facts(self) -> tuple:
         """Everything but the run (``epoch``): two runs with equal facts can share one seat session."""
         return (self.fps, self.layout, self.actuators, json.dumps(self.render, sort_keys=True),
-                json.dumps(self.body, sort_keys=True), json.dumps(self.music, sort_keys=True), self.stall_ms)
+                json.dumps(self.body, sort_keys=True), json.dumps(self.music, sort_keys=True), self.stall_ms,
+                self.frame_version, self.frame_joints, self.frame_rate)
 
     @property
     def mode(self) -> str:
@@ -222,8 +252,8 @@ def parse_description(data: bytes, show: str) -> ShowDescription:
         raise InputError(src, None, f"expected JSON ({exc.__class__.__name__})") from None
     if not isinstance(obj, dict):
         raise InputError(src, None, "expected a JSON object")
-    if obj.get("protocol") != PROTOCOL or obj.get("version") != VERSION:
-        raise InputError(src, "protocol", f"expected {PROTOCOL!r} version {VERSION}, found "
+    if obj.get("protocol") != PROTOCOL or obj.get("version") not in (VERSION, VERSION_FRAMES):
+        raise InputError(src, "protocol", f"expected {PROTOCOL!r} version {VERSION} or {VERSION_FRAMES}, found "
                                           f"{obj.get('protocol')!r} version {obj.get('version')!r}")
     if obj.get("show") != show:
         raise InputError(src, "show", f"expected {show!r}, found {obj.get('show')!r}")
@@ -265,8 +295,39 @@ def parse_description(data: bytes, show: str) -> ShowDescription:
     if not (isinstance(issued, (int, float)) and not isinstance(issued, bool) and math.isfinite(issued)
             and issued >= 0):
         raise InputError(src, "issued", f"expected a time stamp, found {issued!r}"[:200])
+    frame_version, frame_joints, rate = 1, JOINTS, None
+    if obj["version"] == VERSION_FRAMES:
+        frame_version, frame_joints, rate = _check_frames(obj.get("frames"), fps, src)
     return ShowDescription(show, epoch, fps, layout, tuple(actuators), render, body, music, float(stall_ms),
-                           float(issued))
+                           float(issued), frame_version, frame_joints, rate)
+
+
+def _check_frames(frames: Any, fps: float, src: str) -> tuple[int, tuple[str, ...], Optional[float]]:
+    """A version-2 description's ``frames`` object: the frame version (1 or 2), the joints each frame carries
+    (canonical names in canonical order; all 32 for version 1) and the publish rate (the render rate divided by
+    1..8); (version, joints, rate or None for the render rate)."""
+    if not isinstance(frames, dict):
+        raise InputError(src, "frames", "a version-2 description needs its frames object")
+    version = frames.get("version")
+    if version not in (1, 2) or isinstance(version, bool):
+        raise InputError(src, "frames.version", f"expected 1 or 2, found {version!r}"[:200])
+    joints = frames.get("joints")
+    if not isinstance(joints, list):
+        raise InputError(src, "frames.joints", "expected a list of joint names")
+    if version == 1 and joints != list(JOINTS):
+        raise InputError(src, "frames.joints", "frames of version 1 carry the 32 canonical joints in order")
+    if not (0 < len(joints) <= N_JOINTS and all(isinstance(j, str) and j in JOINTS for j in joints)
+            and [JOINTS.index(j) for j in joints] == sorted({JOINTS.index(j) for j in joints})):
+        raise InputError(src, "frames.joints", "expected 1 to 32 canonical joint names, each once, in canonical "
+                                               "order")
+    rate = frames.get("rate")
+    if not (isinstance(rate, (int, float)) and not isinstance(rate, bool) and math.isfinite(rate) and rate > 0):
+        raise InputError(src, "frames.rate", f"expected frames per second, found {rate!r}"[:200])
+    steps = fps / rate
+    if not (abs(steps - round(steps)) < 1e-6 and 1 <= round(steps) <= MAX_RATE_STEPS):
+        raise InputError(src, "frames.rate", f"expected the render rate {fps:g} divided by 1 to {MAX_RATE_STEPS}, "
+                                             f"found {rate:g}")
+    return version, tuple(joints), None if round(steps) == 1 else float(rate)
 
 
 def _check_render(render: dict, src: str) -> dict[str, Any]:

@@ -1,0 +1,167 @@
+"""Compact frames (frame version 2, sans-I/O): only the joints a seat's renderer reads, and the music row as a
+palette, inside the same 32-byte header as version 1 (docs/audience.md, "Compact frame").
+
+    offset size  field
+     0     32    the header of version 1 (wire.HEADER) with version 2: magic, version, kind, n_joints, n_music,
+                 epoch, seq, media_t, wall_t
+    32     12*n_joints   the description's ``frames.joints`` (n_joints, 3) float32 metres, in that order; NaN = not
+                         tracked
+    ...    music (n_music > 0):
+             1          k, the palette's size: 1..255, or 0 for a raw row
+             4*k        the palette: the row's distinct values, float32, ascending
+             n_music    each actuator's palette index (u8)
+           or, for k = 0, 4*n_music bytes: the row as float32
+
+Why: the renderer reads 7 of the 32 joints (:data:`hapmotion.skeleton.joints.RENDER_JOINTS`, whatever the method,
+preset or parameters), so the other 25 are 300 bytes a frame no seat uses; and a music row holds a few distinct
+intensities (a song's bands spread over zones: at most 3 distinct values per row on the recordings here), so a
+palette of float32 values and one byte per actuator carries the row exactly in about a quarter of its float32 size.
+Whole percents (one byte per actuator, no palette) would be 13 bytes smaller but not exact: the seat mixes the music
+before the Player rounds, and whole-percent music changed a Player percent on 13-25 % of frames of real
+recordings. The seat decodes both versions; a compact frame's joints and music are the very float32 numbers a
+version-1 frame carries, so a seat renders the same rows from either.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from typing import Callable, Optional, Sequence
+
+import numpy as np
+
+from ..skeleton.joints import JOINT_INDEX, JOINTS, RENDER_JOINTS
+from .wire import (HEADER, KIND_FRAME, MAGIC, MAX_MEDIA_T, MAX_POSITION_M, N_JOINTS, WireFrame, decode_frame,
+                   encode_frame)
+
+COMPACT = 2
+"""The compact frame's version byte."""
+FRAME_VERSIONS = {"full": 1, "compact": COMPACT}
+"""The ``frames=`` choices of a ``nats://`` sink and the frame version each sends."""
+MAX_PALETTE = 255
+PALETTE = struct.Struct("<B")
+
+RENDERER_JOINTS: tuple[str, ...] = tuple(j for j in JOINTS if j in RENDER_JOINTS)
+"""The joints a seat's renderer reads, in canonical order: the kernel's joints (``RENDER_JOINTS``), the same for
+every method, preset and parameter (``Renderer`` takes exactly these rows of a frame), so no seat setting can need
+a joint a compact frame of these lacks. A description naming fewer is refused by the seat (``seat_show``)."""
+
+
+def compact_joints() -> tuple[str, ...]:
+    """The joints a compact frame carries: those every seat's renderer reads (:data:`RENDERER_JOINTS`)."""
+    return RENDERER_JOINTS
+
+
+def missing_joints(frame_joints: Sequence[str]) -> list[str]:
+    """The joints a seat's renderer reads that frames of ``frame_joints`` do not carry (empty: it can render)."""
+    return [j for j in RENDERER_JOINTS if j not in frame_joints]
+
+
+# ---------------------------------------------------------------------------------------------------- music
+def encode_music(row: np.ndarray) -> bytes:
+    """A music row ``(N,)`` 0..100 as a palette of its float32 values and one index byte per actuator (a raw
+    float32 row when it has more than 255 distinct values)."""
+    row32 = np.ascontiguousarray(row, dtype="<f4")
+    values, index = np.unique(row32, return_inverse=True)
+    if len(values) > MAX_PALETTE:
+        return PALETTE.pack(0) + row32.tobytes()
+    return PALETTE.pack(len(values)) + values.astype("<f4").tobytes() + index.astype(np.uint8).tobytes()
+
+
+def _decode_music(data: bytes, offset: int, n_music: int) -> tuple[np.ndarray, int]:
+    """The music row ``(N,)`` float64 from ``offset`` and the offset after it; ValueError on a bad palette."""
+    if offset >= len(data):
+        raise ValueError("no music palette size")
+    (k,) = PALETTE.unpack_from(data, offset)
+    offset += 1
+    if k == 0:
+        end = offset + 4 * n_music
+        if end > len(data):
+            raise ValueError("music row shorter than its actuator count")
+        return np.frombuffer(data, dtype="<f4", count=n_music, offset=offset).astype(np.float64), end
+    end = offset + 4 * k + n_music
+    if end > len(data):
+        raise ValueError(f"music palette of {k} values and {n_music} indices does not fit in the frame")
+    values = np.frombuffer(data, dtype="<f4", count=k, offset=offset).astype(np.float64)
+    index = np.frombuffer(data, dtype=np.uint8, count=n_music, offset=offset + 4 * k)
+    if int(index.max()) >= k:
+        raise ValueError(f"music palette index {int(index.max())} beyond its {k} values")
+    return values[index], end
+
+
+# ---------------------------------------------------------------------------------------------------- frames
+def encode_compact_frame(epoch: int, seq: int, media_t: float, wall_t: float, joints: Optional[np.ndarray],
+                         music: Optional[np.ndarray]) -> bytes:
+    """The bytes of one compact frame; ``joints`` ``(J, 3)`` metres (the description's ``frames.joints``, in
+    order) or None (music only), ``music`` ``(N,)`` 0..100 or None."""
+    n_j = 0 if joints is None else int(np.shape(joints)[0])
+    n_m = 0 if music is None else int(np.shape(music)[0])
+    parts = [HEADER.pack(MAGIC, COMPACT, KIND_FRAME, n_j, n_m, epoch & 0xFFFFFFFF, seq & 0xFFFFFFFF,
+                         float(media_t), float(wall_t))]
+    if joints is not None:
+        parts.append(np.ascontiguousarray(joints, dtype="<f4").tobytes())
+    if music is not None:
+        parts.append(encode_music(music))
+    return b"".join(parts)
+
+
+def decode_compact_frame(data: bytes, joint_rows: np.ndarray, n_music: int) -> WireFrame:
+    """Parse a compact frame whose joints are the canonical rows ``joint_rows`` ``(J,)``; the skeleton comes back
+    as ``(32, 3)`` with NaN (not sent) in the other rows, as a seat's engine takes it. ValueError naming the
+    field on anything that does not fit (callers count it as ``malformed``)."""
+    if len(data) < HEADER.size:
+        raise ValueError(f"{len(data)} bytes, shorter than the {HEADER.size}-byte header")
+    magic, version, kind, n_j, n_m, epoch, seq, media_t, wall_t = HEADER.unpack_from(data)
+    if magic != MAGIC:
+        raise ValueError(f"magic {magic!r}, expected {MAGIC!r}")
+    if version != COMPACT or kind != KIND_FRAME:
+        raise ValueError(f"version {version} kind {kind}, expected version {COMPACT} kind {KIND_FRAME}")
+    if n_j not in (0, len(joint_rows)):
+        raise ValueError(f"n_joints {n_j}, expected 0 or {len(joint_rows)} (the description's frame joints)")
+    if n_m not in (0, n_music):
+        raise ValueError(f"n_music {n_m}, expected 0 or {n_music} (the description's actuators)")
+    if not (math.isfinite(media_t) and abs(media_t) <= MAX_MEDIA_T):
+        raise ValueError(f"media_t {media_t}, expected finite seconds")
+    if not math.isfinite(wall_t):
+        raise ValueError(f"wall_t {wall_t}, expected a finite time stamp")
+    offset = HEADER.size + 12 * n_j
+    if offset > len(data):
+        raise ValueError(f"{len(data)} bytes, too short for {n_j} joints")
+    skeleton = None
+    if n_j:
+        xyz = np.frombuffer(data, dtype="<f4", count=3 * n_j, offset=HEADER.size).astype(np.float64).reshape(n_j, 3)
+        if np.isinf(xyz).any() or (np.abs(np.nan_to_num(xyz)) > MAX_POSITION_M).any():
+            raise ValueError(f"joint positions infinite or beyond {MAX_POSITION_M:g} m")
+        skeleton = np.full((N_JOINTS, 3), np.nan)
+        skeleton[joint_rows] = xyz
+    music = None
+    if n_m:
+        music, offset = _decode_music(data, offset, n_m)
+        if not (np.isfinite(music).all() and music.min() >= 0.0 and music.max() <= 100.0):
+            raise ValueError("music values outside 0..100")
+    if offset != len(data):
+        raise ValueError(f"{len(data)} bytes, expected {offset} for {n_j} joints and {n_m} music values")
+    return WireFrame(int(epoch), int(seq), float(media_t), float(wall_t), skeleton, music)
+
+
+def frame_decoder(frame_version: int, frame_joints: Sequence[str], n_music: int) -> Callable[[bytes], WireFrame]:
+    """The decoder of a show's frames: version 1 (every joint, float32 music) or compact frames of
+    ``frame_joints``."""
+    if frame_version == COMPACT:
+        rows = np.array([JOINT_INDEX[j] for j in frame_joints], dtype=np.intp)
+        return lambda data: decode_compact_frame(data, rows, n_music)
+    return lambda data: decode_frame(data, n_music)
+
+
+def frame_encoder(frame_version: int, frame_joints: Sequence[str]) -> Callable[..., bytes]:
+    """``encode(epoch, seq, media_t, wall_t, skeleton (32, 3) or None, music or None)`` for a show's frames."""
+    if frame_version != COMPACT:
+        return encode_frame
+    rows = np.array([JOINT_INDEX[j] for j in frame_joints], dtype=np.intp)
+
+    def encode(epoch: int, seq: int, media_t: float, wall_t: float, skeleton: Optional[np.ndarray],
+               music: Optional[np.ndarray]) -> bytes:
+        return encode_compact_frame(epoch, seq, media_t, wall_t, None if skeleton is None else skeleton[rows],
+                                    music)
+
+    return encode
