@@ -2,9 +2,9 @@
 
 The paper added the shoulder sleeves to cover what the vest misses; with the ray towards the target point, a hand
 raised above the shoulder or reaching out to the side mostly hits the top row or the side of the vest, so the
-sleeves stay nearly silent. This step adds a share of the frame's amplitude on the sleeve of the rendered hand's
-side, growing with how far the hand is above or outside its shoulder (with the speed term, on the side of the hand
-that moves).
+sleeves stay nearly silent. This step adds a share of the frame's amplitude on the sleeve of the hand the vest's
+point is on, growing with how far that hand is above or outside its shoulder, so a sleeve runs on the side of the
+active hand and of the vest region that carries it.
 """
 
 from __future__ import annotations
@@ -39,26 +39,27 @@ def sleeve_reach(jt, hand, axes, reach_m):
 
 
 @njit(cache=True, inline="always")
-def carry_on_sleeve(jt, hand, speed_n, by_speed, axes, amp, share, reach_m, charts, energy, tol, raw):
-    """Add a share of ``amp`` (percent; of energy with the energy split, of amplitude with the paper's) at the middle
-    of each hand's sleeve (the performer's side; the mirror swaps it later) into ``raw`` ``(N,)``.
+def side_hand(dp, torso, axes):
+    """MST: the hand on the side of the dynamic point (``dp`` ``(3,)`` world m) relative to J_T (``torso``), along
+    the body's right axis (``axes`` row 0): the joint row of the right hand when the point is on the performer's
+    right (or on the midline), of the left hand otherwise. The vest's point and the sleeve that carries it are
+    then on one side, whichever hands are active."""
+    x = 0.0
+    for k in range(3):
+        x += (dp[k] - torso[k]) * axes[0, k]
+    return J_HAND_R if x >= 0.0 else J_HAND_L
 
-    The share is ``share x reach`` (:func:`sleeve_reach`) of one hand: the faster one when the speed term is on
-    (``by_speed``, ``speed_n`` ``(2,)``, so the sleeve runs on the side of the hand that moves), else the rendered
-    ``hand``.
-    """
+
+@njit(cache=True, inline="always")
+def carry_on_sleeve(jt, hand, axes, amp, share, reach_m, charts, energy, tol, raw):
+    """Add ``share x reach`` (:func:`sleeve_reach`) of ``amp`` (percent; of energy with the energy split, of
+    amplitude with the paper's) at the outer middle of the sleeve of ``hand`` (the joint row of the hand the vest's
+    point is on: the baseline's hand, MST's :func:`side_hand`; the performer's side, the mirror swaps it later)
+    into ``raw`` ``(N,)``. With the frame's drive shared over the motors (``dead_zone_per = "frame"``) the share
+    comes out of the vest's: the sleeve gets ``share x reach / (1 + share x reach)`` of the drive."""
     if share <= 0.0 or amp <= 0.0:
         return
-    top = max(speed_n[0], speed_n[1])
-    for h in range(2):
-        joint = J_HAND_L if h == 0 else J_HAND_R
-        if by_speed:  # the faster hand (the left on a tie)
-            w = 1.0 if top > 0.0 and speed_n[h] == top and (h == 0 or speed_n[0] < top) else 0.0
-        else:
-            w = 1.0 if joint == hand else 0.0
-        if w <= 0.0:
-            continue
-        reach = sleeve_reach(jt, joint, axes, reach_m)
-        if reach > 0.0:
-            chart = CHART_SHOULDER_LEFT if h == 0 else CHART_SHOULDER_RIGHT
-            split_on_chart(chart, 0.5, 1.0, share * reach * w, amp, charts, energy, tol, False, raw)
+    reach = sleeve_reach(jt, hand, axes, reach_m)
+    if reach > 0.0:
+        chart = CHART_SHOULDER_LEFT if hand == J_HAND_L else CHART_SHOULDER_RIGHT
+        split_on_chart(chart, 0.5, 1.0, share * reach, amp, charts, energy, tol, False, raw)
