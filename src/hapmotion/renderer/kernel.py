@@ -32,7 +32,7 @@ from .steps.intensity import boosted_level, filtered_level, level_drive, normali
 from .steps.numeric import dist3
 from .steps.output import share_frame_drive, write_outputs, write_silence
 from .steps.phantom import spread_on_charts
-from .steps.sleeves import carry_on_sleeve, side_hand
+from .steps.sleeves import carried_hand, carry_on_sleeve
 from .steps.triangle import dynamic_point, glide, previous_dynamic_point, salient_triangle, speed_weighted
 from .steps.warping import locate_on_body
 
@@ -138,7 +138,7 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         hand, hand_excess = active_hand(choice, dist_l, dist_r, excess)
 
         # step 5: the dynamic point: Eq. 1 on the motion salient triangle, or the hand itself (baseline)
-        carried = hand  # the hand whose side the vest's point is on (the sleeves carry it)
+        carried = hand  # the hand the sleeves carry (-1: none)
         if baseline:
             for k in range(3):
                 dp[k] = jt[hand, k]
@@ -150,7 +150,7 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             dynamic_point(jt[j_a], jt[j_r], torso, w_a, w_r, 1.0, dp)  # J_T keeps weight 1
             if prm[P_DP_ALPHA] < 1.0:  # beyond the paper: the point glides
                 glide(torso, axes, state, prm[P_DP_ALPHA], dp)
-            carried = side_hand(dp, torso, axes)
+            carried = carried_hand(choice, hand)
         for k in range(3):
             state[ST_PREV_DP + k] = dp[k]
         dist = dist3(dp, torso)

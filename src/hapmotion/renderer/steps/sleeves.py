@@ -2,9 +2,9 @@
 
 The paper added the shoulder sleeves to cover what the vest misses; with the ray towards the target point, a hand
 raised above the shoulder or reaching out to the side mostly hits the top row or the side of the vest, so the
-sleeves stay nearly silent. This step adds a share of the frame's amplitude on the sleeve of the hand the vest's
-point is on, growing with how far that hand is above or outside its shoulder, so a sleeve runs on the side of the
-active hand and of the vest region that carries it.
+sleeves stay nearly silent. This step adds a share of the frame's amplitude on the sleeve of the active hand,
+growing with how far it is above or outside its shoulder, so a sleeve runs on the side of the active hand and of
+the vest region the point is on.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 from numba import njit
 
 from ...layout import CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT
-from ..packed import J_HAND_L, J_HAND_R, J_SHOULDER_L, J_SHOULDER_R
+from ..packed import CHOICE_BOTH, J_HAND_L, J_SHOULDER_L, J_SHOULDER_R
 from .numeric import clip
 from .phantom import split_on_chart
 
@@ -39,25 +39,24 @@ def sleeve_reach(jt, hand, axes, reach_m):
 
 
 @njit(cache=True, inline="always")
-def side_hand(dp, torso, axes):
-    """MST: the hand on the side of the dynamic point (``dp`` ``(3,)`` world m) relative to J_T (``torso``), along
-    the body's right axis (``axes`` row 0): the joint row of the right hand when the point is on the performer's
-    right (or on the midline), of the left hand otherwise. The vest's point and the sleeve that carries it are
-    then on one side, whichever hands are active."""
-    x = 0.0
-    for k in range(3):
-        x += (dp[k] - torso[k]) * axes[0, k]
-    return J_HAND_R if x >= 0.0 else J_HAND_L
+def carried_hand(choice, hand):
+    """MST: the hand whose sleeve carries (its joint row), or -1 for none. One active hand (``choice``
+    ``CHOICE_LEFT`` or ``CHOICE_RIGHT``, ``hand`` its row): that hand, on whose side the triangle puts the vest's
+    point. Two active hands (``CHOICE_BOTH``): none, as the point lies between them, near the midline; a sleeve
+    would have to pick a side and would flip between the two (measured on a two-hand wave: the felt locus then
+    jitters more than the baseline's, 2.4 against 1.5 cm)."""
+    return -1 if choice == CHOICE_BOTH else hand
 
 
 @njit(cache=True, inline="always")
 def carry_on_sleeve(jt, hand, axes, amp, share, reach_m, charts, energy, tol, raw):
-    """Add ``share x reach`` (:func:`sleeve_reach`) of ``amp`` (percent; of energy with the energy split, of
-    amplitude with the paper's) at the outer middle of the sleeve of ``hand`` (the joint row of the hand the vest's
-    point is on: the baseline's hand, MST's :func:`side_hand`; the performer's side, the mirror swaps it later)
-    into ``raw`` ``(N,)``. With the frame's drive shared over the motors (``dead_zone_per = "frame"``) the share
-    comes out of the vest's: the sleeve gets ``share x reach / (1 + share x reach)`` of the drive."""
-    if share <= 0.0 or amp <= 0.0:
+    """Add ``share x reach`` (:func:`sleeve_reach` of ``hand``) of ``amp`` (percent; of energy with the energy
+    split, of amplitude with the paper's) at the outer middle of the sleeve of ``hand`` (a joint row: the hand the
+    vest's point follows, the baseline's own hand or MST's :func:`carried_hand`; -1 = none; the performer's side,
+    the mirror swaps it later) into ``raw`` ``(N,)``. With the frame's drive shared over the motors
+    (``dead_zone_per = "frame"``) the share comes out of the vest's: a hand fully up or out gets
+    ``share / (1 + share)`` of the drive on its sleeve."""
+    if share <= 0.0 or amp <= 0.0 or hand < 0:
         return
     reach = sleeve_reach(jt, hand, axes, reach_m)
     if reach > 0.0:
