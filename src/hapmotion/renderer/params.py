@@ -151,9 +151,10 @@ class Params:
     (smooths location jumps for slow ERMs); 0 = off."""
 
     sleeve_share: float = 0.0
-    """Share of the frame's amplitude (of energy with the energy split) added on the sleeve of the rendered hand's
-    side while that hand is above or outside its shoulder, times how far (``sleeve_reach_m``); 0 = off (ours:
-    the paper added the sleeves for what the vest misses, and the ray alone seldom reaches them)."""
+    """Share of the frame's amplitude (of energy with the energy split) added on the sleeve of the active hand (the
+    baseline's hand; MST's one active hand, none while both are) while that hand is above or outside its shoulder,
+    times how far (``sleeve_reach_m``); with ``dead_zone_per = "frame"`` it comes out of the vest's share. 0 = off
+    (ours: the paper added the sleeves for what the vest misses, and the ray alone seldom reaches them)."""
     sleeve_reach_m: float = 0.25
     """m. The hand's height above, or reach outside, its shoulder at which the sleeve share is full."""
 
@@ -266,8 +267,10 @@ PRESETS: dict[str, Params] = {
 }
 """Named parameter sets. ``paper``: the paper's values. ``energy``: energy-preserving phantom split, asymmetric
 attack/release smoothing, ERM-aware output mapping (see docs/metrics.md for the evidence). ``felt`` (the default):
-the ``energy`` pipeline calibrated for ERM vests, intensity from hand speed and reach, motors lifted over their
-start (docs/algorithm.md, "The felt preset", gives every value with its reason and measured figure)."""
+the ``energy`` pipeline calibrated for ERM vests, intensity from hand speed and reach, the frame's drive lifted over
+the motors' start and shared over them, the active-joint choice held and the dynamic point gliding, the active
+hand's sleeve carrying it (docs/algorithm.md, "The felt preset", gives every value with its reason and measured
+figure)."""
 
 PAPER_VARIANTS: dict[str, dict[str, Any]] = {
     "range-185": {"intensity_far_m": 0.0, "intensity_near_m": 0.13, "baseline_intensity_far_m": 0.0},
