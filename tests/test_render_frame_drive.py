@@ -17,7 +17,7 @@ FELT = PRESETS["felt"]
 
 def shared(raw, amp, energy=True, motors=2.0, dead=20.0):
     x = np.array(raw, dtype=float)
-    share_frame_drive(x, amp, dead, 0.5, energy, motors)
+    share_frame_drive(x, amp, dead, 0.5, energy, motors, np.zeros(x.size, dtype=np.int64))
     return x
 
 

@@ -97,6 +97,7 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
     speed_n = np.zeros(2)
     by_speed = prm[P_SPEED_ON] > 0.5
     lift_frame = prm[P_LIFT_FRAME] > 0.5
+    lit = np.zeros(n_act, dtype=np.int64)
     above = np.zeros(2, dtype=np.bool_)
     prev_dp = np.zeros(3)
     dp = np.zeros(3)
@@ -180,7 +181,8 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         # output: dead zone (per motor, or once for the frame's drive shared over the motors), clip, mirror,
         # per-actuator release
         if lift_frame:
-            share_frame_drive(raw, amp, prm[P_DEAD], prm[P_SILENCE], prm[P_PHANTOM_ENERGY] > 0.5, prm[P_DRIVE_MOTORS])
+            share_frame_drive(raw, amp, prm[P_DEAD], prm[P_SILENCE], prm[P_PHANTOM_ENERGY] > 0.5, prm[P_DRIVE_MOTORS],
+                              lit)
         write_outputs(raw, prm[P_DEAD], prm[P_SILENCE], prm[P_REL_DECAY], mirror_map, state, out[t], not lift_frame)
 
         to_world_into(hit, torso, axes, hit_w)

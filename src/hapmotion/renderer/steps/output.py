@@ -27,7 +27,7 @@ def dead_zone_lift(x, dead_zone, silence):
 
 
 @njit(cache=True, inline="always")
-def share_frame_drive(raw, amp, dead_zone, silence, energy, motors):
+def share_frame_drive(raw, amp, dead_zone, silence, energy, motors, lit):
     """Beyond the paper: the frame's drive, lifted once, shared over the motors of the split; ``raw`` ``(N,)`` is
     rewritten in place (percent, performer's columns), its sum then being ``motors x dead_zone_lift(amp)``.
 
@@ -36,10 +36,11 @@ def share_frame_drive(raw, amp, dead_zone, silence, energy, motors):
     whose energy shares are the bilinear weights) or of its amplitude (the paper's linear split). A share too small
     to start its motor (under ``dead_zone`` once multiplied by the drive) goes to the others, the smallest first,
     as long as they can take it at 100 % each, so that every motor that runs clears the start; a share over 100 %
-    gives its excess to the others. The total
-    is then the drive wherever the point is and however it is split (a point between motors, a glide across a
-    cell, a share on a sleeve), unless every running motor is at 100 %. ``motors`` sets the drive in motors' worth
-    (the loudness of the rule). ``amp`` under ``silence`` gives a silent row.
+    gives its excess to the others. The total is then the drive wherever the point is and however it is split (a
+    point between motors, a glide across a cell, a share on a sleeve), unless every running motor is at 100 %.
+    ``motors`` sets the drive in motors' worth (the loudness of the rule). ``amp`` under ``silence`` gives a silent
+    row. ``lit`` ``(N,)`` int is scratch space (the split lights a dozen motors at most, so the loops below run
+    over those only).
     """
     n = raw.shape[0]
     if amp < silence:
@@ -48,39 +49,45 @@ def share_frame_drive(raw, amp, dead_zone, silence, energy, motors):
         return
     drive = motors * dead_zone_lift(amp, dead_zone, silence)
     total = 0.0
+    m = 0
     for k in range(n):
-        w = raw[k] * raw[k] if energy else raw[k]
-        raw[k] = w if w > 0.0 else 0.0
-        total += raw[k]
-    if total <= 0.0:
+        if raw[k] > 0.0:
+            raw[k] = raw[k] * raw[k] if energy else raw[k]
+            total += raw[k]
+            lit[m] = k
+            m += 1
+        else:
+            raw[k] = 0.0
+    if m == 0:
         return
-    while True:  # drop the smallest share while it cannot start its motor and the others can take the drive
-        smallest = -1
-        lit = 0
-        for k in range(n):
-            if raw[k] > 0.0:
-                lit += 1
-                if smallest < 0 or raw[k] < raw[smallest]:
-                    smallest = k
-        if lit <= 1 or drive * raw[smallest] / total >= dead_zone or (lit - 1) * 100.0 < drive:
+    while m > 1:  # drop the smallest share while it cannot start its motor and the others can take the drive
+        q = 0
+        for i in range(1, m):
+            if raw[lit[i]] < raw[lit[q]]:
+                q = i
+        if drive * raw[lit[q]] / total >= dead_zone or (m - 1) * 100.0 < drive:
             break
-        total -= raw[smallest]
-        raw[smallest] = 0.0
-    for k in range(n):
-        raw[k] = drive * raw[k] / total
-    for _ in range(n):  # motors over 100 %: the excess to the others, in proportion to their shares
+        total -= raw[lit[q]]
+        raw[lit[q]] = 0.0
+        lit[q] = lit[m - 1]
+        m -= 1
+    for i in range(m):
+        raw[lit[i]] = drive * raw[lit[i]] / total
+    for _ in range(m):  # motors over 100 %: the excess to the others, in proportion to their shares
         excess = 0.0
         room = 0.0
-        for k in range(n):
+        for i in range(m):
+            k = lit[i]
             if raw[k] > 100.0:
                 excess += raw[k] - 100.0
                 raw[k] = 100.0
-            elif raw[k] > 0.0:
+            elif raw[k] < 100.0:
                 room += raw[k]
         if excess <= 0.0 or room <= 0.0:
             break
-        for k in range(n):
-            if 0.0 < raw[k] < 100.0:
+        for i in range(m):
+            k = lit[i]
+            if raw[k] < 100.0:
                 raw[k] += excess * raw[k] / room
 
 
