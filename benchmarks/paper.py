@@ -11,7 +11,9 @@ measure is defined here as its check states it, so the figures do not depend on 
 
 The felt locus is the intensity-weighted centroid of the motor positions on the body chart
 (``Layout.positions()``, metres); its speed is the median over frames of how far it moves per second, its jitter
-the RMS distance from its own 0.2 s moving average. Both are taken over frames where something vibrates.
+the RMS distance from its own 0.2 s moving average. Both are taken over frames where something vibrates. The
+sleeve checks (the paper added the shoulder sleeves to cover what the vest misses, Sections 3.2 and 5.2) use
+seeded raises and side reaches of the synthetic adult and the recordings; a motor at 15 or more is felt.
 
 Run::
 
