@@ -388,6 +388,10 @@ def songs(folder: str, audio_dir: str, seed: int) -> list[tuple[str, str]]:
 
 
 # ---------------------------------------------------------------------------------------------------- runs
+STRING_FIELDS = ("idle_choice", "phantom", "phantom_main", "dead_zone_per")
+"""Renderer parameters whose values are names, not numbers (``--preset NAME:field=value``)."""
+
+
 def render(motion, method: str, preset: str | None):
     """Render with the default preset (``None``), a preset name, or ``NAME:field=value,...`` (a preset with some
     parameters changed, for ablations)."""
@@ -396,7 +400,8 @@ def render(motion, method: str, preset: str | None):
     name, _, changes = preset.partition(":")
     if not changes:
         return hapmotion.render(motion, method=method, preset=name)
-    params = hapmotion.PRESETS[name].replace(**{k: float(v) for k, v in (c.split("=") for c in changes.split(","))})
+    params = hapmotion.PRESETS[name].replace(**{k: v if k in STRING_FIELDS else float(v)
+                                               for k, v in (c.split("=") for c in changes.split(","))})
     return hapmotion.render(motion, method=method, preset=name, params=params)
 
 

@@ -11,7 +11,9 @@ measure is defined here as its check states it, so the figures do not depend on 
 
 The felt locus is the intensity-weighted centroid of the motor positions on the body chart
 (``Layout.positions()``, metres); its speed is the median over frames of how far it moves per second, its jitter
-the RMS distance from its own 0.2 s moving average. Both are taken over frames where something vibrates.
+the RMS distance from its own 0.2 s moving average. Both are taken over frames where something vibrates. The
+sleeve checks (the paper added the shoulder sleeves to cover what the vest misses, Sections 3.2 and 5.2) use
+seeded raises and side reaches of the synthetic adult and the recordings; a motor at 15 or more is felt.
 
 Run::
 
@@ -68,7 +70,7 @@ def params_of(spec: str) -> tuple[str, Params]:
         vals = {}
         for item in changes.split(","):
             k, v = item.split("=")
-            vals[k] = v if k in ("idle_choice", "phantom", "phantom_main") else float(v)
+            vals[k] = v if k in ("idle_choice", "phantom", "phantom_main", "dead_zone_per") else float(v)
         params = params.replace(**vals)
     return name, params
 
@@ -153,6 +155,40 @@ def motion_types(fps: float = 60.0, seconds: float = 6.0, scale: float = 1.0) ->
     paths["throwing"] = ((0.3, 1.2, 0.1), np.stack([0 * t, amp * thr, 2 * amp * thr], axis=1))
     paths["arm circle"] = ((0.40, 1.45, 0.25), np.stack([amp * s, amp * c, 0 * t], axis=1))
     return {k: frames_with(J_T + scale * (np.array(centre) - J_T) + o) for k, (centre, o) in paths.items()}
+
+
+IDS = LAYOUT.actuators
+SLEEVE_L = np.array([a.startswith("ForearmL") for a in IDS])  # the wearer's left sleeve
+SLEEVE_R = np.array([a.startswith("ForearmR") for a in IDS])
+VEST_ROW = np.array([int(a.split("_")[1]) // 4 if a.startswith("Vest") else -1 for a in IDS])
+FELT = 15.0  # a motor at 15 or more is felt (as in benchmarks/feel.py)
+
+
+def raise_gestures(n_raise: int = 24, n_out: int = 12, seed: int = 3) -> list[tuple[str, np.ndarray]]:
+    """Seeded one-hand gestures of the synthetic adult, ``[(hand, (150, 32, 3) frames)]`` at 60 Hz: the hand lifted
+    from the hip in 0.5 s to a point and waving 5 cm there (2 Hz). ``n_raise`` raises end 0.25-0.6 m above the
+    shoulder (0-0.5 m out, 0.1 m back to 0.4 m forward); ``n_out`` reaches end 0.4-0.6 m outside the shoulder
+    (0.15 m below to 0.15 m above it, 0.1 m back to 0.3 m forward). Hands alternate, left first."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for g in range(n_raise + n_out):
+        side = 1.0 if g % 2 == 0 else -1.0
+        hand = "HAND_LEFT" if side > 0 else "HAND_RIGHT"
+        shoulder = np.array([side * 0.19, 1.45, 0.0])
+        if g < n_raise:
+            top = shoulder + np.array([side * rng.uniform(0.0, 0.5), rng.uniform(0.25, 0.6), rng.uniform(-0.1, 0.4)])
+        else:
+            top = shoulder + np.array([side * rng.uniform(0.4, 0.6), rng.uniform(-0.15, 0.15), rng.uniform(-0.1, 0.3)])
+        t = np.linspace(0.0, 1.0, 150)
+        s = np.minimum(t / 0.5, 1.0)
+        s = s ** 3 * (10 - 15 * s + 6 * s * s)
+        rest = np.array([side * 0.24, 0.85, 0.0])
+        path = rest + s[:, None] * (top - rest)
+        path[:, 0] += 0.05 * np.sin(4 * np.pi * t) * (t > 0.5)
+        frames = np.repeat(pose()[None], 150, axis=0)
+        frames[:, JOINT_INDEX[hand]] = path
+        out.append((hand, frames))
+    return out
 
 
 def reach_pose(direction: str, reach: float) -> np.ndarray:
@@ -284,6 +320,85 @@ def check_waving_hard(spec):
         f"largest {order[-1]} {100 * diffs[order[-1]]:.1f})")
 
 
+def check_raised_upper_rows(spec):
+    """Raises and side reaches, MST and baseline: with the hand up, the vest's top two rows and the sleeves carry
+    more energy than its bottom two rows (share of gestures)."""
+    ok, n = 0, 0
+    for method in ("mst", "baseline"):
+        for _, frames in raise_gestures():
+            e = (render(motion_from_frames(frames), spec, method).intensities[75:] ** 2).sum(axis=0)
+            upper = e[(VEST_ROW >= 0) & (VEST_ROW <= 1)].sum() + e[SLEEVE_L | SLEEVE_R].sum()
+            ok += int(upper > e[VEST_ROW >= 3].sum() and upper > 0)
+            n += 1
+    return ok / n, ok / n >= 0.95, f"{ok}/{n} gestures (MST and baseline)"
+
+
+def check_raised_on_sleeve(spec):
+    """Raises and side reaches, MST and baseline, mirrored: the hand's own sleeve (the performer's left hand on the
+    wearer's right sleeve) has a motor at 15 or more in at least half of the frames with the hand up, and carries
+    more energy than the other sleeve (share of gestures)."""
+    ok, n = 0, 0
+    for method in ("mst", "baseline"):
+        for hand, frames in raise_gestures():
+            x = render(motion_from_frames(frames), spec, method).intensities[75:]
+            own, other = (SLEEVE_R, SLEEVE_L) if hand == "HAND_LEFT" else (SLEEVE_L, SLEEVE_R)
+            runs = (x[:, own].max(axis=1) >= FELT).mean()
+            ok += int(runs >= 0.5 and (x[:, own] ** 2).sum() > (x[:, other] ** 2).sum())
+            n += 1
+    return ok / n, ok / n >= 0.95, f"{ok}/{n} gestures (MST and baseline)"
+
+
+def sleeve_sides(track, speeds: np.ndarray, fps: float) -> np.ndarray:
+    """Frames where exactly one sleeve runs (a motor at 15 or more), ``(6,)`` counts: (on the active hand's side,
+    frames with one active hand; on the vest's stronger side, frames with one; on the leading hand's side, frames
+    with one). Mirrored, the performer's left hand belongs on the wearer's right. The active hand is the renderer's
+    (``debug["active"]``, frames with exactly one). The vest's stronger side is the half (wearer's left or right)
+    with at least twice the other's vest energy (frames where the vest is about even, its locus near the midline,
+    have none). The leading hand is the faster one over 0.2 s, moving (> 0.2 m/s) and at least 1.5 times as fast
+    as the other."""
+    rows = track.intensities
+    left, right = halves(LAYOUT)
+    vest = ~(SLEEVE_L | SLEEVE_R)
+    on_l = rows[:, SLEEVE_L].max(axis=1) >= FELT
+    on_r = rows[:, SLEEVE_R].max(axis=1) >= FELT
+    one = on_l ^ on_r
+    act = track.debug["active"].astype(bool)
+    single = one & (act[:, 0] ^ act[:, 1])
+    e = rows ** 2
+    ev_l, ev_r = e[:, vest & left].sum(axis=1), e[:, vest & right].sum(axis=1)
+    vest_side = one & (np.maximum(ev_l, ev_r) >= 2.0 * np.minimum(ev_l, ev_r)) & (ev_l + ev_r > 0)
+    n = max(1, int(round(0.2 * fps)))
+    sm = np.stack([smooth(speeds[:, 0], n), smooth(speeds[:, 1], n)], axis=1)
+    fast, slow = sm.max(axis=1), sm.min(axis=1)
+    leads = one & (fast > 0.2) & (fast >= 1.5 * slow)
+    return np.array([np.count_nonzero(single & (on_r == act[:, 0])), np.count_nonzero(single),
+                     np.count_nonzero(vest_side & (on_r == (ev_r > ev_l))), np.count_nonzero(vest_side),
+                     np.count_nonzero(leads & (on_r == (np.argmax(sm, axis=1) == 0))), np.count_nonzero(leads)])
+
+
+def check_sleeves_recordings(spec, clips):
+    """Recordings: the sleeves speak (a sleeve motor at 15 or more in every render; their median share of the
+    energy above 1 %), and a sleeve that runs alone is on the active hand's side and on the vest's stronger side
+    (pooled frames, MST and baseline; the leading hand's side is printed too)."""
+    top, shares, a = [], [], np.zeros(6, dtype=int)
+    for _, m in clips:
+        sp = hand_speeds(m)
+        for method in ("mst", "baseline"):
+            tr = render(m, spec, method)
+            x = tr.intensities
+            top.append(float(x[:, SLEEVE_L | SLEEVE_R].max()))
+            e = x ** 2
+            shares.append(float(e[:, SLEEVE_L | SLEEVE_R].sum() / max(e.sum(), 1e-12)))
+            a += sleeve_sides(tr, sp, m.fps)
+    act, vest, lead = (a[0] / max(a[1], 1), a[2] / max(a[3], 1), a[4] / max(a[5], 1))
+    spoke = sum(t >= FELT for t in top)
+    ok = spoke == len(top) and np.median(shares) > 0.01 and act >= 0.9 and vest >= 0.9
+    return min(act, vest), ok, (f"a sleeve motor >= 15 in {spoke}/{len(top)} renders; sleeve energy share median "
+                                f"{np.median(shares):.1%} (max {max(shares):.1%}); a sleeve alone on the active "
+                                f"hand's side {act:.0%} of {a[1]} frames, on the vest's stronger side {vest:.0%} of "
+                                f"{a[3]} (on the faster hand's {lead:.0%} of {a[5]})")
+
+
 def show_rows(track, song, mode, preset, ratio=(2.0, 3.0)):
     show = hshow.Show(audio=song, preset=preset, mode=mode, length="motion", mix_ratio=ratio)
     return hshow.render_show(show, motion_track=track).intensities
@@ -365,6 +480,10 @@ CHECKS = (
     ("more dynamic is stronger", "Fig. 10 bottom, 4.3.3", "rising, x1.25", "synthetic", check_more_dynamic),
     ("Fig. 11 continuity", "4.3.4, Fig. 11", "jump <= 0.05 K", "split", check_fig11),
     ("MST steadier than baseline", "6.3, Fig. 14", "all; <= 2/s", "recordings", check_mst_steadier),
+    ("raised hands in the upper rows", "3.2, 5.2 (whole upper body)", ">= 95 %", "synthetic", check_raised_upper_rows),
+    ("raised hand felt on its sleeve", "3.2, 5.2 (the sleeves)", ">= 95 %", "synthetic", check_raised_on_sleeve),
+    ("sleeves speak, on the active side", "3.2, 5.2 (the sleeves)", "all; > 1 %; >= 90 %", "recordings",
+     check_sleeves_recordings),
     ("larger range stronger", "6.3 (Motion 5)", "rho >= 0.8", "synthetic", check_larger_range),
     ("waving the hard case", "6.3 (Motion 1)", "waving least", "synthetic", check_waving_hard),
     ("motion survives 2:3", "6.4", "share, r >= 0.3", "recordings", check_motion_survives),
@@ -397,7 +516,7 @@ def main(argv=None) -> int:
                 continue
             print(f"\n{title}  [{anchor}; {source}]  target: {target}")
             for spec in specs:
-                if fn in (check_mst_steadier,):
+                if fn in (check_mst_steadier, check_sleeves_recordings):
                     _, ok, text = fn(spec, clips)
                 elif fn in (check_motion_survives, check_mode_order):
                     _, ok, text = fn(spec, clips, song_list)

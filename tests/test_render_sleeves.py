@@ -1,5 +1,5 @@
-"""The sleeves carry a raised or outstretched hand on its own side (``sleeve_share``, beyond the paper, off in every
-preset): ``felt`` with a share of 0.3."""
+"""The sleeves carry a raised or outstretched hand on its own side (``sleeve_share``, beyond the paper): on in the
+default preset (``felt``, share 1.0), off in ``paper`` and ``energy``."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from hapmotion.skeleton.joints import JOINT_INDEX
 IDS = hapmotion.load_layout().actuators
 SLEEVE_L = np.array([a.startswith("ForearmL") for a in IDS])
 SLEEVE_R = np.array([a.startswith("ForearmR") for a in IDS])
-CARRY = PRESETS["felt"].replace(sleeve_share=0.3)
+CARRY = PRESETS["felt"]
 
 
 def raise_and_wave(hand: str, top: tuple[float, float, float], fps: float = 60.0) -> np.ndarray:
@@ -67,10 +67,29 @@ def test_a_hand_below_the_shoulder_leaves_the_sleeves_alone():
 
 
 def test_the_sleeves_speak_on_every_recording():
-    """Every recording here drives a sleeve motor to 15 or more (without the carry, three of the seven never do),
-    and the sleeves hold at most 40 % of the energy."""
+    """Every recording here drives a sleeve motor to 15 or more with the default preset, and the sleeves hold at
+    most half of the energy (a hand fully up or out gives its sleeve as much of the frame's drive as the vest)."""
     for path in sorted(MOTION.glob("*.bvh")) + sorted(MOTION.glob("*.pkl")):
-        x = hapmotion.render(hapmotion.load_motion(path), params=CARRY).intensities
+        x = hapmotion.render(hapmotion.load_motion(path)).intensities
         e = x ** 2
         assert x[:, SLEEVE_L | SLEEVE_R].max() >= 15, path.name
-        assert e[:, SLEEVE_L | SLEEVE_R].sum() / e.sum() <= 0.4, path.name
+        assert e[:, SLEEVE_L | SLEEVE_R].sum() / e.sum() <= 0.5, path.name
+
+
+@pytest.mark.parametrize("method", ["mst", "baseline"])
+def test_a_sleeve_that_runs_alone_is_on_the_side_of_the_vest_region(method):
+    """Recordings: in the frames where one sleeve runs (a motor at 15 or more) and the vest's energy is clearly on
+    one half (twice the other's), the sleeve is on that half in at least 90 % of them (the sleeve carries the hand
+    the vest's point is on, so the two never pull to opposite sides)."""
+    left = hapmotion.load_layout().positions()[:, 0] < 0
+    vest = ~(SLEEVE_L | SLEEVE_R)
+    agree = n = 0
+    for path in sorted(MOTION.glob("*.bvh")) + sorted(MOTION.glob("*.pkl")):
+        x = hapmotion.render(hapmotion.load_motion(path), method=method).intensities
+        on_l, on_r = x[:, SLEEVE_L].max(axis=1) >= 15, x[:, SLEEVE_R].max(axis=1) >= 15
+        e = x ** 2
+        ev_l, ev_r = e[:, vest & left].sum(axis=1), e[:, vest & ~left].sum(axis=1)
+        clear = (on_l ^ on_r) & (np.maximum(ev_l, ev_r) >= 2 * np.minimum(ev_l, ev_r)) & (ev_l + ev_r > 0)
+        agree += np.count_nonzero(clear & (on_r == (ev_r > ev_l)))
+        n += np.count_nonzero(clear)
+    assert n > 200 and agree / n >= 0.9

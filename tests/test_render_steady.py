@@ -1,5 +1,5 @@
-"""The choice hold and the gliding dynamic point (beyond the paper, off in every preset): hand-worked cases, step ==
-batch, and the steadier felt locus on a real recording."""
+"""The choice hold and the gliding dynamic point (beyond the paper; on in the default preset, off in ``paper`` and
+``energy``): hand-worked cases, step == batch, and the steadier felt locus on a real recording."""
 
 from __future__ import annotations
 
@@ -16,7 +16,8 @@ from hapmotion.renderer.params import PRESETS
 from hapmotion.renderer.steps.choice import held_choice
 from hapmotion.skeleton.joints import JOINT_INDEX
 
-STEADY = PRESETS["felt"].replace(choice_hold_s=0.2, point_smoothing_s=0.15)
+STEADY = PRESETS["felt"]
+PLAIN = PRESETS["felt"].replace(choice_hold_s=0.0, point_smoothing_s=0.0)
 
 
 def run_choices(choices, idle, hold):
@@ -113,7 +114,8 @@ def test_hold_and_glide_steady_the_felt_locus_on_a_salsa_recording():
         a = track.debug["active"]
         return np.count_nonzero(np.diff(a[:, 0] + 2 * a[:, 1].astype(int))) / (motion.n_frames / motion.fps)
 
-    plain, steady = hapmotion.render(motion, preset="felt"), hapmotion.render(motion, params=STEADY)
+    assert STEADY.choice_hold_s == 0.2 and STEADY.point_smoothing_s == 0.15
+    plain, steady = hapmotion.render(motion, params=PLAIN), hapmotion.render(motion, params=STEADY)
     base = hapmotion.render(motion, method="baseline", params=STEADY)
     assert switches(steady) < 1.0 < switches(plain)
     assert locus_speed(steady) < locus_speed(base) and locus_speed(steady) < locus_speed(plain)

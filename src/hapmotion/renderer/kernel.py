@@ -23,15 +23,16 @@ from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENE
                      P_MAX_LEVEL, P_METHOD, P_NEAR, P_PCT, P_PHANTOM_ENERGY, P_REL_DECAY, P_RELEASE, P_SIDE_BLEND,
                      P_SILENCE, P_TOL, P_W_GAIN, P_W_MAX, P_WINDOW, S_TPX, S_TPY, S_TPZ, ST_AXES, ST_CHOICE,
                      ST_LEVEL, ST_PREV_DP, ST_SEEN, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE,
-                     P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA, P_TORSO_START, P_TORSO_FULL, P_SLEEVE_SHARE, P_SLEEVE_REACH)
+                     P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA, P_TORSO_START, P_TORSO_FULL, P_SLEEVE_SHARE, P_SLEEVE_REACH,
+                     P_LIFT_FRAME, P_DRIVE_MOTORS)
 from .steps.choice import (active_hand, active_hands, choose_active, hand_accelerations, held_choice, moving_only,
                            update_speeds, update_thresholds, upper_body_speed)
 from .steps.held_joints import hold_joints
 from .steps.intensity import boosted_level, filtered_level, level_drive, normalised_distance, speed_reach_drive
 from .steps.numeric import dist3
-from .steps.output import write_outputs, write_silence
+from .steps.output import share_frame_drive, write_outputs, write_silence
 from .steps.phantom import spread_on_charts
-from .steps.sleeves import carry_on_sleeve
+from .steps.sleeves import carried_hand, carry_on_sleeve
 from .steps.triangle import dynamic_point, glide, previous_dynamic_point, salient_triangle, speed_weighted
 from .steps.warping import locate_on_body
 
@@ -95,6 +96,8 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
     excess = np.zeros(2)
     speed_n = np.zeros(2)
     by_speed = prm[P_SPEED_ON] > 0.5
+    lift_frame = prm[P_LIFT_FRAME] > 0.5
+    lit = np.zeros(n_act, dtype=np.int64)
     above = np.zeros(2, dtype=np.bool_)
     prev_dp = np.zeros(3)
     dp = np.zeros(3)
@@ -136,6 +139,7 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         hand, hand_excess = active_hand(choice, dist_l, dist_r, excess)
 
         # step 5: the dynamic point: Eq. 1 on the motion salient triangle, or the hand itself (baseline)
+        carried = hand  # the hand the sleeves carry (-1: none)
         if baseline:
             for k in range(3):
                 dp[k] = jt[hand, k]
@@ -147,6 +151,7 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             dynamic_point(jt[j_a], jt[j_r], torso, w_a, w_r, 1.0, dp)  # J_T keeps weight 1
             if prm[P_DP_ALPHA] < 1.0:  # beyond the paper: the point glides
                 glide(torso, axes, state, prm[P_DP_ALPHA], dp)
+            carried = carried_hand(choice, hand)
         for k in range(3):
             state[ST_PREV_DP + k] = dp[k]
         dist = dist3(dp, torso)
@@ -170,11 +175,15 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         chart, u, v = spread_on_charts(hit, face, amp, surf, charts, prm[P_SIDE_BLEND], prm[P_PHANTOM_ENERGY] > 0.5,
                                        prm[P_TOL], prm[P_MAIN_FLAT] > 0.5, raw)
         if prm[P_SLEEVE_SHARE] > 0.0 and chart != CHART_SHOULDER_LEFT and chart != CHART_SHOULDER_RIGHT:
-            carry_on_sleeve(jt, hand, speed_n, by_speed, axes, amp, prm[P_SLEEVE_SHARE], prm[P_SLEEVE_REACH],
-                            charts, prm[P_PHANTOM_ENERGY] > 0.5, prm[P_TOL], raw)
+            carry_on_sleeve(jt, carried, axes, amp, prm[P_SLEEVE_SHARE], prm[P_SLEEVE_REACH], charts,
+                            prm[P_PHANTOM_ENERGY] > 0.5, prm[P_TOL], raw)
 
-        # output: dead zone, clip, mirror, per-actuator release
-        write_outputs(raw, prm[P_DEAD], prm[P_SILENCE], prm[P_REL_DECAY], mirror_map, state, out[t])
+        # output: dead zone (per motor, or once for the frame's drive shared over the motors), clip, mirror,
+        # per-actuator release
+        if lift_frame:
+            share_frame_drive(raw, amp, prm[P_DEAD], prm[P_SILENCE], prm[P_PHANTOM_ENERGY] > 0.5, prm[P_DRIVE_MOTORS],
+                              lit)
+        write_outputs(raw, prm[P_DEAD], prm[P_SILENCE], prm[P_REL_DECAY], mirror_map, state, out[t], not lift_frame)
 
         to_world_into(hit, torso, axes, hit_w)
         to_world_into(tp_body, torso, axes, tp_w)

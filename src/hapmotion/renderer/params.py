@@ -27,6 +27,7 @@ METHODS = ("mst", "baseline")
 PHANTOMS = ("paper", "energy")
 PHANTOM_MAINS = ("share", "flat")
 IDLE_CHOICES = ("keep", "farther")
+DEAD_ZONE_PER = ("motor", "frame")
 
 
 _RANGES = (
@@ -40,7 +41,7 @@ _RANGES = (
     ("reach_share", 0.0, 1.0), ("active_speed_mps", 0.0, 10.0), ("opposite_weight", 0.0, 10.0),
     ("speed_smoothing_s", 0.0, 1.0), ("speed_weight", 0.0, 100.0), ("choice_hold_s", 0.0, 2.0),
     ("point_smoothing_s", 0.0, 2.0), ("upper_speed_start_mps", 0.0, 10.0), ("upper_speed_full_mps", 0.0, 20.0),
-    ("sleeve_share", 0.0, 1.0), ("sleeve_reach_m", 0.01, 2.0),
+    ("sleeve_share", 0.0, 1.0), ("sleeve_reach_m", 0.01, 2.0), ("frame_drive_motors", 0.1, 8.0),
 )
 """Accepted range of each numeric parameter (beyond these the renderer's numbers stop meaning anything)."""
 
@@ -134,6 +135,14 @@ class Params:
     dead_zone: float = 0.0
     """Percent. Outputs of at least ``silence_floor`` are lifted to ``dead_zone + (100 - dead_zone) x / 100`` so
     they clear the ERM start threshold; smaller ones are set to 0. 0 = off."""
+    dead_zone_per: str = "motor"
+    """Where the dead-zone lift applies: ``motor``, each motor of the split (the frame's total then grows with
+    the number of motors the split lights); ``frame``, once to the frame's drive, which the motors then share in
+    proportion to the split, a share too small to start its motor going to the others (the total is the lifted
+    drive wherever the point is and however it is split)."""
+    frame_drive_motors: float = 1.0
+    """With ``dead_zone_per = "frame"``: the frame's drive in motors' worth, the total of the motors being this many
+    times the lifted level (how loud the rule is; 1 = one motor at the lifted level)."""
     silence_floor: float = 0.5
     """Percent. With a dead zone, outputs below this are silence rather than lifted (the Player takes integer
     percents, so less than 0.5 % rounds to 0 anyway); released tails also end here or at the dead zone."""
@@ -142,9 +151,10 @@ class Params:
     (smooths location jumps for slow ERMs); 0 = off."""
 
     sleeve_share: float = 0.0
-    """Share of the frame's amplitude (of energy with the energy split) added on the sleeve of the rendered hand's
-    side while that hand is above or outside its shoulder, times how far (``sleeve_reach_m``); 0 = off (ours:
-    the paper added the sleeves for what the vest misses, and the ray alone seldom reaches them)."""
+    """Share of the frame's amplitude (of energy with the energy split) added on the sleeve of the active hand (the
+    baseline's hand; MST's one active hand, none while both are) while that hand is above or outside its shoulder,
+    times how far (``sleeve_reach_m``); with ``dead_zone_per = "frame"`` it comes out of the vest's share. 0 = off
+    (ours: the paper added the sleeves for what the vest misses, and the ray alone seldom reaches them)."""
     sleeve_reach_m: float = 0.25
     """m. The hand's height above, or reach outside, its shoulder at which the sleeve share is full."""
 
@@ -177,6 +187,8 @@ class Params:
             raise UsageError(f"idle_choice must be one of {', '.join(IDLE_CHOICES)}, not {self.idle_choice!r}")
         if self.phantom_main not in PHANTOM_MAINS:
             raise UsageError(f"phantom_main must be one of {', '.join(PHANTOM_MAINS)}, not {self.phantom_main!r}")
+        if self.dead_zone_per not in DEAD_ZONE_PER:
+            raise UsageError(f"dead_zone_per must be one of {', '.join(DEAD_ZONE_PER)}, not {self.dead_zone_per!r}")
         if self.phantom not in PHANTOMS:
             raise UsageError(f"phantom must be one of {', '.join(PHANTOMS)}, not {self.phantom!r}")
         for name in ("attack_alpha", "release_alpha"):
@@ -239,20 +251,26 @@ PRESETS: dict[str, Params] = {
         base_level=10.0,
         max_level=10.0,
         dead_zone=20.0,
-        actuator_release_s=0.08,
-        speed_full_mps=1.2,
+        dead_zone_per="frame",
+        frame_drive_motors=2.0,
+        speed_full_mps=1.6,
         speed_start_mps=0.1,
         reach_share=0.4,
         active_speed_mps=0.2,
         opposite_weight=0.5,
         speed_weight=1.0,
         upper_speed_full_mps=0.4,
+        choice_hold_s=0.2,
+        point_smoothing_s=0.15,
+        sleeve_share=1.0,
     ),
 }
 """Named parameter sets. ``paper``: the paper's values. ``energy``: energy-preserving phantom split, asymmetric
 attack/release smoothing, ERM-aware output mapping (see docs/metrics.md for the evidence). ``felt`` (the default):
-the ``energy`` pipeline calibrated for ERM vests, intensity from hand speed and reach, motors lifted over their
-start (docs/algorithm.md, "The felt preset", gives every value with its reason and measured figure)."""
+the ``energy`` pipeline calibrated for ERM vests, intensity from hand speed and reach, the frame's drive lifted over
+the motors' start and shared over them, the active-joint choice held and the dynamic point gliding, the active
+hand's sleeve carrying it (docs/algorithm.md, "The felt preset", gives every value with its reason and measured
+figure)."""
 
 PAPER_VARIANTS: dict[str, dict[str, Any]] = {
     "range-185": {"intensity_far_m": 0.0, "intensity_near_m": 0.13, "baseline_intensity_far_m": 0.0},

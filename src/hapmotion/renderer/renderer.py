@@ -70,6 +70,8 @@ def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
     p[packed.P_TOL] = params.phantom_1d_tolerance
     p[packed.P_BETA] = params.perceptual_exponent
     p[packed.P_DEAD] = params.dead_zone
+    p[packed.P_LIFT_FRAME] = 1.0 if params.dead_zone_per == "frame" else 0.0
+    p[packed.P_DRIVE_MOTORS] = params.frame_drive_motors
     release_s = params.actuator_release_s
     p[packed.P_REL_DECAY] = float(np.exp(-1.0 / (fps * release_s))) if release_s > 0 else 0.0
     p[packed.P_FPS] = fps
