@@ -133,6 +133,8 @@ class Projection:
 
     def __call__(self, rows: np.ndarray) -> np.ndarray:
         rows = np.asarray(rows, dtype=np.float64)
+        if rows.shape[-1] < self.weights.shape[0]:  # the body chart alone on a rig with gloves: the gloves rest
+            rows = np.concatenate([rows, np.zeros(rows.shape[:-1] + (self.weights.shape[0] - rows.shape[-1],))], -1)
         if self.identity is not None:
             return rows[..., self.identity]
         x = np.nan_to_num(np.clip(rows, 0.0, 100.0))

@@ -8,15 +8,16 @@ numbers. It reads, per frame, the joints every reader maps (``HAND_*`` / ``WRIST
 the BVH skeletons here carry no finger data), and gives each performer hand six places, :data:`HAND_PLACES` (five
 fingertips and the palm), in 0..100 %:
 
-- **clap** (:meth:`HandGestures.step`): the two hands close on each other at ``clap_speed`` m/s or faster and stop
-  within ``contact_m`` of each other: a short strong pulse on both palms, ``100 min(1, closing speed / clap_full)``
+- **clap** (:meth:`HandGestures.step`): the two hands close on each other at ``clap_speed`` m/s or faster (the
+  fastest closing since they were last ``contact_m`` + 0.1 m apart) and stop (closing at half that or less) within
+  ``contact_m`` of each other: a short strong pulse on both palms, ``100 min(1, closing speed / clap_full)``
   fading to 0 over ``clap_pulse_s`` (a clap is an impact: felt at once and gone, as the sound is);
 - **wave**: a raised hand (its forearm level or up) that reverses its side-to-side direction relative to the
   neck (along the shoulder line, at ``wave_min_speed`` m/s or faster and mostly sideways) at least twice within ``wave_window_s``: its whole glove at ``100 min(1, hand speed / wave_full)``, so the
   vibration swells in each swing and dips at each turn, the wave's own rhythm (no wave within ``wave_window_s``
   of a clap: clapping hands reverse too);
 - **point**: a hand that reaches ``point_reach`` of its arm's length above the navel, arriving at ``point_speed``
-  m/s or faster, and is then held still (under ``hold_speed``) for ``point_hold_s``: a pulse on that hand's
+  m/s or faster (its fastest since it last rested with the arm bent), and is then held still (under ``hold_speed``) for ``point_hold_s``: a pulse on that hand's
   fingertips, the index tip at ``100 min(1, arrival speed / point_full)``, the other tips at half, fading over
   ``point_pulse_s`` (a jab that comes straight back is not a point).
 
@@ -174,9 +175,10 @@ class HandGestures:
         gap = hands[1] - hands[0]
         d = float(np.linalg.norm(gap))
         closing = -float(np.dot(self._vel[1] - self._vel[0], gap / d)) if d > 1e-9 else 0.0
-        self._peak_close = max(closing, self._peak_close * math.exp(-self.dt / 0.15))
-        if d > r.contact_m + 0.1:
+        if d > r.contact_m + 0.1:  # apart again: the next meeting may be a clap, judged by its own approach
             self._clap_armed = True
+            self._peak_close = 0.0
+        self._peak_close = max(closing, self._peak_close)
         met = min(d, self._prev_d if self._prev_d is not None else d) <= r.contact_m
         if self._clap_armed and met and self._peak_close >= r.clap_speed and closing <= 0.5 * self._peak_close:
             self.clapped = True
@@ -214,7 +216,6 @@ class HandGestures:
             self.pointed[h] = False
             side = _SIDES[h]
             shoulder, elbow = _joint(frame, f"SHOULDER_{side}"), _joint(frame, f"ELBOW_{side}")
-            self._peak_speed[h] = max(speed[h], self._peak_speed[h] * math.exp(-self.dt / 0.25))
             if p is None or shoulder is None or elbow is None or navel is None:
                 self._hold[h] = 0.0
                 continue
@@ -225,6 +226,9 @@ class HandGestures:
             reach = float(np.linalg.norm(end - shoulder)) / arm if arm > 1e-6 else 0.0
             if reach < r.point_reach - 0.1:
                 self._point_armed[h] = True
+                if speed[h] < r.hold_speed:  # at rest with the arm bent: the next reach is judged on its own
+                    self._peak_speed[h] = 0.0
+            self._peak_speed[h] = max(speed[h], self._peak_speed[h])
             if reach >= r.point_reach and p[1] > navel[1] and speed[h] < r.hold_speed:
                 if self._hold[h] == 0.0:
                     self._arrival[h] = self._peak_speed[h]
