@@ -250,3 +250,36 @@ def test_live_the_gloves_reach_the_sdk2_players_positions_8_and_9(tmp_path):
 def test_rules_are_documented_numbers():
     r = HandRules()
     assert 0 < r.contact_m < 0.3 and r.clap_speed < r.clap_full and r.hold_speed < r.point_speed
+
+
+def test_render_for_gloves_writes_the_gloves_tact_and_play_sends_it_back(tmp_path):
+    """``render --rig pro+gloves`` of a waving recording: the gloves' ``.tact`` files hold the wave; the rig's own
+    track played on the same rig reaches the Player's glove dots with the same numbers (to its rounding)."""
+    from click.testing import CliRunner
+
+    from hapmotion.cli import cli
+    from hapmotion.live.playback import play
+
+    wave = MOTION / "dataset-2_wave-both-hands_normal_001.bvh"
+    for out in ("pg.tact", "pg.csv"):
+        result = CliRunner().invoke(cli, ["render", str(wave), "--rig", "pro+gloves", "-o", str(tmp_path / out)])
+        assert result.exit_code == 0, result.output
+    for side in ("L", "R"):
+        glove = hapmotion.load_track(tmp_path / f"pg.Glove{side}.tact")
+        assert glove.intensities.max() > 50 and (glove.intensities.max(axis=1) > 0).mean() > 0.5
+    track = hapmotion.load_track(tmp_path / "pg.csv")
+    player = FakePlayerSdk1(sizes=V2_ALL_SIZES)
+
+    async def run():
+        await player.start()
+        try:
+            await play(track, [player.url()], show=Show(layout=LAYOUT.with_rig(parse_rig("pro+gloves"))),
+                       handle_signals=False)
+        finally:
+            await player.stop()
+
+    asyncio.run(run())
+    assert player.errors == []
+    col = {a: i for i, a in enumerate(track.actuators)}
+    sent = max(max(v) for _, p, v, _ in player.frames if p == "GloveL")
+    assert abs(sent - np.rint(track.intensities[:, [col[f"GloveL_{k}"] for k in range(6)]].max())) <= 1
