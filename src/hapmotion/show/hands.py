@@ -9,11 +9,12 @@ the BVH skeletons here carry no finger data), and gives each performer hand six 
 fingertips and the palm), in 0..100 %:
 
 - **clap** (:meth:`HandGestures.step`): the two hands close on each other at ``clap_speed`` m/s or faster (the
-  fastest closing since they were last ``contact_m`` + 0.1 m apart) and stop (closing at half that or less) within
+  fastest closing since they were last ``contact_m`` + 0.1 m apart, each hand bringing at least
+  ``clap_each`` of it) and stop (closing at half that or less) within
   ``contact_m`` of each other: a short strong pulse on both palms, ``100 min(1, closing speed / clap_full)``
   fading to 0 over ``clap_pulse_s`` (a clap is an impact: felt at once and gone, as the sound is);
 - **wave**: a raised hand (its forearm level or up) that reverses its side-to-side direction relative to the
-  neck (along the shoulder line, at ``wave_min_speed`` m/s or faster and mostly sideways) at least twice within ``wave_window_s``: its whole glove at ``100 min(1, hand speed / wave_full)``, so the
+  neck (along the shoulder line, at ``wave_min_speed`` m/s or faster and mostly sideways) ``wave_turns`` (3) times within ``wave_window_s``: its whole glove at ``100 min(1, hand speed / wave_full)``, so the
   vibration swells in each swing and dips at each turn, the wave's own rhythm (no wave within ``wave_window_s``
   of a clap: clapping hands reverse too);
 - **point**: a hand that reaches ``point_reach`` of its arm's length above the navel, arriving at ``point_speed``
@@ -53,6 +54,9 @@ class HandRules:
     clap_speed: float = 0.8
     clap_full: float = 1.6
     clap_pulse_s: float = 0.12
+    clap_each: float = 0.25
+    """In a clap both hands come: each closes at this share of the closing speed or more at some moment (a fist
+    pulled back to a still hand, a boxer's guard, is no clap)."""
     wave_min_speed: float = 0.15
     wave_lateral: float = 0.6
     """A swing counts when its side-to-side part is at least this share of the hand's speed (a jab forward is no
@@ -61,6 +65,9 @@ class HandRules:
     """A hand is raised when it is no lower than this under its elbow (the forearm level or up; a hanging hand is
     25 cm or more under it)."""
     wave_window_s: float = 1.2
+    wave_turns: int = 3
+    """Turns within ``wave_window_s`` that make a wave: one swing there and back is a gesture, one and a half
+    (three turns) a wave; with two, a boxer's guard and a dancer's arm work pass for waves."""
     wave_full: float = 1.0
     point_reach: float = 0.9
     point_speed: float = 1.0
@@ -108,7 +115,7 @@ class HandGestures:
         self._neck: Optional[np.ndarray] = None
         self._neck_vel = np.zeros(3)
         self._prev_d: Optional[float] = None
-        self._peak_close = 0.0
+        self._peak_close = self._peak_each = 0.0
         self._clap_armed = False
         self._clap_level = 0.0
         self._clap_at = -math.inf
@@ -174,13 +181,18 @@ class HandGestures:
             return
         gap = hands[1] - hands[0]
         d = float(np.linalg.norm(gap))
-        closing = -float(np.dot(self._vel[1] - self._vel[0], gap / d)) if d > 1e-9 else 0.0
+        toward = gap / d if d > 1e-9 else np.zeros(3)
+        each = min(float(np.dot(self._vel[0], toward)), -float(np.dot(self._vel[1], toward)))
+        closing = -float(np.dot(self._vel[1] - self._vel[0], toward))
         if d > r.contact_m + 0.1:  # apart again: the next meeting may be a clap, judged by its own approach
             self._clap_armed = True
-            self._peak_close = 0.0
+            self._peak_close = self._peak_each = 0.0
         self._peak_close = max(closing, self._peak_close)
+        self._peak_each = max(each, self._peak_each)
         met = min(d, self._prev_d if self._prev_d is not None else d) <= r.contact_m
-        if self._clap_armed and met and self._peak_close >= r.clap_speed and closing <= 0.5 * self._peak_close:
+        both = self._peak_each >= r.clap_each * self._peak_close  # both hands came: not a fist back to a guard
+        if (self._clap_armed and met and both and self._peak_close >= r.clap_speed
+                and closing <= 0.5 * self._peak_close):
             self.clapped = True
             self._clap_armed = False
             self._clap_level = 100.0 * min(1.0, self._peak_close / r.clap_full)
@@ -207,7 +219,7 @@ class HandGestures:
                 turns.pop(0)
             elbow = _joint(frame, f"ELBOW_{_SIDES[h]}")
             raised = p is not None and elbow is not None and p[1] >= elbow[1] - r.wave_below_elbow_m
-            self.waving[h] = raised and len(turns) >= 2 and self.t - self._clap_at > r.wave_window_s
+            self.waving[h] = raised and len(turns) >= r.wave_turns and self.t - self._clap_at > r.wave_window_s
 
     def _point(self, frame: np.ndarray, hands: list, speed: list) -> None:
         r = self.rules
