@@ -283,3 +283,43 @@ def test_render_for_gloves_writes_the_gloves_tact_and_play_sends_it_back(tmp_pat
     col = {a: i for i, a in enumerate(track.actuators)}
     sent = max(max(v) for _, p, v, _ in player.frames if p == "GloveL")
     assert abs(sent - np.rint(track.intensities[:, [col[f"GloveL_{k}"] for k in range(6)]].max())) <= 1
+
+
+# ------------------------------------------------------------------------------------------ the output stage
+def _stage(**show):
+    from hapmotion.show import OutputStage
+
+    return OutputStage.for_show(Show(layout=GLOVES, mirror=False, **show), "motion", layout=GLOVES, fps=FPS)
+
+
+def test_the_stage_puts_the_gloves_under_the_wearers_comfort_and_the_power_limit():
+    from hapmotion.show import Comfort
+
+    pos = _clap(0.75)
+    body_rows = np.zeros((len(pos), len(LAYOUT.actuators)))
+    plain = _stage().rows(body_rows, None, pos)
+    n = len(LAYOUT.actuators)
+    assert plain.shape == (len(pos), n + 12) and plain[:, n + PALM].max() == pytest.approx(100 * 1.5 / 1.6, abs=0.1)
+    capped = _stage(comfort=Comfort(max_level=40.0)).rows(body_rows, None, pos)
+    assert capped[:, n:].max() == pytest.approx(40.0)  # the wearer's maximum level covers the gloves
+    # a full body chart and full gloves: the whole row is scaled to the show's one power limit (0.75 of 64 motors)
+    full = _stage().rows(np.full_like(body_rows, 100.0), None, pos)
+    power = ((full / 100.0) ** 2).sum(axis=1)
+    assert power.max() <= 0.75 * (n + 12) + 1e-9 and full[:, n + PALM].max() > 0
+    # frame by frame, as live and a seat drive it: the same rows
+    stage = _stage()
+    stepped = np.array([stage.step(r, i / FPS, f) for i, (r, f) in enumerate(zip(body_rows, pos))])
+    assert np.array_equal(stepped, plain)
+
+
+def test_a_glove_pattern_plays_on_gloves_as_it_is():
+    from hapmotion.track import HapticTrack
+
+    ids = parse_rig("gloves").actuators
+    rows = np.zeros((10, 12))
+    rows[:, 1] = 80.0  # the left index tip
+    pattern = HapticTrack(rows, 30.0, ids, layout="gloves")
+    on_rig = rig_track(pattern, GLOVES)
+    col = {a: i for i, a in enumerate(on_rig.actuators)}
+    assert on_rig.intensities[:, col["GloveL_1"]].max() == 80.0
+    assert on_rig.intensities[:, [col[a] for a in on_rig.actuators if a != "GloveL_1"]].max() == 0
