@@ -12,8 +12,8 @@ Synthetic (seeded, with sensor noise, at 30/60/120 frames/s, performers 0.85-1.1
 - waves: one raised hand swinging 1-3 Hz, 8-25 cm, the other hanging: the waving hand's glove (the mirrored one)
   gets >= 90 % of the gloves' energy (target >= 95 % of clips); and of the one-hand ``wave`` clips of
   ``benchmarks.feel`` that are felt (its slowest, 0.7 Hz, turn too seldom to count as waves), the same share;
-- points: one arm straightened in 0.2-0.33 s (the hand arriving at 1.1-2.3 m/s) and held 0.3-1 s: a fingertip pulse on the (mirrored) pointing
-  hand's glove (target >= 95 %); jabs that come straight back: no point (target 0).
+- points: one arm straightened in 0.2-0.33 s (the hand arriving at 1.1-2.3 m/s) and held 0.3-1 s: a fingertip
+  pulse on the (mirrored) pointing hand's glove (target >= 95 %); jabs that come straight back: no point (target 0).
 
 Recordings of the motion folder: the two waving clips (``wave-both-hands``, ``byebye``) must drive the gloves in at
 least half of their frames; the clips with no clap in them (the two waves, ``punch``) must give no clap, and the

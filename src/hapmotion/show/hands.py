@@ -9,18 +9,20 @@ the BVH skeletons here carry no finger data), and gives each performer hand six 
 fingertips and the palm), in 0..100 %:
 
 - **clap** (:meth:`HandGestures.step`): the two hands close on each other at ``clap_speed`` m/s or faster (the
-  fastest closing since they were last ``contact_m`` + 0.1 m apart, each hand bringing at least
-  ``clap_each`` of it) and stop (closing at half that or less) within
-  ``contact_m`` of each other: a short strong pulse on both palms, ``100 min(1, closing speed / clap_full)``
-  fading to 0 over ``clap_pulse_s`` (a clap is an impact: felt at once and gone, as the sound is);
-- **wave**: a raised hand (its forearm level or up) that reverses its side-to-side direction relative to the
-  neck (along the shoulder line, at ``wave_min_speed`` m/s or faster and mostly sideways) ``wave_turns`` (3) times within ``wave_window_s``: its whole glove at ``100 min(1, hand speed / wave_full)``, so the
-  vibration swells in each swing and dips at each turn, the wave's own rhythm (no wave within ``wave_window_s``
-  of a clap: clapping hands reverse too);
+  fastest closing since they were last ``contact_m`` + 0.1 m apart, each hand bringing at least ``clap_each`` of
+  it) and stop (closing at half that or less) within ``contact_m`` of each other: a short strong pulse on both
+  palms, ``100 min(1, closing speed / clap_full)`` fading to 0 over ``clap_pulse_s`` (a clap is an impact: felt
+  at once and gone, as the sound is);
+- **wave**: a raised hand (its forearm level or up) that reverses its side-to-side direction relative to the neck
+  (along the shoulder line, at ``wave_min_speed`` m/s or faster and mostly sideways) ``wave_turns`` (3) times
+  within ``wave_window_s``: its whole glove at ``100 min(1, hand speed / wave_full)``, so the vibration swells in
+  each swing and dips at each turn, the wave's own rhythm (no wave within ``wave_window_s`` of a clap: clapping
+  hands reverse too);
 - **point**: a hand that reaches ``point_reach`` of its arm's length above the navel, arriving at ``point_speed``
-  m/s or faster (its fastest since it last rested with the arm bent), and is then held still (under ``hold_speed``) for ``point_hold_s``: a pulse on that hand's
-  fingertips, the index tip at ``100 min(1, arrival speed / point_full)``, the other tips at half, fading over
-  ``point_pulse_s`` (a jab that comes straight back is not a point).
+  m/s or faster (its fastest since it last rested with the arm bent), and is then held still (under
+  ``hold_speed``) for ``point_hold_s``: a pulse on that hand's fingertips, the index tip at ``100 min(1, arrival
+  speed / point_full)``, the other tips at half, fading over ``point_pulse_s`` (a jab that comes straight back is
+  not a point).
 
 Each place takes the strongest of the three. :func:`hand_rows` puts the two hands on the wearer's gloves: the
 performer's left hand on the left glove, swapped when the show is mirrored, as the renderer mirrors the body chart.

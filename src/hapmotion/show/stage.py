@@ -207,7 +207,8 @@ class OutputStage:
                   comfort: Comfort = Comfort(), cues: Optional[CueList] = None,
                   music: Optional[RowTimeline] = None, mirror: bool = True) -> "OutputStage":
         """The stage :meth:`to_dict` describes, on ``layout`` at ``fps``, with a seat's own ``comfort`` and
-        ``cues`` (and, when the seat's rig has gloves, the glove layer, mirrored as the seat's renderer). ``settings`` ``None`` or empty: a motion-only show (no mix; the show's power limit). Every field
+        ``cues`` (and, when the seat's rig has gloves, the glove layer, mirrored as the seat's renderer
+        mirrors). ``settings`` ``None`` or empty: a motion-only show (no mix; the show's power limit). Every field
         is checked (:meth:`check_settings`): UsageError naming the field, never an internal error."""
         n = len(layout.played_actuators)
         checked = cls.check_settings(settings or {"power_limit": show_power_limit(n)}, n)
