@@ -323,3 +323,18 @@ def test_a_glove_pattern_plays_on_gloves_as_it_is():
     col = {a: i for i, a in enumerate(on_rig.actuators)}
     assert on_rig.intensities[:, col["GloveL_1"]].max() == 80.0
     assert on_rig.intensities[:, [col[a] for a in on_rig.actuators if a != "GloveL_1"]].max() == 0
+
+
+def test_a_hand_tip_where_the_input_has_one_decides_the_reach():
+    """With ``HANDTIP_*`` (Azure Kinect JSON, live canonical senders) the reach runs to the fingers' end: a hand
+    pointing on along the arm is a point; the same arm with the hand bent back at the wrist (the tip 9 cm back
+    towards the shoulder, reach (0.55 - 0.09) / (0.55 + 0.09) = 0.72) is not."""
+    pos = _point()
+    arm = pos[:, J["HAND_RIGHT"]] - pos[:, J["ELBOW_RIGHT"]]
+    unit = arm / np.linalg.norm(arm, axis=1)[:, None]
+    pos[:, J["HANDTIP_RIGHT"]] = pos[:, J["HAND_RIGHT"]] + 0.09 * unit
+    _, g = _run(pos)
+    assert sum(f[2][1] for f in g.flags) == 1
+    pos[:, J["HANDTIP_RIGHT"]] = pos[:, J["HAND_RIGHT"]] - 0.09 * unit
+    out, g = _run(pos)
+    assert not any(f[2].any() for f in g.flags) and out.max() == 0
