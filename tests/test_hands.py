@@ -166,7 +166,7 @@ def test_the_layer_runs_the_same_numbers_in_one_go_and_frame_by_frame():
     layer = HandLayer(FPS, mirror=True)
     whole = layer.rows(pos)
     layer.reset()
-    stepped = np.array([layer.step(f) for f in pos])
+    stepped = np.array([layer.step(f, i / FPS) for i, f in enumerate(pos)])
     assert np.array_equal(whole, stepped) and whole.max() == 100
 
 
@@ -338,3 +338,15 @@ def test_a_hand_tip_where_the_input_has_one_decides_the_reach():
     pos[:, J["HANDTIP_RIGHT"]] = pos[:, J["HAND_RIGHT"]] - 0.09 * unit
     out, g = _run(pos)
     assert not any(f[2].any() for f in g.flags) and out.max() == 0
+
+
+def test_live_frames_at_an_uneven_rate_are_timed_by_their_show_time():
+    """A sender that skips every other frame, or sends in bursts: the frames' show times give the speeds, so the
+    clap is found once, at the same closing speed (1.5 m/s: 100 * 1.5 / 1.6 on both palms)."""
+    pos = _clap(0.75)
+    keep = np.flatnonzero(np.arange(len(pos)) % 3 != 1)  # two frames of three
+    g = HandGestures(FPS)
+    out = np.array([g.step(pos[i], i / FPS) for i in keep])
+    claps = np.flatnonzero(out[:, 0, PALM] > 0)
+    assert out[:, :, PALM].max() == pytest.approx(100 * 1.5 / 1.6, abs=0.5)
+    assert len(claps) and (np.diff(claps) == 1).all() and out[:, :, :PALM].max() == 0

@@ -109,9 +109,13 @@ class HandGestures:
         self._alpha = 1.0 - math.exp(-self.dt / rules.velocity_tau_s)
         self.reset()
 
+    MAX_GAP_S = 0.25
+    """Frames further apart than this (a stalled or restarted source) start the hands' velocities afresh."""
+
     def reset(self) -> None:
         """Forget all history: the next frame is a first frame."""
         self.t = 0.0
+        self._last_t: Optional[float] = None
         self._prev: list[Optional[np.ndarray]] = [None, None]
         self._vel = np.zeros((2, 3))
         self._neck: Optional[np.ndarray] = None
@@ -133,13 +137,22 @@ class HandGestures:
         self.waving = np.zeros(2, dtype=bool)
         self.pointed = np.zeros(2, dtype=bool)
 
-    def step(self, frame: np.ndarray) -> np.ndarray:
-        """One frame (see the class docstring): ``(2, 6)`` float64 0..100."""
+    def step(self, frame: np.ndarray, t: Optional[float] = None) -> np.ndarray:
+        """One frame (see the class docstring): ``(2, 6)`` float64 0..100. ``t`` is the frame's show time in
+        seconds, when known (live: senders need not keep a steady rate); without it frames are ``1 / fps`` apart."""
         frame = np.asarray(frame, dtype=np.float64)
         if frame.shape != (32, 3):
             raise ValueError(f"frame must be (32, 3), got {frame.shape}")
         r, dt = self.rules, self.dt
+        if t is not None and math.isfinite(t):
+            gap = t - self._last_t if self._last_t is not None else dt
+            if gap > self.MAX_GAP_S:
+                self._prev, self._neck = [None, None], None  # no velocity across a gap
+            if 0.0 < gap <= self.MAX_GAP_S:
+                dt = gap
+            self._last_t = t
         self.t += dt
+        self._alpha = 1.0 - math.exp(-dt / r.velocity_tau_s)
         hands = [_joint(frame, f"HAND_{s}", f"WRIST_{s}") for s in _SIDES]
         speed = [0.0, 0.0]
         for h, p in enumerate(hands):
@@ -161,7 +174,7 @@ class HandGestures:
         out = np.zeros((2, N_PLACES))
         self._clap(hands)
         self._wave(frame, hands)
-        self._point(frame, hands, speed)
+        self._point(frame, hands, speed, dt)
         since = self.t - self._clap_at
         if since < r.clap_pulse_s:
             out[:, PALM] = self._clap_level * (1.0 - since / r.clap_pulse_s)
@@ -223,7 +236,7 @@ class HandGestures:
             raised = p is not None and elbow is not None and p[1] >= elbow[1] - r.wave_below_elbow_m
             self.waving[h] = raised and len(turns) >= r.wave_turns and self.t - self._clap_at > r.wave_window_s
 
-    def _point(self, frame: np.ndarray, hands: list, speed: list) -> None:
+    def _point(self, frame: np.ndarray, hands: list, speed: list, dt: float) -> None:
         r = self.rules
         navel = _joint(frame, "SPINE_NAVEL", "PELVIS")
         for h, p in enumerate(hands):
@@ -246,7 +259,7 @@ class HandGestures:
             if reach >= r.point_reach and p[1] > navel[1] and speed[h] < r.hold_speed:
                 if self._hold[h] == 0.0:
                     self._arrival[h] = self._peak_speed[h]
-                self._hold[h] += self.dt
+                self._hold[h] += dt
             else:
                 self._hold[h] = 0.0
             if (self._point_armed[h] and self._hold[h] >= r.point_hold_s - 1e-9
@@ -256,12 +269,13 @@ class HandGestures:
                 self._point_level[h] = 100.0 * min(1.0, self._arrival[h] / r.point_full)
                 self._point_at[h] = self.t
 
-    def run(self, positions: np.ndarray) -> np.ndarray:
-        """Many frames, continuing from the current state: ``(T, 32, 3)`` -> ``(T, 2, 6)``."""
+    def run(self, positions: np.ndarray, times: Optional[np.ndarray] = None) -> np.ndarray:
+        """Many frames, continuing from the current state: ``(T, 32, 3)`` (and their ``(T,)`` show times in
+        seconds, if known) -> ``(T, 2, 6)``."""
         positions = np.asarray(positions, dtype=np.float64)
         out = np.zeros((positions.shape[0], 2, N_PLACES))
         for i in range(positions.shape[0]):
-            out[i] = self.step(positions[i])
+            out[i] = self.step(positions[i], None if times is None else float(times[i]))
         return out
 
 
@@ -284,13 +298,16 @@ class HandLayer:
         self.gestures = HandGestures(fps, rules)
 
     def rows(self, positions: np.ndarray) -> np.ndarray:
-        """``(T, 32, 3)`` frames from a fresh state -> ``(T, 12)`` glove places 0..100."""
+        """``(T, 32, 3)`` frames at the layer's rate (frame ``i`` at ``i / fps`` s) from a fresh state -> ``(T, 12)``
+        glove places 0..100: the numbers :meth:`step` gives frame by frame at those times."""
         self.gestures.reset()
-        return hand_rows(self.gestures.run(positions), self.mirror)
+        positions = np.asarray(positions, dtype=np.float64)
+        times = np.arange(positions.shape[0]) / self.gestures.fps
+        return hand_rows(self.gestures.run(positions, times), self.mirror)
 
-    def step(self, frame: np.ndarray) -> np.ndarray:
-        """One ``(32, 3)`` frame -> ``(12,)`` glove places 0..100 (state kept)."""
-        return hand_rows(self.gestures.step(frame), self.mirror)
+    def step(self, frame: np.ndarray, t: Optional[float] = None) -> np.ndarray:
+        """One ``(32, 3)`` frame at show time ``t`` s -> ``(12,)`` glove places 0..100 (state kept)."""
+        return hand_rows(self.gestures.step(frame, t), self.mirror)
 
     def reset(self) -> None:
         self.gestures.reset()

@@ -290,7 +290,7 @@ class OutputStage:
                 raise ValueError(f"mode {self.mode} needs an incoming row")
             row = self.condition(self._full(incoming), music)
             if self.hands is not None and skeleton is not None and np.shape(skeleton) == (32, 3):
-                row = self._with_hands(row, self.hands.step(skeleton))
+                row = self._with_hands(row, self.hands.step(skeleton, t))
         cues = self.cues
         if cues is not None:
             row = cues.layer(row, t)
