@@ -18,7 +18,9 @@ Targets, per rig (each printed beside its figure, ``!`` when missed):
   of the shoulder it stands for) is within one motor pitch of the X40 render's, per gesture frame with any drive
   (mean distance <= the X40's pitch: the mean distance between neighbouring motors of its front panel, on the
   default adult);
-- energy: each body side's energy over all gestures within +-1 dB of the X40 render's.
+- energy: each body side's energy over all gestures within +-1 dB of the X40 render's;
+- gloves (``pro+gloves``): a clap, a wave and a point felt where they should be, with their own targets
+  (:mod:`benchmarks.gloves`).
 
 Run::
 
@@ -36,6 +38,7 @@ import tempfile
 import numpy as np
 
 import hapmotion
+from benchmarks import gloves
 from benchmarks.feel import SHARED, hand_speeds, real_clips, runs, synthetic_clips
 from hapmotion.body.model import BodyModel
 from hapmotion.layout import CHART_BACK, CHART_FRONT, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT
@@ -198,6 +201,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--preset", default=None, help="renderer preset (default: the default, felt)")
     ap.add_argument("--no-synthetic", action="store_true", help="the recordings only")
+    ap.add_argument("--no-gloves", action="store_true", help="leave out the glove figures (benchmarks.gloves)")
     ap.add_argument("-v", "--verbose", action="store_true", help="per-clip sides")
     args = ap.parse_args(argv)
     rig_names = args.rig or list(RIGS)
@@ -214,6 +218,8 @@ def main(argv=None) -> int:
         with tempfile.TemporaryDirectory() as tmp:
             synth = [c for c in synthetic_clips(tmp, args.seed) if c.hand is not None]
             report("synthetic (benchmarks.feel, seeded)", measure(synth, rig_names, args.verbose, show), pitch, len(synth))
+    if not args.no_gloves:  # the hands on the gloves (benchmarks.gloves): clap, wave and point
+        ok &= gloves.run(args.seed, args.motion_dir)
     print("('!' = target missed)")
     return 0 if ok else 1
 

@@ -39,6 +39,21 @@ from .limits import LimitsArg, as_limits, checked_json_text, parse_json_text
 
 CHART_FRONT, CHART_BACK, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT = 0, 1, 2, 3
 CHART_NAMES = ("front", "back", "shoulder_left", "shoulder_right")
+CHART_HAND_LEFT, CHART_HAND_RIGHT = 4, 5
+"""The wearer's hands: places a layout gains when its rig has motors on the hands (:meth:`Layout.with_rig`)."""
+
+HAND_PLACES: tuple[tuple[str, float, float], ...] = (
+    ("thumb", 0.0, 0.0), ("index", 0.25, 0.0), ("middle", 0.5, 0.0), ("ring", 0.75, 0.0), ("little", 1.0, 0.0),
+    ("palm", 0.5, 1.0),
+)
+"""The six places of each hand, ``(name, across, height)`` on a hand's chart (``across`` from the thumb to the little
+finger, ``height`` from the fingertips to the wrist, as the wearable files put glove motors): the five fingertips
+and the palm's heel. They are a TactGlove's six motors (five tips and one at the wrist), so on gloves every place is
+one motor's; on other hand wearables the rig's phantom split spreads them (:mod:`hapmotion.rig`)."""
+
+HAND_DEVICES = ("GloveL", "GloveR")
+"""The names of the hand places' columns (``GloveL_0`` .. ``GloveL_5``, wearer's left; then the right): the
+TactGlove's own positions, so a track of the body chart with hands plays on gloves as it is."""
 
 DEFAULT_LAYOUT_NAME = "x40_shoulders"
 """The default layout's name: what a track or sink is for when none is named."""
@@ -143,6 +158,60 @@ class Layout:
     def with_rig(self, rig: Any) -> "Layout":
         """This layout played on ``rig``."""
         return Layout(self.name, self.devices, rig)
+
+    # ------------------------------------------------------------------ the rows played: body chart (+ hands)
+    @property
+    def hand_devices(self) -> tuple[Device, ...]:
+        """The hand places' devices (``GloveL``, ``GloveR``: six places each, :data:`HAND_PLACES`, after the body
+        chart's columns) when the layout's rig has motors on the hands (gloves), else ``()``. The renderer, the
+        music and the cues' body places stay on the body chart; the output stage fills these columns from the
+        performer's hands (:mod:`hapmotion.hands`)."""
+        rig = self.rig
+        if rig is None or not any(getattr(m, "limb", "") == "hand" for m in rig.motors):
+            return ()
+        glove = bundled_wearables()["gloves"]
+        out, offset = [], self.n_actuators
+        for chart, name in zip((CHART_HAND_LEFT, CHART_HAND_RIGHT), HAND_DEVICES):
+            first = glove.device_motors(name)[0]
+            out.append(Device(name=name, rows=1, cols=len(HAND_PLACES), chart=chart, offset=offset,
+                              sdk2_position=first.sdk2_position, sdk2_offset=0, sdk2_length=len(HAND_PLACES),
+                              x_span=(0.0, 1.0), z_span=(0.0, 1.0)))
+            offset += len(HAND_PLACES)
+        return tuple(out)
+
+    @property
+    def played_actuators(self) -> tuple[str, ...]:
+        """The columns of the rows a show sends: :attr:`actuators` (the body chart), then the hand places'
+        (``GloveL_0`` .. ``GloveR_5``) when the rig has hands."""
+        return self.actuators + tuple(f"{d.name}_{i}" for d in self.hand_devices for i in range(d.size))
+
+    def played_places(self) -> tuple[tuple[str, float, float], ...]:
+        """:meth:`places` of :attr:`played_actuators`: the hand places on ``hand_left`` / ``hand_right``."""
+        hands = tuple((f"hand_{side}", u, v) for side in ("left", "right") for _, u, v in HAND_PLACES)
+        return self.places() + (hands if self.hand_devices else ())
+
+    def played_mirror_map(self) -> np.ndarray:
+        """:meth:`mirror_map` of :attr:`played_actuators`: mirroring swaps the two hands' places too."""
+        out = self.mirror_map()
+        hands = self.hand_devices
+        if not hands:
+            return out
+        n, h = self.n_actuators, len(HAND_PLACES)
+        return np.concatenate([out, np.arange(n + h, n + 2 * h), np.arange(n, n + h)])
+
+    def played_positions(self, body: BodyModel | None = None) -> np.ndarray:
+        """:meth:`positions` of :attr:`played_actuators`. A hand place is put where a hanging hand is (beside the
+        hip, a hand's length out from the torso's side): far from every vest and sleeve motor, so the music's
+        duck rule, which finds the motion's neighbours by position, never pairs a hand with the body."""
+        out = self.positions(body)
+        if not self.hand_devices:
+            return out
+        body = body or BodyModel.default()
+        hands = np.zeros((2 * len(HAND_PLACES), 3))
+        for k in range(2 * len(HAND_PLACES)):
+            side = -1.0 if k < len(HAND_PLACES) else 1.0
+            hands[k] = (side * (body.half_width + 0.2), body.y_row_last - 0.2, 0.0)
+        return np.vstack([out, hands])
 
     # ------------------------------------------------------------------ geometry
     def positions(self, body: BodyModel | None = None) -> np.ndarray:

@@ -133,6 +133,8 @@ class Projection:
 
     def __call__(self, rows: np.ndarray) -> np.ndarray:
         rows = np.asarray(rows, dtype=np.float64)
+        if rows.shape[-1] < self.weights.shape[0]:  # the body chart alone on a rig with gloves: the gloves rest
+            rows = np.concatenate([rows, np.zeros(rows.shape[:-1] + (self.weights.shape[0] - rows.shape[-1],))], -1)
         if self.identity is not None:
             return rows[..., self.identity]
         x = np.nan_to_num(np.clip(rows, 0.0, 100.0))
@@ -192,7 +194,7 @@ class Rig:
     def projection(self, layout: Optional[Layout] = None) -> Projection:
         """Rows on ``layout``'s body chart (default: the default layout) to rows of this rig's motors."""
         layout = layout or default_layout()
-        weights = transfer(layout.places(), [(m.chart, m.across, m.height) for m in self.motors])
+        weights = transfer(layout.played_places(), [(m.chart, m.across, m.height) for m in self.motors])
         return Projection(self.actuators, weights, self.energy, _identity(weights))
 
     def sdk2_groups(self) -> tuple:
@@ -320,9 +322,9 @@ def lift(ids: Sequence[str], rows: np.ndarray, layout: Optional[Layout] = None, 
     Left/Right pattern onto the shoulder grids; an Air's 8 front motors onto the X40's front). Returns ``((T, N)
     rows, the devices that have no place on the chart)``."""
     layout = layout or default_layout()
-    chart_ids = layout.actuators
+    chart_ids = layout.played_actuators
     index = {a: i for i, a in enumerate(chart_ids)}
-    sizes = {d.name: d.size for d in layout.devices}
+    sizes = {d.name: d.size for d in layout.devices + layout.hand_devices}
     rows = np.asarray(rows, dtype=np.float64).reshape(len(rows), len(ids))
     out = np.zeros((rows.shape[0], len(chart_ids)))
     energy_sum = np.zeros_like(out)
@@ -332,7 +334,7 @@ def lift(ids: Sequence[str], rows: np.ndarray, layout: Optional[Layout] = None, 
         if k.isdigit():
             devices.setdefault(dev, []).append((int(k), c))
     missing = []
-    places = layout.places()
+    places = layout.played_places()
     for dev, cols in devices.items():
         cols.sort()
         whole = [k for k, _ in cols] == list(range(len(cols)))
@@ -363,12 +365,12 @@ def lift_track(track: HapticTrack, layout: Optional[Layout] = None) -> tuple[Hap
     chart's, else through :func:`lift`. Devices with no place on the chart are returned by name and kept as they
     are after the chart's columns (so whoever plays the track notes them as it notes any device it lacks)."""
     layout = layout or default_layout()
-    if tuple(track.actuators) == tuple(layout.actuators) and track.layout == layout.name:
+    if tuple(track.actuators) in (tuple(layout.actuators), layout.played_actuators) and track.layout == layout.name:
         return track, []  # already on it (a rig's motor layout too: check's pattern)
     devices = {a.rpartition("_")[0] for a in track.actuators}
-    chart_devices = {d.name for d in layout.devices}
+    chart_devices = {d.name for d in layout.devices + layout.hand_devices}
     rig = _track_rig(track.layout, track.actuators)
-    sizes = {d.name: d.size for d in layout.devices}
+    sizes = {d.name: d.size for d in layout.devices + layout.hand_devices}
     counts = {d: sum(1 for a in track.actuators if a.rpartition("_")[0] == d) for d in devices}
     if rig is None and devices <= chart_devices and all(counts[d] == sizes[d] for d in devices):
         return track, []
@@ -376,7 +378,7 @@ def lift_track(track: HapticTrack, layout: Optional[Layout] = None) -> tuple[Hap
     if not devices & chart_devices and set(missing) == devices:
         return track, missing  # nothing reaches the body chart: the caller says so about the track as it is
     keep = [i for i, a in enumerate(track.actuators) if a.rpartition("_")[0] in missing]
-    ids = tuple(layout.actuators) + tuple(track.actuators[i] for i in keep)
+    ids = tuple(layout.played_actuators) + tuple(track.actuators[i] for i in keep)
     meta = dict(track.meta, lifted_from=track.layout)
     return HapticTrack(np.hstack([rows, track.intensities[:, keep]]), track.fps, ids, layout=layout.name, meta=meta,
                        debug=dict(track.debug)), missing
@@ -395,8 +397,8 @@ def rig_track(track: HapticTrack, layout: Layout, *, slots: bool = False) -> Hap
         raise UsageError(f"the track's devices ({', '.join(missing)}) have no place on the body chart, so the rig "
                          f"{rig.name} cannot play them")
     index = {a: i for i, a in enumerate(on_chart.actuators)}
-    chart = np.zeros((on_chart.n_frames, len(layout.actuators)))
-    for j, a in enumerate(layout.actuators):  # by id: a vest-only pattern has only the vest's columns
+    chart = np.zeros((on_chart.n_frames, len(layout.played_actuators)))
+    for j, a in enumerate(layout.played_actuators):  # by id: a vest-only pattern has only the vest's columns
         if a in index:
             chart[:, j] = on_chart.intensities[:, index[a]]
     rows = rig.projection(layout)(chart)

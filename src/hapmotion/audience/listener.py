@@ -421,7 +421,7 @@ def seat_show(desc: ShowDescription, seat: Seat, cues: Optional[CueList] = None)
     renderer = None if mode == "audio" else show.renderer(desc.fps, body=BodyModel.from_dict(desc.body))
     music = None if mode == "motion" else RowTimeline.streamed(len(desc.actuators), desc.fps)
     stage = OutputStage.from_dict(desc.music or {}, mode, layout=layout, fps=desc.fps, comfort=seat.comfort,
-                                  cues=cues, music=music)
+                                  cues=cues, music=music, mirror=show.params().mirror)
     return SeatShow(layout, mode, renderer, stage, music)
 
 

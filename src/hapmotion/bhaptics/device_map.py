@@ -36,8 +36,9 @@ class DeviceMap:
         """From a :class:`hapmotion.layout.Layout` (device offsets and its ``sdk2_*`` fields, or its ``rig``)."""
         devices = {d.name: np.arange(d.offset, d.offset + d.size, dtype=np.intp) for d in layout.devices}
         rig = getattr(layout, "rig", None)
-        if rig is not None:
-            return cls.for_rig(rig, rig.projection(layout), tuple(layout.actuators), devices)
+        if rig is not None:  # the rows played: the body chart, and the hand places when the rig has gloves
+            devices.update({d.name: np.arange(d.offset, d.offset + d.size, dtype=np.intp) for d in layout.hand_devices})
+            return cls.for_rig(rig, rig.projection(layout), tuple(layout.played_actuators), devices)
         groups: dict[int, tuple[int, list]] = {}
         for d in layout.devices:
             if d.sdk2_position >= 0:

@@ -413,7 +413,7 @@ class LiveEngine:
             row = self.upstream.row(frame, t)
             skeleton, debug = self.upstream.last_skeleton, self.upstream.last_debug
         if self.stage is not None:
-            row = self.stage.step(row, t)
+            row = self.stage.step(row, t, skeleton)
         assert row is not None  # the constructor refuses an engine with neither
         if row.shape != (self.n,):
             raise ValueError(f"the renderer returned shape {row.shape}, expected ({self.n},)")

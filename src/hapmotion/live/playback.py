@@ -193,8 +193,9 @@ async def play(
                  "each row repeated" if fps > track.fps else "resampled, peaks kept")
         track = track.resample(fps)
     track, _ = lift_track(track, session_layout)  # another wearable's pattern onto the body chart (docs/wearables.md)
-    rows = layout_rows(track, session_layout.actuators, name)
-    stage = OutputStage.identity(session_layout.actuators, fps, mirror_map=session_layout.mirror_map(),
+    rows = layout_rows(track, session_layout.played_actuators, name)
+    stage = OutputStage.identity(session_layout.played_actuators, fps,
+                                 mirror_map=session_layout.played_mirror_map(),
                                  comfort=show.comfort, cues=show.load_cues(limits))
     source = TrackSource(rows.shape[0], fps, speed=speed, loop=loop, name=name, marks=marks, on_mark=on_mark)
     meta = {"mode": "playback", "source": source.describe(), "track": name, "fps": fps}

@@ -118,8 +118,12 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
     n_motion = motion_track.n_frames if motion_track is not None else 0
     n_music = music.n_frames if music is not None else 0
     n_frames = n_motion if show.length == "motion" or music is None else max(n_motion, n_music)
+    skeleton = None
+    if stage.hands is not None and motion is not None:  # the gloves' input: the frames the renderer had
+        frames = motion.resample(show.fps) if show.fps is not None else motion
+        skeleton = fit_rows(frames.positions, n_frames, fill=np.nan)
     rows = stage.rows(fit_rows(motion_track.intensities, n_frames) if motion_track is not None else None,
-                      fit_rows(music.intensities, n_frames) if music is not None else None)
+                      fit_rows(music.intensities, n_frames) if music is not None else None, skeleton)
 
     meta: dict[str, Any] = dict(motion_track.meta) if motion_track is not None else {}
     debug: dict[str, np.ndarray] = dict(motion_track.debug) if motion_track is not None else {}
@@ -137,7 +141,8 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
             meta["cue_notes"] = list(stage.cue_list.notes)
     if not show.comfort.is_neutral:
         meta["comfort"] = show.comfort.to_dict()
-    return HapticTrack(intensities=rows, fps=fps, actuators=ids, layout=layout_name, meta=meta, debug=debug)
+    return HapticTrack(intensities=rows, fps=fps, actuators=stage.actuators, layout=layout_name, meta=meta,
+                       debug=debug)
 
 
 def render_variants(show: Show, motion: Optional[Motion], methods: Sequence[str], presets: Sequence[str],
@@ -164,12 +169,12 @@ def render_variants(show: Show, motion: Optional[Motion], methods: Sequence[str]
     if show.audio is None:
         if motion is None:  # saved rows are shown as they were stored, as `play` sends them: cues and comfort only
             return [_as_stored(v, t) for v, t in zip(variants, tracks)]
-        return [render_show(v, motion_track=t) for v, t in zip(variants, tracks)]
+        return [render_show(v, motion, motion_track=t) for v, t in zip(variants, tracks)]
     out: list[HapticTrack] = []
     for mode in modes:
         played = list(zip(variants, tracks))[:1] if mode == "audio" else list(zip(variants, tracks))
         # an audio-only view without a motion track still plays (the music alone, at the show's rate)
-        out.extend(render_show(v.replace(mode=mode), motion_track=t) for v, t in played)
+        out.extend(render_show(v.replace(mode=mode), motion, motion_track=t) for v, t in played)
         if mode == "audio" and not played:
             out.append(render_show(show.replace(mode="audio")))
     return out

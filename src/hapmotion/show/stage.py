@@ -15,6 +15,12 @@ Per row, in this order (the batch and per-row drivers run the same functions, so
    clipped to 0..100 and held to the show's power limit. ``rows`` (playing a stored track) passes the row as it is.
 2. **cues**: authored cues layered on (:func:`hapmotion.show.cues.layer`), under the same power limit.
 3. **comfort**: the wearer's gain and limits (:mod:`hapmotion.show.comfort`), the last word on every row.
+
+On a rig with gloves the rows sent have the hand places after the body chart
+(:meth:`hapmotion.layout.Layout.played_actuators`): the incoming and music rows are the body chart's, and step 1
+ends by putting the performer's hands on the gloves (:class:`hapmotion.show.hands.HandLayer`, from the skeleton
+given with the row, in the ``motion`` and ``multimodal`` modes) under the same power limit; cues and comfort then
+see the whole row.
 """
 
 from __future__ import annotations
@@ -32,6 +38,7 @@ from ..renderer.params import PRESETS
 from .comfort import Comfort, Limiter, limit_rows
 from .cue_layer import LiveCues
 from .cues import CueList, cue_layer, layer
+from .hands import HandLayer
 from .settings import MODES, Show, check_choice, check_fps
 from .timeline import RowTimeline
 
@@ -84,13 +91,17 @@ class OutputStage:
         The cue list layered on, or ``None``.
     music:
         The music's rows (``audio`` and ``multimodal``), read at each row's show time by :meth:`step`.
+    hands:
+        The glove layer (a rig with gloves): the last ``hands.width`` of ``actuators`` are the hand places, the
+        incoming and music rows may stop before them (the body chart), and the skeleton given to :meth:`rows` /
+        :meth:`step` drives them.
     """
 
     def __init__(self, mode: str, actuators: Sequence[str], fps: float, *, ratio: tuple[float, float] = (2.0, 3.0),
                  rule: str = "duck", audio_preset: str = "felt", power_limit: Optional[float] = None,
                  positions: Optional[np.ndarray] = None, mirror_map: Optional[np.ndarray] = None,
                  comfort: Comfort = Comfort(), cues: Optional[CueList] = None,
-                 music: Optional[RowTimeline] = None):
+                 music: Optional[RowTimeline] = None, hands: Optional[HandLayer] = None):
         check_choice(mode, STAGE_MODES, "mode")
         check_choice(rule, MIX_RULES, "mix rule")
         check_choice(audio_preset, tuple(PRESETS), "preset")
@@ -105,7 +116,9 @@ class OutputStage:
             raise ValueError(f"positions must be ({n}, 3), not {np.shape(positions)}")
         if mirror_map is not None and np.shape(mirror_map) != (n,):
             raise ValueError(f"mirror_map must be ({n},), not {np.shape(mirror_map)}")
-        if music is not None and music.n != n:
+        self.hands = hands
+        self.body_n = n - (hands.width if hands is not None else 0)
+        if music is not None and music.n not in (n, self.body_n):
             raise ValueError(f"the music's rows have {music.n} columns, the stage {n}")
         self.mode = mode
         self.actuators = tuple(actuators)
@@ -132,11 +145,18 @@ class OutputStage:
     def for_show(cls, show: Show, mode: str, *, layout: Layout, fps: float,
                  music: Optional[RowTimeline] = None, cues: Optional[CueList] = None) -> "OutputStage":
         """The stage of ``show`` played in ``mode`` on ``layout`` at ``fps``; ``cues`` is the show's cue list when
-        already read (default: :meth:`Show.load_cues`)."""
-        return cls(mode, layout.actuators, fps, ratio=show.mix_ratio, rule=show.resolved_rule(),
-                   audio_preset=show.preset, power_limit=show_power_limit(len(layout.actuators)),
-                   positions=layout.positions(), mirror_map=layout.mirror_map(), comfort=show.comfort,
-                   cues=cues if cues is not None else show.load_cues(), music=music)
+        already read (default: :meth:`Show.load_cues`). A layout whose rig has gloves gets the glove layer,
+        mirrored as the show's renderer mirrors."""
+        return cls(mode, layout.played_actuators, fps, ratio=show.mix_ratio, rule=show.resolved_rule(),
+                   audio_preset=show.preset, power_limit=show_power_limit(len(layout.played_actuators)),
+                   positions=layout.played_positions(), mirror_map=layout.played_mirror_map(),
+                   comfort=show.comfort, cues=cues if cues is not None else show.load_cues(), music=music,
+                   hands=cls.hand_layer(layout, fps, show.params().mirror))
+
+    @staticmethod
+    def hand_layer(layout: Layout, fps: float, mirror: bool) -> Optional[HandLayer]:
+        """The glove layer of ``layout`` (``None`` when its rig has no gloves)."""
+        return HandLayer(fps, mirror=mirror) if layout.hand_devices else None
 
     @classmethod
     def identity(cls, actuators: Sequence[str], fps: float, *, mirror_map: Optional[np.ndarray] = None,
@@ -185,16 +205,17 @@ class OutputStage:
     @classmethod
     def from_dict(cls, settings: Optional[dict[str, Any]], mode: str, *, layout: Layout, fps: float,
                   comfort: Comfort = Comfort(), cues: Optional[CueList] = None,
-                  music: Optional[RowTimeline] = None) -> "OutputStage":
+                  music: Optional[RowTimeline] = None, mirror: bool = True) -> "OutputStage":
         """The stage :meth:`to_dict` describes, on ``layout`` at ``fps``, with a seat's own ``comfort`` and
-        ``cues``. ``settings`` ``None`` or empty: a motion-only show (no mix; the show's power limit). Every field
+        ``cues`` (and, when the seat's rig has gloves, the glove layer, mirrored as the seat's renderer
+        mirrors). ``settings`` ``None`` or empty: a motion-only show (no mix; the show's power limit). Every field
         is checked (:meth:`check_settings`): UsageError naming the field, never an internal error."""
-        n = len(layout.actuators)
+        n = len(layout.played_actuators)
         checked = cls.check_settings(settings or {"power_limit": show_power_limit(n)}, n)
-        return cls(mode, layout.actuators, fps, ratio=tuple(checked["mix_ratio"]), rule=checked["mix_rule"],
+        return cls(mode, layout.played_actuators, fps, ratio=tuple(checked["mix_ratio"]), rule=checked["mix_rule"],
                    audio_preset=checked["params_preset"], power_limit=checked["power_limit"],
-                   positions=layout.positions(), mirror_map=layout.mirror_map(), comfort=comfort, cues=cues,
-                   music=music)
+                   positions=layout.played_positions(), mirror_map=layout.played_mirror_map(), comfort=comfort,
+                   cues=cues, music=music, hands=cls.hand_layer(layout, fps, mirror))
 
     # ------------------------------------------------------------------ the mode stage (stateless)
     def condition(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray]) -> np.ndarray:
@@ -209,14 +230,32 @@ class OutputStage:
         return limit_power(np.clip(chosen, 0.0, 100.0), self.power_limit)
 
     # ------------------------------------------------------------------ files: whole arrays
-    def rows(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray]) -> np.ndarray:
+    def _full(self, rows: Optional[np.ndarray]) -> Optional[np.ndarray]:
+        """Body-chart rows widened with silent hand places (rows already full width as they are)."""
+        if rows is None or self.hands is None or np.shape(rows)[-1] == self.n:
+            return rows
+        rows = np.asarray(rows, dtype=np.float64)
+        return np.concatenate([rows, np.zeros(rows.shape[:-1] + (self.n - rows.shape[-1],))], axis=-1)
+
+    def _with_hands(self, out: np.ndarray, hands: np.ndarray) -> np.ndarray:
+        """The hand places take the performer's hands (the stronger of the two), the row held to the power limit."""
+        out = np.array(out, dtype=np.float64)
+        out[..., self.body_n:] = np.maximum(out[..., self.body_n:], hands)
+        return limit_power(out, self.power_limit)
+
+    def rows(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray],
+             skeleton: Optional[np.ndarray] = None) -> np.ndarray:
         """The ``(T, N)`` rows sent for ``(T, N)`` incoming and music rows (either ``None``: silence), from a fresh
-        state: mode, every cue of the list on the timeline, comfort."""
+        state: mode, every cue of the list on the timeline, comfort. ``skeleton`` ``(T, 32, 3)`` (metres, NaN = not
+        sent) drives the glove layer, when the stage has one."""
         if incoming is None and music is None:
             raise ValueError("rows() needs the incoming rows, the music's rows, or both")
+        incoming, music = self._full(incoming), self._full(music)
         shape = (incoming if incoming is not None else music).shape
         out = self.condition(incoming if incoming is not None else np.zeros(shape),
                              music if music is not None else np.zeros(shape))
+        if self.hands is not None and skeleton is not None and self.mode in ("motion", "multimodal"):
+            out = self._with_hands(out, self.hands.rows(skeleton))
         if self.cue_list is not None:
             energy = cue_layer(self.cue_list, fps=self.fps, n_frames=out.shape[0], actuators=self.actuators,
                                mirror_map=self.mirror_map)
@@ -235,20 +274,23 @@ class OutputStage:
                                   power_limit=self.power_limit)
         return self._cues
 
-    def step(self, incoming: Optional[np.ndarray], t: float) -> np.ndarray:
+    def step(self, incoming: Optional[np.ndarray], t: float, skeleton: Optional[np.ndarray] = None) -> np.ndarray:
         """The ``(N,)`` row sent at show time ``t`` seconds for the ``(N,)`` incoming row (``None``: none, as
-        when the music plays alone); the cue layer and the comfort limiter move on by one row."""
+        when the music plays alone); the cue layer and the comfort limiter move on by one row. ``skeleton``
+        ``(32, 3)`` is the frame the row was rendered from (the glove layer's input; ``None``: the gloves rest)."""
         if not math.isfinite(t):
             raise ValueError(f"show time must be a finite number of seconds, not {t!r}")
-        music = self.music.row(t) if self.music is not None else self._silence
+        music = self._full(self.music.row(t)) if self.music is not None else self._silence
         if self.mode == "rows":
-            row = np.array(incoming, dtype=np.float64)
+            row = np.array(self._full(incoming), dtype=np.float64)
         elif self.mode == "audio":
             row = self.condition(None, music)
         else:
             if incoming is None:
                 raise ValueError(f"mode {self.mode} needs an incoming row")
-            row = self.condition(incoming, music)
+            row = self.condition(self._full(incoming), music)
+            if self.hands is not None and skeleton is not None and np.shape(skeleton) == (32, 3):
+                row = self._with_hands(row, self.hands.step(skeleton, t))
         cues = self.cues
         if cues is not None:
             row = cues.layer(row, t)
