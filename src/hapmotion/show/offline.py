@@ -52,10 +52,10 @@ def render_motion(show: Show, motion: Motion, progress: Progress = None) -> Hapt
 
 def fit_rows(rows: np.ndarray, n_frames: int, fill: Any = 0.0, hold: bool = False) -> np.ndarray:
     """Cut or extend ``rows`` (first axis = frames) to ``n_frames``: extra frames hold the last row (``hold``)
-    or are ``fill``."""
+    or are ``fill``. Cut rows are a view of ``rows``, not a copy (the stage reads them and writes its own)."""
     rows = np.asarray(rows)
     if rows.shape[0] >= n_frames:
-        return rows[:n_frames].copy()
+        return rows[:n_frames]
     extra_shape = (n_frames - rows.shape[0],) + rows.shape[1:]
     if hold and rows.shape[0]:
         extra = np.broadcast_to(rows[-1], extra_shape)

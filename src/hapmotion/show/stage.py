@@ -206,7 +206,7 @@ class OutputStage:
             return mix(incoming, music, ratio=self.ratio, power_limit=self.power_limit, rule=self.rule,
                        params=self.audio_params, kernel=self._kernel)
         chosen = incoming if self.mode == "motion" else music
-        return limit_power(np.clip(chosen, 0.0, 100.0), self.power_limit)
+        return limit_power(np.clip(chosen, 0.0, 100.0), self.power_limit, copy=False)  # scaled in the clip's copy
 
     # ------------------------------------------------------------------ files: whole arrays
     def rows(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray]) -> np.ndarray:
