@@ -140,7 +140,7 @@ def duck_mix(motion: np.ndarray, audio: np.ndarray, audio_share: float, kernel: 
 def mix(motion_rows: np.ndarray, audio_rows: np.ndarray, ratio: "tuple[float, float]" = DEFAULT_RATIO,
         power_limit: float | None = None, *, rule: str | None = None,
         positions: np.ndarray | None = None, params: AudioParams | None = None,
-        kernel: np.ndarray | None = None) -> np.ndarray:
+        kernel: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
     """Mix motion and audio intensities of the same shape, ``(N,)`` (one frame, as live uses it) or ``(T, N)``.
 
     ``ratio`` is ``(audio, motion)``. ``rule`` is ``duck``, ``paper`` or ``energy`` (module docstring); not given:
@@ -151,7 +151,8 @@ def mix(motion_rows: np.ndarray, audio_rows: np.ndarray, ratio: "tuple[float, fl
     :func:`locus_kernel` of those positions when the caller keeps it (a live stage mixes every row with one).
     Inputs are clipped to 0..100 first (non-finite values count as 0); the result is clipped to 0..100 and, with
     ``power_limit``, scaled per frame by :func:`limit_power`. Returns float64 of the input shape. ``(T, N)`` rows are
-    mixed :data:`ROW_BLOCK` rows at a time (every rule is per row).
+    mixed :data:`ROW_BLOCK` rows at a time (every rule is per row), into ``out`` when given (float64 of their shape;
+    it may be ``motion_rows`` itself, each block being read before it is written).
     """
     a_w, m_w = check_ratio(ratio)
     p = params or DEFAULT_PARAMS
@@ -163,8 +164,12 @@ def mix(motion_rows: np.ndarray, audio_rows: np.ndarray, ratio: "tuple[float, fl
         n = motion_rows.shape[-1] if motion_rows.ndim else 1
         kernel = locus_kernel(positions, n, p.duck_locus_radius_m)
     if motion_rows.ndim < 2:
-        return _mix_rows(motion_rows, audio_rows, a_w, m_w, power_limit, rule, p, kernel)
-    out = np.empty(motion_rows.shape)
+        row = _mix_rows(motion_rows, audio_rows, a_w, m_w, power_limit, rule, p, kernel)
+        if out is None:
+            return row
+        out[...] = row
+        return out
+    out = np.empty(motion_rows.shape) if out is None else out
     for rows_at in _row_blocks(out.shape[0]):
         out[rows_at] = _mix_rows(motion_rows[rows_at], audio_rows[rows_at], a_w, m_w, power_limit, rule, p, kernel)
     return out

@@ -50,6 +50,16 @@ def render_motion(show: Show, motion: Motion, progress: Progress = None) -> Hapt
     return track
 
 
+def render_input(show: Show, motion: Motion) -> Motion:
+    """``motion`` as :func:`render_motion` renders it with ``show``, and no more: resampled to ``show.fps`` (if
+    set) and holding only the joints the renderer reads (:meth:`~hapmotion.motion.Motion.render_joints_only`). A
+    caller that reads a motion only to render it keeps this instead of the motion (``hapmotion render``: the 330 MB
+    of an hour at 120 fps are let go before rendering); the track is the same, bit for bit."""
+    if show.fps is not None:
+        motion = motion.resample(show.fps)
+    return motion.render_joints_only()
+
+
 def fit_rows(rows: np.ndarray, n_frames: int, fill: Any = 0.0, hold: bool = False) -> np.ndarray:
     """Cut or extend ``rows`` (first axis = frames) to ``n_frames``: extra frames hold the last row (``hold``)
     or are ``fill``. Cut rows are a view of ``rows``, not a copy (the stage reads them and writes its own)."""
@@ -101,7 +111,8 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
     ``meta["comfort"]`` the wearer's limits when they change anything.
     """
     mode = show.resolved_mode(motion is not None or motion_track is not None)
-    if motion_track is None and motion is not None:
+    own_rows = motion_track is None and motion is not None  # the motion's rows are ours: the stage writes in them
+    if own_rows:
         # rendered in audio mode too: the music then plays on the motion's timeline (rate, length rule, debug)
         motion_track = render_motion(show, motion, progress)
     if motion_track is not None:
@@ -119,7 +130,7 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
     n_music = music.n_frames if music is not None else 0
     n_frames = n_motion if show.length == "motion" or music is None else max(n_motion, n_music)
     rows = stage.rows(fit_rows(motion_track.intensities, n_frames) if motion_track is not None else None,
-                      fit_rows(music.intensities, n_frames) if music is not None else None)
+                      fit_rows(music.intensities, n_frames) if music is not None else None, in_place=own_rows)
 
     meta: dict[str, Any] = dict(motion_track.meta) if motion_track is not None else {}
     debug: dict[str, np.ndarray] = dict(motion_track.debug) if motion_track is not None else {}

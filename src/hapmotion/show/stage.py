@@ -197,26 +197,31 @@ class OutputStage:
                    music=music)
 
     # ------------------------------------------------------------------ the mode stage (stateless)
-    def condition(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray]) -> np.ndarray:
+    def condition(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray], *,
+                  out: Optional[np.ndarray] = None) -> np.ndarray:
         """Step 1 on ``(N,)`` or ``(T, N)`` rows 0..100: the incoming rows (``None``: silence) and the music's
-        rows (``None``: silence) in this stage's mode."""
+        rows (``None``: silence) in this stage's mode; written into ``out`` (float64, the rows' shape, which may be
+        ``incoming`` itself) when given."""
         if self.mode == "rows":
             return np.asarray(incoming, dtype=np.float64)
         if self.mode == "multimodal":
             return mix(incoming, music, ratio=self.ratio, power_limit=self.power_limit, rule=self.rule,
-                       params=self.audio_params, kernel=self._kernel)
+                       params=self.audio_params, kernel=self._kernel, out=out)
         chosen = incoming if self.mode == "motion" else music
-        return limit_power(np.clip(chosen, 0.0, 100.0), self.power_limit, copy=False)  # scaled in the clip's copy
+        return limit_power(np.clip(chosen, 0.0, 100.0, out=out), self.power_limit, copy=False)  # in the clip's rows
 
     # ------------------------------------------------------------------ files: whole arrays
-    def rows(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray]) -> np.ndarray:
+    def rows(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray], *,
+             in_place: bool = False) -> np.ndarray:
         """The ``(T, N)`` rows sent for ``(T, N)`` incoming and music rows (either ``None``: silence), from a fresh
-        state: mode, every cue of the list on the timeline, comfort."""
+        state: mode, every cue of the list on the timeline, comfort. ``in_place``: ``incoming`` is the caller's own
+        float64 array and step 1 writes into it (an hour at 120 fps needs no second 180 MB)."""
         if incoming is None and music is None:
             raise ValueError("rows() needs the incoming rows, the music's rows, or both")
         shape = (incoming if incoming is not None else music).shape
         out = self.condition(incoming if incoming is not None else np.zeros(shape),
-                             music if music is not None else np.zeros(shape))
+                             music if music is not None else np.zeros(shape),
+                             out=incoming if in_place and incoming is not None else None)
         if self.cue_list is not None:
             energy = cue_layer(self.cue_list, fps=self.fps, n_frames=out.shape[0], actuators=self.actuators,
                                mirror_map=self.mirror_map)
