@@ -111,7 +111,7 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
     ``meta["comfort"]`` the wearer's limits when they change anything.
     """
     mode = show.resolved_mode(motion is not None or motion_track is not None)
-    own_rows = motion_track is None and motion is not None  # the motion's rows are ours: the stage writes in them
+    own_rows = motion_track is None and motion is not None  # the motion's rows are made here
     if own_rows:
         # rendered in audio mode too: the music then plays on the motion's timeline (rate, length rule, debug)
         motion_track = render_motion(show, motion, progress)
@@ -129,8 +129,10 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
     n_motion = motion_track.n_frames if motion_track is not None else 0
     n_music = music.n_frames if music is not None else 0
     n_frames = n_motion if show.length == "motion" or music is None else max(n_motion, n_music)
-    rows = stage.rows(fit_rows(motion_track.intensities, n_frames) if motion_track is not None else None,
-                      fit_rows(music.intensities, n_frames) if music is not None else None, in_place=own_rows)
+    motion_rows = fit_rows(motion_track.intensities, n_frames) if motion_track is not None else None
+    music_rows = fit_rows(music.intensities, n_frames) if music is not None else None
+    # the stage writes into rows made here (the music's always are), never into a caller's motion track
+    rows = stage.rows(motion_rows, music_rows, out=motion_rows if own_rows else music_rows)
 
     meta: dict[str, Any] = dict(motion_track.meta) if motion_track is not None else {}
     debug: dict[str, np.ndarray] = dict(motion_track.debug) if motion_track is not None else {}

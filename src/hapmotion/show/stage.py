@@ -212,16 +212,16 @@ class OutputStage:
 
     # ------------------------------------------------------------------ files: whole arrays
     def rows(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray], *,
-             in_place: bool = False) -> np.ndarray:
+             out: Optional[np.ndarray] = None) -> np.ndarray:
         """The ``(T, N)`` rows sent for ``(T, N)`` incoming and music rows (either ``None``: silence), from a fresh
-        state: mode, every cue of the list on the timeline, comfort. ``in_place``: ``incoming`` is the caller's own
-        float64 array and step 1 writes into it (an hour at 120 fps needs no second 180 MB)."""
+        state: mode, every cue of the list on the timeline, comfort. ``out``: a float64 ``(T, N)`` array of the
+        caller's that step 1 writes into, which may be either input (an hour at 120 fps needs no second 180 MB)."""
         if incoming is None and music is None:
             raise ValueError("rows() needs the incoming rows, the music's rows, or both")
         shape = (incoming if incoming is not None else music).shape
         out = self.condition(incoming if incoming is not None else np.zeros(shape),
                              music if music is not None else np.zeros(shape),
-                             out=incoming if in_place and incoming is not None else None)
+                             out=out)
         if self.cue_list is not None:
             energy = cue_layer(self.cue_list, fps=self.fps, n_frames=out.shape[0], actuators=self.actuators,
                                mirror_map=self.mirror_map)
