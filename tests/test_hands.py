@@ -16,6 +16,7 @@ from hapmotion.motion import new_motion
 from hapmotion.motion_files import save_motion_table
 from hapmotion.rig import parse_rig, rig_track
 from hapmotion.show import Show, render_show
+from hapmotion.show.offline import render_input
 from hapmotion.show.hands import HandGestures, HandLayer, HandRules, hand_rows
 from hapmotion.skeleton.joints import JOINT_INDEX as J
 
@@ -183,6 +184,17 @@ def test_both_hands_waving_are_felt_on_both_gloves():
     assert track.actuators == layout.played_actuators and gloves.shape[1] == 12
     # the recording waves both hands above the shoulders for most of its 6.7 s
     assert (gloves[:, :6].max(axis=1) > 0).mean() > 0.6 and (gloves[:, 6:].max(axis=1) > 0).mean() > 0.6
+
+
+def test_the_render_commands_kept_joints_give_the_gloves_the_same_rows():
+    """``hapmotion render`` keeps only the joints a show reads (render_input): on a glove rig that includes the
+    glove layer's, so the track is the whole motion's, bit for bit, and no joint it let go reads as a place."""
+    motion = hapmotion.load_motion(MOTION / "dataset-2_wave-both-hands_normal_001.bvh")
+    show = Show(layout=LAYOUT.with_rig(parse_rig("x40+tactosy-shoulders+gloves")))
+    whole = render_show(show, motion)
+    kept = render_show(show, render_input(show, motion))
+    assert np.array_equal(kept.intensities, whole.intensities)
+    assert whole.intensities[:, len(LAYOUT.actuators):].max() > 0
 
 
 def test_gloves_leave_the_body_chart_as_it_was_and_rigs_without_gloves_unchanged():

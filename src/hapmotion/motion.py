@@ -8,7 +8,7 @@ on them because it works in the per-frame body frame (``hapmotion.body.frame``).
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -34,7 +34,8 @@ class Motion:
         ``(32,)`` bool: the joint was computed from others (e.g. SPINE_NAVEL for COCO-17), not read.
     confidence:
         ``(T, 32)`` float32 in 0..1: 1 = read with full confidence, 0.5 = derived or low-confidence, 0 = missing in
-        the source and filled (held or interpolated). Absent joints are 0.
+        the source and filled (held or interpolated). Absent joints are 0. When every frame has the same
+        confidences (a file without any), a read-only view of one row.
     meta:
         Free-form facts for ``hapmotion info``: ``format``, ``skeleton``, ``path``, ``units``, ``source_joints``
         (canonical name -> source name), ``notes`` (list of strings: skipped T-pose frames, chosen body id, ...),
@@ -105,6 +106,28 @@ class Motion:
         meta["notes"] = list(meta["notes"]) + [f"resampled from {self.fps:g} to {fps:g} fps"]
         return replace(self, positions=out.reshape(n_new, N_JOINTS, 3), fps=float(fps), confidence=conf, meta=meta)
 
+    def render_joints_only(self, extra: Sequence[str] = ()) -> "Motion":
+        """A copy holding only the joints the renderer reads (:data:`~hapmotion.skeleton.joints.RENDER_JOINTS`),
+        for a caller that renders this motion and lets it go (``hapmotion render``): an hour at 120 fps then keeps
+        72 MB of positions instead of 330 MB through rendering and the output stage.
+
+        ``extra`` names more joints to keep. The copy's other joints are absent (``present`` and ``derived`` False,
+        confidence 0) and read 0.0, not NaN: its arrays are joint-major (``positions`` is a ``(T, 32, 3)`` view of
+        a ``(32, T, 3)`` array of zeros) and the memory of the joints never written is never allocated by the system. The render joints' values
+        are this motion's, bit for bit, so the copy renders exactly as this motion does.
+        """
+        n = self.n_frames
+        keep = np.zeros(N_JOINTS, dtype=bool)
+        keep[[JOINT_INDEX[j] for j in (*RENDER_JOINTS, *extra)]] = True
+        keep &= self.present
+        positions = np.zeros((N_JOINTS, n, 3))  # calloc: pages of the joints left out are never touched
+        confidence = np.zeros((N_JOINTS, n), dtype=np.float32)
+        for j in np.flatnonzero(keep):
+            positions[j] = self.positions[:, j, :]
+            confidence[j] = self.confidence[:, j]
+        return replace(self, positions=positions.transpose(1, 0, 2), present=keep, derived=self.derived & keep,
+                       confidence=confidence.T, meta=dict(self.meta))
+
     def missing_render_joints(self) -> list[str]:
         """Names of the joints the renderer needs that this motion lacks."""
         return [j for j in RENDER_JOINTS if not self.present[JOINT_INDEX[j]]]
@@ -156,18 +179,32 @@ def new_motion(
         raise InputError(source, None, "expected at least one frame, found 0")
     if not np.isfinite(fps) or fps <= 0:
         raise InputError(source, "frame rate", f"expected a positive frame rate, found {fps}")
-    finite = np.isfinite(pos).all(axis=2)
+    finite = np.empty((n, N_JOINTS), dtype=bool)
+    for start in range(0, n, _FINITE_BLOCK):
+        # x * 0 is 0 for every finite x and NaN for NaN and inf: a joint is finite where the three sum to 0. Five
+        # times faster than isfinite(...).all(axis=2) over the axis of 3, and no (T, 32, 3) temporary
+        block = pos[start:start + _FINITE_BLOCK]
+        with np.errstate(invalid="ignore"):  # inf * 0 is the NaN looked for, not a warning for the reader's notes
+            zero = block[:, :, 0] * 0.0
+            zero += block[:, :, 1] * 0.0
+            zero += block[:, :, 2] * 0.0
+        np.equal(zero, 0.0, out=finite[start:start + _FINITE_BLOCK])
     ok = finite if valid is None else (np.asarray(valid, dtype=bool) & finite)
     present = ok.any(axis=0)
     der = np.zeros(N_JOINTS, dtype=bool) if derived is None else np.asarray(derived, dtype=bool).copy()
-    if confidence is None:
-        conf = np.where(der[None, :], 0.5, 1.0).astype(np.float32) * np.ones((n, 1), dtype=np.float32)
+    if confidence is None and ok[:, present].all():
+        # every frame has the same confidences (a BVH file): one row, repeated by a read-only view
+        row = np.where(present, np.where(der, 0.5, 1.0), 0.0).astype(np.float32)
+        conf = np.broadcast_to(row, (n, N_JOINTS))
     else:
-        conf = np.clip(np.asarray(confidence, dtype=np.float32), 0.0, 1.0).copy()
+        if confidence is None:
+            conf = np.where(der[None, :], 0.5, 1.0).astype(np.float32) * np.ones((n, 1), dtype=np.float32)
+        else:
+            conf = np.clip(np.asarray(confidence, dtype=np.float32), 0.0, 1.0).copy()
+        conf[~ok] = 0.0
+        conf[:, ~present] = 0.0
     filled = fill_gaps(pos, ok, present)
-    conf[~ok] = 0.0
     pos[:, ~present, :] = np.nan
-    conf[:, ~present] = 0.0
     der &= present
     meta = dict(meta or {})
     meta.setdefault("path", source)
@@ -187,6 +224,10 @@ def new_motion(
             f"expected hands, shoulders, spine, pelvis and neck (read or derivable), found none for these{hint}",
         )
     return motion
+
+
+_FINITE_BLOCK = 65536
+"""Frames :func:`new_motion` checks for finite values at a time."""
 
 
 def fill_gaps(pos: np.ndarray, ok: np.ndarray, present: np.ndarray) -> int:

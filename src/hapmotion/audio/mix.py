@@ -60,21 +60,38 @@ def check_ratio(ratio: "tuple[float, float] | list[float]") -> tuple[float, floa
     return a, m
 
 
-def limit_power(rows: np.ndarray, limit: float | None) -> np.ndarray:
+ROW_BLOCK = 4096
+"""Rows per block when whole tracks are mixed or limited: every step is per row, so a block's temporaries stay in
+the processor's cache and an hour-long track never gets a full-size temporary (same numbers as whole arrays)."""
+
+
+def _row_blocks(n: int):
+    for start in range(0, n, ROW_BLOCK):
+        yield slice(start, min(n, start + ROW_BLOCK))
+
+
+def limit_power(rows: np.ndarray, limit: float | None, *, copy: bool = True) -> np.ndarray:
     """Scale each row down so ``sum((I / 100) ** 2) <= limit`` (units: actuators at full drive).
 
     ``rows``: ``(N,)`` or ``(T, N)`` intensities 0..100; rows under the limit are unchanged; ``None`` returns a copy.
+    ``copy`` False scales a float64 ``rows`` in place and returns it (the caller's own fresh array).
     Scaling all motors of a frame by one factor keeps the pattern's shape (Google's post-processor limits the
     summed power across channels the same way).
     """
-    out = np.array(rows, dtype=np.float64)
+    out = np.array(rows, dtype=np.float64) if copy else np.asarray(rows, dtype=np.float64)
     if limit is None:
         return out
     if not limit > 0:
         raise UsageError(f"power limit {limit!r}: expected a number > 0 or None")
-    power = np.sum((out / 100.0) ** 2, axis=-1, keepdims=True)
-    scale = np.sqrt(limit / np.maximum(power, limit))
-    return out * scale
+    if out.ndim < 2:
+        power = np.sum((out / 100.0) ** 2, axis=-1, keepdims=True)
+        out *= np.sqrt(limit / np.maximum(power, limit))
+        return out
+    for rows_at in _row_blocks(out.shape[0]):
+        block = out[rows_at]
+        power = np.sum((block / 100.0) ** 2, axis=-1, keepdims=True)
+        block *= np.sqrt(limit / np.maximum(power, limit))
+    return out
 
 
 def resolve_rule(rule: str | None = None, params: AudioParams | None = None) -> str:
@@ -123,7 +140,7 @@ def duck_mix(motion: np.ndarray, audio: np.ndarray, audio_share: float, kernel: 
 def mix(motion_rows: np.ndarray, audio_rows: np.ndarray, ratio: "tuple[float, float]" = DEFAULT_RATIO,
         power_limit: float | None = None, *, rule: str | None = None,
         positions: np.ndarray | None = None, params: AudioParams | None = None,
-        kernel: np.ndarray | None = None) -> np.ndarray:
+        kernel: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
     """Mix motion and audio intensities of the same shape, ``(N,)`` (one frame, as live uses it) or ``(T, N)``.
 
     ``ratio`` is ``(audio, motion)``. ``rule`` is ``duck``, ``paper`` or ``energy`` (module docstring); not given:
@@ -133,25 +150,43 @@ def mix(motion_rows: np.ndarray, audio_rows: np.ndarray, ratio: "tuple[float, fl
     ``params`` (default :data:`DEFAULT_PARAMS`) holds its depths and the start level. ``kernel`` is
     :func:`locus_kernel` of those positions when the caller keeps it (a live stage mixes every row with one).
     Inputs are clipped to 0..100 first (non-finite values count as 0); the result is clipped to 0..100 and, with
-    ``power_limit``, scaled per frame by :func:`limit_power`. Returns float64 of the input shape.
+    ``power_limit``, scaled per frame by :func:`limit_power`. Returns float64 of the input shape. ``(T, N)`` rows are
+    mixed :data:`ROW_BLOCK` rows at a time (every rule is per row), into ``out`` when given (float64 of their shape;
+    it may be ``motion_rows`` itself, each block being read before it is written).
     """
     a_w, m_w = check_ratio(ratio)
     p = params or DEFAULT_PARAMS
     rule = resolve_rule(rule, p)
+    motion_rows, audio_rows = np.asarray(motion_rows), np.asarray(audio_rows)
+    if motion_rows.shape != audio_rows.shape:
+        raise ValueError(f"motion rows {motion_rows.shape} and audio rows {audio_rows.shape} differ in shape")
+    if rule == "duck" and kernel is None:
+        n = motion_rows.shape[-1] if motion_rows.ndim else 1
+        kernel = locus_kernel(positions, n, p.duck_locus_radius_m)
+    if motion_rows.ndim < 2:
+        row = _mix_rows(motion_rows, audio_rows, a_w, m_w, power_limit, rule, p, kernel)
+        if out is None:
+            return row
+        out[...] = row
+        return out
+    out = np.empty(motion_rows.shape) if out is None else out
+    for rows_at in _row_blocks(out.shape[0]):
+        out[rows_at] = _mix_rows(motion_rows[rows_at], audio_rows[rows_at], a_w, m_w, power_limit, rule, p, kernel)
+    return out
+
+
+def _mix_rows(motion_rows: np.ndarray, audio_rows: np.ndarray, a_w: float, m_w: float, power_limit: float | None,
+              rule: str, p: AudioParams, kernel: np.ndarray | None) -> np.ndarray:
+    """:func:`mix` of ``(N,)`` or ``(B, N)`` rows with checked weights, rule and (``duck``) kernel."""
     motion = np.clip(np.nan_to_num(np.asarray(motion_rows, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0),
                      0.0, 100.0)
     audio = np.clip(np.nan_to_num(np.asarray(audio_rows, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0),
                     0.0, 100.0)
-    if motion.shape != audio.shape:
-        raise ValueError(f"motion rows {motion.shape} and audio rows {audio.shape} differ in shape")
     a_w, m_w = a_w / (a_w + m_w), m_w / (a_w + m_w)
     if rule == "paper":
         out = a_w * audio + m_w * motion
     elif rule == "energy":
         out = np.sqrt(a_w * audio ** 2 + m_w * motion ** 2)
     else:
-        n = motion.shape[-1] if motion.ndim else 1
-        if kernel is None:
-            kernel = locus_kernel(positions, n, p.duck_locus_radius_m)
         out = duck_mix(motion, audio, a_w, kernel, p)
-    return limit_power(np.clip(out, 0.0, 100.0), power_limit)
+    return limit_power(np.clip(out, 0.0, 100.0), power_limit, copy=False)

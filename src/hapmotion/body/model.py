@@ -22,7 +22,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .frame import body_frames, points_to_body
+from .frame import DEFAULT_AXES
 
 # Proportions relative to the shoulder width / torso length; see the module docstring.
 HALF_DEPTH_PER_SHOULDER_WIDTH = 0.30
@@ -60,14 +60,22 @@ class BodyModel:
     @classmethod
     def from_motion(cls, motion) -> "BodyModel":
         """Median dimensions over all frames of a :class:`~hapmotion.motion.Motion`."""
-        origin, axes = body_frames(motion)
-        sl = motion.joint("SHOULDER_LEFT")
-        sr = motion.joint("SHOULDER_RIGHT")
-        pel = points_to_body(motion.joint("PELVIS")[:, None, :], origin, axes)[:, 0, :]
-        mid = points_to_body(((sl + sr) / 2)[:, None, :], origin, axes)[:, 0, :]
-        width = float(np.median(np.linalg.norm(sr - sl, axis=1)))
-        sh = float(np.median(mid[:, 1]))
-        ph = float(np.median(pel[:, 1]))
+        return cls.from_joints(motion.joint)
+
+    @classmethod
+    def from_joints(cls, joint) -> "BodyModel":
+        """Median dimensions over all frames of the joints ``joint(name)`` returns, ``(T, 3)`` metres each (a
+        motion's :meth:`~hapmotion.motion.Motion.joint`, or a table of the render joints alone): the shoulders'
+        distance, and the shoulders' midpoint and the pelvis in the body frame (:mod:`hapmotion.body.frame`)."""
+        # numba on first use, as the renderer's kernel: see hapmotion.body.sizing_compiled
+        from .sizing_compiled import body_samples
+
+        sl = joint("SHOULDER_LEFT")
+        n = sl.shape[0]
+        width, sh, ph = np.empty(n), np.empty(n), np.empty(n)
+        body_samples(sl, joint("SHOULDER_RIGHT"), joint("PELVIS"), joint("NECK"), joint("SPINE_NAVEL"), DEFAULT_AXES,
+                     width, sh, ph)
+        width, sh, ph = float(np.median(width)), float(np.median(sh)), float(np.median(ph))
         if not (width > 0.05):
             width = cls.shoulder_width
         if not (sh - ph > 0.1):  # a broken skeleton: keep the proportions of the default body

@@ -51,21 +51,26 @@ def command(motion_file: Optional[str], output: str, show: Show, motion_opts: di
     # imported here, not at the top: rendering pulls in the music analysis (scipy), which `hapmotion --help` and
     # every other command's start-up would otherwise pay for
     from ..show import render_show
+    from ..show.offline import render_input
     from ..track_files import save_track
 
     mode = show.resolved_mode(motion_file is not None)
     out_path = Path(output)
     motion = None
     if motion_file is not None:  # in audio mode too: the music then plays on the motion's timeline
-        motion = read_motion(motion_file, **(motion_opts or {}))
+        # only what the render reads is kept: an hour at 120 fps lets 330 MB of positions go before rendering
+        motion = render_input(show, read_motion(motion_file, **(motion_opts or {})))
     total = motion.n_frames if motion is not None else 0
     update, close = progress_bar(total, "rendering")
     try:
         track = render_show(show, motion, progress=update)
     finally:
         close()
+    del motion  # its joints are not needed to write the track
     # on the --rig wearables (none: the body chart as rendered); a .tact file holds the slots bHaptics addresses
     track = rig_track(track, show.load_layout(), slots=out_path.suffix.lower() == ".tact")
+    if out_path.suffix.lower() == ".tact":  # a .tact file holds no renderer debug: let it go before writing
+        track = dataclasses.replace(track, debug={})
     written = save_track(track, out_path)
     peak = float(track.intensities.max()) if track.n_frames else 0.0
     also = f" and {', '.join(p.name for p in written[1:])}" if len(written) > 1 else ""

@@ -81,6 +81,11 @@ class HandRules:
     """Hand velocities are smoothed by a one-pole filter of this time constant (motion capture jitter)."""
 
 
+HAND_JOINTS: tuple[str, ...] = (
+    "HAND_LEFT", "HAND_RIGHT", "WRIST_LEFT", "WRIST_RIGHT", "HANDTIP_LEFT", "HANDTIP_RIGHT", "ELBOW_LEFT",
+    "ELBOW_RIGHT", "SHOULDER_LEFT", "SHOULDER_RIGHT", "NECK", "SPINE_CHEST", "SPINE_NAVEL", "PELVIS",
+)
+"""Every joint the glove layer reads (a caller that keeps only some joints of a motion keeps these for gloves)."""
 _SIDES = ("LEFT", "RIGHT")
 _J = JOINT_INDEX
 

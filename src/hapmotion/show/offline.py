@@ -30,6 +30,7 @@ from ..renderer.params import PRESETS
 from ..renderer.renderer import render
 from ..track import HapticTrack
 from .music import song_track
+from .hands import HAND_JOINTS
 from .settings import Show
 from .stage import OutputStage, show_power_limit
 
@@ -50,12 +51,29 @@ def render_motion(show: Show, motion: Motion, progress: Progress = None) -> Hapt
     return track
 
 
+def render_input(show: Show, motion: Motion) -> Motion:
+    """``motion`` as :func:`render_motion` renders it with ``show``, and no more: resampled to ``show.fps`` (if
+    set) and holding only the joints the renderer reads (:meth:`~hapmotion.motion.Motion.render_joints_only`),
+    and the glove layer's (:data:`~hapmotion.show.hands.HAND_JOINTS`) when the show's rig has gloves. A
+    caller that reads a motion only to render it keeps this instead of the motion (``hapmotion render``: the 330 MB
+    of an hour at 120 fps are let go before rendering); the track is the same, bit for bit."""
+    if show.fps is not None:
+        motion = motion.resample(show.fps)
+    return motion.render_joints_only(HAND_JOINTS if show.load_layout().hand_devices else ())
+
+
+def hand_skeleton(motion: Motion) -> np.ndarray:
+    """The glove layer's input: ``motion``'s ``(T, 32, 3)`` positions with every joint it lacks NaN (a motion
+    kept by :func:`render_input` reads 0.0 at the joints it let go, which the layer would take for a place)."""
+    return np.where(motion.present[None, :, None], motion.positions, np.nan)
+
+
 def fit_rows(rows: np.ndarray, n_frames: int, fill: Any = 0.0, hold: bool = False) -> np.ndarray:
     """Cut or extend ``rows`` (first axis = frames) to ``n_frames``: extra frames hold the last row (``hold``)
-    or are ``fill``."""
+    or are ``fill``. Cut rows are a view of ``rows``, not a copy (the stage reads them and writes its own)."""
     rows = np.asarray(rows)
     if rows.shape[0] >= n_frames:
-        return rows[:n_frames].copy()
+        return rows[:n_frames]
     extra_shape = (n_frames - rows.shape[0],) + rows.shape[1:]
     if hold and rows.shape[0]:
         extra = np.broadcast_to(rows[-1], extra_shape)
@@ -101,7 +119,8 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
     ``meta["comfort"]`` the wearer's limits when they change anything.
     """
     mode = show.resolved_mode(motion is not None or motion_track is not None)
-    if motion_track is None and motion is not None:
+    own_rows = motion_track is None and motion is not None  # the motion's rows are made here
+    if own_rows:
         # rendered in audio mode too: the music then plays on the motion's timeline (rate, length rule, debug)
         motion_track = render_motion(show, motion, progress)
     if motion_track is not None:
@@ -120,10 +139,12 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
     n_frames = n_motion if show.length == "motion" or music is None else max(n_motion, n_music)
     skeleton = None
     if stage.hands is not None and motion is not None:  # the gloves' input: the frames the renderer had
-        frames = motion.resample(show.fps) if show.fps is not None else motion
-        skeleton = fit_rows(frames.positions, n_frames, fill=np.nan)
-    rows = stage.rows(fit_rows(motion_track.intensities, n_frames) if motion_track is not None else None,
-                      fit_rows(music.intensities, n_frames) if music is not None else None, skeleton)
+        skeleton = fit_rows(hand_skeleton(motion.resample(show.fps) if show.fps is not None else motion),
+                            n_frames, fill=np.nan)
+    motion_rows = fit_rows(motion_track.intensities, n_frames) if motion_track is not None else None
+    music_rows = fit_rows(music.intensities, n_frames) if music is not None else None
+    # the stage writes into rows made here (the music's always are), never into a caller's motion track
+    rows = stage.rows(motion_rows, music_rows, skeleton, out=motion_rows if own_rows else music_rows)
 
     meta: dict[str, Any] = dict(motion_track.meta) if motion_track is not None else {}
     debug: dict[str, np.ndarray] = dict(motion_track.debug) if motion_track is not None else {}

@@ -218,16 +218,18 @@ class OutputStage:
                    cues=cues, music=music, hands=cls.hand_layer(layout, fps, mirror))
 
     # ------------------------------------------------------------------ the mode stage (stateless)
-    def condition(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray]) -> np.ndarray:
+    def condition(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray], *,
+                  out: Optional[np.ndarray] = None) -> np.ndarray:
         """Step 1 on ``(N,)`` or ``(T, N)`` rows 0..100: the incoming rows (``None``: silence) and the music's
-        rows (``None``: silence) in this stage's mode."""
+        rows (``None``: silence) in this stage's mode; written into ``out`` (float64, the rows' shape, which may be
+        ``incoming`` itself) when given."""
         if self.mode == "rows":
             return np.asarray(incoming, dtype=np.float64)
         if self.mode == "multimodal":
             return mix(incoming, music, ratio=self.ratio, power_limit=self.power_limit, rule=self.rule,
-                       params=self.audio_params, kernel=self._kernel)
+                       params=self.audio_params, kernel=self._kernel, out=out)
         chosen = incoming if self.mode == "motion" else music
-        return limit_power(np.clip(chosen, 0.0, 100.0), self.power_limit)
+        return limit_power(np.clip(chosen, 0.0, 100.0, out=out), self.power_limit, copy=False)  # in the clip's rows
 
     # ------------------------------------------------------------------ files: whole arrays
     def _full(self, rows: Optional[np.ndarray]) -> Optional[np.ndarray]:
@@ -244,16 +246,20 @@ class OutputStage:
         return limit_power(out, self.power_limit)
 
     def rows(self, incoming: Optional[np.ndarray], music: Optional[np.ndarray],
-             skeleton: Optional[np.ndarray] = None) -> np.ndarray:
+             skeleton: Optional[np.ndarray] = None, *, out: Optional[np.ndarray] = None) -> np.ndarray:
         """The ``(T, N)`` rows sent for ``(T, N)`` incoming and music rows (either ``None``: silence), from a fresh
         state: mode, every cue of the list on the timeline, comfort. ``skeleton`` ``(T, 32, 3)`` (metres, NaN = not
-        sent) drives the glove layer, when the stage has one."""
+        sent) drives the glove layer, when the stage has one. ``out``: a float64 ``(T, N)`` array of the caller's
+        that step 1 writes into, which may be either input (an hour at 120 fps needs no second 180 MB); ignored
+        when the rows are widened with hand places."""
         if incoming is None and music is None:
             raise ValueError("rows() needs the incoming rows, the music's rows, or both")
+        if out is not None and self.hands is not None and np.shape(out)[-1] != self.n:
+            out = None  # the rows are widened with the hand places: step 1 makes its own
         incoming, music = self._full(incoming), self._full(music)
         shape = (incoming if incoming is not None else music).shape
         out = self.condition(incoming if incoming is not None else np.zeros(shape),
-                             music if music is not None else np.zeros(shape))
+                             music if music is not None else np.zeros(shape), out=out)
         if self.hands is not None and skeleton is not None and self.mode in ("motion", "multimodal"):
             out = self._with_hands(out, self.hands.rows(skeleton))
         if self.cue_list is not None:

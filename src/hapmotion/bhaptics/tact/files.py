@@ -70,6 +70,11 @@ frames are put in its place. The text cannot occur inside a JSON string (its quo
 
 
 def _feedback_json(rows: np.ndarray) -> str:
+    """:func:`_feedback_parts` joined: the JSON text of one position's frames."""
+    return "".join(_feedback_parts(rows))
+
+
+def _feedback_parts(rows: np.ndarray) -> list[str]:
     """The dot-mode frames for one position from ``rows`` (T, M) on the 20 ms tick, as the JSON text of the list
     (what ``json.dumps(..., separators=(",", ":"))`` writes for it, byte for byte).
 
@@ -83,7 +88,7 @@ def _feedback_json(rows: np.ndarray) -> str:
     q = np.rint(rows).astype(np.int64)
     n, m = q.shape
     if n == 0:
-        return "[]"
+        return ["[]"]
     change = np.ones(n, dtype=bool)
     change[1:] = (q[1:] != q[:-1]).any(axis=1)
     starts = np.flatnonzero(change)
@@ -92,7 +97,7 @@ def _feedback_json(rows: np.ndarray) -> str:
     keep = runs.any(axis=1)  # silent runs are left out
     starts, ends, runs = starts[keep], ends[keep], runs[keep]
     if not len(starts):
-        return "[]"
+        return ["[]"]
     levels = int(runs.max()) + 1  # rows are 0..100, so at most 101
     # np.int64 / 100.0 rounded by numpy, exactly as the frames were always written
     value = [json.dumps(round(np.int64(v) / 100.0, 2)) for v in range(levels)]
@@ -110,7 +115,7 @@ def _feedback_json(rows: np.ndarray) -> str:
                  for k, (s, e) in enumerate(zip(starts[b0:b0 + len(block)].tolist(),
                                                 ends[b0:b0 + len(block)].tolist()))]
         out.append("".join(np.insert(cells, np.flatnonzero(first), heads).tolist()))
-    return "[" + "".join(out) + "]}]"
+    return ["[", *out, "]}]"]  # parts, not one joined copy: an hour's text is written as it is
 
 
 _RUNS_PER_BLOCK = 8192
@@ -140,17 +145,26 @@ def _project(name: str, type_name: str, duration_ms: int) -> dict:
     }
 
 
-def _tact_text(name: str, type_name: str, rows: dict[str, np.ndarray], duration_ms: int) -> str:
-    """The compact JSON text of one ``.tact`` file: the skeleton from :func:`_project` with each position's frames
-    (:func:`_feedback_json`) put in place of its empty dot-mode list, positions in the device type's order."""
+def _tact_text(name: str, type_name: str, rows: dict[str, np.ndarray], duration_ms: int) -> list[str]:
+    """The compact JSON text of one ``.tact`` file, in parts to be written one after the other: the skeleton from
+    :func:`_project` with each position's frames (:func:`_feedback_parts`) put in place of its empty dot-mode list,
+    positions in the device type's order."""
     positions = bhaptics_devices()[type_name].positions
     parts = json.dumps(_project(name, type_name, duration_ms), separators=(",", ":")).split(_DOT_FEEDBACK)
     assert len(parts) == len(positions) + 1, "one empty dot-mode list per position in the skeleton"
     out = [parts[0]]
     for pos, rest in zip(positions, parts[1:]):
-        frames = _feedback_json(rows[pos]) if pos in rows else "[]"
-        out += [_DOT_FEEDBACK[:-2], frames, rest]
-    return "".join(out)
+        out += [_DOT_FEEDBACK[:-2], *(_feedback_parts(rows[pos]) if pos in rows else ["[]"]), rest]
+    return out
+
+
+def _columns(track: HapticTrack, device: str) -> np.ndarray:
+    """``(T, M)`` rows of one device: a view when its columns lie side by side in order (they do on every bundled
+    layout), else a copy."""
+    cols = track.device_columns(device)
+    if len(cols) and np.array_equal(cols, np.arange(cols[0], cols[0] + len(cols))):
+        return track.intensities[:, cols[0]:cols[0] + len(cols)]
+    return track.intensities[:, cols]
 
 
 def write_tact(track: HapticTrack, path: Path) -> list[Path]:
@@ -158,15 +172,15 @@ def write_tact(track: HapticTrack, path: Path) -> list[Path]:
     plan = _files(track, path)
     ticked = track.resample(PLAYER_TICK_FPS)
     duration_ms = ticked.n_frames * PLAYER_TICK_MS
-    docs = {target: _tact_text(path.stem, type_name,
-                               {d: ticked.intensities[:, ticked.device_columns(d)] for d in devs}, duration_ms)
-            for target, (type_name, devs) in plan.items()}
     with contextlib.ExitStack() as stack:
-        # every file is complete before any is renamed into place
-        tmps = {target: stack.enter_context(atomic_path(target)) for target in docs}
-        for target, doc in docs.items():
-            tmps[target].write_text(doc, encoding="utf-8")
-    return sorted(docs, key=lambda target: target != path)
+        # every file is complete before any is renamed into place; one file's text is made at a time
+        tmps = {target: stack.enter_context(atomic_path(target)) for target in plan}
+        for target, (type_name, devs) in plan.items():
+            parts = _tact_text(path.stem, type_name, {d: _columns(ticked, d) for d in devs}, duration_ms)
+            with open(tmps[target], "w", encoding="utf-8") as f:
+                f.writelines(parts)
+            del parts
+    return sorted(plan, key=lambda target: target != path)
 
 
 # ------------------------------------------------------------------------------------------------------ reading
