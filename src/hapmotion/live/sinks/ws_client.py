@@ -105,6 +105,8 @@ class WebSocketClientSink(Sink):
         Connection attempt limit; first and longest wait between attempts (doubling).
     """
 
+    uses_debug = False  # rows only
+
     off_open_timeout = 0.5
     """Seconds :meth:`shutdown` waits to reconnect for the turn-off, so reconnecting, the hello, the turn-off and
     its confirmation all fit in the engine's ``stop_timeout`` (2 s by default)."""
@@ -302,10 +304,13 @@ class WebSocketClientSink(Sink):
                 continue
             wait = self.pacer.due() - time.perf_counter()
             if wait > 0:
-                try:  # sleep until the tick, but wake up if the connection is lost meanwhile
-                    await asyncio.wait_for(self._wake.wait(), wait)
-                except asyncio.TimeoutError:
-                    pass
+                # sleep until the tick, but wake up if the connection is lost meanwhile (a timer on the same event:
+                # no task per tick, as asyncio.wait_for would make)
+                timer = asyncio.get_running_loop().call_later(wait, self._wake.set)
+                try:
+                    await self._wake.wait()
+                finally:
+                    timer.cancel()
                 self._wake.clear()
                 continue
             return self.pacer.take(time.perf_counter())
@@ -316,7 +321,7 @@ class WebSocketClientSink(Sink):
         last = batch.frames[-1][0] if batch.frames else None
         return OutFrame(last.seq if last else -1, last.t if last else 0.0, batch.row,
                         last.received if last else None, last.created if last else time.perf_counter(),
-                        kind=last.kind if last else "frame")
+                        kind=last.kind if last else "frame", interval=last.interval if last else None)
 
     async def shutdown(self) -> None:
         """Turn everything off on the open connection (or a fresh one), make sure the server read it, close."""
