@@ -279,3 +279,34 @@ def test_a_recording_sent_at_its_rate_renders_as_offline(kind, rate, jitter_ms, 
             assert f.created - last_rx >= MIN_GRACE_S
     intervals = {round(1.0 / f.interval, 6) for f in tap.frames[settled_by + 1:] if f.kind == "frame"}
     assert intervals == {rate}  # the Player sinks hold each row for the sender's interval
+
+
+def test_the_quick_check_of_a_frame_agrees_with_sanitize():
+    """The engine skips ``sanitize`` for frames it would pass unchanged; on random frames with whole and partial
+    NaN joints, absurd and infinite coordinates, both give the same verdict and the same positions."""
+    from hapmotion.live.hygiene import sanitize
+
+    engine = LiveEngine(hapmotion.Renderer(), [Tap()], n_actuators=52, handle_signals=False)
+    quiet = logging.getLogger("hapmotion.test.quiet")
+    quiet.disabled = True
+    engine.faults._log = quiet
+    rng = np.random.default_rng(0)
+    verdicts = set()
+    for _ in range(3000):
+        p = rng.uniform(-1.0, 2.0, (32, 3))
+        for j in rng.choice(32, rng.integers(0, 32), replace=False):
+            kind = rng.integers(0, 5)
+            if kind == 0:
+                p[j] = np.nan
+            elif kind == 1:
+                p[j, rng.integers(0, 3)] = np.nan
+            elif kind == 2:
+                p[j, rng.integers(0, 3)] = 25.0
+            elif kind == 3:
+                p[j, rng.integers(0, 3)] = np.inf
+        a, b = p.copy(), p.copy()
+        verdict = engine._usable(a)
+        assert verdict == sanitize(b, Faults("test", quiet), required=engine._required)
+        np.testing.assert_array_equal(a, b)
+        verdicts.add(verdict)
+    assert verdicts == {True, False}

@@ -232,10 +232,14 @@ class LiveEngine:
             self._render_due()
 
     def _usable(self, positions: np.ndarray) -> bool:
-        """:func:`~hapmotion.live.hygiene.sanitize`, skipped for the usual frame whose every coordinate is a number
-        within ``max_abs`` (which it would return unchanged, usable)."""
-        if positions.size and bool((np.abs(positions) <= self.max_abs).all()):
-            return True
+        """:func:`~hapmotion.live.hygiene.sanitize`, skipped for the usual frame that it would return unchanged as
+        usable: every joint either sent whole within ``max_abs`` or not sent at all (NaN), one of the renderer's
+        joints sent."""
+        if positions.size:
+            inside = np.abs(positions) <= self.max_abs  # (NaN is not)
+            whole = inside.all(axis=1)
+            if whole.all() or (whole[self._required].any() and (whole | np.isnan(positions).all(axis=1)).all()):
+                return True
         return sanitize(positions, self.faults, max_abs=self.max_abs, required=self._required)
 
     def _follow(self, rate: float) -> None:

@@ -30,6 +30,11 @@ from .base import Sink, log, with_timeout
 from .pacing import Batch, TickPacer
 
 
+QUICK_SEND_CHARS = 16_384
+"""A message shorter than this, written while nothing is waiting in the connection's buffer, cannot make the send
+wait (the write buffer's high-water mark is 64 KiB): it is sent without a timeout's timer."""
+
+
 class _Link:
     """One open connection: frames written on it, and how many of them the server has confirmed reading."""
 
@@ -127,6 +132,7 @@ class WebSocketClientSink(Sink):
         self.ack_timeout = float(ack_timeout)
         self.ssl = ssl
         self.pacer = TickPacer(self.tick_s)
+        self._tick: Optional[asyncio.TimerHandle] = None  # wakes the task for the next tick's send
         self._link: Optional[_Link] = None
         self._lost = False
         self._ran = False  # run() started: the stream may have played something
@@ -150,8 +156,28 @@ class WebSocketClientSink(Sink):
 
     # -------------------------------------------------------------- engine side
     def offer(self, frame: OutFrame) -> None:
-        """Gather the frame for the next tick's send (never waits)."""
-        self.pacer.add(frame, time.perf_counter())
+        """Gather the frame for the next tick's send (never waits). The sink's task is woken when the send is
+        due, not before: a row that comes between two ticks costs a timer, not a wake-up of the task."""
+        now = time.perf_counter()
+        self.pacer.add(frame, now)
+        wait = self.pacer.due() - now
+        if wait > 0 and self._arm_tick(wait):
+            return
+        self._wake.set()
+
+    def _arm_tick(self, wait: float) -> bool:
+        """Wake the task in ``wait`` seconds (the next tick) unless a wake-up is already set for it; False when
+        there is no running loop to time it."""
+        if self._tick is None:
+            try:
+                loop = asyncio.get_running_loop()
+            except RuntimeError:
+                return False
+            self._tick = loop.call_later(wait, self._on_tick)
+        return True
+
+    def _on_tick(self) -> None:
+        self._tick = None
         self._wake.set()
 
     # -------------------------------------------------------------- task
@@ -173,7 +199,12 @@ class WebSocketClientSink(Sink):
 
     async def _send_all(self, ws: ClientConnection, messages: list[str]) -> None:
         for m in messages:
-            await with_timeout(ws.send(m), self.send_timeout)
+            if len(m) < QUICK_SEND_CHARS and not ws.transport.get_write_buffer_size():
+                # The kernel took everything written before: this send writes and returns without waiting (the
+                # library waits only when its buffer is over the high-water mark), so it needs no timer.
+                await ws.send(m)
+            else:
+                await with_timeout(ws.send(m), self.send_timeout)
 
     async def _reader(self, link: _Link) -> None:
         """Read (and keep) what the server says, so its replies never pile up and pongs are always seen."""
@@ -306,11 +337,8 @@ class WebSocketClientSink(Sink):
             if wait > 0:
                 # sleep until the tick, but wake up if the connection is lost meanwhile (a timer on the same event:
                 # no task per tick, as asyncio.wait_for would make)
-                timer = asyncio.get_running_loop().call_later(wait, self._wake.set)
-                try:
-                    await self._wake.wait()
-                finally:
-                    timer.cancel()
+                self._arm_tick(wait)
+                await self._wake.wait()
                 self._wake.clear()
                 continue
             return self.pacer.take(time.perf_counter())
