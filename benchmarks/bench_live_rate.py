@@ -15,8 +15,9 @@ Per case:
 * **wrong side**: the share of the vibration energy on the side of the vest and sleeves where offline rendering of
   the same frames (the recording as the VMC source decodes it, at the sender's rate, the same renderer and body
   model) puts the lesser part. Energy of what the Player received: each request's dots squared, times the time
-  it played (until its ``durationMillis`` ran out or the next request replaced it). Target: offline's own share
-  (within 1 point);
+  it played (until its ``durationMillis`` ran out or the next request replaced it). Target: the offline rows'
+  share as a Player gets them (the Player sinks' pacer run on them: at most one request per 20 ms tick, the max
+  of the tick's rows), within 1 point; the offline rows' own share is printed beside it;
 * **fade frames**: rows the session faded out while frames were arriving (its ``--stats-json``). Target: 0;
 * **silent gaps**: time the Player had nothing playing between the first and the last request (a duration shorter
   than the time to the next request). Target: 0 ms.
@@ -41,8 +42,12 @@ from websockets.asyncio.server import serve
 
 import hapmotion
 from hapmotion.bhaptics.device_map import DeviceMap
+from hapmotion.bhaptics.tick import PLAYER_TICK_S
 from hapmotion.layout import load_layout
+from hapmotion.live.frames import OutFrame
 from hapmotion.live.hygiene import Faults
+from hapmotion.live.sinks.pacing import TickPacer
+from hapmotion.live.sinks.player_sdk1 import default_duration_ms
 from hapmotion.live.wire.vmc_in import VmcDecoder
 from hapmotion.show import Show
 from hapmotion.show.stage import OutputStage
@@ -94,6 +99,35 @@ def side_energy(rows: np.ndarray, weights: np.ndarray, x: np.ndarray) -> tuple[f
     return float(e[:, x < 0].sum()), float(e[:, x > 0].sum())
 
 
+def paced(rows: np.ndarray, rate: float) -> tuple[np.ndarray, np.ndarray]:
+    """The Player requests of ``rows`` played at ``rate`` through the Player sinks' pacer (sans-I/O): a send when a
+    row comes and the tick is due, else at the tick. Returns ``(times (S,), rows (S, N))``."""
+    pacer = TickPacer(PLAYER_TICK_S)
+    times, sent = [], []
+    timer = None
+
+    def take(now: float) -> None:
+        nonlocal timer
+        batch = pacer.take(now)
+        if batch is not None:
+            times.append(now)
+            sent.append(batch.row.copy())
+        timer = pacer.due() if pacer.wants_send() else None
+
+    for k, row in enumerate(rows):
+        t = k / rate
+        while timer is not None and timer <= t:
+            take(timer)
+        pacer.add(OutFrame(k, t, row, None, t), t)
+        if pacer.due() <= t:
+            take(t)
+        elif timer is None:
+            timer = pacer.due()
+    while timer is not None:
+        take(timer)
+    return np.array(times), np.array(sent)
+
+
 def decoded(sender: VmcSender) -> np.ndarray:
     """The frames as the VMC source decodes them (sans-I/O): what the live renderer gets."""
     d = VmcDecoder(Faults("bench"))
@@ -116,7 +150,13 @@ async def one_case(rate: float, jitter_ms: float, tmp: Path) -> dict:
     offline = OutputStage.for_show(show, "motion", layout=layout, fps=rate).rows(rows, None)
     off_l, off_r = side_energy(offline, np.full(len(offline), 1.0 / rate), x)
     lesser = "left" if off_l < off_r else "right"
-    off_share = min(off_l, off_r) / (off_l + off_r)
+    rows_share = min(off_l, off_r) / (off_l + off_r)
+    # What a Player gets of those rows: at most one request per 20 ms tick, the max of the tick's rows (the
+    # sinks' own pacer, run on the rows' own times), each held for its durationMillis.
+    p_times, p_rows = paced(offline, rate)
+    p_play = np.minimum(np.append(np.diff(p_times), np.inf), default_duration_ms(rate) / 1000.0)
+    pl, pr = side_energy(p_rows, p_play, x)
+    off_share = (pl if lesser == "left" else pr) / (pl + pr)
 
     player = await Player().start()
     stats_json = tmp / f"rate{rate:g}_{jitter_ms:g}.json"
@@ -134,11 +174,13 @@ async def one_case(rate: float, jitter_ms: float, tmp: Path) -> dict:
         port = int(m.group(1)) if m else None
     await asyncio.sleep(0.5)
     rng = random.Random(int(rate * 100 + jitter_ms))
+    sent_at = []
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
         t0 = time.perf_counter() + 0.05
         for i in range(sender.n):
             due = t0 + i / rate + rng.uniform(-jitter_ms, jitter_ms) / 1000.0
             await asyncio.sleep(max(0.0, due - time.perf_counter()))
+            sent_at.append(time.perf_counter())
             for dg in sender.datagrams(i, "bundle"):
                 sock.sendto(dg, ("127.0.0.1", port))
     # Stop at once after the last frame, before the session would begin its stall fade: every fade row counted
@@ -160,6 +202,7 @@ async def one_case(rate: float, jitter_ms: float, tmp: Path) -> dict:
     silent = float(np.clip(gaps - durations[:-1], 0.0, None).sum()) if len(gaps) else 0.0
     warned = [ln for ln in log.splitlines() if "frames/s" in ln and "fps" in ln]
     return {"rate": rate, "jitter_ms": jitter_ms, "offline_share": off_share, "live_share": live_share,
+            "rows_share": rows_share, "longest_send_gap_ms": float(np.diff(sent_at).max()) * 1e3,
             "fade_frames": stats["fade_frames"], "silent_ms": silent * 1e3,
             "frames_in": stats["frames_in"], "rendered": stats["frames_out"], "requests": len(times),
             "duration_ms": float(np.median(durations)) * 1e3 if len(durations) else float("nan"),
@@ -185,7 +228,11 @@ async def main(quick: bool) -> int:
             good_side = abs(r["live_share"] - r["offline_share"]) <= 0.01
             line("energy on the wrong side (live)", f"{100 * r['live_share']:.1f} %",
                  f"offline's {100 * r['offline_share']:.1f} % (+-1)", good_side)
+            line("  offline: the rows themselves / as a Player gets them",
+                 f"{100 * r['rows_share']:.1f} / {100 * r['offline_share']:.1f} %", "(for reference)", True)
             line("fade frames while frames arrive", f"{r['fade_frames']}", "0", r["fade_frames"] == 0)
+            line("  the sender's longest gap between two frames", f"{r['longest_send_gap_ms']:.1f} ms",
+                 "(over 40 ms: a stall)", True)
             line("silent gaps between the Player's frames", f"{r['silent_ms']:.0f} ms", "0 ms", r["silent_ms"] == 0)
             for w in r["warnings"]:
                 print(f"  session said: {w.strip()}")
