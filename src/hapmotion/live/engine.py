@@ -1,5 +1,9 @@
 """The live loop: source -> newest-wins slot -> ``Renderer.step`` -> every sink's own slot; stall fade; stop.
 
+A frame is rendered inside the callback that brought it (the source's), at the stream's own rate
+(:mod:`~hapmotion.live.sender_clock` measures it for sources that do not know their show time); the render cap
+and the stall fade are timers. So no task wakes per frame, which on a live show costs as much as the work.
+
 Safety rules (docs/live.md, "Safety"):
 
 * a stalled source (no usable frame) fades every actuator linearly to zero, reaching zero ``stall_s`` after the

@@ -199,8 +199,16 @@ class WebSocketClientSink(Sink):
         if self.pacer.due() > now or ws.protocol.state is not State.OPEN or ws.transport.get_write_buffer_size():
             return False
         batch = self.pacer.take(now)
+        try:  # (this runs in the engine's callback: a failure here must stay this sink's)
+            messages = self.frame_messages(self._as_frame(batch))
+        except Exception as exc:
+            self.stats.errors += 1
+            self.stats.skipped += len(batch.frames)
+            self.warn_once("build", "could not build a request (%s: %s); its rows are skipped",
+                           exc.__class__.__name__, exc)
+            return True
         try:
-            for m in self.frame_messages(self._as_frame(batch)):
+            for m in messages:
                 ws.protocol.send_text(m.encode())
             ws.send_data()
         except Exception as exc:  # the connection failed under us: the task reconnects, the batch is lost
