@@ -311,10 +311,10 @@ def _per_call_us(fn, n: int = 3000) -> float:
 
 async def bench_session_cost(frames: np.ndarray, seconds: float, tmp: Path) -> bool:
     import logging
-    from types import SimpleNamespace
 
     from hapmotion.bhaptics.device_map import DeviceMap
     from hapmotion.layout import load_layout
+    from hapmotion.live.frames import OutFrame
     from hapmotion.live.hygiene import Faults
     from hapmotion.live.sinks import PlayerSdk1Sink
     from hapmotion.live.wire.osc_in import OscSkeletonDecoder
@@ -337,7 +337,7 @@ async def bench_session_cost(frames: np.ndarray, seconds: float, tmp: Path) -> b
 
     dmap = DeviceMap.from_layout(load_layout())
     sink = PlayerSdk1Sink(dmap, port=1)
-    row = SimpleNamespace(row=np.linspace(0.0, 100.0, dmap.n))
+    row = OutFrame(0, 0.0, np.linspace(0.0, 100.0, dmap.n), None, 0.0, interval=1.0 / FPS)
     build = _per_call_us(lambda: sink.frame_messages(row))
     decoder = OscSkeletonDecoder(Faults("bench", logging.getLogger("hapmotion.bench")))
     decode = _per_call_us(lambda: decoder.feed(dgrams[5], 0.0))

@@ -212,3 +212,31 @@ def test_the_fake_sdk2_player_refuses_a_string_version(tmp_path):
     p.check_auth({"applicationId": "a", "sdkApiKey": "k", "version": 1})
     assert p.errors == ["auth version '1', expected an integer"] and len(p.auths) == 1
     assert json.loads(json.dumps(p.auths[0]))["version"] == 1
+
+
+def test_a_request_that_cannot_be_built_is_counted_and_the_stream_goes_on(live_log):
+    """A due send goes out from the engine's own callback (offer); a failure to build it must stay the sink's: counted
+    as an error, logged once, its rows skipped, the next rows sent."""
+
+    class Flaky(PlayerSdk1Sink):
+        def frame_messages(self, frame):
+            if 20 <= frame.seq < 25:
+                raise ValueError("no request for this row")
+            return super().frame_messages(frame)
+
+    async def scenario():
+        player = await FakePlayerSdk1().start()
+        sink = Flaky(DMAP, host="127.0.0.1", port=player.port, fps=30.0)
+        run = asyncio.create_task(sink.run())
+        await wait_for(lambda: sink.stats.connects == 1, 5)
+        await _feed(sink, 30.0, 60)
+        await wait_for(lambda: player.requests >= 50, 5)
+        run.cancel()
+        await asyncio.gather(run, return_exceptions=True)
+        await sink.shutdown()
+        return sink, player
+
+    sink, player = asyncio.run(asyncio.wait_for(scenario(), 30))
+    assert sink.stats.errors >= 1 and sink.stats.skipped >= 1
+    assert sink.stats.sent + sink.stats.skipped >= 60 - 1 and player.requests >= 50
+    assert sum("could not build a request" in line for line in live_log) == 1

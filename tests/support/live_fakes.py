@@ -471,7 +471,8 @@ def is_tick_max_sequence(sent: list, emitted: list) -> bool:
 
 
 class ScriptSource(Source):
-    """Submits ``frames`` every ``interval`` seconds (seqs optional), then ends or waits (``then="wait"``)."""
+    """Submits ``frames`` every ``interval`` seconds on a fixed schedule (seqs optional), then ends or waits
+    (``then="wait"``)."""
 
     name = "script"
 
@@ -480,12 +481,14 @@ class ScriptSource(Source):
         self.done = asyncio.Event()
 
     async def run(self):
+        t0 = time.perf_counter()
         for k, pos in enumerate(self.frames):
             if self.before:
                 self.before(k)
             seq = self.seqs[k] if self.seqs is not None else k
             self.engine.submit(SkeletonFrame(np.array(pos, dtype=float), seq, None, time.perf_counter()))
-            await asyncio.sleep(self.interval)
+            # on a fixed schedule, as a tracker sends: a sleep that wakes late does not slow the stream down
+            await asyncio.sleep(max(0.0, t0 + (k + 1) * self.interval - time.perf_counter()))
         self.done.set()
         if self.then == "wait":
             await asyncio.Event().wait()

@@ -1,5 +1,9 @@
 """The live loop: source -> newest-wins slot -> ``Renderer.step`` -> every sink's own slot; stall fade; stop.
 
+A frame is rendered inside the callback that brought it (the source's), at the stream's own rate
+(:mod:`~hapmotion.live.sender_clock` measures it for sources that do not know their show time); the render cap
+and the stall fade are timers. So no task wakes per frame, which on a live show costs as much as the work.
+
 Safety rules (docs/live.md, "Safety"):
 
 * a stalled source (no usable frame) fades every actuator linearly to zero, reaching zero ``stall_s`` after the
@@ -18,11 +22,10 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import math
 import signal
 import threading
 import time
-from typing import Any, Callable, Optional, Protocol, Sequence
+from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
 
@@ -32,8 +35,10 @@ from ..skeleton.joints import JOINT_INDEX, RENDER_JOINTS
 from . import steady_heap
 from .frames import OutFrame, SkeletonFrame
 from .hygiene import MAX_ABS_M, Faults, FrameOrder, RateLimiter, sanitize
+from .sender_clock import SenderClock
 from .sinks.base import Sink
 from .sources import Source
+from .upstream import RenderedSkeleton, StepRenderer, Upstream
 from .stats import LiveStats
 
 log = logging.getLogger("hapmotion.live")
@@ -47,56 +52,13 @@ was ignored when the process started stays ignored: ``nohup hapmotion live ...``
 terminal hangs up."""
 
 
-class StepRenderer(Protocol):
-    """What the engine needs from a skeleton renderer (``hapmotion.Renderer`` fits)."""
-
-    def step(self, frame: np.ndarray) -> np.ndarray: ...
-
-    @property
-    def last_debug(self) -> dict[str, np.ndarray]: ...
-
-    def reset(self) -> None: ...
-
-
-class Upstream(Protocol):
-    """What turns each incoming frame into the row the output stage takes.
-
-    ``reads_skeleton`` says whether frames carry a skeleton to check and render (a clock's ticks do not);
-    ``row(frame, t)`` returns ``(N,)`` 0..100 for the frame at show time ``t``; ``last_skeleton`` and
-    ``last_debug`` describe that row for viewers (``None`` when there is nothing to show); ``reset()`` starts
-    afresh after a stall."""
-
-    reads_skeleton: bool
-    last_skeleton: Optional[np.ndarray]
-    last_debug: Optional[dict[str, np.ndarray]]
-
-    def row(self, frame: SkeletonFrame, t: float) -> np.ndarray: ...
-
-    def reset(self) -> None: ...
-
-
-class RenderedSkeleton:
-    """The :class:`Upstream` of a live show: each frame's skeleton rendered by a :class:`StepRenderer`."""
-
-    reads_skeleton = True
-
-    def __init__(self, renderer: StepRenderer):
-        self.renderer = renderer
-        self.last_skeleton: Optional[np.ndarray] = None
-        self.last_debug: Optional[dict[str, np.ndarray]] = None
-
-    def row(self, frame: SkeletonFrame, t: float) -> np.ndarray:
-        out = np.asarray(self.renderer.step(frame.positions), dtype=np.float64)
-        self.last_skeleton, self.last_debug = frame.positions, self.renderer.last_debug
-        return out
-
-    def warm_up(self) -> None:
-        """Step the renderer once so its first real frame is not delayed by JIT compilation."""
-        self.renderer.step(np.full((32, 3), np.nan))
-        self.renderer.reset()
-
-    def reset(self) -> None:
-        self.renderer.reset()
+RENDER_BURST = 8.0
+"""Frames the render cap lets through at once: a jittered sender's frames may arrive a few milliseconds apart, and
+a sender (or this machine) that paused sends the frames it owes together; each is still rendered, so the renderer
+sees every frame (the cap is on the average rate: a flood costs at most this many renders more)."""
+MIN_GRACE_S = 0.04
+"""The fade never starts sooner than this after the last frame: a sender or a machine that pauses for a moment
+(a 90 fps sender's frame 20 ms late) is not a stall. Two 20 ms Player ticks, the least a Player holds a row."""
 
 
 class LiveEngine:
@@ -116,10 +78,14 @@ class LiveEngine:
     n_actuators:
         N, the row length.
     fps:
-        The renderer's frame rate (sets the fade tick and the "slow" threshold).
+        The renderer's frame rate (sets the fade tick and the "slow" threshold). For a source that does not know
+        its show time (OSC, WebSocket, VMC), only the starting rate: the stream's own rate is measured
+        (:mod:`~hapmotion.live.sender_clock`) and the renderer follows it (one warning when it is not ``fps``).
     rate:
         Frames per second expected from the source (default ``fps``; ``fps * speed`` for a replay). The renderer
-        runs at most ``render_cap * rate`` times a second; frames arriving faster replace each other.
+        runs at most ``render_cap * rate`` times a second on average (``rate``: the measured rate once it is
+        higher), in bursts of :data:`RENDER_BURST` frames (jittered arrival); frames arriving faster replace each
+        other.
     stall_s:
         Seconds after the last usable frame by which every actuator has faded to zero.
     max_abs:
@@ -155,13 +121,13 @@ class LiveEngine:
         self.sinks = list(sinks)
         self.n = int(n_actuators)
         self.fps = float(fps)
-        self.interval = 1.0 / self.fps
+        self.render_fps = self.fps  # the rate rows are rendered at now: the measured sender's, once known
         self.rate = float(rate or fps)
+        self.expected_rate = self.rate  # frames per second expected now (the measured rate, once known)
         self.stall_s = float(stall_s)
-        # The fade starts when a frame is overdue by half an interval, and never later than half the stall time.
-        self.grace_s = min(1.5 / self.rate, 0.5 * self.stall_s)
         self.max_abs = max_abs
-        self.min_gap = 1.0 / (render_cap * self.rate)
+        self.render_cap = float(render_cap)
+        self.clock = SenderClock(self.fps)
         self.stop_timeout = stop_timeout
         self.handle_signals = handle_signals
         self.stats_interval = stats_interval
@@ -178,20 +144,47 @@ class LiveEngine:
                 k += 1
             s.stats.name = name
             self.stats.sinks[name] = s.stats
+        # the renderer's debug values are made only when a sink shows them (viewers), not for every row
+        self._wants_debug = any(getattr(s, "uses_debug", True) for s in self.sinks)
         flood = flood_rate or 40.0 * self.rate
         self._limiter = RateLimiter(flood, max(64.0, 4.0 * self.rate))
         self.order = FrameOrder()
         self._slot: Optional[SkeletonFrame] = None
-        self._wake = asyncio.Event()
         self._stop = asyncio.Event()
         self._stop_reason = ""
         self._seq = 0
         self._t0: Optional[float] = None  # show clock origin (first frame) for sources without show time
         self._last_accept: Optional[float] = None
-        self._last_render = -math.inf
+        self._measured = False  # the last accepted frame came without show time: its rate is measured
+        self._warned_rate = False
+        self._tokens = RENDER_BURST  # the render cap's token bucket
+        self._token_t: Optional[float] = None
         self._last_row = np.zeros(self.n)
         self._faded = True  # nothing is playing yet
+        self._loop: Optional[asyncio.AbstractEventLoop] = None
+        self._render_at: Optional[asyncio.TimerHandle] = None  # a capped frame's render, when due
+        self._fade_at: Optional[asyncio.TimerHandle] = None  # the stall watchdog's next look
+        self._failure: Optional[asyncio.Future] = None  # an error in a render or fade callback
+        self._closed = False  # the session ended: frames are no longer taken
         self.source: Optional[Source] = None
+
+    @property
+    def interval(self) -> float:
+        """Seconds between rows now (the fade's step; each row's ``interval``)."""
+        return 1.0 / self.render_fps
+
+    @property
+    def grace_s(self) -> float:
+        """How long after the last usable frame the fade starts: 1.5 frame intervals and at least
+        :data:`MIN_GRACE_S`, or, for a measured stream, 1.25 times the longest gap between its recent frames if
+        that is longer (jittered arrival is not a stall); before a measured stream's second frame, half the stall
+        time (its rate is not known yet). Never later than half the stall time, so the fade always has the other
+        half to reach zero."""
+        grace = max(1.5 / self.expected_rate, MIN_GRACE_S)
+        if self._measured:
+            gap = self.clock.max_gap
+            grace = 0.5 * self.stall_s if gap is None else max(grace, 1.25 * gap)
+        return min(grace, 0.5 * self.stall_s)
 
     @property
     def reads_skeleton(self) -> bool:
@@ -218,21 +211,59 @@ class LiveEngine:
         self.stats.superseded += count
 
     def submit(self, frame: SkeletonFrame) -> None:
-        """Take a decoded frame: clean it, drop it if it is older than the last one, put it in the slot."""
+        """Take a decoded frame: clean it, drop it if it is older than the last one, measure the stream's rate,
+        and render it at once (or, over the render cap, when the cap allows, unless a newer frame replaces it)."""
+        if self._closed:
+            return
         self.stats.frames_in += 1
-        if self.reads_skeleton and not sanitize(frame.positions, self.faults, max_abs=self.max_abs,
-                                                 required=self._required):
+        if self.reads_skeleton and not self._usable(frame.positions):
             self.stats.empty += 1
             return
         if not self.order.accept(frame.seq, frame.t):
             self.stats.late += 1
             self.faults.add("late", f"frame seq={frame.seq} t={frame.t} arrived after a newer one")
             return
+        self._measured = frame.show_t is None and self.reads_skeleton
+        if self._measured:
+            rate = self.clock.note(frame.seq, frame.t, frame.received)
+            if rate is not None:
+                self._follow(rate)
         if self._slot is not None:
             self.stats.superseded += 1
         self._slot = frame
         self._last_accept = frame.received
-        self._wake.set()
+        if self._render_at is None:
+            self._render_due()
+
+    def _usable(self, positions: np.ndarray) -> bool:
+        """:func:`~hapmotion.live.hygiene.sanitize`, skipped for the usual frame that it would return unchanged as
+        usable: every joint either sent whole within ``max_abs`` or not sent at all (NaN), one of the renderer's
+        joints sent."""
+        if positions.size:
+            inside = np.abs(positions) <= self.max_abs  # (NaN is not)
+            whole = inside.all(axis=1)
+            if whole.all() or (whole[self._required].any() and (whole | np.isnan(positions).all(axis=1)).all()):
+                return True
+        return sanitize(positions, self.faults, max_abs=self.max_abs, required=self._required)
+
+    def _follow(self, rate: float) -> None:
+        """The stream's measured rate is ``rate``: render at it from now on, as if from the stream's start."""
+        retime = getattr(self.upstream, "retime", None)
+        followed = retime is not None and retime(rate)
+        self.expected_rate = rate
+        if followed:
+            self.render_fps = rate
+        how = f"measured from its {self.clock.source}"
+        if followed:
+            action = f"rendering at {rate:g} frames/s from now on (--fps {rate:g} starts at that rate)"
+        else:
+            action = f"rows are still rendered at {self.render_fps:g} frames/s (this renderer cannot change rate)"
+        if not self._warned_rate:
+            self._warned_rate = True
+            log.warning("%s sends %g frames/s (%s), not --fps %g: %s", self.faults.source, rate, how, self.fps,
+                        action)
+        else:
+            log.info("%s now sends %g frames/s (%s): %s", self.faults.source, rate, how, action)
 
     # ------------------------------------------------------------------ control
     def request_stop(self, reason: str) -> None:
@@ -244,6 +275,8 @@ class LiveEngine:
     async def run(self, source: Source) -> LiveStats:
         """Run until stopped; always turns every sink off before returning or raising."""
         loop = asyncio.get_running_loop()
+        self._loop = loop
+        self._failure = loop.create_future()
         self.source = source
         installed = self._install_signals(loop)
         tasks: list[asyncio.Task] = []
@@ -289,6 +322,7 @@ class LiveEngine:
                 self._stop_reason = f"could not start ({reason})"
             raise
         finally:
+            self._close()
             for t in tasks:
                 t.cancel()
             await asyncio.gather(*tasks, return_exceptions=True)
@@ -373,35 +407,73 @@ class LiveEngine:
 
         await asyncio.gather(*(off(s) for s in self.sinks))
 
-    # ------------------------------------------------------------------ the render loop
+    # ------------------------------------------------------------------ rendering and the stall watchdog
+    # Both run as plain callbacks of the event loop (a frame renders inside the source's own callback; timers for
+    # a capped frame and for the fade): no task wakes up per frame, and an error in either ends the session
+    # through the failure future the render task waits on.
     async def _render_loop(self) -> None:
-        loop = asyncio.get_running_loop()
-        while True:
-            if self._slot is None:
-                deadline = self._next_fade_time()
-                handle = loop.call_at(self._to_loop_time(loop, deadline), self._wake.set) \
-                    if deadline is not None else None
-                await self._wake.wait()
-                self._wake.clear()
-                if handle is not None:
-                    handle.cancel()
-            now = time.perf_counter()
-            if self._slot is not None:
-                wait = self._last_render + self.min_gap - now
-                if wait > 0:  # flood: let newer frames replace this one, render at most render_cap * rate
-                    await asyncio.sleep(wait)
-                frame, self._slot = self._slot, None
-                self._wake.clear()
-                self._render(frame)
-            else:
-                self._fade(now)
+        assert self._failure is not None
+        await self._failure
+
+    def _fail(self, exc: BaseException) -> None:
+        if self._failure is not None and not self._failure.done():
+            self._failure.set_exception(exc)
+
+    def _close(self) -> None:
+        """The session ends: take no more frames, cancel the pending render and fade."""
+        self._closed = True
+        for handle in (self._render_at, self._fade_at):
+            if handle is not None:
+                handle.cancel()
+        self._render_at = self._fade_at = None
+
+    def _render_due(self) -> None:
+        """Render the frame in the slot now if the render cap allows, else arm a timer for when it does."""
+        self._render_at = None
+        if self._slot is None or self._closed:
+            return
+        now = time.perf_counter()
+        rate = self.render_cap * max(self.rate, self.expected_rate)
+        tokens = RENDER_BURST if self._token_t is None else \
+            min(RENDER_BURST, self._tokens + (now - self._token_t) * rate)
+        if tokens < 1.0:
+            if self._loop is not None:  # flood: newer frames may replace this one meanwhile
+                self._render_at = self._loop.call_later((1.0 - tokens) / rate, self._render_due)
+                return
+        self._tokens, self._token_t = max(0.0, tokens - 1.0), now
+        frame, self._slot = self._slot, None
+        try:
+            self._render(frame)
+        except BaseException as exc:  # the session stops with it; the sinks are turned off
+            self._fail(exc)
+            return
+        self._arm_fade()
+
+    def _arm_fade(self) -> None:
+        """(Re)arm the stall watchdog for the next moment a fade row may be due."""
+        if self._fade_at is not None:
+            self._fade_at.cancel()
+            self._fade_at = None
+        deadline = self._next_fade_time()
+        if deadline is not None and self._loop is not None and not self._closed:
+            self._fade_at = self._loop.call_at(self._to_loop_time(self._loop, deadline), self._fade_due)
+
+    def _fade_due(self) -> None:
+        self._fade_at = None
+        if self._slot is not None or self._closed:
+            return  # a frame is on its way to the renderer
+        try:
+            self._fade(time.perf_counter())
+        except BaseException as exc:
+            self._fail(exc)
+            return
+        self._arm_fade()
 
     @staticmethod
     def _to_loop_time(loop: asyncio.AbstractEventLoop, perf_time: float) -> float:
         return loop.time() + (perf_time - time.perf_counter())
 
     def _render(self, frame: SkeletonFrame) -> None:
-        now = time.perf_counter()
         if frame.show_t is not None:
             t = frame.show_t
         else:
@@ -411,7 +483,8 @@ class LiveEngine:
         skeleton = debug = row = None
         if self.upstream is not None:
             row = self.upstream.row(frame, t)
-            skeleton, debug = self.upstream.last_skeleton, self.upstream.last_debug
+            skeleton = self.upstream.last_skeleton
+            debug = self.upstream.last_debug if self._wants_debug else None
         if self.stage is not None:
             row = self.stage.step(row, t, skeleton)
         assert row is not None  # the constructor refuses an engine with neither
@@ -421,7 +494,6 @@ class LiveEngine:
             self.faults.add("render_nan", "the renderer returned a non-finite intensity; sent as 0")
             row = np.nan_to_num(row, nan=0.0, posinf=100.0, neginf=0.0)
         row = np.clip(row, 0.0, 100.0)
-        self._last_render = now
         self._last_row = row
         self._faded = False
         self.stats.rendered += 1
@@ -430,7 +502,8 @@ class LiveEngine:
     def _next_fade_time(self) -> Optional[float]:
         if self._faded or self._last_accept is None:
             return None
-        start = self._last_accept + self.grace_s
+        grace = self.grace_s
+        start = self._last_accept + grace
         end = self._last_accept + self.stall_s
         now = time.perf_counter()
         if now < start:
@@ -442,7 +515,8 @@ class LiveEngine:
         if self._faded or self._last_accept is None:
             return
         since = now - self._last_accept
-        if since < self.grace_s:
+        grace = self.grace_s
+        if since < grace:
             return
         if since >= self.stall_s - 1e-4:
             self._faded = True
@@ -451,9 +525,10 @@ class LiveEngine:
             if self.upstream is not None:
                 self.upstream.reset()
             self.order.reset()
+            self.clock.reset()
             self._emit(np.zeros(self.n), None, None, None, "off")
             return
-        gain = (self.stall_s - since) / (self.stall_s - self.grace_s)
+        gain = (self.stall_s - since) / (self.stall_s - grace)
         self.stats.fade_frames += 1
         self._emit(self._last_row * min(1.0, max(0.0, gain)), None, None, None, "fade")
 
@@ -462,7 +537,7 @@ class LiveEngine:
         now = time.perf_counter()
         if t is None:
             t = (now - self._t0) if self._t0 is not None else 0.0
-        frame = OutFrame(self._seq, t, row, received, now, skeleton, debug, kind)
+        frame = OutFrame(self._seq, t, row, received, now, skeleton, debug, kind, self.interval)
         self._seq += 1
         for s in self.sinks:
             s.offer(frame)

@@ -87,6 +87,10 @@ class OutFrame:
         The renderer's ``last_debug`` for this frame, or None.
     kind:
         ``"frame"`` (rendered), ``"fade"`` (stalled source, fading out) or ``"off"`` (all zeros).
+    interval:
+        Seconds until the next row is due: the stream's own frame interval, as measured (the fade's step while
+        fading), or None when not known. A device that holds each row for a set time (the bHaptics Player's
+        ``durationMillis``) holds it for longer than this.
     """
 
     seq: int
@@ -97,6 +101,7 @@ class OutFrame:
     skeleton: Optional[np.ndarray] = None
     debug: Optional[Mapping[str, np.ndarray]] = None
     kind: str = "frame"
+    interval: Optional[float] = None
 
 
 def joint_index(name: str) -> int:

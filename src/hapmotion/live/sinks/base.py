@@ -42,6 +42,10 @@ class Sink:
     bounded_shutdown = True
     """False for sinks whose :meth:`shutdown` must finish however long it takes (the recorder's file)."""
 
+    uses_debug = True
+    """Whether the sink reads each frame's ``debug`` (the renderer's dynamic point, level ...: viewers do). The
+    engine makes those values only when a sink of the session reads them."""
+
     def __init__(self, name: str, *, fps: float = 60.0, send_timeout: float = 0.5):
         self.name = name
         self.fps = float(fps)

@@ -43,6 +43,8 @@ class OscOutSink(Sink):
         Bytes waiting in the socket's user-space buffer beyond which a frame is skipped.
     """
 
+    uses_debug = False  # rows only
+
     def __init__(self, dmap: DeviceMap, *, host: str = OSC_OUT.host, port: int = OSC_OUT.port,
                  prefix: str = OSC_OUT.path, per_actuator: bool = True, per_device: bool = True, fps: float = 60.0,
                  buffer_limit: int = 65536, name: Optional[str] = None, **kwargs: Any):

@@ -30,6 +30,15 @@ def default_duration_ms(fps: float) -> int:
     return max(2 * PLAYER_TICK_MS, int(math.ceil(2000.0 / fps)))
 
 
+def row_duration_ms(frame: OutFrame, fixed_ms: Optional[int], fps: float) -> int:
+    """``durationMillis`` of the request that plays ``frame``: the sink's ``duration=`` when given, else
+    :func:`default_duration_ms` at the rate the row came at (its ``interval``: a 30 fps sender's rows are held
+    67 ms, so the Player never falls silent between them), or at the session's ``fps``."""
+    if fixed_ms:
+        return fixed_ms
+    return default_duration_ms(1.0 / frame.interval if frame.interval else fps)
+
+
 class PlayerSdk1Sink(WebSocketClientSink):
     """Streams rows to the Player's SDK1 endpoint.
 
@@ -42,7 +51,8 @@ class PlayerSdk1Sink(WebSocketClientSink):
     app_id, app_name:
         Optional query parameters some SDK1 clients send (bHaptics' tact-js v1 ``PlayerSocket.ts``).
     duration_ms:
-        ``durationMillis`` of each frame (default :func:`default_duration_ms`).
+        ``durationMillis`` of each frame (default :func:`row_duration_ms`: two send intervals at the rate the rows
+        come at).
     key_prefix:
         Keys are ``<prefix>_<Device>``.
     registrations:
@@ -59,17 +69,29 @@ class PlayerSdk1Sink(WebSocketClientSink):
         kwargs.setdefault("tick_s", PLAYER_TICK_S)
         super().__init__(name or f"player {url}", url, fps=fps, **kwargs)
         self.dmap = dmap
-        self.duration_ms = int(duration_ms) if duration_ms else default_duration_ms(fps)
+        self.fixed_ms = int(duration_ms) if duration_ms else None
+        self.duration_ms = self.fixed_ms or default_duration_ms(fps)
         self.key_prefix = key_prefix
         self.registrations = dict(registrations or {})
         self.status: Optional[dict] = None
-        self.template = V2FrameTemplate(dmap, self.duration_ms, key_prefix)  # built once: one request per tick
+        # built once per hold time (one, or one per sender rate): one request per tick from it
+        self._templates: dict[int, V2FrameTemplate] = {}
+        self.template = self._template(self.duration_ms)
 
     def hello_messages(self) -> list[str]:
         reg = v2_register_message(self.registrations)
         return [reg] if reg else []
 
+    def _template(self, duration_ms: int) -> V2FrameTemplate:
+        template = self._templates.get(duration_ms)
+        if template is None:
+            template = self._templates[duration_ms] = V2FrameTemplate(self.dmap, duration_ms, self.key_prefix)
+        return template
+
     def frame_messages(self, frame: OutFrame) -> list[str]:
+        ms = row_duration_ms(frame, self.fixed_ms, self.fps)
+        if ms != self.template.duration_ms:
+            self.template = self._template(ms)
         return [self.template.message(frame.row)]
 
     def off_messages(self) -> list[str]:

@@ -20,7 +20,7 @@ from ...bhaptics.tick import PLAYER_TICK_S
 from ...errors import UsageError
 from ..addresses import PLAYER_SDK2
 from ..frames import OutFrame
-from .player_sdk1 import _host, default_duration_ms
+from .player_sdk1 import _host, default_duration_ms, row_duration_ms
 from .ws_client import WebSocketClientSink
 
 
@@ -66,7 +66,8 @@ class PlayerSdk2Sink(WebSocketClientSink):
         self.workspace_id = workspace_id
         self.api_key = api_key
         self.version = version
-        self.duration_ms = int(duration_ms) if duration_ms else default_duration_ms(fps)
+        self.fixed_ms = int(duration_ms) if duration_ms else None
+        self.duration_ms = self.fixed_ms or default_duration_ms(fps)
         self._request_id = 1
         self.server_messages: dict[str, Any] = {}
 
@@ -79,6 +80,7 @@ class PlayerSdk2Sink(WebSocketClientSink):
         return msgs
 
     def frame_messages(self, frame: OutFrame) -> list[str]:
+        self.duration_ms = row_duration_ms(frame, self.fixed_ms, self.fps)
         return self._dots(frame.row)
 
     def off_messages(self) -> list[str]:

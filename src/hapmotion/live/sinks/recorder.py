@@ -61,6 +61,8 @@ class RecorderSink(Sink):
         Seconds between journal writes: after a crash, at most about this much of the take is missing.
     """
 
+    uses_debug = False  # rows only
+
     bounded_shutdown = False
 
     def __init__(self, path: "str | os.PathLike[str]", actuators: Sequence[str], layout: str = DEFAULT_LAYOUT_NAME, *,

@@ -24,10 +24,16 @@ from typing import Any, Optional
 
 from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed
+from websockets.protocol import State
 
 from ..frames import OutFrame
 from .base import Sink, log, with_timeout
 from .pacing import Batch, TickPacer
+
+
+QUICK_SEND_CHARS = 16_384
+"""A message shorter than this, written while nothing is waiting in the connection's buffer, cannot make the send
+wait (the write buffer's high-water mark is 64 KiB): it is sent without a timeout's timer."""
 
 
 class _Link:
@@ -105,6 +111,8 @@ class WebSocketClientSink(Sink):
         Connection attempt limit; first and longest wait between attempts (doubling).
     """
 
+    uses_debug = False  # rows only
+
     off_open_timeout = 0.5
     """Seconds :meth:`shutdown` waits to reconnect for the turn-off, so reconnecting, the hello, the turn-off and
     its confirmation all fit in the engine's ``stop_timeout`` (2 s by default)."""
@@ -125,6 +133,8 @@ class WebSocketClientSink(Sink):
         self.ack_timeout = float(ack_timeout)
         self.ssl = ssl
         self.pacer = TickPacer(self.tick_s)
+        self._tick: Optional[asyncio.TimerHandle] = None  # the next tick's send
+        self._idle: Optional[_Link] = None  # the connection the stream waits on for its next send
         self._link: Optional[_Link] = None
         self._lost = False
         self._ran = False  # run() started: the stream may have played something
@@ -148,9 +158,75 @@ class WebSocketClientSink(Sink):
 
     # -------------------------------------------------------------- engine side
     def offer(self, frame: OutFrame) -> None:
-        """Gather the frame for the next tick's send (never waits)."""
-        self.pacer.add(frame, time.perf_counter())
-        self._wake.set()
+        """Gather the frame for the next tick's send (never waits). When the tick is due and the connection is
+        idle, the send goes at once from here; a row that comes between two ticks costs a timer. The sink's task
+        is woken only for what may wait (a full buffer, a lost connection)."""
+        now = time.perf_counter()
+        self.pacer.add(frame, now)
+        wait = self.pacer.due() - now
+        if wait > 0 and self._arm_tick(wait):
+            return
+        if not self._send_at_once():
+            self._wake.set()
+
+    def _arm_tick(self, wait: float) -> bool:
+        """Wake the task in ``wait`` seconds (the next tick) unless a wake-up is already set for it; False when
+        there is no running loop to time it."""
+        if self._tick is None:
+            try:
+                loop = asyncio.get_running_loop()
+            except RuntimeError:
+                return False
+            self._tick = loop.call_later(wait, self._on_tick)
+        return True
+
+    def _on_tick(self) -> None:
+        self._tick = None
+        if not self._send_at_once():
+            self._wake.set()
+
+    def _send_at_once(self) -> bool:
+        """Send the tick's batch from the calling callback when that cannot wait: the stream is idle on an open
+        connection, the tick is due and nothing waits in the connection's buffer. This is what the library's own
+        ``send`` does before it would wait for a full buffer to drain (the sans-I/O protocol's frame, then the
+        transport's write), without waking the sink's task: one event-loop turn per row instead of two or three.
+        False when the task must send (it then waits with a timeout)."""
+        link = self._idle
+        if link is None or self._lost or not self.pacer.wants_send():
+            return False
+        ws = link.ws
+        now = time.perf_counter()
+        if self.pacer.due() > now or ws.protocol.state is not State.OPEN or ws.transport.get_write_buffer_size():
+            return False
+        batch = self.pacer.take(now)
+        try:  # (this runs in the engine's callback: a failure here must stay this sink's)
+            messages = self.frame_messages(self._as_frame(batch))
+        except Exception as exc:
+            self.stats.errors += 1
+            self.stats.skipped += len(batch.frames)
+            self.warn_once("build", "could not build a request (%s: %s); its rows are skipped",
+                           exc.__class__.__name__, exc)
+            return True
+        try:
+            for m in messages:
+                ws.protocol.send_text(m.encode())
+            ws.send_data()
+        except Exception as exc:  # the connection failed under us: the task reconnects, the batch is lost
+            self.stats.skipped += len(batch.frames)
+            self.warn_once("lost", "connection lost (%s); reconnecting", exc)
+            self._lost = True
+            self._wake.set()
+            return True
+        self._sent(link, batch)
+        return True
+
+    def _sent(self, link: _Link, batch: Batch) -> None:
+        """Count a batch written on ``link``."""
+        now = time.perf_counter()
+        self.stats.extra["sends"] += 1
+        link.written += len(batch.frames)
+        for frame, held in batch.frames:
+            self.stats.record(frame.received, now, self.interval, held if self.tick_s > 0 else None)
 
     # -------------------------------------------------------------- task
     async def _connect(self, open_timeout: Optional[float] = None) -> ClientConnection:
@@ -171,7 +247,12 @@ class WebSocketClientSink(Sink):
 
     async def _send_all(self, ws: ClientConnection, messages: list[str]) -> None:
         for m in messages:
-            await with_timeout(ws.send(m), self.send_timeout)
+            if len(m) < QUICK_SEND_CHARS and not ws.transport.get_write_buffer_size():
+                # The kernel took everything written before: this send writes and returns without waiting (the
+                # library waits only when its buffer is over the high-water mark), so it needs no timer.
+                await ws.send(m)
+            else:
+                await with_timeout(ws.send(m), self.send_timeout)
 
     async def _reader(self, link: _Link) -> None:
         """Read (and keep) what the server says, so its replies never pile up and pongs are always seen."""
@@ -269,7 +350,11 @@ class WebSocketClientSink(Sink):
     async def _stream(self, link: _Link) -> None:
         timeouts = 0
         while True:
-            batch = await self._next_batch()
+            self._idle = link  # meanwhile, a due send may go at once (_send_at_once)
+            try:
+                batch = await self._next_batch()
+            finally:
+                self._idle = None
             if batch is None:
                 return
             try:
@@ -287,11 +372,7 @@ class WebSocketClientSink(Sink):
                     return
                 continue
             timeouts = 0
-            now = time.perf_counter()
-            self.stats.extra["sends"] += 1
-            link.written += len(batch.frames)
-            for frame, held in batch.frames:
-                self.stats.record(frame.received, now, self.interval, held if self.tick_s > 0 else None)
+            self._sent(link, batch)
 
     async def _next_batch(self) -> Optional[Batch]:
         """Wait for something to send and for the tick; None once the connection is lost."""
@@ -302,10 +383,10 @@ class WebSocketClientSink(Sink):
                 continue
             wait = self.pacer.due() - time.perf_counter()
             if wait > 0:
-                try:  # sleep until the tick, but wake up if the connection is lost meanwhile
-                    await asyncio.wait_for(self._wake.wait(), wait)
-                except asyncio.TimeoutError:
-                    pass
+                # sleep until the tick, but wake up if the connection is lost meanwhile (a timer on the same event:
+                # no task per tick, as asyncio.wait_for would make)
+                self._arm_tick(wait)
+                await self._wake.wait()
                 self._wake.clear()
                 continue
             return self.pacer.take(time.perf_counter())
@@ -316,7 +397,7 @@ class WebSocketClientSink(Sink):
         last = batch.frames[-1][0] if batch.frames else None
         return OutFrame(last.seq if last else -1, last.t if last else 0.0, batch.row,
                         last.received if last else None, last.created if last else time.perf_counter(),
-                        kind=last.kind if last else "frame")
+                        kind=last.kind if last else "frame", interval=last.interval if last else None)
 
     async def shutdown(self) -> None:
         """Turn everything off on the open connection (or a fresh one), make sure the server read it, close."""
