@@ -145,7 +145,10 @@ def codec_copy(x: np.ndarray, sr: int = SR, quality: float = 0.0) -> np.ndarray:
     """``x`` through Ogg Vorbis at low quality (libsndfile's encoder, ``compression_level`` 1.0 - quality: 1.0 is
     the lowest Vorbis quality, about 32-48 kbit/s at 22 kHz mono), decoded again."""
     buf = io.BytesIO()
-    sf.write(buf, np.clip(x, -1, 1), sr, format="OGG", subtype="VORBIS", compression_level=1.0 - quality)
+    clipped = np.clip(x, -1, 1).astype(np.float32)
+    with sf.SoundFile(buf, "w", sr, 1, format="OGG", subtype="VORBIS", compression_level=1.0 - quality) as f:
+        for k in range(0, clipped.size, 16384):  # in blocks: libsndfile's Vorbis encoder crashed on one long write
+            f.write(clipped[k:k + 16384])
     buf.seek(0)
     y, _ = sf.read(buf, dtype="float64")
     out = np.zeros_like(x)

@@ -145,13 +145,13 @@ class SeatSync:
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
         self._sub: Optional[Subscription] = None
-        self._trust: Optional[SeatTrust] = None
+        self.trust: Optional[SeatTrust] = None
         self._said: set[str] = set()
         self.cpu_s = 0.0
 
     # ------------------------------------------------------------------ life cycle
     async def start(self, nc: NatsClient, show: str, trust: SeatTrust) -> None:
-        self._trust = trust
+        self.trust = trust
         self._sub = await nc.subscribe(subject(show, "sync"), cb=self._on_batch)
         self._thread = threading.Thread(target=self._listen, name="hapmotion-sync", daemon=True)
         self._thread.start()
@@ -183,9 +183,14 @@ class SeatSync:
             log.warning("seat sync: %s (counted; logged once)", text)
 
     async def _on_batch(self, msg: Msg) -> None:
-        arrival = time.perf_counter()
+        self.receive(msg.data, time.perf_counter())
+
+    def receive(self, raw: bytes, arrival: float) -> None:
+        """One message of the reference subject as received (its bytes, its local arrival time): checked against
+        :attr:`trust`, then stored; unsigned, wrongly signed, malformed and replayed batches are counted and
+        logged once per kind."""
         try:
-            data = self._trust.open("sync", msg.data)
+            data = self.trust.open("sync", raw)
             batch = decode_batch(data)
         except (Unsigned, BadSignature) as exc:
             self._fault("bad_signature", f"reference {exc}")

@@ -21,11 +21,16 @@ from dataclasses import dataclass
 from typing import Optional
 
 import numpy as np
+from scipy.ndimage import uniform_filter1d
 
 from ..audio.sync_features import RATE, novelty
 
 EXCLUSION_S = 0.06
 """The second-best peak is looked for at least this far from the best one."""
+LOCAL_MEAN_S = 0.5
+"""Each side's novelty has its mean over this long taken out before matching: onsets are one or two hops wide and
+pass, while where the music is merely busy (a song starting after silence or noise) does not: two different songs
+that both start after silence would otherwise line up on the step from quiet to busy."""
 MIN_ACTIVE_BANDS = 2
 """Bands whose heard novelty varies over the window; fewer (silence, a pure tone) gives no estimate."""
 MIN_NOVELTY_DB = 0.05
@@ -56,9 +61,12 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
     w, n = heard_db.shape[0], ref_db.shape[0]
     if w < 8 or n <= w:
         return None
+    size = max(3, int(round(LOCAL_MEAN_S * RATE)) | 1)
     h = novelty(heard_db)
+    h -= uniform_filter1d(h, size, axis=0, mode="nearest")
     missing = ~np.isfinite(ref_db).all(axis=1)
     r = novelty(np.where(missing[:, None], np.nan, ref_db))
+    r -= uniform_filter1d(r, size, axis=0, mode="nearest")
     # hops next to a gap carry a difference across it: zeroed by novelty(); the gap itself matches nothing
     h = h - h.mean(axis=0, keepdims=True)
     h_norm = np.sqrt((h * h).sum(axis=0))
@@ -68,7 +76,7 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
         return None
     h, h_norm, r = h[:, active], h_norm[active], r[:, active]
     n_lags = n - w + 1
-    size = 1 << (n + w - 1).bit_length()
+    size = 1 << (n + w - 1).bit_length()  # (the FFT's length from here on)
     # cross-correlation of every band at every lag by FFT: c[l] = sum_k h[k] r[k + l]
     spec = np.fft.rfft(r, size, axis=0) * np.conj(np.fft.rfft(h, size, axis=0))
     c = np.fft.irfft(spec, size, axis=0)[:n_lags]
@@ -79,9 +87,11 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
     win2 = s2[w:] - s2[:-w]
     var = np.maximum(win2 - win1 * win1 / w, 0.0)
     denom = h_norm[None, :] * np.sqrt(var)
-    # a reference band silent over the window: no evidence either way (counts 0); under 1 % of the heard
-    # band's energy is treated as silent, so rounding noise cannot divide into a large coefficient
-    quiet = var < 1e-4 * (h_norm[None, :] ** 2)
+    s_abs = np.concatenate([np.zeros((1, r.shape[1])), np.cumsum(np.abs(r), axis=0)])
+    r_events = (s_abs[w:] - s_abs[:-w]) ** 2 / np.maximum(win2, 1e-12)
+    # a reference band with too few onsets over the lag's window (silent, not received yet, the song not started)
+    # is no evidence either way: it counts 0, the same rule as for the heard side (MIN_EVENTS)
+    quiet = (var < 1e-4 * (h_norm[None, :] ** 2)) | (r_events < MIN_EVENTS)
     coef = np.where(quiet, 0.0, c / np.where(quiet, 1.0, denom))
     score = coef.mean(axis=1)
     if not np.isfinite(score).any() or np.all(quiet):
@@ -99,3 +109,4 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
     second = float(others.max()) if others.size else -1.0
     offset = t_heard - t_ref - (best + frac) / RATE
     return Estimate(float(offset), peak, peak - second, int(active.sum()), t_heard + (w - 1) / RATE)
+

@@ -4,7 +4,7 @@ The publisher reads the show's song and sends its band levels (:mod:`hapmotion.a
 100 hops a second, one byte each) on its own subject, ``hapmotion.show.SHOW.sync``, in batches of
 :data:`BATCH_S` sent :data:`LEAD_S` ahead of the frames (the song is a file: the publisher knows what plays next).
 Seats without sync do not subscribe and pay nothing; the frame format is untouched. The cost: two messages a
-second of 30 + 250 bytes (+68 signed), 0.6 KB/s per synchronising seat, against 60 frames a second.
+second of 32 + 250 bytes (+68 signed), 0.7 KB/s per synchronising seat, against 60 frames a second.
 
 **Batch** (little-endian), inside the venue's signature envelope (kind ``sync``) when the show is signed::
 

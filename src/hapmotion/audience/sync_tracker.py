@@ -1,10 +1,10 @@
 """From a stream of delay estimates to the delay a seat plays at: searching, locked, lost (sans-I/O).
 
 Each :class:`~hapmotion.audience.sync_estimator.Estimate` is *good* when its score reaches :data:`MIN_SCORE` and
-its margin :data:`MIN_MARGIN`. The thresholds come from what unrelated signals reach: over a 3 s window, 9 s of
-lags and five bands, a different song scored at most 0.31, a speech-like signal 0.24, room noise 0.15, while the
-right song through a low-quality Vorbis copy with room noise at 10 dB SNR scored 0.48 and more
-(benchmarks/bench_sync.py prints both sides on every run).
+its margin :data:`MIN_MARGIN`. The thresholds come from what unrelated signals reach: over a 3 s window, 6-10 s of
+lags and five bands, a different song (the two shared songs against each other and against synthetic songs)
+scored at most 0.31, a speech-like signal 0.29, room noise 0.15, while the right song through a low-quality Vorbis
+copy with room noise at 10 dB SNR scored 0.48 and more once the window was full of music.
 
 * **searching**: good estimates of the last :data:`VOTE_S` seconds vote; when :data:`LOCK_VOTES` of them agree
   within :data:`AGREE_S` and span at least :data:`LOCK_SPAN_S` (so they do not all come from one stretch of
@@ -31,9 +31,9 @@ from .sync_estimator import Estimate
 MIN_SCORE = 0.40
 MIN_MARGIN = 0.02
 VOTE_S = 3.0
-LOCK_VOTES = 5
+LOCK_VOTES = 4
 AGREE_S = 0.025
-LOCK_SPAN_S = 1.0
+LOCK_SPAN_S = 0.75
 GATE_S = 0.045
 JUMP_VOTES = 4
 JUMP_SPAN_S = 0.5

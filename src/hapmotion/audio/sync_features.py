@@ -11,8 +11,9 @@ only by the delay between them, the room's noise and the stream's codec. A seat 
   matching resolves about a tenth of a hop after peak interpolation and filtering, well inside the 25-50 ms at
   which people notice an audio-haptic offset; the show's frame rate (30 or 60 Hz) would tie the resolution to a
   publisher setting.
-* **Novelty** (:func:`novelty`): each band's rise in level over two hops, half-wave rectified (a band-wise
-  log-energy flux, the usual onset function). A gain, an equaliser or a codec scales a band's energy, which the
+* **Novelty** (:func:`novelty`): each band's rise in level over two hops, half-wave rectified and capped at
+  :data:`MAX_RISE_DB` (a band-wise log-energy flux, the usual onset function); a rise out of silence is not
+  counted. A gain, an equaliser or a codec scales a band's energy, which the
   logarithm turns into an offset that the difference removes; stationary room noise only lifts the floor.
 """
 
@@ -34,6 +35,13 @@ FLOOR_DB = -100.0
 """Levels are floored here (quantised 0); digital silence reads as the floor."""
 STEP_DB = 0.5
 """Quantisation step of a level (a byte spans -100 to +27.5 dB)."""
+MAX_RISE_DB = 12.0
+"""A band's rise counts up to this much: onsets in music rise 3-20 dB in 20 ms, while a sound starting after silence
+rises 60-80 dB at once; uncapped, that one event would outweigh every other onset in the window, and two songs that
+both start after silence would line up on their starts alone."""
+SILENT_DB = FLOOR_DB + 20.0
+"""A rise out of a level at or below this (digital silence, a song not started yet) is no onset: it says that
+something started, not which music it is."""
 
 
 def quantise(levels_db: np.ndarray) -> np.ndarray:
@@ -59,8 +67,9 @@ class BandAnalyser:
         freqs = np.fft.rfftfreq(self.n_fft, 1.0 / self.sr)
         # (bins, B) 0/1 matrix: one matrix product sums every band of every hop
         self.masks = np.stack([(freqs >= lo) & (freqs < hi) for lo, hi in BANDS], axis=1).astype(np.float64)
-        # a full-scale sine reads 0 dB: |X| at its bin is sum(w) / 2, so 4 |X|^2 / sum(w)^2 = A^2
-        self.scale = 4.0 / float(self.window.sum()) ** 2
+        # a full-scale sine reads 0 dB: by Parseval its bins' |X|^2 sum to n_fft * A^2 / 4 * sum(w^2) over the
+        # positive frequencies, so A^2 = 4 * sum |X|^2 / (n_fft * sum(w^2))
+        self.scale = 4.0 / (self.n_fft * float((self.window ** 2).sum()))
 
     def levels(self, frames: np.ndarray) -> np.ndarray:
         spec = np.fft.rfft(frames * self.window, n=self.n_fft, axis=-1)
@@ -126,11 +135,13 @@ class LevelStream:
 
 
 def novelty(levels_db: np.ndarray) -> np.ndarray:
-    """``(H, B)`` levels in dB -> ``(H, B)`` onset novelty: each band's rise over two hops, half-wave rectified, in
-    dB (0 for the first two hops and across NaN gaps)."""
+    """``(H, B)`` levels in dB -> ``(H, B)`` onset novelty: each band's rise over two hops, half-wave rectified and
+    capped at :data:`MAX_RISE_DB`, in dB (0 for the first two hops, across NaN gaps and out of silence,
+    :data:`SILENT_DB`)."""
     lv = np.asarray(levels_db, dtype=np.float64)
     out = np.zeros_like(lv)
     if lv.shape[0] > 2:
         rise = lv[2:] - lv[:-2]
-        out[2:] = np.where(np.isfinite(rise), np.maximum(rise, 0.0), 0.0)
+        counted = np.isfinite(rise) & (lv[:-2] > SILENT_DB)
+        out[2:] = np.where(counted, np.clip(rise, 0.0, MAX_RISE_DB), 0.0)
     return out
