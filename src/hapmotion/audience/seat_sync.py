@@ -258,6 +258,8 @@ class SeatSync:
                         self._step(heard[-n:], t_zero + first / RATE)
                 self.cpu_s += time.thread_time() - cpu0
         except Exception as exc:  # a device that went away, a pipe that broke: the seat plays on unsynced
+            if self._stop.is_set():
+                return  # closed under the read while the seat stops
             log.warning("seat sync: the audio input failed (%s: %s); playing unsynced", exc.__class__.__name__, exc)
             self._snapshot = (None, 0.0, 0.0)
 

@@ -89,9 +89,10 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
     denom = h_norm[None, :] * np.sqrt(var)
     s_abs = np.concatenate([np.zeros((1, r.shape[1])), np.cumsum(np.abs(r), axis=0)])
     r_events = (s_abs[w:] - s_abs[:-w]) ** 2 / np.maximum(win2, 1e-12)
-    # a reference band with too few onsets over the lag's window (silent, not received yet, the song not started)
-    # is no evidence either way: it counts 0, the same rule as for the heard side (MIN_EVENTS)
-    quiet = (var < 1e-4 * (h_norm[None, :] ** 2)) | (r_events < MIN_EVENTS)
+    # a reference band with hardly any onsets over the lag's window (not received yet, a few hops of music at the
+    # window's edge) is no evidence either way: it counts 0. Half the heard side's minimum: at the true lag of a
+    # song that just started, both sides hold the same second of music and the same number of onsets
+    quiet = (var < 1e-4 * (h_norm[None, :] ** 2)) | (r_events < MIN_EVENTS / 2)
     coef = np.where(quiet, 0.0, c / np.where(quiet, 1.0, denom))
     score = coef.mean(axis=1)
     if not np.isfinite(score).any() or np.all(quiet):

@@ -3,7 +3,7 @@
 Each :class:`~hapmotion.audience.sync_estimator.Estimate` is *good* when its score reaches :data:`MIN_SCORE` and
 its margin :data:`MIN_MARGIN`. The thresholds come from what unrelated signals reach: over a 3 s window, 6-10 s of
 lags and five bands, a different song (the two shared songs against each other and against synthetic songs)
-scored at most 0.31, a speech-like signal 0.29, room noise 0.15, while the right song through a low-quality Vorbis
+scored about 0.3 at most, a speech-like signal too, room noise 0.15, while the right song through a low-quality Vorbis
 copy with room noise at 10 dB SNR scored 0.48 and more once the window was full of music.
 
 * **searching**: good estimates of the last :data:`VOTE_S` seconds vote; when :data:`LOCK_VOTES` of them agree
