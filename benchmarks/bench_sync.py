@@ -49,11 +49,12 @@ from hapmotion.live import ReplaySource, live
 from hapmotion.live.sinks import Sink
 from hapmotion.show import Show
 
+from tests.support.data import AUDIO, MOTION
+
 from . import sync_scenes as scenes
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
-SONGS = [SHARED / "audio" / "vibe_ace.ogg", SHARED / "audio" / "lets_go_fishin.ogg"]
-MOTION = SHARED / "motion" / "dataset-1_dance-short_normal_001.bvh"
+SONGS = [AUDIO / "vibe_ace.ogg", AUDIO / "lets_go_fishin.ogg"]
+DANCE = MOTION / "dataset-1_dance-short_normal_001.bvh"
 SR = scenes.SR
 BLOCK = 441  # 20 ms at 22.05 kHz
 TARGETS = {"skew_stream": 0.040, "skew_noisy": 0.060, "lock": 5.0, "relock": 3.0, "cpu": 0.15}
@@ -169,7 +170,7 @@ async def run_song(server: LocalNatsServer, song: Path, seconds: float, seed: in
     viewers.append(Viewer("other song", scenes.codec_copy(other), True, delay=1.0))
     show = Show(audio=song)
     with publishing(PublisherSecurity(unsigned=True)):
-        motion = hapmotion.load_motion(MOTION)
+        motion = hapmotion.load_motion(DANCE)
         source = ReplaySource(motion)
         ready = asyncio.get_running_loop().create_future()
         venue = asyncio.create_task(live(show, source, [url], handle_signals=False,
