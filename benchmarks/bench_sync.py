@@ -6,7 +6,7 @@ hears? Not a timed test: figures are printed beside their targets.
 For each song (the shared real songs, then synthetic songs drawn from ``--seed``), a local ``nats-server`` carries a
 recorded show (the dance recording dataset-1_dance-short_normal_001.bvh replayed with the song, published by the
 ``nats://`` sink with its music reference, as ``hapmotion live --sink nats://...`` does) to seats started with the
-default sync options, each reading what its viewer hears through the raw pipe input (``--audio-input raw:PATH``, an
+default sync options before the show starts (an audience waiting for the concert), each reading what its viewer hears through the raw pipe input (``--audio-input raw:PATH``, an
 OS pipe this harness writes in real time). What each viewer hears is built from the publisher's own media clock:
 
 * **stream**: a low-quality Ogg Vorbis copy of the song (libsndfile's encoder at its lowest quality), the way a
@@ -169,6 +169,17 @@ async def run_song(server: LocalNatsServer, song: Path, seconds: float, seed: in
     viewers.append(Viewer("speech", scenes.speech_like(seed, 20.0), False, 10.0))
     viewers.append(Viewer("other song", scenes.codec_copy(other), True, delay=1.0))
     show = Show(audio=song)
+    stop = threading.Event()
+    seats, pipes = [], []
+    for v in viewers:  # the viewers are there before the show starts, as an audience is
+        r, w = os.pipe()
+        pipes.append(w)
+        sync = SyncSettings(input=f"raw:/dev/fd/{r}?rate={SR}&channels=1&format=f32")
+        sessions: list = []
+        seats.append((asyncio.create_task(listen(url, [lambda d, f, t=v.taps: t], seat=Seat(), sync=sync,
+                                                 security=SeatSecurity(unsigned=True), handle_signals=False,
+                                                 sessions=sessions)), sessions, v, r))
+    await asyncio.sleep(1.0)
     with publishing(PublisherSecurity(unsigned=True)):
         motion = hapmotion.load_motion(DANCE)
         source = ReplaySource(motion)
@@ -179,21 +190,13 @@ async def run_song(server: LocalNatsServer, song: Path, seconds: float, seed: in
         if venue.done():
             venue.result()
     edge = await media_edge(server.url, name)
-    stop = threading.Event()
-    seats, threads = [], []
-    t0 = time.perf_counter() + 0.5
-    for i, v in enumerate(viewers):
+    threads = []
+    t0 = time.perf_counter() + 3.0  # the signals below take about a second to build
+    for i, (v, w) in enumerate(zip(viewers, pipes)):
         v.t0, v.edge = t0, edge
         x = v.signal(seconds, seed + i)
-        r, w = os.pipe()
-        sync = SyncSettings(input=f"raw:/dev/fd/{r}?rate={SR}&channels=1&format=f32")
-        sessions: list = []
-        seats.append((asyncio.create_task(listen(url, [lambda d, f, t=v.taps: t], seat=Seat(), sync=sync,
-                                                 security=SeatSecurity(unsigned=True), handle_signals=False,
-                                                 sessions=sessions)), sessions, v, r))
-        th = threading.Thread(target=writer, args=(w, x, t0, np.random.default_rng(seed + 100 + i), stop),
-                              daemon=True)
-        threads.append(th)
+        threads.append(threading.Thread(target=writer, args=(w, x, t0, np.random.default_rng(seed + 100 + i), stop),
+                                        daemon=True))
     for th in threads:
         th.start()
     await asyncio.sleep(seconds + 1.0)

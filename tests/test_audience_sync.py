@@ -16,12 +16,12 @@ import pytest
 import soundfile as sf
 from click.testing import CliRunner
 from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
-from support.audience import REHEARSAL, SONG, Venue, start_seat, stop
-from support.live_fakes import start_session
+from support.audience import REHEARSAL, SONG, Venue, stop
+from support.live_fakes import start_session, wait_for
 from support.sync_signals import SR, real_song
 
 import hapmotion
-from hapmotion.audience import PublisherSecurity, Seat, publishing
+from hapmotion.audience import PublisherSecurity, Seat, listen, publishing
 from hapmotion.audience.seat_sync import SeatSync, SyncSettings
 from hapmotion.audience.signing import SeatTrust, VenueSigner
 from hapmotion.audience.sync_reference import encode_batch
@@ -58,26 +58,29 @@ def heard_file(tmp_path, music: np.ndarray) -> str:
 async def show_and_seat(url: str, heard: str, *, unsynced: str = "delay", seconds: float = 14.0,
                         publisher=PublisherSecurity(unsigned=True), seat_security=REHEARSAL):
     """The song published as a music-only show (the venue's reference with it) and one seat listening to ``heard``;
-    returns (play times, the seat's sync, the seat's faults)."""
-    with publishing(publisher):
-        show_task, _ = await start_session(None, [url.replace("tls://", "nats://")], audio=SONG, mode="audio")
+    returns (play times, the seat's sync)."""
     tap = PlayTimes()
     sync = SyncSettings(input=f"file:{heard}", unsynced=unsynced, max_delay_s=5.0)
+    sessions: list = []
+    # the seat waits for the show, as an audience does: it holds the reference from the show's start
+    seat_task = asyncio.create_task(listen(url, [lambda d, f, t=tap: t], seat=Seat(), security=seat_security,
+                                           sync=sync, handle_signals=False, sessions=sessions))
+    await asyncio.sleep(1.0)
+    with publishing(publisher):
+        show_task, _ = await start_session(None, [url.replace("tls://", "nats://")], audio=SONG, mode="audio")
     try:
-        seat_task, sessions = await start_seat(url, [lambda d, f, t=tap: t], Seat(), security=seat_security,
-                                               sync=sync)
+        await wait_for(lambda: sessions or seat_task.done(), 10)
         await asyncio.sleep(seconds)
         source = sessions[-1][1]
-        faults = dict(source.engine.faults.counts) if hasattr(source.engine.faults, "counts") else {}
-        await stop(seat_task)
     finally:
+        await stop(seat_task)
         await stop(show_task)
-    return tap, source.sync, faults
+    return tap, source.sync
 
 
 def test_a_seat_locks_on_the_heard_music_and_plays_each_frame_when_it_is_heard(nats_server, tmp_path):
     heard = heard_file(tmp_path, real_song(seconds=20.0))
-    tap, sync, _ = asyncio.run(asyncio.wait_for(show_and_seat(f"{nats_server.url}/synced", heard), 60))
+    tap, sync = asyncio.run(asyncio.wait_for(show_and_seat(f"{nats_server.url}/synced", heard), 60))
     truth = sync.audio.started + LEAD_S     # local time minus media time of what the seat heard
     locked = [(at, s) for at, _, s in sync.estimates if s.state == "locked"]
     assert locked, "the seat never locked"
@@ -96,7 +99,7 @@ def test_a_seat_locks_on_the_heard_music_and_plays_each_frame_when_it_is_heard(n
 @pytest.mark.parametrize("unsynced", ["delay", "silent"])
 def test_a_seat_hearing_another_song_never_locks_and_plays_as_the_user_chose(nats_server, tmp_path, unsynced):
     heard = heard_file(tmp_path, real_song("lets_go_fishin.ogg", 20.0))
-    tap, sync, _ = asyncio.run(asyncio.wait_for(show_and_seat(f"{nats_server.url}/other{unsynced}", heard,
+    tap, sync = asyncio.run(asyncio.wait_for(show_and_seat(f"{nats_server.url}/other{unsynced}", heard,
                                                               unsynced=unsynced, seconds=12.0), 60))
     assert all(s.state == "searching" for _, _, s in sync.estimates)
     assert sync.tracker.locks == 0
@@ -111,7 +114,7 @@ def test_a_signed_show_carries_a_signed_reference_that_a_checking_seat_locks_on(
     try:
         heard = heard_file(tmp_path, real_song(seconds=14.0))
         url = f"{venue.url}/signedsync"
-        tap, sync, _ = asyncio.run(asyncio.wait_for(show_and_seat(url, heard, seconds=11.0,
+        tap, sync = asyncio.run(asyncio.wait_for(show_and_seat(url, heard, seconds=11.0,
                                                                   publisher=venue.publisher(),
                                                                   seat_security=venue.seat()), 60))
     finally:

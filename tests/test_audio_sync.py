@@ -251,3 +251,29 @@ def test_sync_settings_are_checked():
         SyncSettings(unsynced="maybe")
     with pytest.raises(UsageError):
         SyncSettings(max_delay_s=0.2)
+
+
+def test_a_wav_stream_from_a_pipe_is_read_with_its_own_rate():
+    import io
+
+    r, w = os.pipe()
+    data = io.BytesIO()
+    sf.write(data, np.full(8000, 0.5), 8000, format="WAV", subtype="PCM_16")
+
+    def write() -> None:
+        with os.fdopen(w, "wb") as f:
+            f.write(data.getvalue())
+
+    threading.Thread(target=write).start()
+    inp = open_input(f"wav:/dev/fd/{r}")
+    assert inp.sample_rate == 8000.0
+    got = []
+    while True:
+        block, _ = inp.read()
+        if block is None:
+            break
+        got.append(block)
+    inp.close()
+    os.close(r)
+    x = np.concatenate(got)
+    assert x.size == 8000 and np.allclose(x, 0.5, atol=1e-4)

@@ -60,7 +60,8 @@ FALLBACKS = ("delay", "silent")
 class SyncSettings:
     """``--sync audio`` settings: the audio input (:func:`hapmotion.audio.inputs.open_input` spec), what plays
     while the seat is not locked (``delay``: the manual ``--delay``; ``silent``: nothing), and the longest delay
-    behind the venue searched, seconds."""
+    behind the venue searched, seconds. A seat that joins a running show locks once it holds the reference for the
+    whole range (``max_delay_s`` + 3 s after joining, or from the show's start)."""
 
     input: str = "loopback"
     unsynced: str = "delay"
@@ -198,7 +199,9 @@ class SeatSync:
         except ValueError as exc:
             self._fault("malformed", f"reference batch: {exc}")
             return
-        if self.epoch is None or batch.epoch != self.epoch:
+        if self.epoch is None:
+            self.epoch = batch.epoch  # the run's first batches may come before its description is read
+        elif batch.epoch != self.epoch:
             return
         if self._last_seq is not None and batch.seq <= self._last_seq:
             self._fault("replayed", f"reference batch seq={batch.seq} after seq={self._last_seq}")
@@ -272,6 +275,12 @@ class SeatSync:
             n = heard_db.shape[0] + int(math.ceil((hi - lo) * RATE))
             ref = self.store.span(first, n)
             est = estimate(heard_db, t_heard, ref, first / RATE)
+            media = (first + np.arange(n)) / RATE
+            if est is not None and self.tracker.state.state == "searching" \
+                    and not np.isfinite(ref[media >= 0.0]).all():
+                # part of the range was never received (the seat joined a running show): a repeat of the music
+                # (the bar before) could win over the true delay, which may lie in the part not received yet
+                est = None
         before = self.tracker.state.state
         state = self.tracker.update(est, at)
         offset = self.tracker.offset_at(at)
