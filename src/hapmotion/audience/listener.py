@@ -54,6 +54,7 @@ from .connection import NatsAuth, connect, connect_error, parse_server_url
 from .cue_gate import CueGate
 from .descriptions import DescriptionWatch
 from .interpolation import Upsampler
+from .seat_sync import SeatSync, SyncSettings
 from .seat import Seat, SeatSink, SeatStage
 from .signing import BadSignature, SeatTrust, Unsigned
 from .wire import ShowDescription, WireFrame, check_show_name, decode_event, subject
@@ -158,8 +159,11 @@ class AudienceSource(Source):
     def __init__(self, nc: NatsClient, desc: ShowDescription, seat: Seat, *, mode: str,
                  music: Optional[RowTimeline], trust: Optional[SeatTrust] = None, cues: Optional[LiveCues] = None,
                  on_cue: Optional[Callable[[dict, float], None]] = None, max_pending: Optional[int] = None,
-                 on_other_run: Optional[Callable[[], None]] = None, inbox: Optional["FrameInbox"] = None):
+                 on_other_run: Optional[Callable[[], None]] = None, inbox: Optional["FrameInbox"] = None,
+                 sync: Optional[SeatSync] = None):
         self.on_other_run = on_other_run
+        self.sync = sync  # --sync audio: frames wait by media time and play when the sync says (seat_sync.py)
+        wait_s = seat.delay_s + (sync.settings.max_delay_s if sync is not None else 0.0)
         self.inbox = inbox
         self.nc, self.desc, self.seat, self.mode, self.music = nc, desc, seat, mode, music
         self.trust = trust or SeatTrust.unsigned(desc.show)
@@ -170,8 +174,9 @@ class AudienceSource(Source):
         self.on_cue = on_cue
         self.changed: Optional[ShowDescription] = None
         self.ended = asyncio.Event()
-        self.max_pending = max_pending or int(desc.fps * (seat.delay_s + 2.0)) + 64
-        self._heap: list[tuple[float, int, WireFrame]] = []
+        self.max_pending = max_pending or int(desc.fps * (wait_s + 2.0)) + 64
+        self._wait_s = wait_s
+        self._heap: list[tuple[float, int, WireFrame, float]] = []
         self._count = itertools.count()
         self._arrived = asyncio.Event()
         self._last_seq: Optional[int] = None
@@ -199,7 +204,7 @@ class AudienceSource(Source):
             limits = {"pending_msgs_limit": 4 * self.max_pending, "pending_bytes_limit": 8 << 20}
             self._subs.append(await self.nc.subscribe(subject(show, "frame"), cb=self._on_frame, **limits))
         else:
-            self.inbox.attach(self._frame, self.seat.delay_s)
+            self.inbox.attach(self._frame, self._wait_s)
 
     async def run(self) -> None:
         while not self.ended.is_set():
@@ -207,11 +212,18 @@ class AudienceSource(Source):
                 await self._wait_arrival(None)
                 continue
             due = self._heap[0][0]
+            if self.sync is not None:  # keyed by media time; the sync's offset moves as it tracks the music
+                due = self.sync.play_time(self._heap[0][2].media_t, self._heap[0][3])
+                if due is None:
+                    heapq.heappop(self._heap)
+                    self.engine.faults.add("unsynced", "not locked to the music: frames are not played "
+                                                       "(--unsynced silent)")
+                    continue
             wait = due - time.perf_counter()
             if wait > 0.0005:
                 await self._wait_arrival(wait)
                 continue
-            _, _, wf = heapq.heappop(self._heap)
+            _, _, wf, _ = heapq.heappop(self._heap)
             now = time.perf_counter()
             if now - due > LATE_S:
                 self.engine.faults.add("stale", f"frame at media time {wf.media_t:.3f} s would play "
@@ -277,7 +289,8 @@ class AudienceSource(Source):
         if self.mode != "motion" and wf.music is None:
             faults.add("no_music", "a frame without the music's row; its music is silent")
         # a show published below its render rate: the frames between the last one and this one first, every frame
-        # shifted by the interpolation's delay (the first between is due as this one arrives)
+        # shifted by the interpolation's delay (the first between is due as this one arrives); a synchronised seat
+        # keys them by media time, as its offset moves while it tracks the music
         due = self.clock.due(wf.media_t, arrival) + self.upsampler.delay_s
         for f in self.upsampler.feed(wf):
             self.published_at[f.media_t] = f.wall_t
@@ -286,7 +299,8 @@ class AudienceSource(Source):
             if len(self._heap) >= self.max_pending:
                 heapq.heappop(self._heap)
                 faults.add("overflow", f"more than {self.max_pending} frames waiting; the oldest is dropped")
-            heapq.heappush(self._heap, (due - (wf.media_t - f.media_t), next(self._count), f))
+            f_due = due - (wf.media_t - f.media_t)
+            heapq.heappush(self._heap, (f_due if self.sync is None else f.media_t, next(self._count), f, f_due))
         self._arrived.set()
 
     def _open(self, kind: str, data: bytes) -> Optional[bytes]:
@@ -363,6 +377,8 @@ class AudienceSource(Source):
             self._last_seq = self._last_event_seq = None
             self.clock.reset()
             self.upsampler.reset()
+            if self.sync is not None:
+                self.sync.follow(desc.epoch)
         else:
             log.info("%s: the show description changed (run %d); rebuilding the seat", self.name, desc.epoch)
             self.changed = desc
@@ -449,7 +465,7 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
                  on_ready: Optional[Callable[[LiveEngine], None]] = None,
                  on_cue: Optional[Callable[[dict, float], None]] = None,
                  cues: Union[CueList, str, "os.PathLike[str]", None] = None,
-                 sessions: Optional[list] = None) -> LiveStats:
+                 sessions: Optional[list] = None, sync: Optional[SyncSettings] = None) -> LiveStats:
     """Render the show at ``nats://HOST:PORT/SHOW`` (or ``tls://``) for one seat until a stop signal; return the
     statistics of the last session (a new session starts when the show's settings change).
 
@@ -460,6 +476,8 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
     each session's ``(engine, source)``. ``cues`` is the show's cue list (a file or a
     :class:`~hapmotion.show.cues.CueList`, the seat's copy of the venue's): its timed cues play at their media
     time, and the cues the venue announces play when the seat reaches the media time they were fired at.
+    ``sync`` (:class:`~hapmotion.audience.seat_sync.SyncSettings`) plays the frames in step with the music this
+    machine hears (``--sync audio``), ``seat.delay_s`` then being a fine offset on top.
     """
     server, show = parse_show_url(url)
     if not sinks:
@@ -472,6 +490,7 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
     cue_list = Show(cues=cues).load_cues()
     # a zone this seat's vest does not have, or a layout that cannot be read, is a usage error before connecting
     SeatStage(seat, Show(layout=seat.layout).load_layout())
+    seat_sync = SeatSync(sync, seat.delay_s) if sync is not None else None  # a missing device fails here, first
     watch: Optional[DescriptionWatch] = None
 
     def on_state(state: str) -> None:
@@ -482,8 +501,12 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
     try:
         nc = await connect(server, name=f"hapmotion seat {show}", auth=security.auth, on_state=on_state)
     except UsageError:
+        if seat_sync is not None:
+            seat_sync.audio.close()
         raise
     except Exception as exc:
+        if seat_sync is not None:
+            seat_sync.audio.close()
         raise connect_error(url, exc) from None
     log.log(logging.INFO if trust.signed else logging.WARNING, "seat: %s", trust.describe())
     watch = DescriptionWatch(nc, show, trust)
@@ -491,6 +514,8 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
     follower: Optional[asyncio.Task] = None
     try:
         await inbox.start(nc, show, seat.delay_s)
+        if seat_sync is not None:
+            await seat_sync.start(nc, show, trust)
         await watch.start()
         desc = await watch.next_description()
         n_session = 0
@@ -503,8 +528,11 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
                 continue
             n_session += 1
             zones = SeatStage(seat, parts.layout)
+            if seat_sync is not None:
+                seat_sync.follow(desc.epoch)
             source = AudienceSource(nc, desc, seat, mode=parts.mode, music=parts.music, trust=trust,
-                                    cues=parts.stage.cues, on_cue=on_cue, on_other_run=watch.refresh, inbox=inbox)
+                                    cues=parts.stage.cues, on_cue=on_cue, on_other_run=watch.refresh, inbox=inbox,
+                                    sync=seat_sync)
             session = Session(source, parts.renderer, parts.stage, parts.layout, numbered_sinks(sinks, n_session),
                               fps=desc.fps, wrap=lambda sink: SeatSink(sink, zones), stall_s=desc.stall_ms / 1000.0,
                               handle_signals=handle_signals, stats_interval=stats_interval, on_stats=on_stats,
@@ -521,6 +549,8 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
                 return stats
             desc = source.changed
     finally:
+        if seat_sync is not None:
+            await seat_sync.close()
         await inbox.close()
         await watch.close()
         await nc.close()

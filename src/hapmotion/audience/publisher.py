@@ -39,6 +39,7 @@ from ..skeleton.joints import JOINTS
 from .compact import FRAME_VERSIONS, compact_joints, frame_encoder
 from .connection import NatsAuth, connect, connect_error, description_bucket, open_bucket, parse_server_url
 from .signing import VenueSigner
+from .sync_reference import ReferencePublisher
 from .wire import MAX_RATE_STEPS, ShowDescription, check_show_name, encode_event, subject
 
 __all__ = ["NatsPublisherSink", "PublisherSecurity", "connect", "describe_show", "description_bucket", "publishing"]
@@ -132,10 +133,14 @@ class NatsPublisherSink(Sink):
     security:
         Credentials, TLS and the signing key (:class:`PublisherSecurity`); without a key it must say
         ``unsigned=True`` (a rehearsal), else UsageError.
+    reference:
+        The song's reference for seats that synchronise to what they hear
+        (:class:`~hapmotion.audience.sync_reference.ReferencePublisher`), or None.
     """
 
     def __init__(self, url: str, description: ShowDescription, *, music: Optional[RowTimeline] = None,
-                 fps: float = 60.0, security: PublisherSecurity = PublisherSecurity()):
+                 fps: float = 60.0, security: PublisherSecurity = PublisherSecurity(),
+                 reference: Optional[ReferencePublisher] = None):
         super().__init__(f"nats {url}/{description.show}", fps=fps)
         self.url = url
         self.description = description
@@ -148,7 +153,8 @@ class NatsPublisherSink(Sink):
         self.event_seq = 0
         self.published = 0
         self.cues = 0
-        self._subjects = {k: subject(description.show, k) for k in ("frame", "cue", "end")}
+        self.reference = reference
+        self._subjects = {k: subject(description.show, k) for k in ("frame", "cue", "end", "sync")}
         self._republish: Optional[asyncio.Task] = None
         self._guard: Optional[asyncio.Task] = None
         self._closing = False
@@ -248,6 +254,13 @@ class NatsPublisherSink(Sink):
             return
         self.published += 1
         self.sent(frame)
+        if self.reference is not None:
+            batch = self.reference.next_batch(frame.t)  # a batch every 0.5 s, on its own subject
+            if batch is not None:
+                try:
+                    await self.nc.publish(self._subjects["sync"], self.signer.seal("sync", batch))
+                except Exception as exc:
+                    self.warn_once("publish_sync", "publishing the music reference failed (%s)", exc)
 
     async def publish_cue(self, name: str, t: float, gain: float = 1.0) -> None:
         """Announce a cue fired at media time ``t`` to every seat."""
@@ -276,6 +289,8 @@ class NatsPublisherSink(Sink):
             for task in (self._republish, self._guard):
                 if task is not None:
                     task.cancel()
+            if self.reference is not None:
+                self.reference.close()
             await self.nc.close()
 
     async def abandon(self) -> None:
@@ -304,7 +319,9 @@ def publisher_sink(ep: Endpoint, *, fps: float, show: Show, stage: OutputStage, 
     frames_choice(frames, rate, stage.fps, f"--sink {ep.text!r}")  # the error names the SINK as given
     desc = describe_show(name, show=show, stage=stage, layout=layout, body=body, stall_ms=stall_ms, mirror=mirror,
                          frames=frames, rate=rate)
-    return NatsPublisherSink(server, desc, music=music, fps=fps, security=security)
+    reference = (ReferencePublisher.for_file(show.audio, show.audio_offset_s, desc.epoch)
+                 if show.audio is not None else None)
+    return NatsPublisherSink(server, desc, music=music, fps=fps, security=security, reference=reference)
 
 
 register_sink_kind("nats", publisher_sink)

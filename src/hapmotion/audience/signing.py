@@ -31,7 +31,7 @@ ENVELOPE = b"HMS1"
 SIGNATURE_BYTES = 64
 PREFIX_BYTES = len(ENVELOPE) + SIGNATURE_BYTES
 """Bytes a signature adds to each message (68)."""
-KINDS = ("frame", "cue", "end", "description")
+KINDS = ("frame", "cue", "end", "description", "sync")
 
 
 class Unsigned(ValueError):

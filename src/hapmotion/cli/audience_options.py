@@ -101,3 +101,59 @@ def seat_security_options(command: Callable) -> Callable:
                           default=None, help="The venue's Ed25519 public key (PEM): only what it signed plays "
                                              "[env HAPMOTION_VENUE_PUBKEY].")
     return _apply([pubkey, *_NATS], run)
+
+
+def _list_audio_inputs(ctx: click.Context, _param: click.Parameter, value: bool) -> None:
+    """``--list-audio-inputs``: print the capture devices (or why there are none) and the file/pipe inputs, exit."""
+    if not value or ctx.resilient_parsing:
+        return
+    from ..audio.inputs import SPECS, list_inputs
+
+    listing = list_inputs()
+    click.echo("audio inputs for --sync audio (--audio-input SPEC):")
+    for spec, what in listing.devices:
+        click.echo(f"  {spec:40s} {what}")
+    if listing.problem:
+        click.echo(f"  (no devices: {listing.problem})")
+    click.echo("  file:PATH / wav:PATH|- / raw:PATH|-?rate=48000&channels=2&format=s16   an audio file, a WAV or raw "
+               "PCM stream (a pipe or standard input)")
+    click.echo(f"forms: {SPECS}")
+    ctx.exit(0)
+
+
+def seat_sync_options(command: Callable) -> Callable:
+    """``hapmotion listen``: ``--sync audio`` and its settings, given to the command as ``sync``
+    (:class:`hapmotion.audience.seat_sync.SyncSettings` or None); ``--list-audio-inputs`` prints and exits."""
+    @functools.wraps(command)
+    def run(**kwargs: Any) -> Any:
+        mode = kwargs.pop("sync_mode")
+        spec, unsynced, max_delay_ms = kwargs.pop("audio_input"), kwargs.pop("unsynced"), kwargs.pop("sync_max_delay")
+        sync = None
+        if mode == "audio":
+            from ..audience.seat_sync import SyncSettings
+
+            sync = SyncSettings(input=spec or "loopback", unsynced=unsynced or "delay",
+                                max_delay_s=max_delay_ms / 1000.0)
+        elif spec is not None or unsynced is not None:
+            raise click.UsageError("--audio-input and --unsynced need --sync audio")
+        return command(sync=sync, **kwargs)
+
+    options = [
+        click.option("--sync", "sync_mode", type=click.Choice(["off", "audio"]), default="off", show_default=True,
+                     help="audio: play in step with the music this computer plays (or hears), matched against the "
+                          "venue's reference; --delay is then a fine offset on top."),
+        click.option("--audio-input", metavar="SPEC", default=None,
+                     help="What --sync audio listens to: loopback (the default output's loopback/monitor; the "
+                          "default), mic, device:NAME, file:PATH, wav:PATH|-, raw:PATH|-?rate=R&channels=C "
+                          "(--list-audio-inputs)."),
+        click.option("--unsynced", type=click.Choice(["delay", "silent"]), default=None,
+                     help="While --sync audio is not locked: play at the manual --delay (delay, the default) or "
+                          "not at all (silent)."),
+        click.option("--sync-max-delay", metavar="MS", type=float, default=10000.0, show_default=True,
+                     help="--sync audio searches delays behind the venue up to this many milliseconds "
+                          "(1000..60000)."),
+        click.option("--list-audio-inputs", is_flag=True, expose_value=False, is_eager=True,
+                     callback=_list_audio_inputs, help="List the audio inputs --sync audio can use, and exit."),
+    ]
+
+    return _apply(options, run)

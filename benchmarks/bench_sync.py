@@ -1,0 +1,313 @@
+"""Harness of audio-synchronised seats (``hapmotion listen ... --sync audio``): does the vest follow what the viewer
+hears? Not a timed test: figures are printed beside their targets.
+
+``python -m benchmarks.bench_sync [--songs N] [--seconds S] [--seed K]``
+
+For each song (the shared real songs, then synthetic songs drawn from ``--seed``), a local ``nats-server`` carries a
+recorded show (the dance recording dataset-1_dance-short_normal_001.bvh replayed with the song, published by the
+``nats://`` sink with its music reference, as ``hapmotion live --sink nats://...`` does) to seats started with the
+default sync options before the show starts (an audience waiting for the concert), each reading what its viewer hears through the raw pipe input (``--audio-input raw:PATH``, an
+OS pipe this harness writes in real time). What each viewer hears is built from the publisher's own media clock:
+
+* **stream**: a low-quality Ogg Vorbis copy of the song (libsndfile's encoder at its lowest quality), the way a
+  stream sounds through a loopback; a delay drawn from 0.3-3.0 s, a clock drift of +-0.1 %, blocks arriving with up
+  to 20 ms of jitter, and a 1 s jump of the delay (a re-buffer or a skip) half way;
+* **noisy**: the same plus room noise (pink noise and mains hum) at 10 dB SNR: a microphone in a room;
+* **silence**, **speech** (a speech-like signal with room noise) and **other song** (a different song, same codec):
+  no lock may happen.
+
+Reported: the skew between the heard music and the vest (the local time each frame reached the seat's sinks minus
+the time its media time was heard), p50 and p95 of its size, from 5 s after the music started (frames within 3 s
+after the jump left out: the re-lock time covers them); time to lock after the music started; time to re-lock after
+the jump (locked again within 40 ms of the truth); false locks (a lock more than 60 ms from the truth outside the
+3 s after the jump, or any lock on the no-music seats); the sync worker's CPU (the thread that reads, analyses and
+matches the audio: everything sync adds but decoding two small reference messages a second). All seats and the
+publisher share this process and this machine's cores with other work (a loaded machine), as the load average
+printed says.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import os
+import tempfile
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import soundfile as sf
+
+import hapmotion
+from hapmotion.audience import PublisherSecurity, Seat, SeatSecurity, listen, publishing
+from hapmotion.audience.seat_sync import SyncSettings
+from hapmotion.audience.server import LocalNatsServer
+from hapmotion.audience.wire import decode_frame, subject
+from hapmotion.live import ReplaySource, live
+from hapmotion.live.sinks import Sink
+from hapmotion.show import Show
+
+from tests.support.data import AUDIO, MOTION
+
+from . import sync_scenes as scenes
+
+SONGS = [AUDIO / "vibe_ace.ogg", AUDIO / "lets_go_fishin.ogg"]
+DANCE = MOTION / "dataset-1_dance-short_normal_001.bvh"
+SR = scenes.SR
+BLOCK = 441  # 20 ms at 22.05 kHz
+TARGETS = {"skew_stream": 0.040, "skew_noisy": 0.060, "lock": 5.0, "relock": 3.0, "cpu": 0.15}
+
+
+class Tap(Sink):
+    """Every frame a seat's engine emits, with the local time (perf_counter) it did."""
+
+    def __init__(self, *_: object):
+        super().__init__("tap")
+        self.frames: list[tuple[float, float]] = []
+
+    def offer(self, frame) -> None:
+        if frame.kind == "frame":
+            self.frames.append((time.perf_counter(), frame.t))
+
+    async def run(self) -> None:
+        await asyncio.Event().wait()
+
+
+@dataclass
+class Viewer:
+    """What one seat's viewer hears: the signal as a function of the media time heard at each local time."""
+
+    name: str
+    source: np.ndarray          # (n,) at SR, indexed by media time (or not: the no-music signals)
+    follows_media: bool
+    noise_db: float | None = None
+    delay: float = 1.0
+    drift: float = 0.0
+    jump: float = 0.0
+    jump_at: float = 30.0       # seconds after the writer starts
+    taps: Tap = field(default_factory=Tap)
+    sync: object = None
+    t0: float = 0.0             # local time of the writer's first sample
+    edge: float = 0.0           # venue: media m plays at local m + edge
+
+    def media_at(self, tau: np.ndarray) -> np.ndarray:
+        m = (tau - self.edge - self.delay) * (1.0 + self.drift)
+        return np.where(tau >= self.t0 + self.jump_at, m - self.jump, m)
+
+    def heard_time(self, m: np.ndarray, tau_play: np.ndarray) -> np.ndarray:
+        """Local time the viewer heard media time ``m`` (the segment of the frame's own play time)."""
+        after = tau_play >= self.t0 + self.jump_at
+        return np.where(after, (m + self.jump), m) / (1.0 + self.drift) + self.edge + self.delay
+
+    def offset_truth(self, tau: float) -> float:
+        """Local minus media time of what is heard at ``tau``."""
+        return float(tau - self.media_at(np.array([tau]))[0])
+
+    def signal(self, seconds: float, seed: int) -> np.ndarray:
+        tau = self.t0 + np.arange(int(seconds * SR)) / SR
+        if self.follows_media:
+            x = scenes.heard(self.source, self.media_at(tau))
+        else:
+            x = np.resize(self.source, tau.size)
+        if self.noise_db is not None:
+            rms = float(np.sqrt(np.mean(x * x))) or 1e-3
+            x = x + scenes.room_noise(seed, x.size) * rms / 10 ** (self.noise_db / 20)
+        return x.astype(np.float32)
+
+
+def writer(fd: int, x: np.ndarray, t0: float, rng: np.random.Generator, stop: threading.Event) -> None:
+    """Write ``x`` to the pipe in real time from ``t0``, each 20 ms block up to 20 ms late (jitter)."""
+    with os.fdopen(fd, "wb", buffering=0) as f:
+        for k in range(0, x.size, BLOCK):
+            if stop.is_set():
+                return
+            due = t0 + (k + BLOCK) / SR + rng.uniform(0.0, 0.020)
+            wait = due - time.perf_counter()
+            if wait > 0:
+                time.sleep(wait)
+            try:
+                f.write(x[k:k + BLOCK].tobytes())
+            except BrokenPipeError:
+                return
+
+
+async def media_edge(url: str, show: str, seconds: float = 1.0) -> float:
+    """The venue's live edge as a subscriber sees it: the smallest arrival minus media time over ``seconds``."""
+    import nats
+
+    nc = await nats.connect(url)
+    best = [np.inf]
+
+    async def on(msg) -> None:
+        wf = decode_frame(msg.data, 52)
+        best[0] = min(best[0], time.perf_counter() - wf.media_t)
+
+    await nc.subscribe(subject(show, "frame"), cb=on)
+    await asyncio.sleep(seconds)
+    await nc.close()
+    return best[0]
+
+
+async def run_song(server: LocalNatsServer, song: Path, seconds: float, seed: int, other: np.ndarray) -> list[Viewer]:
+    rng = np.random.default_rng(seed)
+    music, sr = sf.read(song, dtype="float64", always_2d=True)
+    music = music.mean(axis=1)
+    if sr != SR:
+        raise SystemExit(f"{song}: expected {SR} Hz")
+    coded = scenes.codec_copy(music)
+    name = f"sync{seed}"
+    url = f"{server.url}/{name}"
+    viewers = []
+    for kind in ("stream", "noisy"):
+        delay = float(rng.uniform(0.3, 3.0))
+        jump = 1.0 if (delay < 1.3 or rng.random() < 0.5) else -1.0
+        viewers.append(Viewer(kind, coded, True, 10.0 if kind == "noisy" else None, delay=delay,
+                              drift=float(rng.choice([-1e-3, 1e-3])), jump=jump, jump_at=seconds / 2))
+    viewers.append(Viewer("silence", np.zeros(SR), False))
+    viewers.append(Viewer("speech", scenes.speech_like(seed, 20.0), False, 10.0))
+    viewers.append(Viewer("other song", scenes.codec_copy(other), True, delay=1.0))
+    show = Show(audio=song)
+    stop = threading.Event()
+    seats, pipes = [], []
+    for v in viewers:  # the viewers are there before the show starts, as an audience is
+        r, w = os.pipe()
+        pipes.append(w)
+        sync = SyncSettings(input=f"raw:/dev/fd/{r}?rate={SR}&channels=1&format=f32")
+        sessions: list = []
+        seats.append((asyncio.create_task(listen(url, [lambda d, f, t=v.taps: t], seat=Seat(), sync=sync,
+                                                 security=SeatSecurity(unsigned=True), handle_signals=False,
+                                                 sessions=sessions)), sessions, v, r))
+    await asyncio.sleep(1.0)
+    with publishing(PublisherSecurity(unsigned=True)):
+        motion = hapmotion.load_motion(DANCE)
+        source = ReplaySource(motion)
+        ready = asyncio.get_running_loop().create_future()
+        venue = asyncio.create_task(live(show, source, [url], handle_signals=False,
+                                         on_ready=lambda e: ready.done() or ready.set_result(e)))
+        await asyncio.wait({venue, ready}, return_when=asyncio.FIRST_COMPLETED)
+        if venue.done():
+            venue.result()
+    edge = await media_edge(server.url, name)
+    threads = []
+    t0 = time.perf_counter() + 3.0  # the signals below take about a second to build
+    for i, (v, w) in enumerate(zip(viewers, pipes)):
+        v.t0, v.edge = t0, edge
+        x = v.signal(seconds, seed + i)
+        threads.append(threading.Thread(target=writer, args=(w, x, t0, np.random.default_rng(seed + 100 + i), stop),
+                                        daemon=True))
+    for th in threads:
+        th.start()
+    await asyncio.sleep(seconds + 1.0)
+    for task, sessions, v, r in seats:
+        if sessions:
+            v.sync = sessions[-1][1].sync
+    stop.set()
+    for task, _, _, r in seats:
+        task.cancel()
+    await asyncio.gather(*(s[0] for s in seats), return_exceptions=True)
+    for _, _, _, r in seats:
+        os.close(r)
+    venue.cancel()
+    await asyncio.gather(venue, return_exceptions=True)
+    return viewers
+
+
+@dataclass
+class Figures:
+    skew: np.ndarray
+    lock_s: float
+    relock_s: float
+    false_locks: int
+    cpu: float
+
+
+def figures(v: Viewer, seconds: float) -> Figures:
+    sync = v.sync
+    history = list(sync.estimates) if sync is not None else []
+    music_start = v.edge + v.delay  # the viewer hears media time 0
+    jump_t = v.t0 + v.jump_at
+    lock_s = relock_s = np.inf
+    false_locks = 0
+    was_locked = False
+    for at, est, state in history:
+        locked = state.state == "locked" and state.offset_s is not None
+        if os.environ.get("BENCH_SYNC_DEBUG") and v.follows_media and at - music_start < 8:
+            print(f"  {v.name} {at - music_start:6.2f} {state.state:9s} "
+                  f"{'' if est is None else f'err {(est.offset_s - v.offset_truth(at)) * 1000:7.1f} ms score {est.score:.2f} margin {est.margin:.2f}'}")
+        if not v.follows_media or v.name == "other song":
+            false_locks += int(locked and not was_locked)
+            was_locked = locked
+            continue
+        err = abs(state.offset_s - v.offset_truth(at)) if locked else np.inf
+        if locked and not was_locked and err > 0.060 and not (jump_t <= at < jump_t + 3.0):
+            false_locks += 1
+        was_locked = locked
+        if err <= 0.040:
+            if at < jump_t and lock_s == np.inf:
+                lock_s = at - music_start
+            if at >= jump_t and relock_s == np.inf:
+                relock_s = at - jump_t
+    frames = np.array(v.taps.frames) if v.taps.frames else np.zeros((0, 2))
+    skew = np.zeros(0)
+    if v.follows_media and v.name != "other song" and frames.size:
+        tau, m = frames[:, 0], frames[:, 1]
+        keep = (tau >= music_start + 5.0) & ~((tau >= jump_t) & (tau < jump_t + 3.0))
+        skew = tau[keep] - v.heard_time(m[keep], tau[keep])
+    cpu = sync.cpu_s / seconds if sync is not None else 0.0
+    return Figures(skew, lock_s, relock_s, false_locks, cpu)
+
+
+def fmt_ms(x: float) -> str:
+    return "never" if not np.isfinite(x) else f"{x * 1000:.0f} ms"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--songs", type=int, default=4, help="songs: the 2 real ones, then synthetic (default 4)")
+    ap.add_argument("--seconds", type=float, default=60.0, help="seconds of show per song (default 60)")
+    ap.add_argument("--seed", type=int, default=2026, help="seed of the delays, drifts and synthetic songs")
+    args = ap.parse_args(argv)
+    print(f"bench_sync: load average {os.getloadavg()[0]:.1f} at the start, {os.cpu_count()} cores")
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp, LocalNatsServer() as server:
+        songs = list(SONGS)
+        for k in range(max(0, args.songs - len(SONGS))):
+            path = Path(tmp) / f"synthetic-{args.seed + k}.wav"
+            sf.write(path, scenes.synth_song(args.seed + k, args.seconds + 5.0), SR)
+            songs.append(path)
+        for i, song in enumerate(songs[:args.songs]):
+            other_path = songs[(i + 1) % len(songs)]
+            other, _ = sf.read(other_path, dtype="float64")
+            other = other if other.ndim == 1 else other.mean(axis=1)
+            viewers = asyncio.run(run_song(server, song, args.seconds, args.seed + 10 * i, other))
+            for v in viewers:
+                rows.append((song.name, v, figures(v, args.seconds)))
+    print(f"\n{'song':24s} {'viewer':11s} {'delay':>7s} {'jump':>5s} {'skew p50':>9s} {'skew p95':>9s} "
+          f"{'target':>7s} {'lock':>8s} {'re-lock':>8s} {'false':>5s} {'sync CPU':>9s}")
+    ok = True
+    for name, v, f in rows:
+        target = TARGETS["skew_noisy"] if v.name == "noisy" else TARGETS["skew_stream"]
+        music = v.follows_media and v.name != "other song"
+        p50 = float(np.percentile(np.abs(f.skew), 50)) if f.skew.size else np.inf
+        p95 = float(np.percentile(np.abs(f.skew), 95)) if f.skew.size else np.inf
+        good = f.false_locks == 0 and f.cpu <= TARGETS["cpu"]
+        if music:
+            good &= p95 <= target and f.lock_s <= TARGETS["lock"] and f.relock_s <= TARGETS["relock"]
+        ok &= good
+        print(f"{name[:24]:24s} {v.name:11s} {v.delay * 1000 if music else 0:6.0f}ms {v.jump if music else 0:+5.1f} "
+              f"{fmt_ms(p50) if music else '-':>9s} {fmt_ms(p95) if music else '-':>9s} "
+              f"{fmt_ms(target) if music else '-':>7s} {(f'{f.lock_s:.1f} s' if np.isfinite(f.lock_s) else 'never') if music else '-':>8s} "
+              f"{(f'{f.relock_s:.1f} s' if np.isfinite(f.relock_s) else 'never') if music else '-':>8s} "
+              f"{f.false_locks:5d} {f.cpu * 100:8.1f}% {'ok' if good else 'MISSED'}")
+    print(f"\ntargets: skew p95 <= 40 ms (stream copy), <= 60 ms (noisy copy), from 5 s after the music starts; "
+          f"lock within {TARGETS['lock']:g} s; re-lock within {TARGETS['relock']:g} s of a 1 s jump; no false lock; "
+          f"sync CPU <= {TARGETS['cpu'] * 100:g} % of a core per seat")
+    print(f"load average {os.getloadavg()[0]:.1f} at the end; all seats and the publisher in this one process")
+    print("all targets met" if ok else "SOME TARGETS MISSED")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

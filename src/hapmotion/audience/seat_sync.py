@@ -1,0 +1,307 @@
+"""A seat that plays in step with what its viewer hears (``hapmotion listen ... --sync audio``).
+
+:class:`SeatSync` listens to the venue's music reference (``hapmotion.show.SHOW.sync``,
+:mod:`hapmotion.audience.sync_reference`) and to the seat's own audio input (:mod:`hapmotion.audio.inputs`): a
+worker thread turns the heard audio into band levels (:class:`~hapmotion.audio.sync_features.LevelStream`), and
+every :data:`STEP_S` matches the last :data:`WINDOW_S` of them against the reference
+(:func:`~hapmotion.audience.sync_estimator.estimate`) over every offset from the live edge to
+``max_delay_s`` behind it; a :class:`~hapmotion.audience.sync_tracker.DelayTracker` turns the estimates into the
+offset the frames play at. The seat's :class:`~hapmotion.audience.listener.AudienceSource` asks
+:meth:`SeatSync.play_time` when a frame is due: media time + the locked offset + ``--delay`` (a fine offset), or,
+while searching, the manual delay (``--unsynced delay``) or not at all (``--unsynced silent``).
+
+Offsets are *local time minus media time* of the heard music, so they need no clock shared with the venue: the
+heard audio is stamped with this machine's clock as it arrives, the reference carries media time. The *delay* the
+seat reports is that offset minus the live edge (the earliest arrival of the reference), the stream's lag behind
+the venue. The audio itself never leaves this process.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+from nats.aio.client import Client as NatsClient
+from nats.aio.msg import Msg
+from nats.aio.subscription import Subscription
+
+from ..audio.inputs import AudioInput, open_input
+from ..audio.sync_features import N_BANDS, RATE, LevelStream, dequantise
+from ..errors import UsageError
+from .signing import BadSignature, SeatTrust, Unsigned
+from .sync_estimator import estimate
+from .sync_reference import decode_batch
+from .sync_tracker import DelayTracker, SyncState
+from .wire import subject
+
+log = logging.getLogger("hapmotion.live")
+
+WINDOW_S = 3.0
+"""Heard audio matched at once: long enough for a few bars' onsets, short enough to see a jump within 3 s."""
+MIN_WINDOW_S = 1.5
+STEP_S = 0.25
+"""How often the heard window is matched (0.5-1 ms of CPU each)."""
+EDGE_WINDOW_S = 10.0
+"""The live edge is the earliest reference arrival over this long."""
+EARLY_S = 0.25
+"""Offsets searched start this far before the live edge (the venue's own stream may run a little ahead of the
+frames' arrival)."""
+FALLBACKS = ("delay", "silent")
+
+
+@dataclass(frozen=True)
+class SyncSettings:
+    """``--sync audio`` settings: the audio input (:func:`hapmotion.audio.inputs.open_input` spec), what plays
+    while the seat is not locked (``delay``: the manual ``--delay``; ``silent``: nothing), and the longest delay
+    behind the venue searched, seconds. A seat that joins a running show locks once it holds the reference for the
+    whole range (``max_delay_s`` + 3 s after joining, or from the show's start)."""
+
+    input: str = "loopback"
+    unsynced: str = "delay"
+    max_delay_s: float = 10.0
+
+    def __post_init__(self) -> None:
+        if self.unsynced not in FALLBACKS:
+            raise UsageError(f"--unsynced must be one of {', '.join(FALLBACKS)}, not {self.unsynced!r}")
+        if not (math.isfinite(self.max_delay_s) and 1.0 <= self.max_delay_s <= 60.0):
+            raise UsageError(f"--sync-max-delay must be 1000..60000 ms, not {self.max_delay_s * 1000:g}")
+
+
+class ReferenceStore:
+    """The venue's reference levels by hop, the last ``seconds`` of hops (a ring; thread-safe)."""
+
+    def __init__(self, seconds: float):
+        self.size = int(seconds * RATE)
+        self.levels = np.zeros((self.size, N_BANDS), dtype=np.uint8)
+        self.hops = np.full(self.size, np.iinfo(np.int64).min, dtype=np.int64)
+        self.lock = threading.Lock()
+
+    def put(self, first_hop: int, levels: np.ndarray) -> None:
+        idx = np.arange(first_hop, first_hop + levels.shape[0])
+        with self.lock:
+            self.levels[idx % self.size] = levels
+            self.hops[idx % self.size] = idx
+
+    def clear(self) -> None:
+        with self.lock:
+            self.hops[:] = np.iinfo(np.int64).min
+
+    def span(self, first_hop: int, n: int) -> np.ndarray:
+        """``(n, B)`` levels in dB of hops ``first_hop ..``, NaN where none was received."""
+        idx = np.arange(first_hop, first_hop + n)
+        with self.lock:
+            have = self.hops[idx % self.size] == idx
+            rows = dequantise(self.levels[idx % self.size])
+        rows[~have] = np.nan
+        return rows
+
+
+class HeardClock:
+    """Local time of a stream's samples: the earliest arrival (smallest arrival minus sample time) over the last
+    2 s is taken as when the samples were heard (a late block only ever arrives later than it was heard)."""
+
+    def __init__(self, sample_rate: float, window_s: float = 2.0):
+        self.sr = sample_rate
+        self.window_s = window_s
+        self.samples = 0
+        self._lags: deque[tuple[float, float]] = deque()
+
+    def push(self, n: int, arrival: float) -> float:
+        """``n`` more samples whose last arrived at ``arrival``; returns the local time of sample 0."""
+        self.samples += n
+        lag = arrival - self.samples / self.sr
+        while self._lags and self._lags[-1][1] >= lag:
+            self._lags.pop()
+        self._lags.append((arrival, lag))
+        while self._lags[0][0] < arrival - self.window_s:
+            self._lags.popleft()
+        return self._lags[0][1]
+
+
+class SeatSync:
+    """The sync of one seat (module docstring): :meth:`start` subscribes and starts listening, :meth:`play_time`
+    says when a frame plays, :attr:`state` is the latest :class:`SyncState`, :meth:`close` stops it all."""
+
+    def __init__(self, settings: SyncSettings, delay_s: float = 0.0, audio: Optional[AudioInput] = None):
+        self.settings = settings
+        self.delay_s = float(delay_s)
+        self.audio = audio if audio is not None else open_input(settings.input)
+        self.store = ReferenceStore(settings.max_delay_s + WINDOW_S + 5.0)
+        self.tracker = DelayTracker()
+        self.state: SyncState = self.tracker.state
+        self.epoch: Optional[int] = None
+        self.estimates: deque = deque(maxlen=4096)   # (local time, Estimate or None, SyncState): the harness reads it
+        self.faults: dict[str, int] = {}
+        self._snapshot: tuple = (None, 0.0, 0.0)      # (offset at _t, drift, _t): read by the event loop
+        self._edges: deque[tuple[float, float]] = deque()
+        self._edge: Optional[float] = None
+        self._last_seq: Optional[int] = None
+        self._stop = threading.Event()
+        self._thread: Optional[threading.Thread] = None
+        self._sub: Optional[Subscription] = None
+        self.trust: Optional[SeatTrust] = None
+        self._said: set[str] = set()
+        self.cpu_s = 0.0
+
+    # ------------------------------------------------------------------ life cycle
+    async def start(self, nc: NatsClient, show: str, trust: SeatTrust) -> None:
+        self.trust = trust
+        self._sub = await nc.subscribe(subject(show, "sync"), cb=self._on_batch)
+        self._thread = threading.Thread(target=self._listen, name="hapmotion-sync", daemon=True)
+        self._thread.start()
+        log.info("seat sync: listening to %s; searching (%s)", self.audio.describe(), self._fallback_text())
+
+    def follow(self, epoch: int) -> None:
+        """The run the seat plays: reference batches of other runs are ignored; a new run clears the reference."""
+        if epoch != self.epoch:
+            self.epoch = epoch
+            self._last_seq = None
+            self.store.clear()
+
+    async def close(self) -> None:
+        self._stop.set()
+        if self._sub is not None:
+            try:
+                await self._sub.unsubscribe()
+            except Exception:  # the connection may be gone: nothing to release then
+                pass
+        if self._thread is not None:
+            await asyncio.get_running_loop().run_in_executor(None, self._thread.join, 1.0)
+        self.audio.close()
+
+    # ------------------------------------------------------------------ the reference (event loop)
+    def _fault(self, kind: str, text: str) -> None:
+        self.faults[kind] = self.faults.get(kind, 0) + 1
+        if kind not in self._said:
+            self._said.add(kind)
+            log.warning("seat sync: %s (counted; logged once)", text)
+
+    async def _on_batch(self, msg: Msg) -> None:
+        self.receive(msg.data, time.perf_counter())
+
+    def receive(self, raw: bytes, arrival: float) -> None:
+        """One message of the reference subject as received (its bytes, its local arrival time): checked against
+        :attr:`trust`, then stored; unsigned, wrongly signed, malformed and replayed batches are counted and
+        logged once per kind."""
+        try:
+            data = self.trust.open("sync", raw)
+            batch = decode_batch(data)
+        except (Unsigned, BadSignature) as exc:
+            self._fault("bad_signature", f"reference {exc}")
+            return
+        except ValueError as exc:
+            self._fault("malformed", f"reference batch: {exc}")
+            return
+        if self.epoch is None:
+            self.epoch = batch.epoch  # the run's first batches may come before its description is read
+        elif batch.epoch != self.epoch:
+            return
+        if self._last_seq is not None and batch.seq <= self._last_seq:
+            self._fault("replayed", f"reference batch seq={batch.seq} after seq={self._last_seq}")
+            return
+        self._last_seq = batch.seq
+        self.store.put(batch.first_hop, batch.levels)
+        lag = arrival - batch.sent_t
+        while self._edges and self._edges[-1][1] >= lag:
+            self._edges.pop()
+        self._edges.append((arrival, lag))
+        while self._edges[0][0] < arrival - EDGE_WINDOW_S:
+            self._edges.popleft()
+        self._edge = self._edges[0][1]
+
+    # ------------------------------------------------------------------ when a frame plays (event loop)
+    def play_time(self, media_t: float, fallback_due: float) -> Optional[float]:
+        """Local time at which the frame with ``media_t`` plays: media time + locked offset + ``--delay``; while
+        searching ``fallback_due`` (the manual delay) or None (``--unsynced silent``)."""
+        offset, drift, t0 = self._snapshot
+        if offset is None:
+            return fallback_due if self.settings.unsynced == "delay" else None
+        now = time.perf_counter()
+        return media_t + offset + drift * (now - t0) + self.delay_s
+
+    @property
+    def delay_behind_edge(self) -> Optional[float]:
+        """The locked stream's lag behind the live edge, seconds (None while searching)."""
+        offset = self._snapshot[0]
+        return None if offset is None or self._edge is None else offset - self._edge
+
+    # ------------------------------------------------------------------ the worker thread
+    def _listen(self) -> None:
+        try:
+            levels = LevelStream(self.audio.sample_rate)
+            clock = HeardClock(self.audio.sample_rate)
+            size = int(WINDOW_S * RATE)
+            heard = np.zeros((size * 2, N_BANDS))
+            filled = 0
+            next_step = int(MIN_WINDOW_S * RATE)
+            while not self._stop.is_set():
+                block, arrival = self.audio.read()
+                if block is None:
+                    log.info("seat sync: %s ended", self.audio.describe())
+                    return
+                cpu0 = time.thread_time()
+                t_zero = clock.push(block.size, arrival)
+                rows = levels.push(block)
+                if rows.shape[0]:
+                    keep = min(rows.shape[0], heard.shape[0])
+                    heard = np.roll(heard, -keep, axis=0)
+                    heard[-keep:] = rows[-keep:]
+                    filled += rows.shape[0]
+                    if filled >= next_step:
+                        next_step = filled + int(STEP_S * RATE)
+                        n = min(filled, size)
+                        first = levels.next_hop - n          # hop index (stream) of the window's first row
+                        self._step(heard[-n:], t_zero + first / RATE)
+                self.cpu_s += time.thread_time() - cpu0
+        except Exception as exc:  # a device that went away, a pipe that broke: the seat plays on unsynced
+            if self._stop.is_set():
+                return  # closed under the read while the seat stops
+            log.warning("seat sync: the audio input failed (%s: %s); playing unsynced", exc.__class__.__name__, exc)
+            self._snapshot = (None, 0.0, 0.0)
+
+    def _step(self, heard_db: np.ndarray, t_heard: float) -> None:
+        at = t_heard + (heard_db.shape[0] - 1) / RATE
+        est = None
+        if self._edge is not None:
+            lo, hi = self._edge - EARLY_S, self._edge + self.settings.max_delay_s
+            first = int(math.floor((t_heard - hi) * RATE))
+            n = heard_db.shape[0] + int(math.ceil((hi - lo) * RATE))
+            ref = self.store.span(first, n)
+            est = estimate(heard_db, t_heard, ref, first / RATE)
+            media = (first + np.arange(n)) / RATE
+            if est is not None and self.tracker.state.state == "searching" \
+                    and not np.isfinite(ref[media >= 0.0]).all():
+                # part of the range was never received (the seat joined a running show): a repeat of the music
+                # (the bar before) could win over the true delay, which may lie in the part not received yet
+                est = None
+        before = self.tracker.state.state
+        state = self.tracker.update(est, at)
+        offset = self.tracker.offset_at(at)
+        self._snapshot = (offset, state.drift, at) if offset is not None else (None, 0.0, 0.0)
+        self.state = state
+        self.estimates.append((at, est, state))
+        if state.state != before or (state.state == "locked" and state.jumps != getattr(self, "_jumps", 0)):
+            self._jumps = state.jumps
+            self._say(state)
+
+    def _say(self, state: SyncState) -> None:
+        if state.state == "locked":
+            lag = self.delay_behind_edge
+            log.info("seat sync: locked, %s behind the venue (confidence %.2f)",
+                     f"{lag * 1000:.0f} ms" if lag is not None else "?", state.confidence)
+        elif state.state == "lost":
+            log.warning("seat sync: lost the music; holding the last delay")
+        else:
+            log.warning("seat sync: searching (%s)", self._fallback_text())
+
+    def _fallback_text(self) -> str:
+        if self.settings.unsynced == "delay":
+            return f"playing at the manual delay of {self.delay_s * 1000:g} ms meanwhile"
+        return "the vest stays still meanwhile"

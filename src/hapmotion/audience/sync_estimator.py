@@ -1,0 +1,113 @@
+"""How far behind the venue a seat hears the music: the offset that best lines the heard levels up with the venue's
+reference (sans-I/O, numpy only).
+
+The heard levels ``(W, B)`` (:mod:`hapmotion.audio.sync_features`, hop ``n`` at local time ``t_heard + n / RATE``)
+and the reference levels ``(N, B)`` (hop ``j`` at media time ``t_ref + j / RATE``) are turned into onset novelty,
+and each band's heard novelty is cross-correlated with the reference at every lag, normalised by both sides'
+energy over the window (a normalised cross-correlation; the novelty's two-hop difference already whitens the slow
+envelope, which is what GCC-PHAT's weighting does to a spectrum, without PHAT's noise gain in bands the music
+leaves empty). The bands' coefficients are averaged, so a lag scores 1 only where every band's onsets line up.
+
+An :class:`Estimate` gives the best lag as an offset (local time minus media time, seconds, refined between hops
+by a parabola through the peak), its score (-1..1), and its *margin*: the score minus the best score more than
+:data:`EXCLUSION_S` away. Music repeats itself (beats, bars), so a second peak one beat away is normal; what tells
+a real match from chance is a score well above what unrelated signals reach over that many lags and bands. The
+thresholds that decide it live in :mod:`hapmotion.audience.sync_tracker`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+from scipy.ndimage import uniform_filter1d
+
+from ..audio.sync_features import RATE, novelty
+
+EXCLUSION_S = 0.06
+"""The second-best peak is looked for at least this far from the best one."""
+LOCAL_MEAN_S = 0.5
+"""Each side's novelty has its mean over this long taken out before matching: onsets are one or two hops wide and
+pass, while where the music is merely busy (a song starting after silence or noise) does not: two different songs
+that both start after silence would otherwise line up on the step from quiet to busy."""
+MIN_ACTIVE_BANDS = 2
+"""Bands whose heard novelty varies over the window; fewer (silence, a pure tone) gives no estimate."""
+MIN_NOVELTY_DB = 0.05
+"""A band whose heard novelty has a smaller standard deviation (dB) is silent or stationary noise: left out."""
+MIN_EVENTS = 40.0
+"""A band's heard novelty must spread over at least this many hops' worth of rises (its participation ratio,
+``(sum |h|)^2 / sum h^2``: 1 for a single click, about 100 for 3 s of music): a window holding one or two onsets
+(the music just starting, a door slam) lines up with almost anything, so it is no evidence."""
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """One match of a window of heard audio: ``offset_s`` local time minus media time of the heard music, ``score``
+    the averaged normalised correlation at that offset (-1..1), ``margin`` the score minus the best score elsewhere,
+    ``bands`` how many bands took part, ``at`` the local time of the window's last hop."""
+
+    offset_s: float
+    score: float
+    margin: float
+    bands: int
+    at: float
+
+
+def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float) -> Optional[Estimate]:
+    """The best offset of ``heard_db`` ``(W, B)`` within ``ref_db`` ``(N, B)`` (N > W; NaN rows: reference hops not
+    received, they match nothing). Offsets searched: ``t_heard - t_ref - l / RATE`` for lags ``l = 0 .. N - W``.
+    None when the heard window is silent or stationary, or the reference holds no music over the range."""
+    w, n = heard_db.shape[0], ref_db.shape[0]
+    if w < 8 or n <= w:
+        return None
+    size = max(3, int(round(LOCAL_MEAN_S * RATE)) | 1)
+    h = novelty(heard_db)
+    h -= uniform_filter1d(h, size, axis=0, mode="nearest")
+    missing = ~np.isfinite(ref_db).all(axis=1)
+    r = novelty(np.where(missing[:, None], np.nan, ref_db))
+    r -= uniform_filter1d(r, size, axis=0, mode="nearest")
+    # hops next to a gap carry a difference across it: zeroed by novelty(); the gap itself matches nothing
+    h = h - h.mean(axis=0, keepdims=True)
+    h_norm = np.sqrt((h * h).sum(axis=0))
+    events = np.abs(h).sum(axis=0) ** 2 / np.maximum(h_norm ** 2, 1e-12)
+    active = (h_norm / np.sqrt(w) > MIN_NOVELTY_DB) & (events >= MIN_EVENTS)
+    if active.sum() < MIN_ACTIVE_BANDS:
+        return None
+    h, h_norm, r = h[:, active], h_norm[active], r[:, active]
+    n_lags = n - w + 1
+    size = 1 << (n + w - 1).bit_length()  # (the FFT's length from here on)
+    # cross-correlation of every band at every lag by FFT: c[l] = sum_k h[k] r[k + l]
+    spec = np.fft.rfft(r, size, axis=0) * np.conj(np.fft.rfft(h, size, axis=0))
+    c = np.fft.irfft(spec, size, axis=0)[:n_lags]
+    # the reference's energy over each lag's window (its mean taken out: h has zero mean, so c is unchanged)
+    s1 = np.concatenate([np.zeros((1, r.shape[1])), np.cumsum(r, axis=0)])
+    s2 = np.concatenate([np.zeros((1, r.shape[1])), np.cumsum(r * r, axis=0)])
+    win1 = s1[w:] - s1[:-w]
+    win2 = s2[w:] - s2[:-w]
+    var = np.maximum(win2 - win1 * win1 / w, 0.0)
+    denom = h_norm[None, :] * np.sqrt(var)
+    s_abs = np.concatenate([np.zeros((1, r.shape[1])), np.cumsum(np.abs(r), axis=0)])
+    r_events = (s_abs[w:] - s_abs[:-w]) ** 2 / np.maximum(win2, 1e-12)
+    # a reference band with hardly any onsets over the lag's window (not received yet, a few hops of music at the
+    # window's edge) is no evidence either way: it counts 0. Half the heard side's minimum: at the true lag of a
+    # song that just started, both sides hold the same second of music and the same number of onsets
+    quiet = (var < 1e-4 * (h_norm[None, :] ** 2)) | (r_events < MIN_EVENTS / 2)
+    coef = np.where(quiet, 0.0, c / np.where(quiet, 1.0, denom))
+    score = coef.mean(axis=1)
+    if not np.isfinite(score).any() or np.all(quiet):
+        return None
+    best = int(np.argmax(score))
+    peak = float(score[best])
+    frac = 0.0
+    if 0 < best < n_lags - 1:
+        a, b, cc = score[best - 1], score[best], score[best + 1]
+        den = a - 2.0 * b + cc
+        if den < 0:
+            frac = float(np.clip(0.5 * (a - cc) / den, -0.5, 0.5))
+    ex = max(1, int(round(EXCLUSION_S * RATE)))
+    others = np.concatenate([score[:max(0, best - ex)], score[best + ex + 1:]])
+    second = float(others.max()) if others.size else -1.0
+    offset = t_heard - t_ref - (best + frac) / RATE
+    return Estimate(float(offset), peak, peak - second, int(active.sum()), t_heard + (w - 1) / RATE)
+

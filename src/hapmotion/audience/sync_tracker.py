@@ -1,0 +1,167 @@
+"""From a stream of delay estimates to the delay a seat plays at: searching, locked, lost (sans-I/O).
+
+Each :class:`~hapmotion.audience.sync_estimator.Estimate` is *good* when its score reaches :data:`MIN_SCORE` and
+its margin :data:`MIN_MARGIN`. The thresholds come from what unrelated signals reach: over a 3 s window, 6-10 s of
+lags and five bands, a different song (the two shared songs against each other and against synthetic songs)
+scored about 0.3 at most, a speech-like signal too, room noise 0.15, while the right song through a low-quality Vorbis
+copy with room noise at 10 dB SNR scored 0.48 and more once the window was full of music.
+
+* **searching**: good estimates of the last :data:`VOTE_S` seconds vote; when :data:`LOCK_VOTES` of them agree
+  within :data:`AGREE_S` and span at least :data:`LOCK_SPAN_S` (so they do not all come from one stretch of
+  audio), the seat locks on their median.
+* **locked**: a Kalman filter on (offset, drift) follows the good estimates that fall within :data:`GATE_S` of its
+  prediction; a drift of 0.1 % is 1 ms a second, which the drift state follows. Good estimates outside the gate
+  that agree among themselves (:data:`JUMP_VOTES`, spanning :data:`JUMP_SPAN_S`) are a jump (the viewer's player
+  re-buffered or re-synced): the filter restarts there.
+* **lost**: no good estimate within the gate for :data:`LOST_AFTER_S`: the seat keeps the prediction (the stream
+  most likely still plays where it did) and says so; after :data:`HOLD_S` more it is searching again and plays
+  the user's fallback (the manual delay, or nothing).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from .sync_estimator import Estimate
+
+MIN_SCORE = 0.40
+MIN_MARGIN = 0.02
+VOTE_S = 3.0
+LOCK_VOTES = 4
+AGREE_S = 0.025
+LOCK_SPAN_S = 0.75
+GATE_S = 0.045
+JUMP_VOTES = 4
+JUMP_SPAN_S = 0.5
+LOST_AFTER_S = 5.0
+HOLD_S = 20.0
+MEASUREMENT_S = 0.008
+"""Standard deviation of one estimate (about one hop, from the harness) for the filter."""
+OFFSET_WALK_S = 0.002
+"""How far the offset may wander per square-root second apart from drift (jitter of the player's clock)."""
+DRIFT_WALK = 2e-5
+"""How fast the drift itself may change, per square-root second."""
+
+
+@dataclass(frozen=True)
+class SyncState:
+    """What the seat reports: ``state`` ``searching`` | ``locked`` | ``lost``; ``offset_s`` the offset it plays at
+    (local time minus media time of the heard music; None while searching), ``confidence`` 0..1 (the recent good
+    estimates' mean score; 0 while searching), ``drift`` (seconds per second), ``jumps`` and ``locks`` counted."""
+
+    state: str
+    offset_s: Optional[float]
+    confidence: float
+    drift: float = 0.0
+    jumps: int = 0
+    locks: int = 0
+
+
+def _cluster(points: list[tuple[float, float]], agree: float) -> tuple[int, float, float]:
+    """The largest group of ``(at, offset)`` within ``agree`` of one member's offset: (size, median offset, span of
+    their times)."""
+    if not points:
+        return 0, 0.0, 0.0
+    offs = np.array([p[1] for p in points])
+    ats = np.array([p[0] for p in points])
+    best = (0, 0.0, 0.0)
+    for o in offs:
+        near = np.abs(offs - o) <= agree
+        size = int(near.sum())
+        if size > best[0]:
+            best = (size, float(np.median(offs[near])), float(ats[near].max() - ats[near].min()))
+    return best
+
+
+class DelayTracker:
+    """Feed :meth:`update` every estimate (or None) with its time; read :attr:`state` (a :class:`SyncState`) and
+    :meth:`offset_at` (the offset to play at, local time ``t``)."""
+
+    def __init__(self) -> None:
+        self.state = SyncState("searching", None, 0.0)
+        self._votes: deque[tuple[float, float, float]] = deque()  # (at, offset, score) of good estimates
+        self._jump: deque[tuple[float, float]] = deque()
+        self._x = np.zeros(2)     # offset at _t, drift
+        self._p = np.eye(2)
+        self._t = 0.0
+        self._confirmed = 0.0
+        self._scores: deque[float] = deque(maxlen=8)
+        self.jumps = 0
+        self.locks = 0
+
+    # ------------------------------------------------------------------ filter
+    def _start(self, at: float, offset: float) -> None:
+        self._x = np.array([offset, 0.0])
+        self._p = np.diag([MEASUREMENT_S ** 2, (5e-4) ** 2])
+        self._t = at
+        self._confirmed = at
+        self._jump.clear()
+
+    def _predict(self, at: float) -> tuple[np.ndarray, np.ndarray]:
+        dt = max(0.0, at - self._t)
+        f = np.array([[1.0, dt], [0.0, 1.0]])
+        q = np.diag([OFFSET_WALK_S ** 2 * dt, DRIFT_WALK ** 2 * dt])
+        return f @ self._x, f @ self._p @ f.T + q
+
+    def offset_at(self, t: float) -> Optional[float]:
+        """The offset to play at local time ``t`` (None while searching)."""
+        if self.state.state == "searching":
+            return None
+        return float(self._x[0] + self._x[1] * (t - self._t))
+
+    # ------------------------------------------------------------------ update
+    def update(self, est: Optional[Estimate], at: float) -> SyncState:
+        good = est is not None and est.score >= MIN_SCORE and est.margin >= MIN_MARGIN
+        while self._votes and self._votes[0][0] < at - VOTE_S:
+            self._votes.popleft()
+        while self._jump and self._jump[0][0] < at - VOTE_S:
+            self._jump.popleft()
+        if good:
+            self._votes.append((at, est.offset_s, est.score))
+        mode = self.state.state
+        if mode == "searching":
+            size, median, span = _cluster([(a, o) for a, o, _ in self._votes], AGREE_S)
+            if size >= LOCK_VOTES and span >= LOCK_SPAN_S:
+                self._start(at, median)
+                self._scores.extend(s for _, o, s in self._votes if abs(o - median) <= AGREE_S)
+                self.locks += 1
+                self._votes.clear()
+                return self._report("locked")
+            return self._report("searching")
+        x, p = self._predict(at)
+        if good and abs(est.offset_s - x[0]) <= GATE_S:
+            s = p[0, 0] + MEASUREMENT_S ** 2
+            k = p[:, 0] / s
+            self._x = x + k * (est.offset_s - x[0])
+            self._p = p - np.outer(k, p[0, :])
+            self._t = at
+            self._confirmed = at
+            self._jump.clear()
+            self._scores.append(est.score)
+            return self._report("locked")
+        if good:
+            self._jump.append((at, est.offset_s))
+            size, median, span = _cluster(list(self._jump), AGREE_S)
+            if size >= JUMP_VOTES and span >= JUMP_SPAN_S:
+                self.jumps += 1
+                self._start(at, median)
+                self._scores.clear()
+                self._scores.append(est.score)
+                return self._report("locked")
+        silent_for = at - self._confirmed
+        if silent_for > LOST_AFTER_S + HOLD_S:
+            self._votes.clear()
+            self._scores.clear()
+            return self._report("searching")
+        return self._report("lost" if silent_for > LOST_AFTER_S else mode)
+
+    def _report(self, state: str) -> SyncState:
+        offset = None if state == "searching" else float(self._x[0])
+        confidence = float(np.mean(self._scores)) if (self._scores and state != "searching") else 0.0
+        self.state = SyncState(state, offset, confidence, float(self._x[1]) if offset is not None else 0.0,
+                               self.jumps, self.locks)
+        return self.state

@@ -1,0 +1,255 @@
+"""Audio a seat listens to: a sound device (the loopback of the computer's output, a monitor source, a microphone)
+or a file or pipe, all as blocks of mono samples stamped with the local time their last sample was heard.
+
+``open_input(spec)`` takes:
+
+* ``loopback`` (the default): what the default output device plays (WASAPI loopback on Windows, the output's
+  PulseAudio/PipeWire monitor source on Linux; macOS has none: route the output through a virtual device such as
+  BlackHole and name it);
+* ``mic``: the default microphone;
+* ``device:NAME``: a device by (part of) the name ``hapmotion listen --list-audio-inputs`` shows;
+* ``file:PATH``: an audio file (WAV, FLAC, Ogg, ...) played in real time from the moment the seat starts;
+* ``wav:PATH`` or ``wav:-``: a WAV stream from a named pipe or standard input, stamped as it arrives;
+* ``raw:PATH?rate=48000&channels=2&format=s16`` (or ``raw:-?...``): headerless PCM (``s16`` little-endian or
+  ``f32``) from a pipe or standard input, stamped as it arrives (``parec --format=s16le`` writes this).
+
+Devices are read with SoundCard (PyPI ``soundcard``), which captures the output's loopback on Windows (WASAPI) and
+Linux (PulseAudio and PipeWire's pulse server) with no driver to install, where PortAudio (``sounddevice``) has no
+loopback capture in its released builds. It is imported when a device is opened or listed: a seat without sync, a
+machine without sound, never loads it. Nothing read here leaves the machine: the samples become band levels
+(:mod:`hapmotion.audio.sync_features`) in the seat's own process.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+import wave
+from dataclasses import dataclass
+from typing import BinaryIO, Optional
+from urllib.parse import parse_qs
+
+import numpy as np
+import soundfile as sf
+
+from ..errors import InputError, UsageError
+from .io import downmix
+
+BLOCK_S = 0.02
+"""Samples per block read, seconds (devices and files); pipes hand over what has arrived, up to this."""
+DEVICE_RATE = 48000
+SPECS = "loopback, mic, device:NAME, file:PATH, wav:PATH|-, raw:PATH|-?rate=R&channels=C&format=s16|f32"
+
+
+class AudioInput:
+    """One source of heard audio: :meth:`read` blocks until the next block ``(n,)`` float64 mono and returns it with
+    the ``time.perf_counter()`` at which its last sample was heard, or ``(None, t)`` at the end; :meth:`close`."""
+
+    sample_rate: float = DEVICE_RATE
+    name: str = ""
+
+    def read(self) -> tuple[Optional[np.ndarray], float]:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        pass
+
+    def describe(self) -> str:
+        return self.name
+
+
+class FileInput(AudioInput):
+    """An audio file played in real time from the first :meth:`read` (the seat hears it as a listener would)."""
+
+    def __init__(self, path: str):
+        if not os.path.isfile(path):
+            raise UsageError(f"--audio-input file:{path}: no such file")
+        try:
+            self._f = sf.SoundFile(path)
+        except (sf.LibsndfileError, RuntimeError, OSError) as exc:
+            raise InputError(path, "", f"cannot read it as audio: {exc}") from None
+        self.sample_rate = float(self._f.samplerate)
+        self.name = f"file {path}"
+        self._block = max(1, int(BLOCK_S * self.sample_rate))
+        self.started: Optional[float] = None
+        """``perf_counter()`` at which the file's first sample was heard (its first :meth:`read`)."""
+        self._done = 0
+
+    def read(self) -> tuple[Optional[np.ndarray], float]:
+        if self.started is None:
+            self.started = time.perf_counter()
+        data = self._f.read(self._block, dtype="float32", always_2d=True)
+        if data.shape[0] == 0:
+            return None, time.perf_counter()
+        self._done += data.shape[0]
+        due = self.started + self._done / self.sample_rate
+        wait = due - time.perf_counter()
+        if wait > 0:
+            time.sleep(wait)
+        return np.nan_to_num(downmix(data)), due
+
+    def close(self) -> None:
+        self._f.close()
+
+
+def _open_stream(where: str, spec: str) -> BinaryIO:
+    if where == "-":
+        return sys.stdin.buffer
+    if not os.path.exists(where):
+        raise UsageError(f"--audio-input {spec}: no such file or pipe {where}")
+    return open(where, "rb", buffering=0)
+
+
+class PipeInput(AudioInput):
+    """Raw PCM or a WAV stream from a pipe or standard input, each block stamped on arrival."""
+
+    def __init__(self, spec: str, kind: str, rest: str):
+        where, _, query = rest.partition("?")
+        self.name = f"{kind} stream {where}"
+        self._stream = _open_stream(where, spec)
+        if kind == "wav":
+            try:
+                self._wav: Optional[wave.Wave_read] = wave.open(self._stream, "rb")
+            except (wave.Error, EOFError) as exc:
+                raise InputError(where, "header", f"expected a PCM WAV stream ({exc})") from None
+            self.sample_rate = float(self._wav.getframerate())
+            self.channels = self._wav.getnchannels()
+            width = self._wav.getsampwidth()
+            if width not in (2, 4):
+                raise InputError(where, "header", f"expected 16- or 32-bit PCM, found {8 * width}-bit")
+            self._dtype = np.dtype("<i2") if width == 2 else np.dtype("<i4")
+        else:
+            self._wav = None
+            q = {k: v[-1] for k, v in parse_qs(query).items()}
+            unknown = set(q) - {"rate", "channels", "format"}
+            if unknown:
+                raise UsageError(f"--audio-input {spec}: unknown {', '.join(sorted(unknown))} (rate, channels, "
+                                 f"format)")
+            try:
+                self.sample_rate = float(q.get("rate", DEVICE_RATE))
+                self.channels = int(q.get("channels", 2))
+            except ValueError:
+                raise UsageError(f"--audio-input {spec}: rate and channels must be numbers") from None
+            fmt = q.get("format", "s16")
+            if fmt not in ("s16", "f32"):
+                raise UsageError(f"--audio-input {spec}: format s16 or f32, not {fmt!r}")
+            self._dtype = np.dtype("<i2") if fmt == "s16" else np.dtype("<f4")
+        if not (4000 <= self.sample_rate <= 384000 and 1 <= self.channels <= 32):
+            raise UsageError(f"--audio-input {spec}: expected a rate of 4000..384000 Hz and 1..32 channels")
+        self._frame_bytes = self._dtype.itemsize * self.channels
+        self._max = max(1, int(BLOCK_S * self.sample_rate)) * self._frame_bytes
+        self._carry = b""
+
+    def read(self) -> tuple[Optional[np.ndarray], float]:
+        while True:
+            chunk = self._wav.readframes(self._max // self._frame_bytes) if self._wav else self._stream.read(self._max)
+            now = time.perf_counter()
+            if not chunk:
+                return None, now
+            data = self._carry + chunk
+            usable = len(data) - len(data) % self._frame_bytes
+            self._carry = data[usable:]
+            if usable:
+                break
+        x = np.frombuffer(data[:usable], dtype=self._dtype).reshape(-1, self.channels)
+        scale = 1.0 if self._dtype.kind == "f" else 1.0 / float(np.iinfo(self._dtype).max + 1)
+        return np.nan_to_num(downmix(x.astype(np.float64) * scale)), now
+
+    def close(self) -> None:
+        if self._stream is not sys.stdin.buffer:
+            self._stream.close()
+
+
+def _soundcard():
+    """SoundCard, imported on first use (it connects to the sound server on import); UsageError in one line when
+    this machine has no sound system to talk to."""
+    try:
+        if len(sys.argv) < 2:  # soundcard names its PulseAudio client after sys.argv[1]
+            sys.argv.append("")
+            try:
+                import soundcard
+            finally:
+                sys.argv.pop()
+        else:
+            import soundcard
+    except Exception as exc:  # no PulseAudio/PipeWire server, no CoreAudio/WASAPI: one line, not a traceback
+        raise UsageError(f"no sound system to capture from (SoundCard found no PulseAudio/PipeWire, WASAPI or "
+                         f"CoreAudio server: {exc.__class__.__name__}{': ' + str(exc) if str(exc) else ''}); use --audio-input file:PATH, wav:- or raw:- "
+                         f"instead") from None
+    return soundcard
+
+
+class DeviceInput(AudioInput):
+    """A capture device through SoundCard: ``loopback``, ``mic`` or ``device:NAME``."""
+
+    def __init__(self, spec: str):
+        sc = _soundcard()
+        try:
+            if spec == "loopback":
+                speaker = sc.default_speaker()
+                mic = sc.get_microphone(str(speaker.name), include_loopback=True)
+            elif spec == "mic":
+                mic = sc.default_microphone()
+            else:
+                mic = sc.get_microphone(spec.partition(":")[2], include_loopback=True)
+        except Exception as exc:  # SoundCard raises IndexError/RuntimeError/... for a device that is not there
+            raise UsageError(f"--audio-input {spec}: no such audio input ({exc.__class__.__name__}: {exc}); "
+                             f"hapmotion listen --list-audio-inputs shows what there is") from None
+        self.name = f"device {mic.name}"
+        self.sample_rate = float(DEVICE_RATE)
+        self._block = int(BLOCK_S * DEVICE_RATE)
+        try:
+            self._ctx = mic.recorder(samplerate=DEVICE_RATE, blocksize=self._block)
+            self._rec = self._ctx.__enter__()
+        except Exception as exc:
+            raise UsageError(f"--audio-input {spec}: cannot record from {mic.name} ({exc})") from None
+
+    def read(self) -> tuple[Optional[np.ndarray], float]:
+        data = self._rec.record(numframes=self._block)
+        return np.nan_to_num(downmix(np.asarray(data))), time.perf_counter()
+
+    def close(self) -> None:
+        try:
+            self._ctx.__exit__(None, None, None)
+        except Exception:  # a device unplugged meanwhile: nothing left to release
+            pass
+
+
+def open_input(spec: str) -> AudioInput:
+    """The input ``spec`` names (module docstring); UsageError in one line when it cannot be opened."""
+    kind, sep, rest = spec.partition(":")
+    if spec in ("loopback", "mic") or kind == "device":
+        return DeviceInput(spec)
+    if kind == "file" and rest:
+        return FileInput(rest)
+    if kind in ("wav", "raw") and rest:
+        return PipeInput(spec, kind, rest)
+    raise UsageError(f"--audio-input {spec!r}: expected one of {SPECS}")
+
+
+@dataclass(frozen=True)
+class InputListing:
+    """What ``--list-audio-inputs`` prints: the devices (``(spec, description)``) and why there are none."""
+
+    devices: tuple[tuple[str, str], ...]
+    problem: Optional[str]
+
+
+def list_inputs() -> InputListing:
+    """The capture devices this machine has (loopbacks first), or the reason it has none."""
+    try:
+        sc = _soundcard()
+        mics = sc.all_microphones(include_loopback=True)
+        speaker = sc.default_speaker() if mics else None
+    except UsageError as exc:
+        return InputListing((), str(exc))
+    except Exception as exc:  # a sound server that went away while listing
+        return InputListing((), f"the sound system did not answer ({exc.__class__.__name__})")
+    rows = []
+    for mic in sorted(mics, key=lambda m: not getattr(m, "isloopback", False)):
+        kind = "loopback/monitor" if getattr(mic, "isloopback", False) else "input"
+        rows.append((f"device:{mic.name}", kind))
+    if speaker is not None:
+        rows.insert(0, ("loopback", f"what {speaker.name} plays"))
+    return InputListing(tuple(rows), None if rows else "the sound system has no capture devices")

@@ -1,0 +1,70 @@
+"""Signals for the audio-sync tests: a random song whose answer is known by construction, a speech-like signal,
+delayed, drifting and jumping copies (no tests here)."""
+
+from __future__ import annotations
+
+import numpy as np
+import soundfile as sf
+
+from .data import AUDIO
+
+SR = 22050
+
+
+def song(seed: int, seconds: float, sr: int = SR) -> np.ndarray:
+    """Random notes (random pitch, length and loudness) over a random kick pattern: music with onsets everywhere and
+    nothing repeating exactly. ``(n,)`` float64, peak 0.8."""
+    rng = np.random.default_rng(seed)
+    n = int(seconds * sr)
+    out = np.zeros(n + sr)
+    t = 0.0
+    while t < seconds:
+        length = rng.uniform(0.08, 0.5)
+        m = int(length * sr)
+        tt = np.arange(m) / sr
+        f = 110.0 * 2 ** rng.uniform(0, 4)
+        tone = np.sin(2 * np.pi * f * tt) + 0.4 * np.sin(4 * np.pi * f * tt) + 0.2 * np.sin(6 * np.pi * f * tt)
+        i = int(t * sr)
+        out[i:i + m] += rng.uniform(0.2, 1.0) * tone * np.exp(-tt / rng.uniform(0.05, 0.3))
+        if rng.random() < 0.35:
+            k = int(0.12 * sr)
+            out[i:i + k] += np.sin(2 * np.pi * 55 * np.arange(k) / sr) * np.exp(-np.arange(k) / (0.04 * sr))
+        t += length * rng.uniform(0.5, 1.0)
+    out = out[:n]
+    return 0.8 * out / np.abs(out).max()
+
+
+def speech_like(seed: int, seconds: float, sr: int = SR) -> np.ndarray:
+    """Voiced syllables of 0.1-0.3 s with a wandering pitch and pauses, the rhythm of speech."""
+    rng = np.random.default_rng(seed)
+    n = int(seconds * sr)
+    out = np.zeros(n + sr)
+    i = 0
+    while i < n:
+        m = int(rng.uniform(0.1, 0.3) * sr)
+        f0 = rng.uniform(100, 220) * np.linspace(1.0, rng.uniform(0.85, 1.15), m)
+        phase = 2 * np.pi * np.cumsum(f0) / sr
+        out[i:i + m] += sum(np.sin(h * phase) / h for h in range(1, 12)) * np.sin(np.linspace(0, np.pi, m))
+        i += m + int(rng.uniform(0.03, 0.5) * sr)
+    out = out[:n]
+    return 0.5 * out / np.abs(out).max()
+
+
+def real_song(name: str = "vibe_ace.ogg", seconds: float | None = None) -> np.ndarray:
+    """A shared real song (22.05 kHz mono), optionally its first ``seconds``."""
+    x, sr = sf.read(AUDIO / name, dtype="float64")
+    assert sr == SR
+    return x if seconds is None else x[:int(seconds * SR)]
+
+
+def played(source: np.ndarray, media_at_s: np.ndarray, sr: int = SR) -> np.ndarray:
+    """What is heard when sample ``i`` plays the source at media time ``media_at_s[i]`` (silence outside)."""
+    return np.interp(media_at_s * sr, np.arange(source.size), source, left=0.0, right=0.0)
+
+
+def noisy(x: np.ndarray, snr_db: float, seed: int) -> np.ndarray:
+    """``x`` plus white-ish noise low-passed like a room's, ``snr_db`` under the signal's RMS."""
+    rng = np.random.default_rng(seed)
+    noise = np.convolve(rng.normal(size=x.size), np.ones(8) / 8, mode="same")
+    rms = np.sqrt(np.mean(x * x))
+    return x + noise / noise.std() * rms / 10 ** (snr_db / 20)

@@ -1,0 +1,169 @@
+"""A seat synchronised to what it hears, end to end against a real nats-server: the publisher's music reference (signed
+on a venue's server), a seat reading the heard audio from a file locks on the true offset and plays the frames
+there; a seat hearing another song never locks and plays at the manual delay or not at all; the command line."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import soundfile as sf
+from click.testing import CliRunner
+from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
+from support.audience import REHEARSAL, SONG, Venue, stop
+from support.live_fakes import start_session, wait_for
+from support.sync_signals import SR, real_song
+
+import hapmotion
+from hapmotion.audience import PublisherSecurity, Seat, listen, publishing
+from hapmotion.audience.seat_sync import SeatSync, SyncSettings
+from hapmotion.audience.signing import SeatTrust, VenueSigner
+from hapmotion.audience.sync_reference import encode_batch
+from hapmotion.cli.listen import command
+from hapmotion.live.sinks import Sink
+
+pytestmark = pytest.mark.slow
+
+LEAD_S = 2.5
+"""Silence before the song in the heard file: the seat hears media time 0 at the file's start + LEAD_S."""
+
+
+class PlayTimes(Sink):
+    """The local time (perf_counter) each rendered frame reached the seat's sinks, with its media time."""
+
+    def __init__(self, *_: object):
+        super().__init__("play times")
+        self.frames: list[tuple[float, float]] = []
+
+    def offer(self, frame) -> None:
+        if frame.kind == "frame":
+            self.frames.append((time.perf_counter(), frame.t))
+
+    async def run(self) -> None:
+        await asyncio.Event().wait()
+
+
+def heard_file(tmp_path, music: np.ndarray) -> str:
+    path = tmp_path / "heard.wav"
+    sf.write(path, np.concatenate([np.zeros(int(LEAD_S * SR)), music]), SR)
+    return str(path)
+
+
+async def show_and_seat(url: str, heard: str, *, unsynced: str = "delay", seconds: float = 14.0,
+                        publisher=PublisherSecurity(unsigned=True), seat_security=REHEARSAL):
+    """The song published as a music-only show (the venue's reference with it) and one seat listening to ``heard``;
+    returns (play times, the seat's sync)."""
+    tap = PlayTimes()
+    sync = SyncSettings(input=f"file:{heard}", unsynced=unsynced, max_delay_s=5.0)
+    sessions: list = []
+    # the seat waits for the show, as an audience does: it holds the reference from the show's start
+    seat_task = asyncio.create_task(listen(url, [lambda d, f, t=tap: t], seat=Seat(), security=seat_security,
+                                           sync=sync, handle_signals=False, sessions=sessions))
+    await asyncio.sleep(1.0)
+    with publishing(publisher):
+        show_task, _ = await start_session(None, [url.replace("tls://", "nats://")], audio=SONG, mode="audio")
+    try:
+        await wait_for(lambda: sessions or seat_task.done(), 10)
+        await asyncio.sleep(seconds)
+        source = sessions[-1][1]
+    finally:
+        await stop(seat_task)
+        await stop(show_task)
+    return tap, source.sync
+
+
+def test_a_seat_locks_on_the_heard_music_and_plays_each_frame_when_it_is_heard(nats_server, tmp_path):
+    heard = heard_file(tmp_path, real_song(seconds=20.0))
+    tap, sync = asyncio.run(asyncio.wait_for(show_and_seat(f"{nats_server.url}/synced", heard), 60))
+    truth = sync.audio.started + LEAD_S     # local time minus media time of what the seat heard
+    locked = [(at, s) for at, _, s in sync.estimates if s.state == "locked"]
+    assert locked, "the seat never locked"
+    assert locked[0][0] - truth < 5.0        # within 5 s of the music starting
+    assert all(abs(s.offset_s - truth) < 0.010 for _, s in locked)
+    assert sync.state.state == "locked" and sync.state.confidence > 0.4
+    assert 0.0 < sync.delay_behind_edge < 5.0
+    played = np.array([(w, t) for w, t in tap.frames if w > locked[0][0] + 0.5])
+    assert len(played) > 200
+    skew = played[:, 0] - (played[:, 1] + truth)
+    # the engine hands a frame on as it becomes due; a loaded machine can hold the loop up now and then
+    assert abs(np.median(skew)) < 0.015
+    assert np.percentile(np.abs(skew), 90) < 0.050
+
+
+@pytest.mark.parametrize("unsynced", ["delay", "silent"])
+def test_a_seat_hearing_another_song_never_locks_and_plays_as_the_user_chose(nats_server, tmp_path, unsynced):
+    heard = heard_file(tmp_path, real_song("lets_go_fishin.ogg", 20.0))
+    tap, sync = asyncio.run(asyncio.wait_for(show_and_seat(f"{nats_server.url}/other{unsynced}", heard,
+                                                              unsynced=unsynced, seconds=12.0), 60))
+    assert all(s.state == "searching" for _, _, s in sync.estimates)
+    assert sync.tracker.locks == 0
+    if unsynced == "delay":
+        assert len(tap.frames) > 300      # the manual delay (0 ms): every frame plays at the live edge
+    else:
+        assert tap.frames == []           # the vest stays still
+
+
+def test_a_signed_show_carries_a_signed_reference_that_a_checking_seat_locks_on(tmp_path):
+    venue = Venue(tmp_path, show="signedsync").__enter__()
+    try:
+        heard = heard_file(tmp_path, real_song(seconds=14.0))
+        url = f"{venue.url}/signedsync"
+        tap, sync = asyncio.run(asyncio.wait_for(show_and_seat(url, heard, seconds=11.0,
+                                                                  publisher=venue.publisher(),
+                                                                  seat_security=venue.seat()), 60))
+    finally:
+        venue.__exit__()
+    assert sync.faults == {}
+    assert sync.tracker.locks == 1
+    assert abs(sync.state.offset_s - (sync.audio.started + LEAD_S)) < 0.010
+
+
+def test_a_forged_reference_is_dropped_and_counted(tmp_path):
+    heard = heard_file(tmp_path, np.zeros(SR))
+    venue_key, other_key = Ed25519PrivateKey.generate(), Ed25519PrivateKey.generate()
+    sync = SeatSync(SyncSettings(input=f"file:{heard}"))
+    sync.trust = SeatTrust("s", venue_key.public_key())
+    sync.follow(1)
+    batch = encode_batch(1, 1, 0.0, 0, np.full((50, 5), 100, dtype=np.uint8))
+
+    sync.receive(batch, 1.0)                                                     # unsigned
+    sync.receive(VenueSigner("s", other_key).seal("sync", batch), 1.0)           # someone else's key
+    sync.receive(VenueSigner("s", venue_key).seal("frame", batch), 1.0)          # a frame's signature
+    sync.receive(VenueSigner("s", venue_key).seal("sync", batch), 1.0)           # the venue's
+    sync.receive(VenueSigner("s", venue_key).seal("sync", batch), 1.0)           # replayed
+    sync.audio.close()
+    assert sync.faults == {"bad_signature": 3, "replayed": 1}
+    assert np.isfinite(sync.store.span(0, 50)).all()
+
+
+def test_list_audio_inputs_works_without_a_show_or_a_sound_card():
+    result = CliRunner().invoke(command, ["--list-audio-inputs"])
+    assert result.exit_code == 0, result.output
+    assert "file:PATH" in result.output and "raw:" in result.output
+
+
+def test_sync_options_on_the_command_line(tmp_path):
+    runner = CliRunner()
+    base = ["nats://127.0.0.1:1/x", "--unsigned", "--sink", "player"]
+    result = runner.invoke(command, base + ["--audio-input", "mic"])
+    assert result.exit_code == 2 and "--sync audio" in result.output
+    result = runner.invoke(command, base + ["--sync", "audio", "--sync-max-delay", "100"])
+    assert result.exit_code != 0 and "--sync-max-delay" in str(result.exception or result.output)
+
+
+def test_a_device_that_is_not_there_is_one_line_from_the_real_command():
+    """With or without a sound system, a device that does not exist stops the seat with one line (no traceback),
+    before it connects anywhere."""
+    env = {**os.environ, "PYTHONPATH": str(Path(hapmotion.__file__).parents[1])}
+    done = subprocess.run([sys.executable, "-m", "hapmotion", "listen", "nats://127.0.0.1:1/x", "--unsigned",
+                           "--sink", "player", "--sync", "audio", "--audio-input", "device:no such device 81b2"],
+                          capture_output=True, text=True, timeout=60, env=env)
+    lines = [ln for ln in done.stderr.splitlines() if ln.strip()]
+    assert done.returncode != 0
+    assert len(lines) == 1 and "audio" in lines[0] and "Traceback" not in done.stderr, done.stderr

@@ -1,0 +1,279 @@
+"""Audio synchronisation without a network: the band levels (streamed and whole agree, a sine reads its level), the
+delay estimator on known delays (synthetic and real music, a codec-like noisy copy), drift and jumps through the
+tracker, and the honest failures (silence, a speech-like signal, a different song) that must never lock; the
+reference batches and the audio inputs."""
+
+from __future__ import annotations
+
+import math
+import os
+import threading
+
+import numpy as np
+import pytest
+import soundfile as sf
+from support.sync_signals import SR, noisy, played, real_song, song, speech_like
+
+from hapmotion.audience.seat_sync import HeardClock, ReferenceStore, SyncSettings
+from hapmotion.audience.sync_estimator import estimate
+from hapmotion.audience.sync_reference import ReferencePublisher, SongReference, decode_batch, encode_batch
+from hapmotion.audience.sync_tracker import DelayTracker
+from hapmotion.audio.inputs import FileInput, PipeInput, open_input
+from hapmotion.audio.sync_features import (BANDS, N_BANDS, RATE, LevelStream, dequantise, quantise,
+                                           signal_levels)
+from hapmotion.errors import UsageError
+
+MAX_DELAY = 5.0
+
+
+def follow(heard: np.ndarray, source: np.ndarray, step_s: float = 0.25, window_s: float = 3.0):
+    """Run the seat's matching over ``heard`` (local time = its own sample time) against the reference levels of
+    ``source`` (media time = its sample time), as the seat does: levels streamed in 20 ms blocks, a 3 s window every
+    ``step_s``, offsets from -0.25 s to ``MAX_DELAY``. Returns [(local time, Estimate or None, SyncState)]."""
+    ref = dequantise(quantise(signal_levels(source, SR)))
+    stream = LevelStream(SR)
+    heard_levels = np.concatenate([stream.push(heard[k:k + 441]) for k in range(0, heard.size, 441)])
+    heard_levels = dequantise(quantise(heard_levels))
+    tracker = DelayTracker()
+    out = []
+    w, step = int(window_s * RATE), int(step_s * RATE)
+    for end in range(int(1.5 * RATE), heard_levels.shape[0], step):
+        n = min(end, w)
+        t_heard = (end - n) / RATE
+        first = int(math.floor((t_heard - MAX_DELAY) * RATE))
+        span = n + int((MAX_DELAY + 0.25) * RATE)
+        idx = np.arange(first, first + span)
+        r = np.full((span, N_BANDS), np.nan)
+        ok = (idx >= 0) & (idx < ref.shape[0])
+        r[ok] = ref[idx[ok]]
+        est = estimate(heard_levels[end - n:end], t_heard, r, first / RATE)
+        at = t_heard + (n - 1) / RATE
+        out.append((at, est, tracker.update(est, at)))
+    return out, tracker
+
+
+def delayed(source: np.ndarray, delay_s: float, seconds: float, drift: float = 0.0) -> np.ndarray:
+    tau = np.arange(int(seconds * SR)) / SR
+    return played(source, (tau - delay_s) * (1.0 + drift))
+
+
+# ---------------------------------------------------------------------------------------------------- levels
+def test_a_full_scale_sine_reads_zero_db_in_its_band_and_silence_reads_the_floor():
+    t = np.arange(SR) / SR
+    levels = signal_levels(np.sin(2 * np.pi * 700.0 * t), SR)
+    band = next(i for i, (lo, hi) in enumerate(BANDS) if lo <= 700 < hi)
+    assert np.allclose(levels[10:-10, band], 0.0, atol=0.3)
+    assert (levels[10:-10, [b for b in range(N_BANDS) if b != band]] < -20).all()
+    assert (signal_levels(np.zeros(SR), SR) == -100.0).all()
+    assert np.abs(dequantise(quantise(levels)) - levels).max() <= 0.25 + 1e-9
+
+
+def test_streamed_levels_equal_the_whole_signal_levels_whatever_the_block_size():
+    x = song(3, 4.0)
+    whole = signal_levels(x, SR)
+    for block in (1, 441, 1000, 12345):
+        stream = LevelStream(SR)
+        parts = np.concatenate([stream.push(x[k:k + block]) for k in range(0, x.size, block)])
+        assert parts.shape[0] >= whole.shape[0] - 3
+        n = min(parts.shape[0], whole.shape[0])
+        assert np.allclose(parts[:n], whole[:n], atol=1e-9)
+
+
+# ---------------------------------------------------------------------------------------------------- estimator
+@pytest.mark.parametrize("delay_s", [0.3, 1.234, 2.95])
+def test_known_delays_of_synthetic_music_are_found_within_5_ms(delay_s):
+    src = song(7, 20.0)
+    history, tracker = follow(delayed(src, delay_s, 14.0), src)
+    found = [e for _, e, _ in history if e is not None and e.score >= 0.4]
+    assert len(found) >= 20
+    assert max(abs(e.offset_s - delay_s) for e in found) < 0.005
+    assert tracker.state.state == "locked" and abs(tracker.state.offset_s - delay_s) < 0.005
+
+
+@pytest.mark.parametrize("delay_s", [0.45, 2.2])
+def test_known_delays_of_a_real_song_through_a_noisy_copy_are_found(delay_s):
+    src = real_song(seconds=30.0)
+    heard = noisy(delayed(src, delay_s, 24.0), 10.0, seed=1)
+    history, tracker = follow(heard, src)
+    locked = [(at, s) for at, _, s in history if s.state == "locked"]
+    assert locked, "never locked"
+    assert locked[0][0] - delay_s < 6.0  # locked within 6 s of the music reaching the seat
+    assert all(abs(s.offset_s - delay_s) < 0.02 for _, s in locked)
+
+
+def test_drift_of_a_tenth_of_a_percent_is_followed():
+    src = song(11, 50.0)
+    drift = 1e-3  # the stream plays 0.1 % fast: the offset shrinks by 1 ms a second
+    history, tracker = follow(delayed(src, 1.5, 45.0, drift=drift), src)
+    # heard at local t: media (t - 1.5) * (1 + drift); offset = t - media
+    errors = [s.offset_s - (at - (at - 1.5) * (1 + drift)) for at, _, s in history if s.state == "locked" and at > 20]
+    assert len(errors) > 50
+    assert max(abs(e) for e in errors) < 0.010
+    assert tracker.state.drift == pytest.approx(-drift, abs=4e-4)
+
+
+@pytest.mark.parametrize("jump_s", [1.0, -1.0])
+def test_a_1_s_jump_is_relocked_within_3_s_and_counted(jump_s):
+    src = song(5, 40.0)
+    tau = np.arange(int(32 * SR)) / SR
+    media = np.where(tau < 16.0, tau - 2.0, tau - 2.0 - jump_s)
+    history, tracker = follow(played(src, media), src)
+    after = [(at, s) for at, _, s in history if at >= 16.0 and s.state == "locked"
+             and abs(s.offset_s - (2.0 + jump_s)) < 0.01]
+    assert after and after[0][0] - 16.0 <= 3.0
+    assert tracker.jumps == 1
+    assert all(abs(s.offset_s - 2.0) < 0.01 for at, _, s in history if 8 < at < 16.0)
+
+
+def test_silence_gives_no_estimate_and_never_locks():
+    history, tracker = follow(np.zeros(int(12 * SR)), song(1, 20.0))
+    assert all(e is None for _, e, _ in history)
+    assert tracker.locks == 0 and tracker.state.state == "searching"
+
+
+@pytest.mark.parametrize("heard", ["speech", "other song", "other real song", "noise"])
+def test_what_is_not_the_venues_music_never_locks(heard):
+    src = real_song(seconds=40.0)
+    signal = {"speech": lambda: noisy(speech_like(2, 35.0), 10.0, 3),
+              "other song": lambda: delayed(song(21, 40.0), 1.0, 35.0),
+              "other real song": lambda: delayed(real_song("lets_go_fishin.ogg", 40.0), 1.0, 35.0),
+              "noise": lambda: noisy(np.zeros(int(35 * SR)), 0.0, 4) * 0.0 + np.random.default_rng(0).normal(
+                  size=int(35 * SR)) * 0.05}[heard]()
+    history, tracker = follow(signal, src)
+    assert tracker.locks == 0, [(round(at, 2), round(e.score, 2)) for at, e, s in history if e and e.score > 0.3]
+    assert all(s.state == "searching" for _, _, s in history)
+
+
+def test_the_tracker_loses_a_song_that_stops_and_holds_then_searches():
+    src = song(9, 30.0)
+    tau = np.arange(int(60 * SR)) / SR
+    heard = played(src, tau - 1.0) * (tau < 20.0)   # the music stops at 20 s
+    history, tracker = follow(heard, src)
+    states = {s.state for at, _, s in history if 10 < at < 20}
+    assert states == {"locked"}
+    assert any(s.state == "lost" and abs(s.offset_s - 1.0) < 0.01 for at, _, s in history if 26 < at < 44)
+    assert history[-1][2].state == "searching"  # held 5 + 20 s, then searching again (the fallback plays)
+
+
+# ---------------------------------------------------------------------------------------------------- reference
+def test_reference_batches_round_trip_and_malformed_ones_are_refused():
+    levels = np.arange(50 * N_BANDS, dtype=np.uint8).reshape(50, N_BANDS)
+    data = encode_batch(7, 3, 12.5, 1200, levels)
+    batch = decode_batch(data)
+    assert (batch.epoch, batch.seq, batch.sent_t, batch.first_hop) == (7, 3, 12.5, 1200)
+    assert np.array_equal(batch.levels, levels)
+    for bad in (data[:20], data[:-1], b"XX" + data[2:], data[:28] + b"\x00\x00" + data[30:]):
+        with pytest.raises(ValueError):
+            decode_batch(bad)
+
+
+def test_the_publisher_sends_the_songs_levels_ahead_and_restarts_after_a_media_jump(tmp_path):
+    x = song(4, 6.0)
+    path = tmp_path / "song.wav"
+    sf.write(path, x, SR)
+    pub = ReferencePublisher(SongReference(path, offset_s=0.0), epoch=5)
+    store = ReferenceStore(30.0)
+    sent = 0
+    for k in range(0, 60 * 4):     # 4 s of frames at 60 Hz
+        data = pub.next_batch(k / 60)
+        if data is not None:
+            b = decode_batch(data)
+            assert b.first_hop / RATE <= k / 60 + 1.0  # at most a batch and its lead ahead
+            store.put(b.first_hop, b.levels)
+            sent += 1
+    assert 8 <= sent <= 10  # two a second
+    want = dequantise(quantise(signal_levels(sf.read(path)[0], SR)))[:400]
+    assert np.abs(store.span(0, 400) - want).max() <= 0.5   # one step: the file is read as float32
+    back = decode_batch(pub.next_batch(1.0))   # the replay starts again at 1 s
+    assert back.first_hop == 100
+
+
+# ---------------------------------------------------------------------------------------------------- inputs
+def test_file_input_plays_in_real_time_and_ends(tmp_path):
+    path = tmp_path / "a.wav"
+    sf.write(path, np.full(int(0.3 * SR), 0.25), SR)
+    inp = open_input(f"file:{path}")
+    assert isinstance(inp, FileInput)
+    got, stamps = [], []
+    while True:
+        block, t = inp.read()
+        if block is None:
+            break
+        got.append(block)
+        stamps.append(t)
+    inp.close()
+    assert sum(b.size for b in got) == int(0.3 * SR)
+    assert stamps[-1] - inp.started == pytest.approx(0.3, abs=0.002)   # stamped by the sample clock
+
+
+def test_raw_pipe_input_reads_s16_stereo_and_stamps_arrival():
+    r, w = os.pipe()
+    inp = PipeInput(f"raw:/dev/fd/{r}?rate=8000&channels=2", "raw", f"/dev/fd/{r}?rate=8000&channels=2")
+    pcm = np.array([[16384, -16384], [8192, 8192]] * 100, dtype="<i2")
+
+    def write() -> None:
+        with os.fdopen(w, "wb") as f:
+            f.write(pcm.tobytes()[:7])     # a frame split across writes
+            f.flush()
+            f.write(pcm.tobytes()[7:])
+
+    threading.Thread(target=write).start()
+    blocks = []
+    while True:
+        block, _ = inp.read()
+        if block is None:
+            break
+        blocks.append(block)
+    inp.close()
+    os.close(r)
+    x = np.concatenate(blocks)
+    assert x.size == 200
+    assert np.allclose(x[:2], [0.0, 0.25])  # the mean of the channels, full scale 1
+
+
+@pytest.mark.parametrize("spec", ["nonsense", "file:", "raw:-?rate=abc", "raw:-?format=u8", "raw:-?speed=2",
+                                  "device:no such device anywhere 9f3c"])
+def test_bad_audio_inputs_are_one_line_usage_errors(spec, tmp_path):
+    with pytest.raises(UsageError) as info:
+        open_input(spec)
+    assert "\n" not in str(info.value)
+
+
+def test_heard_clock_takes_the_earliest_arrival():
+    clock = HeardClock(1000.0)
+    assert clock.push(100, 10.1) == pytest.approx(10.0)
+    assert clock.push(100, 10.25) == pytest.approx(10.0)    # arrived 50 ms late: the earlier anchor stands
+    assert clock.push(100, 10.29) == pytest.approx(9.99)    # arrived earlier than ever: a new anchor
+
+
+def test_sync_settings_are_checked():
+    with pytest.raises(UsageError):
+        SyncSettings(unsynced="maybe")
+    with pytest.raises(UsageError):
+        SyncSettings(max_delay_s=0.2)
+
+
+def test_a_wav_stream_from_a_pipe_is_read_with_its_own_rate():
+    import io
+
+    r, w = os.pipe()
+    data = io.BytesIO()
+    sf.write(data, np.full(8000, 0.5), 8000, format="WAV", subtype="PCM_16")
+
+    def write() -> None:
+        with os.fdopen(w, "wb") as f:
+            f.write(data.getvalue())
+
+    threading.Thread(target=write).start()
+    inp = open_input(f"wav:/dev/fd/{r}")
+    assert inp.sample_rate == 8000.0
+    got = []
+    while True:
+        block, _ = inp.read()
+        if block is None:
+            break
+        got.append(block)
+    inp.close()
+    os.close(r)
+    x = np.concatenate(got)
+    assert x.size == 8000 and np.allclose(x, 0.5, atol=1e-4)
