@@ -17,13 +17,15 @@ Figures, per motor and frame unless said: the mean absolute difference (percenta
 over motors) within 10 % of the 60 Hz total where that is lit; the side (the locus's left or right) the same where
 the 60 Hz locus is clearly on one side (over half a pitch off the midline); the kicks (a rise of the vest's RMS
 drive of 0.1 within one frame: the rise of ``benchmarks/feel.py``'s kick, on the rows as sent) found within 2
-frames. Targets: the stated tolerance (:data:`TOLERANCE`, held by tests/test_audience_compact.py), printed after the table.
+frames. Targets: the stated tolerance (:data:`TOLERANCE`, held by tests/test_audience_compact.py), printed after
+the table.
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+
 import numpy as np
 
 import hapmotion
@@ -92,8 +94,8 @@ def lines(frames: list[WireFrame]) -> list[WireFrame]:
     """The frames between published ones as straight lines (skeleton and music), then each published one."""
     out = [frames[0]]
     for a, b in zip(frames, frames[1:]):
-        out.append(dataclasses.replace(b, media_t=0.5 * (a.media_t + b.media_t), skeleton=0.5 * (a.skeleton + b.skeleton),
-                                       music=0.5 * (a.music + b.music)))
+        out.append(dataclasses.replace(b, media_t=0.5 * (a.media_t + b.media_t),
+                                       skeleton=0.5 * (a.skeleton + b.skeleton), music=0.5 * (a.music + b.music)))
         out.append(b)
     return out
 

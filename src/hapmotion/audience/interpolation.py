@@ -1,14 +1,14 @@
 """A seat's frames between the published ones (sans-I/O): a show published at a fraction of its render rate (a
 ``nats://`` sink's ``rate=30`` for a 60 fps show) is rendered at the full rate, the skeleton interpolated by a cubic
-through four consecutive published frames and the music linearly between two.
+through four consecutive published frames and the music row held from the earlier of the two around it.
 
 Why a cubic and not a straight line: the renderer chooses the active hand and boosts by the hands' acceleration.
 Straight lines between frames put all of a 30 Hz stream's acceleration on the published frames and none between
 them, which changed the hand (and the side of the vest) a seat felt: on real recordings the vest's felt locus was
-on the other side of the 60 Hz render's in 21-45 % of the frames with a clear side. The cubic through two frames
+on the other side of the 60 Hz render's in 21-46 % of the frames with a clear side. The cubic through two frames
 on either side carries the acceleration between them (docs/audience.md, "Publishing below the render rate", has
-the figures). The music is a row of intensities with steps at the beats: a cubic would overshoot them, a line
-cannot leave 0..100.
+the figures). The music is a row of intensities with steps at the beats: a line halves a kick's step over two
+frames and a cubic overshoots it, so the row is held (a kick comes at most one frame late).
 
 The frames between k-1 and k need frame k+1, so every frame plays one render interval plus one publish interval
 later than it would without interpolation (``delay_s``: 50 ms for 60 fps published at 30 Hz); the frames between
