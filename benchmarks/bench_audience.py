@@ -85,6 +85,10 @@ P99_TARGET_MS = 50.0
 CLUSTER_TARGET = 2.5
 
 
+IDLE_S = 3.0
+"""Seconds of the servers' CPU measured before the show starts, the subscribers connected (its fixed cost)."""
+
+
 def cpu_of(pid: int) -> float:
     """User + system CPU seconds of a process so far (Linux /proc)."""
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
@@ -279,8 +283,9 @@ def publisher_args(rate: float, frames: str) -> tuple[str, ...]:
 def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connection: int,
         venue: str | None = None, frames: str = "full", music: bool = True) -> dict:
     """One measurement at publish rate ``fps`` with ``frames`` (``full``: today's, ``compact``): subscribers
-    (spread evenly over ``servers``) connect first, then the seats (on the last server) and the publisher (on the
-    first) start, 1.5 s to settle (seats fetch the description), then ``seconds`` measured in every role at once.
+    (spread evenly over ``servers``) connect first (the servers' CPU then measured for :data:`IDLE_S`), then the
+    seats (on the last server) and the publisher (on the first) start, 1.5 s to settle (seats fetch the
+    description), then ``seconds`` measured in every role at once.
     Returns the roles' results and, per server, its seats, deliveries and CPU."""
     shares = [n // len(servers) + (1 if i < n % len(servers) else 0) for i in range(len(servers))]
     extra = ("--venue", venue) if venue else ()
@@ -293,6 +298,11 @@ def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connectio
     try:
         for proc in procs:  # every subscriber connected before the show starts (TLS handshakes are not timed)
             wait_ready(proc)
+        # the servers' CPU with every subscriber connected and nothing published: the part of their cost that does
+        # not depend on the frames (the connections' upkeep), which a lower rate divides among fewer frames
+        idle0, i0 = [cpu_of(srv.proc.pid) for srv in servers], time.perf_counter()
+        time.sleep(IDLE_S)
+        idle = [(cpu_of(srv.proc.pid) - c0) / (time.perf_counter() - i0) for srv, c0 in zip(servers, idle0)]
         seats = spawn("--role", "seats", "--url", seat_url(servers[-1]), "--k", str(k), *extra)
         procs.append(seats)
         pub = spawn("--role", "publisher", "--url", servers[0].url, *publisher_args(fps, frames), *extra,
@@ -322,6 +332,7 @@ def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connectio
         full = k if i == len(servers) - 1 else 0
         delivered = (part["received"] / part["seconds"] if part else 0.0) + full * fps
         out["servers"].append({"seats": shares[i] + full, "delivered_per_s": delivered, "cpu_per_s": cpu[i],
+                               "idle_cpu_per_s": idle[i],
                                "cpu_per_seat_frame_us": cpu[i] / max(delivered, 1e-9) * 1e6})
     return out
 
@@ -375,7 +386,8 @@ def report(n: int, fps: float, r: dict, per_connection: int, frames: str = "full
           "[target: independent of N]")
     for i, srv in enumerate(r["servers"]):
         print(f"  nats-server {i}: {srv['seats']} seats, {srv['delivered_per_s']:,.0f} frames/s delivered, CPU "
-              f"{srv['cpu_per_s'] * 100:.1f} % of a core = {srv['cpu_per_seat_frame_us']:.1f} us per seat-frame")
+              f"{srv['cpu_per_s'] * 100:.1f} % of a core = {srv['cpu_per_seat_frame_us']:.1f} us per seat-frame "
+              f"(with the subscribers connected and nothing published: {srv['idle_cpu_per_s'] * 100:.1f} % of a core)")
     print(f"  server CPU per seat-frame {s['per_frame_us']:.1f} us -> {s['seats_per_core']:,.0f} seats per server "
           f"core at {fps:g} Hz  [reported]")
     for i, part in r["subscribers"].items():
