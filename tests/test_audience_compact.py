@@ -312,3 +312,18 @@ def test_a_publisher_frames_and_rate_are_checked():
                                   ("compact", -30.0, "rate=-30")]:
         with pytest.raises(UsageError, match=f"--sink X: {message}"):
             frames_choice(frames, rate, 60.0, "--sink X")
+
+
+def test_the_seat_s_delay_absorbs_the_interpolation_s(clips):
+    """A 30 Hz stream's frames wait 50 ms for the next one: a seat 150 ms behind the venue (its video stream) plays
+    them at exactly its delay; a seat 20 ms behind plays them 30 ms later; at 60 Hz nothing waits."""
+    from hapmotion.audience.listener import AudienceSource
+
+    motion = clips["01_01.bvh"]
+    half, _ = venue_show(motion, SONG, frames="compact", rate=30.0)
+    full, _ = venue_show(motion, SONG)
+    extra = lambda desc, delay: AudienceSource(None, desc, Seat(delay_s=delay), mode="motion",  # noqa: E731
+                                               music=None).interpolation_extra_s
+    assert extra(half, 0.15) == 0.0 and extra(half, 0.05) == pytest.approx(0.0, abs=1e-12)
+    assert extra(half, 0.02) == pytest.approx(0.03) and extra(half, 0.0) == pytest.approx(0.05)
+    assert extra(full, 0.0) == 0.0
