@@ -24,7 +24,8 @@ subscriber, as every real seat has its own; with three servers spread evenly ove
 ``bench_audience_load.LightConnection``; frame age = arrival wall time minus the publisher's wall stamp; messages
 delivered against frames sent x N = loss), and the full seats (``hapmotion.audience.listen``, each rendering to
 its own fake bHaptics Player; frame age = the moment the encoded frame is written to the Player's socket minus
-the publisher's stamp of that frame's media time, delay 0).
+the publisher's stamp of that frame's media time, delay 0, less the interpolation's planned delay at 30 Hz: 50 ms
+that a seat's ``--delay`` absorbs, printed beside it).
 
 Frames (``--frames``): today's (``full``: version 1, all 32 joints and the music row as float32, the show rendered
 and published at the publish rate, 60 or 30 fps, as ``live --fps RATE`` does) and ``compact`` (version 2: the 7
@@ -82,6 +83,10 @@ SUBS_PER_CONNECTION = 1
 """One connection per subscriber by default: a real seat is its own connection."""
 P99_TARGET_MS = 50.0
 CLUSTER_TARGET = 2.5
+
+
+IDLE_S = 3.0
+"""Seconds of the servers' CPU measured before the show starts, the subscribers connected (its fixed cost)."""
 
 
 def cpu_of(pid: int) -> float:
@@ -176,6 +181,7 @@ async def role_seats(url: str, k: int, venue: str | None) -> dict:
     from hapmotion.live.sinks import PlayerSdk1Sink
 
     ages: list[float] = []
+    planned: set[float] = set()
     players = [await FakePlayerSdk1().start() for _ in range(k)]
 
     def timed_player(port: int):
@@ -185,10 +191,14 @@ async def role_seats(url: str, k: int, venue: str | None) -> dict:
 
             def timed(received, now, interval, held=None):
                 record(received, now, interval, held)
-                walls = [s.wall_of_submit for mine in per_seat for _, s in mine]
-                for w in walls:
-                    if received in w:  # the frame's age when written to the Player's socket
-                        ages.append(time.time() - (time.perf_counter() - now) - w[received])
+                for src in [s for mine in per_seat for _, s in mine]:
+                    w = src.wall_of_submit
+                    if received in w:  # the frame's age when written to the Player's socket, less the
+                        # interpolation's planned delay (a 30 Hz stream's frames wait for the next one on purpose;
+                        # a seat's --delay absorbs it): the network's and the seat's own share
+                        ages.append(time.time() - (time.perf_counter() - now) - w[received]
+                                    - src.interpolation_extra_s)
+                        planned.add(src.interpolation_extra_s)
                         break
             sink.stats.record = timed
             return sink
@@ -221,7 +231,7 @@ async def role_seats(url: str, k: int, venue: str | None) -> dict:
         await p.stop()
     return {"k": k, "rendered_min": min(rendered) if rendered else 0, "stale": stale,
             "age_p50_ms": pct(ages, 50), "age_p99_ms": pct(ages, 99), "cpu_per_s_each": cpu / seconds / k,
-            "player_errors": sum(len(p.errors) for p in players),
+            "planned_ms": 1e3 * max(planned, default=0.0), "player_errors": sum(len(p.errors) for p in players),
             "player_error_kinds": sorted({e for p in players for e in p.errors})[:3]}
 
 
@@ -273,8 +283,9 @@ def publisher_args(rate: float, frames: str) -> tuple[str, ...]:
 def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connection: int,
         venue: str | None = None, frames: str = "full", music: bool = True) -> dict:
     """One measurement at publish rate ``fps`` with ``frames`` (``full``: today's, ``compact``): subscribers
-    (spread evenly over ``servers``) connect first, then the seats (on the last server) and the publisher (on the
-    first) start, 1.5 s to settle (seats fetch the description), then ``seconds`` measured in every role at once.
+    (spread evenly over ``servers``) connect first (the servers' CPU then measured for :data:`IDLE_S`), then the
+    seats (on the last server) and the publisher (on the first) start, 1.5 s to settle (seats fetch the
+    description), then ``seconds`` measured in every role at once.
     Returns the roles' results and, per server, its seats, deliveries and CPU."""
     shares = [n // len(servers) + (1 if i < n % len(servers) else 0) for i in range(len(servers))]
     extra = ("--venue", venue) if venue else ()
@@ -287,6 +298,11 @@ def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connectio
     try:
         for proc in procs:  # every subscriber connected before the show starts (TLS handshakes are not timed)
             wait_ready(proc)
+        # the servers' CPU with every subscriber connected and nothing published: the part of their cost that does
+        # not depend on the frames (the connections' upkeep), which a lower rate divides among fewer frames
+        idle0, i0 = [cpu_of(srv.proc.pid) for srv in servers], time.perf_counter()
+        time.sleep(IDLE_S)
+        idle = [(cpu_of(srv.proc.pid) - c0) / (time.perf_counter() - i0) for srv, c0 in zip(servers, idle0)]
         seats = spawn("--role", "seats", "--url", seat_url(servers[-1]), "--k", str(k), *extra)
         procs.append(seats)
         pub = spawn("--role", "publisher", "--url", servers[0].url, *publisher_args(fps, frames), *extra,
@@ -316,6 +332,7 @@ def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connectio
         full = k if i == len(servers) - 1 else 0
         delivered = (part["received"] / part["seconds"] if part else 0.0) + full * fps
         out["servers"].append({"seats": shares[i] + full, "delivered_per_s": delivered, "cpu_per_s": cpu[i],
+                               "idle_cpu_per_s": idle[i],
                                "cpu_per_seat_frame_us": cpu[i] / max(delivered, 1e-9) * 1e6})
     return out
 
@@ -369,7 +386,8 @@ def report(n: int, fps: float, r: dict, per_connection: int, frames: str = "full
           "[target: independent of N]")
     for i, srv in enumerate(r["servers"]):
         print(f"  nats-server {i}: {srv['seats']} seats, {srv['delivered_per_s']:,.0f} frames/s delivered, CPU "
-              f"{srv['cpu_per_s'] * 100:.1f} % of a core = {srv['cpu_per_seat_frame_us']:.1f} us per seat-frame")
+              f"{srv['cpu_per_s'] * 100:.1f} % of a core = {srv['cpu_per_seat_frame_us']:.1f} us per seat-frame "
+              f"(with the subscribers connected and nothing published: {srv['idle_cpu_per_s'] * 100:.1f} % of a core)")
     print(f"  server CPU per seat-frame {s['per_frame_us']:.1f} us -> {s['seats_per_core']:,.0f} seats per server "
           f"core at {fps:g} Hz  [reported]")
     for i, part in r["subscribers"].items():
@@ -380,7 +398,8 @@ def report(n: int, fps: float, r: dict, per_connection: int, frames: str = "full
               f"({part['tls_connections']} TLS, {part['retries']} made again), {part['bytes_per_frame']} bytes per "
               "frame")
     print(f"  full seats: frame age at the Player p50 {q['age_p50_ms']:.1f} ms p99 {q['age_p99_ms']:.1f} ms "
-          f"[target p99 < {P99_TARGET_MS:g} ms]; CPU {q['cpu_per_s_each'] * 100:.1f} % of a core each; "
+          f"[target p99 < {P99_TARGET_MS:g} ms] beyond the interpolation's planned {q['planned_ms']:.1f} ms; "
+          f"CPU {q['cpu_per_s_each'] * 100:.1f} % of a core each; "
           f"{q['rendered_min']} frames rendered (fewest), {q['stale']} stale, {q['player_errors']} Player errors "
           f"{q['player_error_kinds'] or ''}")
     return s

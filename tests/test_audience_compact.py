@@ -8,6 +8,8 @@ from __future__ import annotations
 import dataclasses
 import json
 import struct
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,6 +29,11 @@ from hapmotion.renderer.params import METHODS, PRESETS
 from hapmotion.show import Show
 from hapmotion.show.comfort import Comfort
 from hapmotion.skeleton.joints import JOINT_INDEX, JOINTS
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # the benchmarks package lives beside tests/ (python -m pytest puts it there too)
+    sys.path.insert(0, str(ROOT))
+from benchmarks import bench_audience_rate as rate_bench  # noqa: E402
 
 SONG = AUDIO / "vibe_ace.ogg"
 ROWS = np.array([JOINT_INDEX[j] for j in compact_joints()])
@@ -168,56 +175,83 @@ def wf(seq, t, x, music=None):
 
 
 def test_upsampler_by_hand():
+    """x = seq^3 along a 30 Hz stream: the cubic through four frames gives it back exactly between them; three
+    frames (a run's start, before a gap, the end) give the quadratic through them; the music is held."""
     up = Upsampler(60.0, 30.0)
-    assert up.delay_s == pytest.approx(1 / 60)
-    assert [f.media_t for f in up.feed(wf(0, 0.0, 1.0, [0.0]))] == [0.0]
-    out = up.feed(wf(1, 1 / 30, 3.0, [50.0]))
+    assert up.delay_s == pytest.approx(1 / 60 + 1 / 30)       # the frames between k-1 and k wait for k+1
+    assert up.feed(wf(0, 0.0, 0.0, [0.0])) == []
+    assert [f.media_t for f in up.feed(wf(1, 1 / 30, 1.0, [50.0]))] == [0.0]
+    out = up.feed(wf(2, 2 / 30, 8.0, [10.0]))
     assert [f.media_t for f in out] == pytest.approx([1 / 60, 1 / 30])
-    assert out[0].skeleton[0, 0] == 2.0 and out[0].music[0] == 25.0 and out[0].wall_t == pytest.approx(100 + 1 / 60)
-    assert out[1].skeleton[0, 0] == 3.0
-    assert len(up.feed(wf(3, 3 / 30, 5.0))) == 1            # a lost frame: no line drawn across the gap
-    assert len(up.feed(wf(4, 10.0, 5.0))) == 1              # a clock jump
-    nan = wf(5, 10.0 + 1 / 30, 7.0)
-    nan.skeleton[3] = np.nan
+    # the quadratic through 0, 1, 8 at 0.5: 0.375 * 0 + 0.75 * 1 - 0.125 * 8
+    assert out[0].skeleton[0, 0] == pytest.approx(-0.25) and out[0].music[0] == 0.0
+    assert out[0].wall_t == pytest.approx(100 + 1 / 60) and out[1].skeleton[0, 0] == 1.0
+    out = up.feed(wf(3, 3 / 30, 27.0, [10.0]))
+    assert out[0].skeleton[0, 0] == pytest.approx(1.5 ** 3) and out[0].music[0] == 50.0   # the cubic: exact
+    assert out[1].skeleton[0, 0] == 8.0
+    out = up.feed(wf(5, 5 / 30, 125.0))                      # a lost frame: 2..3 from 1, 2, 3, then 3; no bridge
+    assert [f.media_t for f in out] == pytest.approx([2.5 / 30, 3 / 30])
+    assert out[0].skeleton[0, 0] == pytest.approx(-0.125 * 1 + 0.75 * 8 + 0.375 * 27)
+    assert [f.skeleton[0, 0] for f in up.feed(wf(6, 6 / 30, 216.0))] == [125.0]
+    out = up.feed(wf(7, 10.0, 0.0))                          # a clock jump: 5..6 as a line (two frames), then 6
+    assert [f.skeleton[0, 0] for f in out] == [170.5, 216.0]
+    up.feed(wf(8, 10.0 + 1 / 30, 2.0))
+    nan = wf(9, 10.0 + 2 / 30, 4.0)
+    nan.skeleton[3] = np.nan                                 # a joint the cubic would need, not tracked
+    nan.skeleton[4] = 6.0                                    # 0, 2, 6 elsewhere: the quadratic
     mid = up.feed(nan)[0].skeleton
-    assert np.isnan(mid[3]).all() and mid[4, 0] == 6.0      # not tracked on one side: not tracked between
+    assert mid[3, 0] == 1.0 and mid[4, 0] == pytest.approx(0.75 * 2 - 0.125 * 6)  # the line where the curve lacks
+    last = up.flush()                                        # the end: 8..9 and 9
+    assert [f.media_t for f in last] == pytest.approx([10.0 + 1.5 / 30, 10.0 + 2 / 30])
+    assert np.isnan(last[0].skeleton[3]).all() and last[1].skeleton[4, 0] == 6.0   # not tracked on one side
+    assert up.flush() == []
     up4 = Upsampler(60.0, 15.0)
-    up4.feed(wf(0, 0.0, 0.0))
-    assert [f.skeleton[0, 0] for f in up4.feed(wf(1, 1 / 15, 4.0))] == [1.0, 2.0, 3.0, 4.0]
+    for k in range(3):
+        up4.feed(wf(k, k / 15, float(k) ** 3))
+    between = [f.skeleton[0, 0] for f in up4.feed(wf(3, 3 / 15, 27.0))][:-1]
+    assert between == pytest.approx([(1 + i / 4) ** 3 for i in (1, 2, 3)])
+    assert Upsampler(60.0, 60.0).delay_s == 0.0 and len(Upsampler(60.0, 60.0).feed(wf(0, 0.0, 1.0))) == 1
 
 
-INTERPOLATION_MEAN_PCT = 4.0
-"""Stated tolerance of a seat interpolating a 30 Hz stream to 60 fps, against the 60 Hz render, per motor and
-frame: a mean absolute difference of at most 4 percentage points (measured 2.8-3.7 on these recordings with the
-song), and less than the 60 Hz render itself changes in 50 ms (3 frames; 4.3-5.2), the audio-haptic asynchrony
-bound of docs/audience.md: the rows differ from the 60 Hz ones by less than a 50 ms timing error would make them
-differ."""
-
-
-@pytest.mark.parametrize("name", ["01_01.bvh", "60_12_scaled.bvh", "gBR_sBM_cAll_d04_mBR0_ch03.pkl"])
-def test_a_30hz_stream_interpolated_by_the_seat_is_within_tolerance_of_the_60hz_render(clips, name):
-    motion = clips[name]
-    full, music = venue_show(motion, SONG)
-    t60, r60 = seat_rows(full, published(full, motion, music))
-    half, _ = venue_show(motion, SONG, frames="compact", rate=30.0)
-    sent = published(half, motion, music)
-    assert len(sent) == (motion.n_frames + 1) // 2
-    t30, r30 = seat_rows(half, sent)
-    k30, k60 = np.rint(t30 * 60).astype(int), np.rint(t60 * 60).astype(int)
-    np.testing.assert_array_equal(k30, np.arange(len(k30)))             # every 60 fps frame, none twice
-    np.testing.assert_allclose(t30, t60[:len(t30)], atol=1e-12)         # at the 60 fps media times
-    diff = np.abs(r30 - r60[:len(r30)]).mean()
-    shifted = np.abs(r60[3:] - r60[:-3]).mean()
-    assert diff <= INTERPOLATION_MEAN_PCT, diff
-    assert diff < shifted, (diff, shifted)
-    np.testing.assert_array_equal(r30[0], r60[0])                      # the first frame, before any interpolation
-    assert r30[::2].max() > 20
+def test_a_30hz_stream_interpolated_by_the_seat_is_within_tolerance_of_the_60hz_render(clips):
+    """The seat's 30 Hz play of three real recordings with the song, against its 60 Hz render, in a wearer's terms
+    (``benchmarks.bench_audience_rate.TOLERANCE``, its reasons in docs/audience.md): every 60 fps media time once,
+    and the per-motor mean, the felt locus, the total, the side and the kicks within the tolerance, with the music
+    and without; the mean and the side no worse than rendering the 30 Hz stream at 30 fps."""
+    tol = rate_bench.TOLERANCE
+    for name, motion in clips.items():
+        full, music = venue_show(motion, SONG)
+        half, _ = venue_show(motion, SONG, frames="compact", rate=30.0)
+        sent = published(half, motion, music)
+        assert len(sent) == (motion.n_frames + 1) // 2
+        decoded = [frame_decoder(2, half.frame_joints, 52)(data) for data in sent]
+        for seat in (Seat(), Seat(mode="motion")):
+            t60, r60 = seat_rows(full, published(full, motion, music), seat)
+            t30, r30 = seat_rows(half, sent, seat)
+            k30 = np.rint(t30 * 60).astype(int)
+            np.testing.assert_array_equal(k30, np.arange(len(k30)))          # every 60 fps frame, none twice
+            np.testing.assert_allclose(t30, t60[:len(t30)], atol=1e-12)      # at the 60 fps media times
+            assert len(t30) >= len(t60) - 1                                   # up to the last published one
+            layout = seat_show(full, seat).layout
+            with_music = seat.mode != "motion"
+            got = rate_bench.wearer_figures(r30, r60, layout, with_music)
+            at30 = np.repeat(rate_bench.render(half, decoded, seat, 30.0), 2, axis=0)
+            own = rate_bench.wearer_figures(at30, r60, layout, with_music)
+            label = f"{name} {seat.mode}: {got}"
+            assert got["mean"] <= tol["mean"] and got["mean"] <= own["mean"], (label, own)
+            assert got["side"] >= tol["side"] and got["side"] >= own["side"], (label, own)
+            assert got["locus"] >= tol["locus"] and got["total"] >= tol["total"], label
+            if with_music:
+                assert got["kicks"] >= tol["kicks"], label
+            np.testing.assert_array_equal(r30[0], r60[0])                     # the first frame: nothing before it
+            assert r30[::2].max() > 20
 
 
 def test_over_nats_a_compact_30hz_show_plays_at_60_fps_on_a_seat(nats_server, clips):
     """A real publisher (``?frames=compact&rate=30``) and seat over a real nats-server: the seat plays every 60 fps
     media time from the 30 Hz stream, each row what the seat's renderer and stage give for the interpolated
-    frames it played (rendered here from the same frames), the frames between played 1/60 s before the next."""
+    frames it played (rendered here from the same frames), the frames between played 1/60 s before the next, the
+    last ones when the publisher's end event arrives."""
     import asyncio
 
     from hapmotion.audience import PublisherSecurity, publishing
@@ -251,9 +285,9 @@ def test_over_nats_a_compact_30hz_show_plays_at_60_fps_on_a_seat(nats_server, cl
     # the same frames decoded and interpolated here, rendered in the order the seat played them
     desc, music = venue_show(motion, SONG, frames="compact", rate=30.0)
     desc = dataclasses.replace(desc, body=source.desc.body, epoch=source.desc.epoch)
-    decode, up, frames = frame_decoder(2, desc.frame_joints, 52), Upsampler(60.0, 30.0), {}
-    for data in published(desc, motion, music):
-        frames.update({round(f.media_t * 60): f for f in up.feed(decode(data))})
+    decode, up = frame_decoder(2, desc.frame_joints, 52), Upsampler(60.0, 30.0)
+    played = [f for data in published(desc, motion, music) for f in up.feed(decode(data))] + up.flush()
+    frames = {round(f.media_t * 60): f for f in played}             # the last two from the end event's flush
     parts = seat_show(desc, Seat(delay_s=0.15))
     expected = []
     for k in ks:
@@ -278,3 +312,18 @@ def test_a_publisher_frames_and_rate_are_checked():
                                   ("compact", -30.0, "rate=-30")]:
         with pytest.raises(UsageError, match=f"--sink X: {message}"):
             frames_choice(frames, rate, 60.0, "--sink X")
+
+
+def test_the_seat_s_delay_absorbs_the_interpolation_s(clips):
+    """A 30 Hz stream's frames wait 50 ms for the next one: a seat 150 ms behind the venue (its video stream) plays
+    them at exactly its delay; a seat 20 ms behind plays them 30 ms later; at 60 Hz nothing waits."""
+    from hapmotion.audience.listener import AudienceSource
+
+    motion = clips["01_01.bvh"]
+    half, _ = venue_show(motion, SONG, frames="compact", rate=30.0)
+    full, _ = venue_show(motion, SONG)
+    extra = lambda desc, delay: AudienceSource(None, desc, Seat(delay_s=delay), mode="motion",  # noqa: E731
+                                               music=None).interpolation_extra_s
+    assert extra(half, 0.15) == 0.0 and extra(half, 0.05) == pytest.approx(0.0, abs=1e-12)
+    assert extra(half, 0.02) == pytest.approx(0.03) and extra(half, 0.0) == pytest.approx(0.05)
+    assert extra(full, 0.0) == 0.0

@@ -51,11 +51,11 @@ def seat_rows(desc, frames: list[bytes], seat: Seat = Seat()) -> tuple[np.ndarra
     decode = frame_decoder(desc.frame_version, desc.frame_joints, len(desc.actuators))
     up = Upsampler(desc.fps, desc.frame_rate)
     times, rows = [], []
-    for data in frames:
-        for wf in up.feed(decode(data)):
-            if parts.music is not None:
-                parts.music.put(wf.media_t, wf.music)
-            incoming = parts.renderer.step(wf.skeleton) if parts.renderer is not None else None
-            times.append(wf.media_t)
-            rows.append(zones(parts.stage.step(incoming, wf.media_t)))
+    played = [f for data in frames for f in up.feed(decode(data))] + up.flush()
+    for wf in played:
+        if parts.music is not None:
+            parts.music.put(wf.media_t, wf.music)
+        incoming = parts.renderer.step(wf.skeleton) if parts.renderer is not None else None
+        times.append(wf.media_t)
+        rows.append(zones(parts.stage.step(incoming, wf.media_t)))
     return np.array(times), np.array(rows)

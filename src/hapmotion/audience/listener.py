@@ -187,6 +187,8 @@ class AudienceSource(Source):
         self._timers: set[asyncio.TimerHandle] = set()
         self._decode = frame_decoder(desc.frame_version, desc.frame_joints, len(desc.actuators))
         self.upsampler = Upsampler(desc.fps, desc.frame_rate)
+        self.interpolation_extra_s = max(0.0, self.upsampler.delay_s - seat.delay_s)
+        """The interpolation's delay beyond the seat's ``delay_s`` (which absorbs it), added to every frame."""
         self.published_at: OrderedDict[float, float] = OrderedDict()  # media time -> publisher wall time
         # submit time (perf_counter, the OutFrame's ``received``) -> publisher wall time: frame age at the device
         # when both machines' clocks agree (the benchmark, on one machine)
@@ -288,20 +290,25 @@ class AudienceSource(Source):
             return
         if self.mode != "motion" and wf.music is None:
             faults.add("no_music", "a frame without the music's row; its music is silent")
-        # a show published below its render rate: the frames between the last one and this one first, every frame
-        # shifted by the interpolation's delay (the first between is due as this one arrives); a synchronised seat
-        # keys them by media time, as its offset moves while it tracks the music
-        due = self.clock.due(wf.media_t, arrival) + self.upsampler.delay_s
-        for f in self.upsampler.feed(wf):
+        # a show published below its render rate: the frames up to the last one, with those between, shifted by the
+        # part of the interpolation's delay the seat's own delay does not cover (a synchronised seat keys them by
+        # media time, as its offset moves while it tracks the music)
+        due = self.clock.due(wf.media_t, arrival) + self.interpolation_extra_s
+        self._queue(self.upsampler.feed(wf), wf.media_t, due)
+        self._arrived.set()
+
+    def _queue(self, frames: list[WireFrame], media_t: float, due: float) -> None:
+        """Queue ``frames`` to play, each ``due`` minus its media time's distance before ``media_t``."""
+        faults = self.engine.faults
+        for f in frames:
             self.published_at[f.media_t] = f.wall_t
             if len(self.published_at) > self.max_pending:
                 self.published_at.popitem(last=False)
             if len(self._heap) >= self.max_pending:
                 heapq.heappop(self._heap)
                 faults.add("overflow", f"more than {self.max_pending} frames waiting; the oldest is dropped")
-            f_due = due - (wf.media_t - f.media_t)
+            f_due = due - (media_t - f.media_t)
             heapq.heappush(self._heap, (f_due if self.sync is None else f.media_t, next(self._count), f, f_due))
-        self._arrived.set()
 
     def _open(self, kind: str, data: bytes) -> Optional[bytes]:
         """The message inside a received one, or None when it is not the venue's (counted and logged once)."""
@@ -363,6 +370,11 @@ class AudienceSource(Source):
         event = self._event("end", msg.data)
         if event is not None:
             log.info("%s: the publisher stopped; the vest fades out and the seat waits for the show", self.name)
+            held = self.upsampler.flush()  # the last published frames, held for the next one's interpolation
+            due = self.clock.peek(held[-1].media_t) if held else None
+            if due is not None:
+                self._queue(held, held[-1].media_t, due + self.interpolation_extra_s)
+                self._arrived.set()
 
     # ------------------------------------------------------------------ another run
     def offer_description(self, desc: ShowDescription) -> None:
