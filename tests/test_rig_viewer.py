@@ -90,3 +90,28 @@ def test_a_rig_with_gloves_names_each_glove_motor():
     glove = parse_rig("gloves").wearables[0]
     motors = glove.device_motors("GloveL")
     assert motors[0].across == 0.0 and motors[4].across == 1.0 and motors[5].height > motors[0].height
+
+
+def test_the_plot_draws_the_hands_of_a_live_recording():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import Normalize
+
+    from hapmotion.viewer.bodymap import draw_body
+
+    track = _hands_track()
+    fig, ax = plt.subplots()
+    try:
+        cells = draw_body(ax, track.intensities[0], track.actuators, plt.get_cmap("magma_r"), Normalize(0, 100))
+        assert len(cells) == 64 and {c.actuator for c in cells} == set(track.actuators)
+        boxes = {p.get_gid(): p for p in ax.patches}
+        white = (1.0, 1.0, 1.0, 1.0)
+        assert tuple(boxes["GloveL_0"].get_facecolor()) != white and tuple(boxes["GloveR_5"].get_facecolor()) != white
+        assert tuple(boxes["GloveL_1"].get_facecolor()) == white
+        assert boxes["GloveL_0"].get_x() < boxes["GloveR_0"].get_x()  # the wearer's left hand on the left
+        texts = [t.get_text() for t in ax.texts]
+        assert "LEFT HAND" in texts and "RIGHT HAND" in texts and "FRONT (wearer's left | right)" in texts
+    finally:
+        plt.close(fig)

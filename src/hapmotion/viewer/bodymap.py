@@ -226,15 +226,18 @@ def body_layout(actuators: Sequence[str], layout: Layout | None = None, rig: Opt
             cells.append(BodyCell(col_of[aid], aid, d.name, k, x0 + c * (CELL_W + CELL_GAP),
                                   -(r + 1) * (CELL_H + CELL_GAP) + CELL_GAP, CELL_W, CELL_H))
         x = x0 + w + EDGE_ROOM + PANEL_GAP
+    if panels:  # the hand places (a rig with gloves: a live recording of it), after the body chart's panels
+        more = _grid_layout(actuators, with_hands([], actuators), x)
+        panels, cells = panels + more[0], cells + more[1]
     return panels, cells
 
 
-def _grid_layout(actuators: Sequence[str], devices: list[dict]) -> tuple[list[BodyPanel], list[BodyCell]]:
-    """Panels side by side, front row then back row, from the page's panel dicts."""
+def _grid_layout(actuators: Sequence[str], devices: list[dict], x: float = 0.0
+                 ) -> tuple[list[BodyPanel], list[BodyCell]]:
+    """Panels side by side from ``x`` on, in the order given, from the page's panel dicts."""
     col_of = {a: i for i, a in enumerate(actuators)}
     panels: list[BodyPanel] = []
     cells: list[BodyCell] = []
-    x = 0.0
     for d in devices:
         x0 = x + EDGE_ROOM
         w = d["cols"] * (CELL_W + CELL_GAP) - CELL_GAP
