@@ -184,3 +184,56 @@ def test_check_reports_the_sdk2_rig_and_a_list_that_makes_none(tmp_path):
     code, out, err = asyncio.run(run([sdk2_device(12, "Mystery")]))
     assert code == 0, err
     assert "these devices make no rig hapmotion knows: name the wearables with --rig" in out
+
+
+def test_live_takes_the_rig_from_the_sdk2_players_devices(tmp_path, capsys):
+    """``live --rig player-v3``: a replayed wave on the rig the Player lists (an X40 and two gloves): the gloves'
+    positions get the performer's hands, the vest its frames."""
+    from support.data import MOTION
+
+    clip = tmp_path / "wave.bvh"
+    clip.write_bytes((MOTION / "dataset-1_byebye_happy_001.bvh").read_bytes())
+    player = FakePlayerSdk2(self_signed_cert(tmp_path), sizes={0: 40, 8: 6, 9: 6},
+                            devices=[sdk2_device(0, "TactSuitX40"), sdk2_device(8, "TactGlove (L)"),
+                                     sdk2_device(9, "TactGlove (R)")])
+
+    async def run():
+        await player.start()
+        try:
+            return await asyncio.to_thread(main, [
+                "live", "--source", f"replay:{clip}", "--speed", "4", "--workspace-id", "w", "--api-key", "k",
+                "--rig", player.url(), "--sink", player.url()])
+        finally:
+            await player.stop()
+
+    code = asyncio.run(run())
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "rig: x40+gloves (the Player's connected devices)" in err
+    assert player.errors == [] and {a["sdkApiKey"] for a in player.auths} == {"k"}
+    assert {pos for _, pos, _, _ in player.dots} == {0, 8, 9}
+    assert max(max(v) for _, pos, v, _ in player.dots if pos == 0) > 0
+    assert max(max(v) for _, pos, v, _ in player.dots if pos in (8, 9)) > 0  # the waving hand reaches a glove
+
+
+def test_a_seat_takes_the_rig_from_the_sdk2_players_devices_before_it_joins(tmp_path, capsys):
+    """``listen --rig player-v3?workspace_id=..&api_key=..``: the seat asks its Player (signed in with the address's
+    options, as its player-v3 sink) before it joins the show; here no show server answers, so it stops there."""
+    player = FakePlayerSdk2(self_signed_cert(tmp_path), devices=[sdk2_device(0, "TactSuitPro"),
+                                                                  sdk2_device(8, "TactGlove (L)"),
+                                                                  sdk2_device(9, "TactGlove (R)")])
+
+    async def run():
+        await player.start()
+        try:
+            return await asyncio.to_thread(main, [
+                "listen", f"nats://127.0.0.1:{free_port()}/concert", "--unsigned",
+                "--rig", player.url(workspace_id="seat", api_key="k"), "--sink", f"record:{tmp_path / 's.csv'}"])
+        finally:
+            await player.stop()
+
+    code = asyncio.run(run())
+    err = capsys.readouterr().err
+    assert "rig: pro+gloves (the Player's connected devices)" in err
+    assert code == 2 and "cannot reach the NATS server" in err, err
+    assert player.errors == [] and [a["applicationId"] for a in player.auths] == ["seat"]
