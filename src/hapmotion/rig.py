@@ -281,8 +281,10 @@ def rig_from_player(sdk2_names: Sequence[str] = (), sdk1_positions: Sequence[str
     taken: set = set()
 
     def add(w: Optional[Wearable]) -> None:
-        covers = {m.device for m in w.motors} | {m.sdk1_position for m in w.motors} if w is not None else set()
-        if w is not None and w not in chosen and not covers & taken:
+        if w is None or w in chosen:
+            return
+        covers = {m.device for m in w.motors} | {m.sdk1_position for m in w.motors}
+        if not covers & taken:
             chosen.append(w)
             taken.update(covers)
 

@@ -1,6 +1,7 @@
 """bHaptics Player SDK2 (``wss://127.0.0.1:15882/v3/feedback``): ``SdkRequestAuth``, ``SdkPlayDotMode``,
 ``SdkStopAll`` and the Player's replies, as bHaptics' own SimHub plugin speaks them without any bHaptics binary
-(GitHub ``bhaptics/tact-simhub`` ``bHapticsSimHub/BhapticsWebsocket.cs``, ``bHapticsSimHub/Model/Sdk2Message.cs``), and the Player's list of its devices (:func:`parse_server_devices`).
+(GitHub ``bhaptics/tact-simhub`` ``bHapticsSimHub/BhapticsWebsocket.cs``, ``bHapticsSimHub/Model/Sdk2Message.cs``),
+and the Player's list of its devices (:func:`parse_server_devices`, :func:`rig_of_devices`).
 Which SDK2 position and array slot each device fills comes from the layout file
 (:class:`~hapmotion.bhaptics.device_map.DeviceMap`), the one place that says so."""
 

@@ -100,7 +100,8 @@ palm's heel, where a TactGlove's sixth motor sits: the wearable file ``gloves.js
 
 
 def hand_actuators() -> tuple[str, ...]:
-    """The hand places' column ids: ``GloveL_0`` .. ``GloveL_5`` (the wearer's left hand), then ``GloveR_0`` .. ``_5``."""
+    """The hand places' column ids: ``GloveL_0`` .. ``GloveL_5`` (the wearer's left hand), then ``GloveR_0`` ..
+    ``GloveR_5``."""
     return tuple(f"{d}_{k}" for d in HAND_DEVICES for k in range(len(HAND_PLACES)))
 
 
