@@ -128,9 +128,11 @@ def test_panels_are_labelled_for_the_wearer(salsa, tmp_path):
         assert panels[name]["left"] == "wearer's LEFT" and panels[name]["right"] == "wearer's RIGHT"
     assert panels["ForearmL"]["title"] == "LEFT SHOULDER" and panels["ForearmR"]["title"] == "RIGHT SHOULDER"
     assert (panels["ForearmL"]["rows"], panels["ForearmL"]["cols"]) == (2, 3)
-    # In body order, wearer's left first: the shoulders on either side of the chest, then the back.
+    # In body order, wearer's left first: the shoulders on either side of the chest, then the back (the gloves
+    # are drawn only for a track or stream with hand columns).
     assert [(d["name"], d["place"]) for d in data["devices"]] == [
-        ("ForearmL", "front"), ("VestFront", "front"), ("ForearmR", "front"), ("VestBack", "back")]
+        ("ForearmL", "front"), ("VestFront", "front"), ("ForearmR", "front"), ("GloveL", "hands"),
+        ("GloveR", "hands"), ("VestBack", "back")]
 
 
 def test_page_is_self_contained(salsa, tmp_path):

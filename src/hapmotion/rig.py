@@ -252,26 +252,47 @@ def parse_rig(text: str, *, energy: bool = True) -> Rig:
     return Rig(wearables, energy=energy)
 
 
+SDK1_POSITION_WEARABLES = {"Vest": "x40", "ForearmL": "tactosy", "ForearmR": "tactosy", "Head": "tactal",
+                           "HandL": "tactosy-hands", "HandR": "tactosy-hands", "FootL": "tactosy-feet",
+                           "FootR": "tactosy-feet", "GloveL": "gloves", "GloveR": "gloves"}
+"""The wearable taken for a device the Player names only by its position (SDK1's ``ConnectedPositions``, or an SDK2
+device whose name no wearable file knows): a vest is taken for an X40, sleeves for Tactosy2 on the forearms."""
+
+
+def player_wearable(device_name: str) -> Optional[Wearable]:
+    """The bundled wearable whose ``player_names`` starts ``device_name`` (the Player's SDK2 ``deviceName``:
+    ``TactSuitX40``, ``Tactosy2_V3 (L)``, ``TactGlove (R)``), or None."""
+    name = str(device_name).lower()
+    for w in bundled_wearables().values():
+        if any(name.startswith(p.lower()) for p in w.player_names):
+            return w
+    return None
+
+
 def rig_from_player(sdk2_names: Sequence[str] = (), sdk1_positions: Sequence[str] = ()) -> Optional[str]:
     """The rig a Player's connected devices make, as ``--rig`` takes it, or None when it says nothing we know.
 
-    SDK2 ``ServerDevices`` names each device (``TactSuitX40``, ``Tactosy2_V3 (L)``): a wearable whose
-    ``player_names`` starts the name is connected. SDK1's ``ConnectedPositions`` only name positions (``Vest``,
-    ``ForearmL`` ...), so a vest is taken for an X40 and sleeves for Tactosy2 on the forearms."""
-    chosen: list[str] = []
+    SDK2 ``ServerDevices`` names each device (``TactSuitX40``, ``Tactosy2_V3 (L)``): the wearable whose
+    ``player_names`` starts the name is connected (:func:`player_wearable`). A device known only by its position
+    (``Vest``, ``ForearmL`` ...: SDK1's ``ConnectedPositions``, or an SDK2 device of an unknown name) is taken as
+    :data:`SDK1_POSITION_WEARABLES` says. A wearable on a position an earlier one already covers is left out (a
+    rig has one wearable per position), so the result always parses."""
+    chosen: list[Wearable] = []
+    taken: set = set()
+
+    def add(w: Optional[Wearable]) -> None:
+        if w is None or w in chosen:
+            return
+        covers = {m.device for m in w.motors} | {m.sdk1_position for m in w.motors}
+        if not covers & taken:
+            chosen.append(w)
+            taken.update(covers)
+
     for name in sdk2_names:
-        for w in bundled_wearables().values():
-            if any(str(name).lower().startswith(p.lower()) for p in w.player_names) and w.name not in chosen:
-                chosen.append(w.name)
-    if not chosen:
-        by_position = {"Vest": "x40", "ForearmL": "tactosy", "ForearmR": "tactosy", "Head": "tactal",
-                       "HandL": "tactosy-hands", "HandR": "tactosy-hands", "FootL": "tactosy-feet",
-                       "FootR": "tactosy-feet", "GloveL": "gloves", "GloveR": "gloves"}
-        for pos in sdk1_positions:
-            w = by_position.get(str(pos))
-            if w and w not in chosen:
-                chosen.append(w)
-    return "+".join(chosen) or None
+        add(player_wearable(name))
+    for pos in sdk1_positions:
+        add(bundled_wearables().get(SDK1_POSITION_WEARABLES.get(str(pos), "")))
+    return "+".join(w.name for w in chosen) or None
 
 
 def default_rig(energy: bool = True) -> Rig:
@@ -411,5 +432,5 @@ def rig_track(track: HapticTrack, layout: Layout, *, slots: bool = False) -> Hap
     return HapticTrack(rows, track.fps, rig.actuators, layout=rig.name, meta=meta, debug=dict(on_chart.debug))
 
 
-__all__ = ["DEFAULT_RIG", "FOLDS", "Projection", "Rig", "default_rig", "lift", "lift_track", "parse_rig", "rig_from_player",
-           "rig_track", "transfer"]
+__all__ = ["DEFAULT_RIG", "FOLDS", "Projection", "Rig", "SDK1_POSITION_WEARABLES", "default_rig", "lift", "lift_track",
+           "parse_rig", "player_wearable", "rig_from_player", "rig_track", "transfer"]

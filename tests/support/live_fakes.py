@@ -44,6 +44,24 @@ V2_ALL_SIZES = {**V2_SIZES, "Left": 20, "Right": 20, "Head": 6, "HandL": 3, "Han
                 "GloveL": 6, "GloveR": 6}
 """Every SDK1 frame position and its most dots (index 0..n-1): docs/wearables.md lists the sources."""
 
+SDK2_DEVICES = [
+    {"position": 0, "deviceName": "TactSuitX40", "address": "DF3A9CDC74BB", "connected": True, "paired": True,
+     "battery": 98, "audioJackIn": False, "vsm": 20},
+    {"position": 1, "deviceName": "Tactosy2_V3 (L)", "address": "C9C1A41F2570", "connected": True, "paired": True,
+     "battery": 26, "audioJackIn": False, "vsm": 11},
+    {"position": 2, "deviceName": "Tactosy2_V3 (R)", "address": "FC8A5696C0B8", "connected": True, "paired": True,
+     "battery": 62, "audioJackIn": False, "vsm": 11},
+]
+"""An SDK2 Player's ``ServerDevices`` list for an X40 and two Tactosy2, as captured from a real Player (a test fixture
+of github.com/senseshift/senseshifter ``crates/bh-sdk/src/v3/message/server.rs``; the field names are those of
+bHaptics' own SDKs, see :class:`hapmotion.bhaptics.sdk2.Sdk2Device`)."""
+
+
+def sdk2_device(position: int, name: str, connected: bool = True, battery: int = 80) -> dict:
+    """One ``ServerDevices`` entry with every field a real Player sends (a made-up address)."""
+    return {"position": position, "deviceName": name, "address": f"{position:02X}A1B2C3D4E5",
+            "connected": connected, "paired": True, "battery": battery, "audioJackIn": False, "vsm": 20}
+
 
 def ci(obj: dict, key: str) -> Any:
     """Case-insensitive member (the Player accepts every casing, docs §2.2)."""
@@ -246,9 +264,14 @@ def self_signed_cert(folder: Path) -> tuple[Path, Path]:
 class FakePlayerSdk2(_Server):
     """SDK2 Player on ``wss://127.0.0.1:PORT/v3/feedback`` with a self-signed certificate."""
 
-    def __init__(self, cert: tuple[Path, Path], port: int = 0, sizes: Optional[dict[int, int]] = None):
+    def __init__(self, cert: tuple[Path, Path], port: int = 0, sizes: Optional[dict[int, int]] = None,
+                 devices: Optional[list[dict]] = SDK2_DEVICES, devices_as_object: bool = False):
         self.port = port
         self.sizes = sizes or V3_SIZES  # SDK2 position -> the motor array length of the device there
+        # what its ServerDevices lists after the auth (None: it never lists its devices), as a JSON string (what
+        # SDK2 payloads normally are) or, with devices_as_object, as the list itself (both are seen from Players)
+        self.devices = devices
+        self.devices_as_object = devices_as_object
         self.ssl_context = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)
         self.ssl_context.load_cert_chain(str(cert[0]), str(cert[1]))
         self.errors: list[str] = []
@@ -283,12 +306,13 @@ class FakePlayerSdk2(_Server):
                     self.errors.append(f"first message {kind!r}, expected auth")
                 else:
                     self.check_auth(payload)
-                try:
+                try:  # what a Player answers an auth with, in its order (docs: the Player's SDK2 replies)
                     await ws.send(json.dumps({"Type": "ServerReady", "Message": None}))
-                    await ws.send(json.dumps({"Type": "ServerDevices", "Message": json.dumps([
-                        {"position": 0, "deviceName": "TactSuitX40", "connected": True},
-                        {"position": 1, "deviceName": "Tactosy2_V3 (L)", "connected": True},
-                        {"position": 2, "deviceName": "Tactosy2_V3 (R)", "connected": True}])}))
+                    if self.devices is not None:
+                        listed = self.devices if self.devices_as_object else json.dumps(self.devices)
+                        await ws.send(json.dumps({"Type": "ServerDevices", "Message": listed}))
+                    await ws.send(json.dumps({"Type": "ServerEventNameList", "Message": "[]"}))
+                    await ws.send(json.dumps({"Type": "ServerEventList", "Message": "[]"}))
                 except ConnectionClosed:  # the client may already be closing; what it sent is still read
                     pass
                 continue

@@ -1,17 +1,20 @@
 """bHaptics Player SDK2 (``wss://127.0.0.1:15882/v3/feedback``): ``SdkRequestAuth``, ``SdkPlayDotMode``,
 ``SdkStopAll`` and the Player's replies, as bHaptics' own SimHub plugin speaks them without any bHaptics binary
-(GitHub ``bhaptics/tact-simhub`` ``bHapticsSimHub/BhapticsWebsocket.cs``, ``bHapticsSimHub/Model/Sdk2Message.cs``).
+(GitHub ``bhaptics/tact-simhub`` ``bHapticsSimHub/BhapticsWebsocket.cs``, ``bHapticsSimHub/Model/Sdk2Message.cs``),
+and the Player's list of its devices (:func:`parse_server_devices`, :func:`rig_of_devices`).
 Which SDK2 position and array slot each device fills comes from the layout file
 (:class:`~hapmotion.bhaptics.device_map.DeviceMap`), the one place that says so."""
 
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from typing import Any, Optional
 
 import numpy as np
 
 from .device_map import DeviceMap
+from ..rig import player_wearable, rig_from_player
 from .player_json import get_ci, json_object, to_int_percent
 
 SDK2_PORT = 15882
@@ -77,3 +80,80 @@ def parse_v3_message(text: "str | bytes") -> Optional[tuple[str, Any]]:
         except ValueError:
             pass
     return (str(kind), payload) if kind is not None else None
+
+
+# ------------------------------------------------------------------------------------ the Player's devices
+SDK2_POSITION_NAMES = ("Vest", "ForearmL", "ForearmR", "Head", "HandL", "HandR", "FootL", "FootR", "GloveL", "GloveR")
+"""The device position each SDK2 ``position`` number stands for (github.com/bhaptics/tact-js
+``sdk/src/internal/position.ts``; bHaptics' Unity SDK2 ``Bhaptics.SDK2.PositionType`` and its ``ToDeviceType``)."""
+
+
+@dataclass(frozen=True)
+class Sdk2Device:
+    """One entry of the Player's SDK2 ``ServerDevices`` list.
+
+    The Player sends, after the auth, ``{"Type": "ServerDevices", "Message": "<JSON list>"}``, one object per paired
+    device with ``position`` (int, :data:`SDK2_POSITION_NAMES`), ``deviceName``, ``address``, ``connected``,
+    ``paired``, ``battery`` (0..100), ``audioJackIn`` and ``vsm``: the message name and these field names are in
+    bHaptics' own web SDK (``ServerDevices`` and the ``BhapticsDevice`` fields, strings of github.com/bhaptics/tact-js
+    ``sdk/src/bhaptics_web_bg.wasm``) and its Unity SDK2 (``Bhaptics.SDK2.Device``: ``paired, deviceName, position,
+    connected, address, battery, audioJackIn``, ``Assets/Bhaptics/SDK2/Scripts/Core/BhapticsHelpers.cs`` as shipped in
+    Unity projects on GitHub, e.g. sahanasash/FunFit). A Player's captured list (an X40 and two Tactosy2: names
+    ``TactSuitX40``, ``Tactosy2_V3 (L)``, ``Tactosy2_V3 (R)`` at positions 0, 1, 2) is a third-party test fixture
+    (github.com/senseshift/senseshifter, ``crates/bh-sdk/src/v3/message/server.rs``); the names other devices
+    report are **not confirmed** (the wearable files' ``player_names`` are the starts of their Bluetooth names)."""
+
+    position: Optional[int]
+    name: str
+    connected: bool
+    battery: Optional[int] = None
+
+    @property
+    def position_name(self) -> Optional[str]:
+        """``Vest``, ``ForearmL`` ... for a known position number, else None."""
+        ok = isinstance(self.position, int) and 0 <= self.position < len(SDK2_POSITION_NAMES)
+        return SDK2_POSITION_NAMES[self.position] if ok else None
+
+    def describe(self) -> str:
+        """``TactSuitX40: SDK2 position 0, connected, battery 98 %``."""
+        battery = f", battery {self.battery} %" if self.battery is not None else ""
+        state = "connected" if self.connected else "not connected"
+        return f"{self.name or '(no name)'}: SDK2 position {self.position}, {state}{battery}"
+
+
+def _int(v: Any) -> Optional[int]:
+    return v if isinstance(v, int) and not isinstance(v, bool) else None
+
+
+def parse_server_devices(payload: Any) -> Optional[tuple[list[Sdk2Device], int]]:
+    """The devices of a ``ServerDevices`` payload (a list, or its JSON text; keys in any casing) and the number of
+    entries skipped (not an object, or with neither a name nor a position number); None when the payload is no list.
+    ``connected`` counts only when it is JSON ``true``."""
+    if isinstance(payload, (str, bytes)):
+        try:
+            payload = json.loads(payload)
+        except ValueError:
+            return None
+    if not isinstance(payload, list):
+        return None
+    devices, skipped = [], 0
+    for item in payload:
+        name = get_ci(item, "deviceName") if isinstance(item, dict) else None
+        position = _int(get_ci(item, "position")) if isinstance(item, dict) else None
+        if not isinstance(item, dict) or (not isinstance(name, str) or not name) and position is None:
+            skipped += 1
+            continue
+        battery = _int(get_ci(item, "battery"))
+        devices.append(Sdk2Device(position, name if isinstance(name, str) else "", get_ci(item, "connected") is True,
+                                  battery if battery is not None and 0 <= battery <= 100 else None))
+    return devices, skipped
+
+
+def rig_of_devices(devices: "list[Sdk2Device]") -> Optional[str]:
+    """The rig (``--rig`` text) the connected devices make: each by its name (a wearable file's ``player_names``),
+    or, when no wearable knows the name, by its position (:data:`hapmotion.rig.SDK1_POSITION_WEARABLES`); None when
+    no connected device is of either kind (:func:`hapmotion.rig.rig_from_player`)."""
+    on = [d for d in devices if d.connected]
+    named = [d.name for d in on if player_wearable(d.name) is not None]
+    by_position = [d.position_name for d in on if player_wearable(d.name) is None and d.position_name]
+    return rig_from_player(named, by_position)

@@ -70,8 +70,9 @@ layout_option = click.option(
 rig_option = click.option(
     "--rig", default=None, metavar="WEARABLES",
     help="The wearables played on, joined by '+': x40+tactosy-shoulders (the body chart itself), x40+tactosy, air, "
-         "x16, pro, pro+tactosy, pro+gloves, ... or a wearable .json file (docs/wearables.md); player[://HOST:PORT]: "
-         "the devices that SDK1 Player reports [default: the layout's own devices].")
+         "x16, pro, pro+tactosy, pro+gloves, ... or a wearable .json file (docs/wearables.md); player[://HOST:PORT] "
+         "or player-v3[://HOST:PORT]: the devices that SDK1 or SDK2 Player reports connected [default: the "
+         "layout's own devices].")
 
 SHOW_OPTIONS: dict[str, Callable[..., Any]] = {
     "method": method_option(),
@@ -120,6 +121,7 @@ def show_options(*names: str, comfort: bool = True) -> Callable[[Callable[..., A
         @functools.wraps(f)
         def wrapper(*args: Any, **kwargs: Any) -> Any:
             given = {name: kwargs.pop(_KWARGS[name]) for name in chosen}
+            given["credentials"] = (kwargs.get("workspace_id"), kwargs.get("api_key"))  # --rig player-v3 asks with them
             limits = (kwargs.get("motion_opts") or {}).get("limits") or kwargs.get("limits")
             kwargs["show"] = _build_show(given, kwargs.pop("comfort", Comfort()), limits)
             return f(*args, **kwargs)
@@ -167,26 +169,28 @@ def _build_show(given: dict[str, Any], comfort: Comfort, limits: Optional[Sequen
         if str(exc).startswith("unknown preset"):
             raise UsageError(f"--preset: {exc}") from None
         raise
-    return with_rig(show, given.get("rig"))
+    return with_rig(show, given.get("rig"), given.get("credentials", (None, None)))
 
 
-def with_rig(show: Show, rig: Optional[str]) -> Show:
+def with_rig(show: Show, rig: Optional[str], credentials: tuple = (None, None)) -> Show:
     """``show`` played on the ``--rig`` wearables (None: as it is), combined by the preset's phantom split."""
     if rig is None:
         return show
     layout = show.load_layout()
-    return show.replace(layout=layout.with_rig(rig_of(rig, layout, energy=show.params().phantom == "energy")))
+    return show.replace(layout=layout.with_rig(rig_of(rig, layout, energy=show.params().phantom == "energy",
+                                                      credentials=credentials)))
 
 
-def rig_of(text: str, layout: Any, *, energy: bool) -> Any:
+def rig_of(text: str, layout: Any, *, energy: bool, credentials: tuple = (None, None)) -> Any:
     """The :class:`~hapmotion.rig.Rig` a ``--rig`` value names: wearables joined by '+', or ``player[://HOST:PORT]``
-    (the devices that SDK1 Player reports connected; the rig is printed)."""
+    / ``player-v3[://HOST:PORT]`` (the devices that SDK1 or SDK2 Player reports connected, asked with the SDK2
+    ``credentials`` ``(workspace id, API key)``; the rig is printed)."""
     from ..rig import parse_rig  # lazy: a rig's wearable files are read only when --rig is given
 
     if text.strip().startswith("player"):
         from ..live.player_check import rig_of_player  # lazy: asks the Player before the show
 
-        text = rig_of_player(text.strip(), layout)
+        text = rig_of_player(text.strip(), layout, workspace_id=credentials[0], api_key=credentials[1])
         click.echo(f"rig: {text} (the Player's connected devices)", err=True)
     return parse_rig(text, energy=energy)
 

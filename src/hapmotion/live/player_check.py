@@ -11,7 +11,11 @@ Two parts:
     github.com/bhaptics/tact-python ``bhaptics/better_haptic_player.py``; the community C# client bHapticsLib
     ``IsDeviceConnected`` looks a ``VestFront``/``VestBack`` query up as ``Vest``);
   - SDK2 (``/v3/feedback``) sends ``ServerDevices`` after the auth: a list of ``{position, deviceName, connected,
-    battery, ...}`` (SDK2 position 0 the vest, 1/2 the left/right sleeve, as in the layout's ``sdk2_position``).
+    battery, ...}`` (SDK2 position 0 the vest, 1/2 the left/right sleeve, as in the layout's ``sdk2_position``;
+    :func:`hapmotion.bhaptics.sdk2.parse_server_devices` gives its sources).
+
+* :func:`rig_of_player` asks either Player for the rig its connected devices make (``--rig player``, ``--rig
+  player-v3``), and says in one line why when it cannot.
 
 * With a rig (``--rig``), :func:`rig_pattern_steps` makes the pattern from the rig's wearable files instead, played
   straight to its motors (:meth:`hapmotion.rig.Rig.motor_layout`): every device of every wearable, gloves and
@@ -35,6 +39,7 @@ import numpy as np
 from websockets.asyncio.client import connect
 
 from ..bhaptics.device_map import DeviceMap
+from ..bhaptics.sdk2 import Sdk2Device, parse_server_devices, rig_of_devices, v3_stop_all
 from ..errors import UsageError
 from ..layout import CHART_BACK, CHART_FRONT, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, Layout
 from ..rig import Rig, rig_from_player
@@ -42,7 +47,6 @@ from ..track import HapticTrack
 from .kinds import build_sink
 from .sinks import PlayerSdk1Sink, PlayerSdk2Sink, Sink
 from .urls import parse_sink
-from ..bhaptics.player_json import get_ci
 from ..bhaptics.tick import PLAYER_TICK_FPS
 
 CHECK_FPS = PLAYER_TICK_FPS
@@ -159,7 +163,8 @@ class PlayerReport:
     """What a Player said about its devices.
 
     ``connected`` are the device names it reported as connected (SDK1 position names, or SDK2 device names);
-    ``layout_devices`` maps each device of the session layout to True/False (None: the Player said nothing).
+    ``layout_devices`` maps each device of the session layout to True/False (None: the Player said nothing);
+    ``sdk2_devices`` every device an SDK2 Player listed, connected or not.
     """
 
     sink: str
@@ -169,6 +174,7 @@ class PlayerReport:
     connected: list[str] = field(default_factory=list)
     layout_devices: dict[str, Optional[bool]] = field(default_factory=dict)
     details: list[str] = field(default_factory=list)
+    sdk2_devices: Optional[list[Sdk2Device]] = None
 
     def lines(self) -> list[str]:
         if not self.reachable:
@@ -183,14 +189,19 @@ class PlayerReport:
         rig = self.rig()
         if rig:
             out.append(f"  these devices make the rig {rig} (play, live and listen take it with --rig {rig})")
+        else:
+            out.append("  these devices make no rig hapmotion knows: name the wearables with --rig (docs/wearables.md)")
         return out
 
     def rig(self) -> Optional[str]:
-        """The rig the connected devices make (``--rig`` text; :func:`hapmotion.rig.rig_from_player`), or None."""
+        """The rig the connected devices make (``--rig`` text), or None: an SDK2 Player's devices by name, else by
+        position (:func:`hapmotion.bhaptics.sdk2.rig_of_devices`); an SDK1 Player's by position
+        (:func:`hapmotion.rig.rig_from_player`)."""
         if not self.answered:
             return None
-        sdk2 = [d.split(":", 1)[0] for d in self.details if ": SDK2 position" in d and "not connected" not in d]
-        return rig_from_player(sdk2, [] if sdk2 else self.connected)
+        if self.sdk2_devices is not None:
+            return rig_of_devices(self.sdk2_devices)
+        return rig_from_player((), self.connected)
 
     def read_sdk1_status(self, status: dict, layout: Layout) -> None:
         """Take in the Player's SDK1 status object (:func:`~hapmotion.bhaptics.sdk1.parse_v2_status`): its
@@ -210,44 +221,58 @@ class PlayerReport:
             self.layout_devices[d.name] = d.name in names or (d.name in ("VestFront", "VestBack") and "Vest" in names)
 
     def read_sdk2_devices(self, devices: Any, layout: Layout) -> None:
-        """Take in the Player's SDK2 ``ServerDevices`` list (``{position, deviceName, connected, battery}`` each): a
-        layout device is connected when a connected device sits at its SDK2 position. Anything but a list leaves the
-        report unanswered."""
-        if not isinstance(devices, list):
+        """Take in the Player's SDK2 ``ServerDevices`` list (:func:`~hapmotion.bhaptics.sdk2.parse_server_devices`):
+        a layout device is connected when a connected device sits at its SDK2 position. Anything but a list leaves
+        the report unanswered."""
+        parsed = parse_server_devices(devices)
+        if parsed is None:
             return
         self.answered = True
+        self.sdk2_devices, skipped = parsed
         by_position: dict[int, bool] = {}
-        for item in devices:
-            if not isinstance(item, dict):
-                continue
-            name, pos = get_ci(item, "deviceName"), get_ci(item, "position")
-            ok = get_ci(item, "connected") is True
-            battery = get_ci(item, "battery")
-            if ok:
-                self.connected.append(str(name))
-            self.details.append(f"{name}: SDK2 position {pos}, {'connected' if ok else 'not connected'}"
-                                + (f", battery {battery} %" if isinstance(battery, int) else ""))
-            if isinstance(pos, int):
-                by_position[pos] = by_position.get(pos, False) or ok
-        for d in layout.devices:
-            self.layout_devices[d.name] = by_position.get(d.sdk2_position, False)
+        for d in self.sdk2_devices:
+            if d.connected:
+                self.connected.append(d.name)
+            self.details.append(d.describe())
+            if d.position is not None:
+                by_position[d.position] = by_position.get(d.position, False) or d.connected
+        if skipped:
+            self.details.append(f"{skipped} entr{'y' if skipped == 1 else 'ies'} of the list not understood (skipped)")
+        for dev in layout.devices:
+            self.layout_devices[dev.name] = by_position.get(dev.sdk2_position, False)
 
 
-def rig_of_player(spec: str, layout: Layout, timeout: float = 2.0) -> str:
-    """The rig the SDK1 Player at ``spec`` (``player`` or ``player://HOST:PORT``) says is connected, as ``--rig``
-    text; :class:`~hapmotion.errors.UsageError` when it cannot be asked or names nothing hapmotion knows."""
-    ep = parse_sink(spec)
-    if ep.kind != "player":
-        raise UsageError(f"--rig {spec}: expected player[://HOST:PORT] to take the rig from the SDK1 Player's "
-                         "devices (or wearables joined by '+')")
-    sink = build_sink(ep, dmap=DeviceMap.from_layout(layout), layout_name=layout.name, fps=CHECK_FPS)
+def rig_of_player(spec: str, layout: Layout, timeout: float = 2.0, *, workspace_id: Optional[str] = None,
+                  api_key: Optional[str] = None) -> str:
+    """The rig the Player at ``spec`` says is connected, as ``--rig`` text: ``player[://HOST:PORT]`` asks the SDK1
+    Player, ``player-v3[://HOST:PORT][?workspace_id=..&api_key=..]`` the SDK2 one (with ``workspace_id`` /
+    ``api_key``, as its sink takes them). :class:`~hapmotion.errors.UsageError`, one line, when the Player cannot
+    be asked, does not list its devices within ``timeout`` seconds, or lists none hapmotion knows."""
+    try:
+        ep = parse_sink(spec)
+    except UsageError:
+        ep = None
+    if ep is None or ep.kind not in ("player", "player-v3"):
+        raise UsageError(f"--rig {spec}: expected wearables joined by '+', or player[://HOST:PORT] / "
+                         "player-v3[://HOST:PORT] to take the rig from the bHaptics Player's connected devices")
+    sink = build_sink(ep, dmap=DeviceMap.from_layout(layout), layout_name=layout.name, fps=CHECK_FPS,
+                      workspace_id=workspace_id, api_key=api_key)
     report = asyncio.run(probe_player(sink, layout, timeout))
+    instead = "name the wearables instead, e.g. --rig x40+tactosy"
     if report is None or not report.reachable:
-        raise UsageError(f"--rig {spec}: cannot ask the Player for its devices ({report.error if report else 'not a Player'})")
+        why = report.error if report else "not a Player"
+        raise UsageError(f"--rig {spec}: cannot ask the Player for its devices ({why}); is the bHaptics Player "
+                         f"running? Or {instead}")
+    if not report.answered:
+        why = f" ({report.error})" if report.error else ""
+        raise UsageError(f"--rig {spec}: the Player did not list its devices within {timeout:g} s{why}; {instead}")
     rig = report.rig()
     if rig is None:
-        raise UsageError(f"--rig {spec}: the Player reports no device hapmotion knows "
-                         f"({', '.join(report.connected) or 'none connected'})")
+        if report.sdk2_devices:
+            listed = "; ".join(d.describe() for d in report.sdk2_devices)
+        else:
+            listed = ", ".join(report.connected) or "no device"
+        raise UsageError(f"--rig {spec}: the Player reports no connected device hapmotion knows ({listed}); {instead}")
     return rig
 
 
@@ -266,7 +291,10 @@ async def probe_player(sink: Sink, layout: Layout, timeout: float = 2.0) -> Opti
         return report
     report.reachable = True
     try:
-        for message in sink.hello_messages() + sink.off_messages():
+        # SDK1 answers requests only, so it gets the sink's turn-off; SDK2 lists its devices after the auth, so a
+        # stop-all is enough and no dots go to positions it may not have
+        off = sink.off_messages() if isinstance(sink, PlayerSdk1Sink) else [v3_stop_all()]
+        for message in sink.hello_messages() + off:
             await ws.send(message)
         loop = asyncio.get_running_loop()
         end = loop.time() + timeout

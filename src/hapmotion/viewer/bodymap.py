@@ -10,7 +10,9 @@ wearer's left on *both* panels; the sleeves' columns run front to back, row 0 ne
 
 A track rendered for a rig (``--rig air``, ``pro+gloves``: :mod:`hapmotion.rig`) is drawn as that rig: one panel per
 device of its wearables, each motor where its wearable file puts it, labelled in the wearer's terms
-(:func:`rig_panels`).
+(:func:`rig_panels`). The body chart's hand places (``GloveL_0..5``, ``GloveR_0..5``: what ``live`` and a recording
+carry on a rig with gloves, :data:`hapmotion.layout.HAND_PLACES`) are drawn as two gloves, each finger and the wrist
+named, side by side under the front row, the wearer's left hand on the left (:func:`with_hands`).
 """
 
 from __future__ import annotations
@@ -21,7 +23,8 @@ from typing import Optional, Sequence
 import numpy as np
 
 from ..errors import HapMotionError, InputError
-from ..layout import CHART_BACK, CHART_FRONT, CHART_NAMES, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, Layout, load_layout
+from ..layout import (CHART_BACK, CHART_FRONT, CHART_NAMES, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, HAND_DEVICES,
+                      HAND_PLACES, Layout, load_layout)
 from ..rig import DEFAULT_RIG, Rig, parse_rig
 
 PANEL_TEXT = {
@@ -90,6 +93,41 @@ class BodyPanel:
         return self.x + self.w / 2
 
 
+# ------------------------------------------------------------------------------------------ the hands
+HAND_WORDS = tuple("wrist" if name == "palm" else name for name, _, _ in HAND_PLACES)
+"""What each of a hand's six places is called on the page: the five fingertips, thumb first, then the wrist (the
+palm's heel, where a TactGlove's sixth motor sits: the wearable file ``gloves.json``)."""
+
+
+def hand_actuators() -> tuple[str, ...]:
+    """The hand places' column ids: ``GloveL_0`` .. ``GloveL_5`` (the wearer's left hand), then ``GloveR_0`` ..
+    ``GloveR_5``."""
+    return tuple(f"{d}_{k}" for d in HAND_DEVICES for k in range(len(HAND_PLACES)))
+
+
+def _hand_panel(device: str, subtitle: str) -> dict:
+    side = "LEFT" if device == HAND_DEVICES[0] else "RIGHT"
+    return dict(name=device, rows=1, cols=len(HAND_PLACES), place="hands", title=f"{side} HAND",
+                subtitle=subtitle, left="thumb", right="wrist", top="fingertips", bottom="", labels=list(HAND_WORDS))
+
+
+def with_hands(panels: list[dict], actuators: Optional[Sequence[str]] = None) -> list[dict]:
+    """``panels`` (the page's panel dicts) with a glove panel for each hand whose places are all among
+    ``actuators`` (both hands when ``actuators`` is None) and that is not drawn yet, after the front row: the page
+    draws the ``hands`` group as a row of its own under the chest and shoulders (six cells across do not fit beside
+    them), the left hand first."""
+    have = {d["name"] for d in panels}
+    out = list(panels)
+    for device in HAND_DEVICES:
+        ids = [f"{device}_{k}" for k in range(len(HAND_PLACES))]
+        if device in have or actuators is not None and not set(ids) <= set(actuators):
+            continue
+        panel = _hand_panel(device, f"glove {device}: the fingertips, then the wrist")
+        upper = [i for i, d in enumerate(out) if d.get("place") in ("front", "hands")]
+        out.insert(upper[-1] + 1 if upper else len(out), panel)
+    return out
+
+
 # ------------------------------------------------------------------------------------------ a rig's panels
 _LIMB_WORDS = {"shoulder": "shoulder sleeve", "forearm": "forearm sleeve", "hand": "hand", "foot": "foot"}
 _AROUND = {"shoulder": ("front", "back", "neck side", "arm side"), "forearm": ("one edge", "other edge", "elbow end",
@@ -137,11 +175,15 @@ def rig_panels(name: Optional[str], actuators: Sequence[str]) -> list[dict]:
             else:
                 side = m0.side
                 left, right, top, bottom = _AROUND.get(m0.limb, ("", "", "", ""))
-                if m0.limb == "hand" and any(getattr(m, "finger", None) for m in motors) or device.startswith("Glove"):
-                    left, right, top, bottom = "thumb", "wrist", "", ""
+                glove = device in HAND_DEVICES and len(motors) == len(HAND_PLACES)
+                if m0.limb == "hand" and any(getattr(m, "finger", None) for m in motors) or glove:
+                    left, right, top, bottom = "thumb", "wrist", "fingertips", ""
                 text = dict(title=f"{side.upper()} {_LIMB_WORDS.get(m0.limb, m0.limb).upper()}",
                             subtitle=f"{short} ({device})", left=left, right=right, top=top, bottom=bottom)
                 place, order = "front", 0 if side == "left" else 2
+                if glove:  # a TactGlove's motors: the five fingertips, thumb first, then the wrist (gloves.json)
+                    text["labels"] = list(HAND_WORDS)
+                    place = "hands"  # a row of its own, as the body chart's hands (with_hands)
             out.append((order, dict(name=device, rows=rows, cols=cols, place=place, **text)))
     return [d for _, d in sorted(out, key=lambda x: x[0])]
 
@@ -185,15 +227,18 @@ def body_layout(actuators: Sequence[str], layout: Layout | None = None, rig: Opt
             cells.append(BodyCell(col_of[aid], aid, d.name, k, x0 + c * (CELL_W + CELL_GAP),
                                   -(r + 1) * (CELL_H + CELL_GAP) + CELL_GAP, CELL_W, CELL_H))
         x = x0 + w + EDGE_ROOM + PANEL_GAP
+    if panels:  # the hand places (a rig with gloves: a live recording of it), after the body chart's panels
+        more = _grid_layout(actuators, with_hands([], actuators), x)
+        panels, cells = panels + more[0], cells + more[1]
     return panels, cells
 
 
-def _grid_layout(actuators: Sequence[str], devices: list[dict]) -> tuple[list[BodyPanel], list[BodyCell]]:
-    """Panels side by side, front row then back row, from the page's panel dicts."""
+def _grid_layout(actuators: Sequence[str], devices: list[dict], x: float = 0.0
+                 ) -> tuple[list[BodyPanel], list[BodyCell]]:
+    """Panels side by side from ``x`` on, in the order given, from the page's panel dicts."""
     col_of = {a: i for i, a in enumerate(actuators)}
     panels: list[BodyPanel] = []
     cells: list[BodyCell] = []
-    x = 0.0
     for d in devices:
         x0 = x + EDGE_ROOM
         w = d["cols"] * (CELL_W + CELL_GAP) - CELL_GAP

@@ -8,7 +8,9 @@ shows a running ``hapmotion live`` WebSocket broadcast (message schema: docs/CON
 Page data (the JSON in ``<script id="hm-data">``)::
 
     format, version, title, footer [str], colors [101 CSS colours], bright_from, scale_tops,
-    actuators [N ids], joints [32 names], bones [[parent, child]], devices [{name, rows, cols, place, title, ...}],
+    actuators [N ids], joints [32 names], bones [[parent, child]],
+    devices [{name, rows, cols, place, title, subtitle, left, right, top, bottom, labels? [a name per cell]}]
+      (every device the page may draw: the script draws those whose ids its track or live stream has),
     motion: null | {fps, n_frames, joints [present joint indices], floor_y, positions blob (T, J, 3) int16 mm},
     energy_units,
     tracks: [{key, label, method, preset, mode, mirror, fps, n_frames, intensities blob (T, N) uint8,
@@ -43,7 +45,7 @@ from ..motion import Motion
 from ..track import HapticTrack
 from ..filesafety import atomic_path
 from . import packing
-from .bodymap import BODY_ORDER, BODY_ROW, PANEL_TEXT, rig_panels
+from .bodymap import BODY_ORDER, BODY_ROW, PANEL_TEXT, hand_actuators, rig_panels, with_hands
 from .colors import SCALE_TOPS, bright_from, page_colors
 from .curves import ENERGY_UNITS, track_motion_energy, triangle_vertices
 
@@ -129,15 +131,19 @@ def track_label(track: HapticTrack) -> str:
 
 
 def _device_panels(track: HapticTrack) -> list[dict]:
-    """Grid and labels of each device of the track's layout, in track column order."""
-    if rig_panels(track.layout, track.actuators):  # rendered on a rig: its wearables, as their files place them
-        return rig_panels(track.layout, track.actuators)
+    """Grid and labels of each device the page may draw, in body order (the script draws those its track or live
+    stream has). With the body chart come its hand places as two gloves (a rig with gloves: a recording of it, or a
+    live stream, which may come to any page by ``?live=``)."""
+    panels = rig_panels(track.layout, track.actuators)
+    if panels:  # rendered on a rig: its wearables, as their files place them
+        return panels
     try:
         layout = load_layout() if track.layout in ("x40_shoulders", "", None) else load_layout(track.layout)
     except (InputError, OSError):
         layout = None
     out = []
-    if layout is not None and tuple(layout.actuators) == tuple(track.actuators):
+    ids, body = tuple(track.actuators), tuple(layout.actuators) if layout is not None else ()
+    if layout is not None and ids[:len(body)] == body and ids[len(body):] in ((), hand_actuators()):
         # In body order (bodymap.BODY_ORDER), each with the group it joins on the page ("front" row or "back").
         for d in sorted(layout.devices, key=lambda d: BODY_ORDER.index(d.chart)):
             text = PANEL_TEXT.get(CHART_NAMES[d.chart], {})
@@ -145,7 +151,7 @@ def _device_panels(track: HapticTrack) -> list[dict]:
                             **{k: text.get(k, "") for k in ("title", "subtitle", "left", "right", "top", "bottom")}))
             if not text:
                 out[-1]["title"] = d.name
-        return out
+        return with_hands(out)
     # A layout the package does not know: one row per device, ids as given.
     for name in track.devices():
         n = len(track.device_columns(name))

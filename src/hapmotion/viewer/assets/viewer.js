@@ -195,8 +195,17 @@
           const val = document.createElement("span");
           val.className = "val";
           cell.append(idx, val);
+          // a cell with a name of its own (a glove's fingertips and wrist) shows it and says it in its tooltip
+          const label = Array.isArray(d.labels) && typeof d.labels[index] === "string" ? d.labels[index] : "";
+          if (label) {
+            cell.dataset.label = label;
+            const lab = document.createElement("span");
+            lab.className = "lab";
+            lab.textContent = label;
+            cell.append(lab);
+          }
           const col = colOf.has(id) ? colOf.get(id) : -1;
-          cell.title = id + (col < 0 ? " (not in this track)" : "");
+          cell.title = id + (label ? " (" + label + ")" : "") + (col < 0 ? " (not in this track)" : "");
           if (col < 0) cell.classList.add("missing");
           else CELLS[col] = { el: cell, val: val, last: -1 };
           grid.appendChild(cell);
@@ -205,14 +214,16 @@
       panel.appendChild(grid);
     }
     // Where each part sits on the wearer (page.py sends the panels in that order, hapmotion/viewer/bodymap.py):
-    // left shoulder, chest, right shoulder side by side (wearer's left on the left), then the back as seen from
-    // behind; any other device after them.
-    const front = document.createElement("div");
-    front.className = "body-front";
-    for (const d of devices) if (d.place === "front") front.appendChild(panels.get(d.name));
-    if (front.childElementCount) root.appendChild(front);
+    // left shoulder, chest, right shoulder side by side (wearer's left on the left), the gloves in a row of their
+    // own under them (left hand on the left), then the back as seen from behind; any other device after them.
+    for (const place of ["front", "hands"]) {
+      const row = document.createElement("div");
+      row.className = "body-front body-" + place;
+      for (const d of devices) if (d.place === place) row.appendChild(panels.get(d.name));
+      if (row.childElementCount) root.appendChild(row);
+    }
     for (const d of devices) if (d.place === "back") root.appendChild(panels.get(d.name));
-    for (const d of devices) if (d.place !== "front" && d.place !== "back") root.appendChild(panels.get(d.name));
+    for (const d of devices) if (!["front", "hands", "back"].includes(d.place)) root.appendChild(panels.get(d.name));
   }
 
   /* Back under the front when the vest panel has the height for it (a tall window), else beside it: the first
