@@ -248,11 +248,6 @@ PRESETS: dict[str, Params] = {
     "paper": Params(weight_window_s=0.05),
     "energy": Params(
         idle_choice="keep",
-        active_speed_mps=0.2,
-        weight_window_s=0.05,
-        two_active="held",
-        choice_hold_s=0.2,
-        point_smoothing_s=0.1,
         intensity_near_m=0.13,
         baseline_intensity_far_m=0.0,
         phantom="energy",
@@ -287,8 +282,10 @@ PRESETS: dict[str, Params] = {
         sleeve_share=1.0,
     ),
 }
-"""Named parameter sets. ``paper``: the paper's values. ``energy``: energy-preserving phantom split, asymmetric
-attack/release smoothing, ERM-aware output mapping (see docs/metrics.md for the evidence). ``felt`` (the default):
+"""Named parameter sets. ``paper``: the paper's values and readings. ``energy``: energy-preserving phantom split,
+asymmetric attack/release smoothing, ERM-aware output mapping (see docs/metrics.md for the evidence), a hand must
+the rest as ``paper`` (docs/algorithm.md gives a steadier configuration of it, measured, and why it is not the
+preset's). ``felt`` (the default):
 the ``energy`` pipeline calibrated for ERM vests, intensity from hand speed and reach, the frame's drive lifted over
 the motors' start and shared over them, the active-joint choice held and the dynamic point gliding, the active
 hand's sleeve carrying it (docs/algorithm.md, "The felt preset", gives every value with its reason and measured
@@ -304,7 +301,8 @@ PAPER_VARIANTS: dict[str, dict[str, Any]] = {
 }
 """The earlier readings of the paper, as field changes to the ``paper`` preset (``Params.replace(**changes)``,
 ``--param`` on the command line): D_t over the 13..185 cm warping range, keep the last choice when no hand is
-active, the 2D main node at a flat 0.5 K; ``earlier`` restores all three (the ``paper`` preset before these
+active, the 2D main node at a flat 0.5 K, each frame's extra weight alone (not accumulated over the three-frame
+window); ``earlier`` restores all four (the ``paper`` preset before these
 readings were revised). docs/algorithm.md gives each reading with its measured effect."""
 
 DEFAULT_PRESET = "felt"
