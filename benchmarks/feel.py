@@ -388,7 +388,7 @@ def songs(folder: str, audio_dir: str, seed: int) -> list[tuple[str, str]]:
 
 
 # ---------------------------------------------------------------------------------------------------- runs
-STRING_FIELDS = ("idle_choice", "phantom", "phantom_main", "dead_zone_per")
+STRING_FIELDS = ("idle_choice", "phantom", "phantom_main", "dead_zone_per", "two_active")
 """Renderer parameters whose values are names, not numbers (``--preset NAME:field=value``)."""
 
 

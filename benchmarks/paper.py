@@ -70,7 +70,7 @@ def params_of(spec: str) -> tuple[str, Params]:
         vals = {}
         for item in changes.split(","):
             k, v = item.split("=")
-            vals[k] = v if k in ("idle_choice", "phantom", "phantom_main", "dead_zone_per") else float(v)
+            vals[k] = v if k in ("idle_choice", "phantom", "phantom_main", "dead_zone_per", "two_active") else float(v)
         params = params.replace(**vals)
     return name, params
 

@@ -158,11 +158,13 @@ def test_salient_triangle_vertices_and_weights():
     jt[J_HAND_R] = (-0.4, 1.3, 0.2)
     excess = np.array([0.5, 5.0])
     prev = np.array([0.5, 1.4, 0.2])  # near the left hand: the right hand is the farther one
-    assert salient_triangle(CHOICE_LEFT, jt, excess, prev, 1.0, 2.0) == (J_HAND_L, J_SHOULDER_R, 1.5, 1.0)
-    assert salient_triangle(CHOICE_RIGHT, jt, excess, prev, 1.0, 2.0) == (J_HAND_R, J_SHOULDER_L, 3.0, 1.0)  # capped
-    assert salient_triangle(CHOICE_BOTH, jt, excess, prev, 1.0, 2.0) == (J_HAND_L, J_HAND_R, 1.0, 3.0)
+    assert salient_triangle(CHOICE_LEFT, jt, excess, prev, 1.0, 2.0, False) == (J_HAND_L, J_SHOULDER_R, 1.5, 1.0)
+    assert salient_triangle(CHOICE_RIGHT, jt, excess, prev, 1.0, 2.0, False) == (J_HAND_R, J_SHOULDER_L, 3.0, 1.0)  # capped
+    assert salient_triangle(CHOICE_BOTH, jt, excess, prev, 1.0, 2.0, False) == (J_HAND_L, J_HAND_R, 1.0, 3.0)
     prev = np.array([-0.3, 1.3, 0.2])  # near the right hand: the left one gets the extra weight
-    assert salient_triangle(CHOICE_BOTH, jt, excess, prev, 1.0, 2.0) == (J_HAND_L, J_HAND_R, 1.5, 1.0)
+    assert salient_triangle(CHOICE_BOTH, jt, excess, prev, 1.0, 2.0, False) == (J_HAND_L, J_HAND_R, 1.5, 1.0)
+    # accumulated weights: each hand carries what was appended to it, whatever prev is
+    assert salient_triangle(CHOICE_BOTH, jt, excess, prev, 1.0, 2.0, True) == (J_HAND_L, J_HAND_R, 1.5, 3.0)
 
 
 def test_dynamic_point_eq1_is_the_weighted_mean_of_the_vertices():

@@ -24,8 +24,8 @@ from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENE
                      P_SILENCE, P_TOL, P_W_GAIN, P_W_MAX, P_WINDOW, S_TPX, S_TPY, S_TPZ, ST_AXES, ST_CHOICE,
                      ST_LEVEL, ST_PREV_DP, ST_SEEN, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE,
                      P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA, P_TORSO_START, P_TORSO_FULL, P_SLEEVE_SHARE, P_SLEEVE_REACH,
-                     P_LIFT_FRAME, P_DRIVE_MOTORS)
-from .steps.choice import (active_hand, active_hands, choose_active, hand_accelerations, held_choice, moving_only,
+                     P_LIFT_FRAME, P_DRIVE_MOTORS, P_W_WINDOW, P_BOTH_HELD)
+from .steps.choice import (active_hand, active_hands, appended_weights, choose_weighted, choose_active, hand_accelerations, held_choice, moving_only,
                            update_speeds, update_thresholds, upper_body_speed)
 from .steps.held_joints import hold_joints
 from .steps.intensity import boosted_level, filtered_level, level_drive, normalised_distance, speed_reach_drive
@@ -96,9 +96,13 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
     excess = np.zeros(2)
     speed_n = np.zeros(2)
     by_speed = prm[P_SPEED_ON] > 0.5
+    moving_gate = prm[P_ACTIVE_SPEED] > 0.0
     lift_frame = prm[P_LIFT_FRAME] > 0.5
     lit = np.zeros(n_act, dtype=np.int64)
     above = np.zeros(2, dtype=np.bool_)
+    held = np.zeros(2, dtype=np.bool_)
+    w_excess = np.zeros(2)
+    w_window = int(prm[P_W_WINDOW])
     prev_dp = np.zeros(3)
     dp = np.zeros(3)
     p = np.zeros(3)
@@ -120,7 +124,7 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         # step 3: the candidates' accelerations relative to J_T
         energy = hand_accelerations(jt, state, prm[P_FPS], acc)
         upper_n = 0.0
-        if by_speed:  # beyond the paper: hand speed relative to J_T, and the upper body's own motion
+        if by_speed or moving_gate:  # beyond the paper: hand speed relative to J_T, and the upper body's own motion
             update_speeds(state, prm[P_SPEED_ALPHA], prm[P_SPEED_START], prm[P_SPEED_FULL], speed_n)
             if prm[P_TORSO_FULL] > 0.0:
                 upper_n = upper_body_speed(jt, state, prm[P_FPS], prm[P_SPEED_ALPHA], prm[P_TORSO_START],
@@ -129,12 +133,25 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
         # step 4: thresholds and the active-joint choice
         update_thresholds(state, acc, window, thr)
         active_hands(acc, thr, prm[P_FLOOR], above, excess)
-        if by_speed:
+        if moving_gate:
             moving_only(state, prm[P_ACTIVE_SPEED], above, excess)
+        previous_dynamic_point(state, torso, prev_dp)
+        if w_window > 0:  # our reading of "append": weights accumulate, and a weighted hand stays active
+            far_left = dist3(jt[J_HAND_L], prev_dp) >= dist3(jt[J_HAND_R], prev_dp)
+            appended_weights(state, above, excess, w_window, far_left, held, w_excess)
+        else:
+            for h in range(2):
+                held[h] = above[h]
+                w_excess[h] = excess[h]
         dist_l = dist3(jt[J_HAND_L], torso)
         dist_r = dist3(jt[J_HAND_R], torso)
-        choice = choose_active(above[0], above[1], dist_l, dist_r, int(state[ST_CHOICE]), prm[P_IDLE_FARTHER] > 0.5)
-        choice = held_choice(choice, not (above[0] or above[1]), state, int(prm[P_HOLD]))
+        if w_window > 0:
+            choice = choose_weighted(above, held, w_excess, dist_l, dist_r, int(state[ST_CHOICE]),
+                                     prm[P_IDLE_FARTHER] > 0.5, prm[P_BOTH_HELD] > 0.5)
+        else:
+            choice = choose_active(above[0], above[1], dist_l, dist_r, int(state[ST_CHOICE]),
+                                   prm[P_IDLE_FARTHER] > 0.5)
+        choice = held_choice(choice, not (held[0] or held[1]), state, int(prm[P_HOLD]))
         state[ST_CHOICE] = choice
         hand, hand_excess = active_hand(choice, dist_l, dist_r, excess)
 
@@ -144,8 +161,8 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             for k in range(3):
                 dp[k] = jt[hand, k]
         else:
-            previous_dynamic_point(state, torso, prev_dp)
-            j_a, j_r, w_a, w_r = salient_triangle(choice, jt, excess, prev_dp, prm[P_W_GAIN], prm[P_W_MAX])
+            j_a, j_r, w_a, w_r = salient_triangle(choice, jt, w_excess, prev_dp, prm[P_W_GAIN], prm[P_W_MAX],
+                                                  w_window > 0)
             if by_speed:
                 w_a, w_r = speed_weighted(choice, w_a, w_r, speed_n, prm[P_SPEED_W], prm[P_OPPOSITE_W])
             dynamic_point(jt[j_a], jt[j_r], torso, w_a, w_r, 1.0, dp)  # J_T keeps weight 1

@@ -28,6 +28,7 @@ PHANTOMS = ("paper", "energy")
 PHANTOM_MAINS = ("share", "flat")
 IDLE_CHOICES = ("keep", "farther")
 DEAD_ZONE_PER = ("motor", "frame")
+TWO_ACTIVE = ("frame", "held")
 
 
 _RANGES = (
@@ -42,6 +43,7 @@ _RANGES = (
     ("speed_smoothing_s", 0.0, 1.0), ("speed_weight", 0.0, 100.0), ("choice_hold_s", 0.0, 2.0),
     ("point_smoothing_s", 0.0, 2.0), ("upper_speed_start_mps", 0.0, 10.0), ("upper_speed_full_mps", 0.0, 20.0),
     ("sleeve_share", 0.0, 1.0), ("sleeve_reach_m", 0.01, 2.0), ("frame_drive_motors", 0.1, 8.0),
+    ("weight_window_s", 0.0, 0.5),
 )
 """Accepted range of each numeric parameter (beyond these the renderer's numbers stop meaning anything)."""
 
@@ -71,6 +73,17 @@ class Params:
     """Extra weight of an active hand per unit of relative excess acceleration ((a - thr) / thr) (ours)."""
     weight_extra_max: float = 2.0
     """Cap on the extra weight (so an active hand's weight is 1..3) (ours)."""
+    weight_window_s: float = 0.0
+    """s. Our reading of "we append the value of weight ... on the J_A" (Section 4.2.2) as accumulating: each
+    hand's extra weight is the sum of the extras appended to it over this many seconds of frames (capped by
+    ``weight_extra_max``), and a hand that still carries appended weight is still an active joint of the triangle.
+    The ``paper`` preset uses the paper's own three-frame window (0.05 s at 60 Hz); 0 = each frame's extra alone,
+    the hand active only on the frames it is above its threshold (the earlier reading,
+    ``PAPER_VARIANTS["frame-weights"]``)."""
+    two_active: str = "frame"
+    """With ``weight_window_s``: two hands are both active joints only when both are above their thresholds in the
+    current ``frame`` (the paper's words for the dual case, Section 4.2.2), or while both are ``held`` (both still
+    carry appended weight; ours: two moving hands then stay one triangle)."""
 
     point_smoothing_s: float = 0.0
     """s. Time constant of a one-pole filter on MST's dynamic point relative to J_T (ours; 0 = none, the paper):
@@ -167,8 +180,10 @@ class Params:
     """m/s. Below this smoothed hand speed the speed term is 0 (capture noise, breathing, sway)."""
     reach_share: float = 0.5
     """Share of the level that follows the reach (D_t) rather than the speed alone, 0..1."""
-    active_speed_mps: float = 0.2
-    """m/s. With the speed term on, a hand slower than this is never the active joint, whatever its acceleration."""
+    active_speed_mps: float = 0.0
+    """m/s. A hand whose smoothed speed relative to J_T is under this is never the active joint, whatever its
+    acceleration (0 = off, the paper: any hand above its threshold). At 120 Hz a still hand's capture noise alone
+    exceeds the acceleration floor."""
     opposite_weight: float = 1.0
     """With the speed term on: the opposite shoulder's weight in Eq. 1 for one active hand (paper: 1)."""
     speed_weight: float = 0.0
@@ -187,6 +202,8 @@ class Params:
             raise UsageError(f"idle_choice must be one of {', '.join(IDLE_CHOICES)}, not {self.idle_choice!r}")
         if self.phantom_main not in PHANTOM_MAINS:
             raise UsageError(f"phantom_main must be one of {', '.join(PHANTOM_MAINS)}, not {self.phantom_main!r}")
+        if self.two_active not in TWO_ACTIVE:
+            raise UsageError(f"two_active must be one of {', '.join(TWO_ACTIVE)}, not {self.two_active!r}")
         if self.dead_zone_per not in DEAD_ZONE_PER:
             raise UsageError(f"dead_zone_per must be one of {', '.join(DEAD_ZONE_PER)}, not {self.dead_zone_per!r}")
         if self.phantom not in PHANTOMS:
@@ -228,7 +245,7 @@ class Params:
 
 
 PRESETS: dict[str, Params] = {
-    "paper": Params(),
+    "paper": Params(weight_window_s=0.05),
     "energy": Params(
         idle_choice="keep",
         intensity_near_m=0.13,
@@ -265,8 +282,10 @@ PRESETS: dict[str, Params] = {
         sleeve_share=1.0,
     ),
 }
-"""Named parameter sets. ``paper``: the paper's values. ``energy``: energy-preserving phantom split, asymmetric
-attack/release smoothing, ERM-aware output mapping (see docs/metrics.md for the evidence). ``felt`` (the default):
+"""Named parameter sets. ``paper``: the paper's values and readings. ``energy``: energy-preserving phantom split,
+asymmetric attack/release smoothing, ERM-aware output mapping (see docs/metrics.md for the evidence), a hand must
+the rest as ``paper`` (docs/algorithm.md gives a steadier configuration of it, measured, and why it is not the
+preset's). ``felt`` (the default):
 the ``energy`` pipeline calibrated for ERM vests, intensity from hand speed and reach, the frame's drive lifted over
 the motors' start and shared over them, the active-joint choice held and the dynamic point gliding, the active
 hand's sleeve carrying it (docs/algorithm.md, "The felt preset", gives every value with its reason and measured
@@ -276,12 +295,14 @@ PAPER_VARIANTS: dict[str, dict[str, Any]] = {
     "range-185": {"intensity_far_m": 0.0, "intensity_near_m": 0.13, "baseline_intensity_far_m": 0.0},
     "keep-last": {"idle_choice": "keep"},
     "flat-main": {"phantom_main": "flat"},
+    "frame-weights": {"weight_window_s": 0.0},
     "earlier": {"intensity_far_m": 0.0, "intensity_near_m": 0.13, "baseline_intensity_far_m": 0.0,
-                "idle_choice": "keep", "phantom_main": "flat"},
+                "idle_choice": "keep", "phantom_main": "flat", "weight_window_s": 0.0},
 }
 """The earlier readings of the paper, as field changes to the ``paper`` preset (``Params.replace(**changes)``,
 ``--param`` on the command line): D_t over the 13..185 cm warping range, keep the last choice when no hand is
-active, the 2D main node at a flat 0.5 K; ``earlier`` restores all three (the ``paper`` preset before these
+active, the 2D main node at a flat 0.5 K, each frame's extra weight alone (not accumulated over the three-frame
+window); ``earlier`` restores all four (the ``paper`` preset before these
 readings were revised). docs/algorithm.md gives each reading with its measured effect."""
 
 DEFAULT_PRESET = "felt"

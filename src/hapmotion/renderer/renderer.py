@@ -90,6 +90,9 @@ def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
     p[packed.P_DP_ALPHA] = (1.0 - float(np.exp(-1.0 / (fps * params.point_smoothing_s)))
                             if params.point_smoothing_s > 0 else 1.0)
     p[packed.P_SILENCE] = params.silence_floor
+    p[packed.P_W_WINDOW] = (min(packed.MAX_WINDOW, max(1, int(round(params.weight_window_s * fps))))
+                            if params.weight_window_s > 0 else 0)
+    p[packed.P_BOTH_HELD] = 1.0 if params.two_active == "held" else 0.0
     p[packed.P_SPEED_ON] = 1.0 if params.speed_full_mps > 0 else 0.0
     p[packed.P_SPEED_START] = params.speed_start_mps
     p[packed.P_SPEED_FULL] = max(params.speed_full_mps, params.speed_start_mps + 1e-6)

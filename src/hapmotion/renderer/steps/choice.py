@@ -16,7 +16,7 @@ from numba import njit
 from ..packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_NONE, CHOICE_RIGHT, J_HAND_L, J_HAND_R, J_NECK, J_PELVIS,
                       J_TORSO, MAX_WINDOW, ST_PREV_UPPER, ST_TORSO_SPEED,
                       ST_CHOICE, ST_HIST, ST_HIST_COUNT, ST_HIST_POS, ST_PENDING, ST_PENDING_N, ST_PREV_REL, ST_PREV_VEL,
-                      ST_SEEN, ST_SPEED)
+                      ST_SEEN, ST_SPEED, ST_WHIST, ST_WHIST_POS)
 from .numeric import clip
 
 
@@ -117,6 +117,36 @@ def active_hands(acc, thr, floor, above, excess):
 
 
 @njit(cache=True, inline="always")
+def appended_weights(state, above, excess, n, far_left, held, w_excess):
+    """Steps 4-5, our reading of "we append the value of weight ... on the J_A": weights accumulate per joint.
+
+    This frame's value is appended to the hand above its threshold (``above`` ``(2,)`` bool), its relative excess
+    (``excess`` ``(2,)``); with both above, to the one farther from the dynamic point only (``far_left``: the left
+    hand is, Section 4.2.2's "distribute the weight value to the joint which records a higher distance"). Each
+    hand's extra weight, written into ``w_excess`` ``(2,)`` (dimensionless, capped later by ``weight_extra_max``),
+    is the sum of what was appended to it over the last ``n`` frames (this one included), kept in a ring in
+    ``state`` (``ST_WHIST``); ``held`` ``(2,)`` bool is written with whether the hand was above its threshold on any
+    of them: a hand that still carries appended weight is still an active joint. With ``n`` = 1 this is the
+    per-frame reading, except that two active hands each keep what they were given.
+    """
+    pos = int(state[ST_WHIST_POS])
+    for h in range(2):
+        add = excess[h]
+        if above[0] and above[1] and far_left != (h == 0):
+            add = 0.0
+        state[ST_WHIST + h * MAX_WINDOW + pos] = add + 1.0 if above[h] else 0.0
+    state[ST_WHIST_POS] = (pos + 1) % MAX_WINDOW
+    for h in range(2):
+        held[h] = False
+        w_excess[h] = 0.0
+        for q in range(n):
+            v = state[ST_WHIST + h * MAX_WINDOW + (pos - q) % MAX_WINDOW]
+            if v > 0.0:
+                held[h] = True
+                w_excess[h] += v - 1.0
+
+
+@njit(cache=True, inline="always")
 def update_speeds(state, alpha, start, full, speed_n):
     """Each hand's speed relative to J_T, smoothed, and its normalised speed (beyond the paper).
 
@@ -179,6 +209,25 @@ def choose_active(above_left, above_right, dist_left, dist_right, last, idle_far
     if last != CHOICE_NONE and not idle_farther:
         return last
     return CHOICE_LEFT if dist_left >= dist_right else CHOICE_RIGHT
+
+
+@njit(cache=True, inline="always")
+def choose_weighted(above, held, w_excess, dist_left, dist_right, last, idle_farther, both_held):
+    """Step 4 with appended weights (:func:`appended_weights`): two active joints only when both hands are above
+    their thresholds in the current frame (Section 4.2.2: "If the acceleration values in the current frame t for
+    both active joints are higher than the ... threshold, we once again define there are two active joints");
+    otherwise the one hand that still carries appended weight (``held`` ``(2,)`` bool); of two such hands the one
+    above its threshold now, else the one carrying more (``w_excess`` ``(2,)``); neither: as
+    :func:`choose_active` with no hand active. ``both_held`` (beyond the paper): two hands that both still carry
+    appended weight are two active joints.
+    """
+    if (above[0] and above[1]) or (both_held and held[0] and held[1]):
+        return CHOICE_BOTH
+    if held[0] and held[1]:
+        if above[0] != above[1]:
+            return CHOICE_LEFT if above[0] else CHOICE_RIGHT
+        return CHOICE_LEFT if w_excess[0] >= w_excess[1] else CHOICE_RIGHT
+    return choose_active(held[0], held[1], dist_left, dist_right, last, idle_farther)
 
 
 @njit(cache=True, inline="always")

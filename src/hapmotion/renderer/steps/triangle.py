@@ -53,7 +53,7 @@ def active_weight(excess, gain, extra_max):
 
 
 @njit(cache=True, inline="always")
-def salient_triangle(choice, jt, excess, prev_dp, gain, extra_max):
+def salient_triangle(choice, jt, excess, prev_dp, gain, extra_max, accumulated):
     """The triangle's two moving vertices and their weights (J_T is the third vertex, weight 1).
 
     Parameters
@@ -68,12 +68,18 @@ def salient_triangle(choice, jt, excess, prev_dp, gain, extra_max):
         ``(3,)`` the last frame's dynamic point, world m (decides which of two active hands gets the extra weight).
     gain, extra_max:
         Extra weight per unit of excess and its cap.
+    accumulated:
+        ``excess`` holds the extras appended to each hand over the weight window
+        (:func:`~hapmotion.renderer.steps.choice.appended_weights`): two active hands each carry their own.
 
     Returns
     -------
     ``(row of J_A, row of J_R, w_A, w_R)``: one active hand gives (that hand, opposite shoulder); two give
-    (left hand, right hand), the extra weight on the hand farther from ``prev_dp``.
+    (left hand, right hand), the extra weight on the hand farther from ``prev_dp`` (each its own when
+    ``accumulated``: the appending already gave it to the farther hand frame by frame).
     """
+    if choice == CHOICE_BOTH and accumulated:
+        return J_HAND_L, J_HAND_R, active_weight(excess[0], gain, extra_max), active_weight(excess[1], gain, extra_max)
     if choice == CHOICE_BOTH:
         if dist3(jt[J_HAND_L], prev_dp) >= dist3(jt[J_HAND_R], prev_dp):
             return J_HAND_L, J_HAND_R, active_weight(excess[0], gain, extra_max), 1.0
