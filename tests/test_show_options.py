@@ -93,8 +93,10 @@ def test_live_applies_the_same_comfort_as_files():
         name = "script"
 
         async def run(self):
+            # stamped at 60 frames/s, as a tracker stamps them: the engine renders at the sender's own rate, and
+            # a machine too busy to keep the sleeps even must not change that rate
             for k, pos in enumerate(frames):
-                self.engine.submit(SkeletonFrame(np.array(pos, dtype=float), k, None, time.perf_counter()))
+                self.engine.submit(SkeletonFrame(np.array(pos, dtype=float), k, k / 60, time.perf_counter()))
                 await asyncio.sleep(1 / 60)
 
     tap = Tap()
