@@ -30,6 +30,7 @@ from hapmotion.body.model import BodyModel
 from hapmotion.errors import UsageError
 from hapmotion.live import LiveEngine
 from hapmotion.live.sinks import RecorderSink
+from hapmotion.live.sinks.recorder import GridRows
 from hapmotion.live.sinks.journal import PAGE, TrackJournal, format_rows, journal_path, recover_journal
 from hapmotion.track_files import load_track
 
@@ -118,6 +119,18 @@ def _record_session(tmp_path, frames, *, wait_after: float, **kw):
     t0 = time.perf_counter()
     asyncio.run(asyncio.wait_for(scenario(), 30))
     return rec, time.perf_counter() - t0, seen
+
+
+def test_a_hold_across_a_storage_block_sets_every_row():
+    """A silent stretch held from inside one storage block into the next (a source pausing across 34 s of a
+    120 fps take) sets every row it covers: none keeps the block's uninitialised memory."""
+    grid = GridRows(3)
+    grid.fill(0, 4095, np.full(3, 10.0))
+    grid.fill(4095, 4098, np.full(3, 20.0))
+    grid.fill(4098, 9000, np.full(3, 30.0))
+    rows = grid.rows(0, grid.n)
+    assert grid.n == 9000 and rows.shape == (9000, 3)
+    assert (rows[:4095] == 10).all() and (rows[4095:4098] == 20).all() and (rows[4098:] == 30).all()
 
 
 def test_a_stall_does_not_end_the_recording(tmp_path):

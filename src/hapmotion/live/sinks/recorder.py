@@ -42,6 +42,37 @@ FORMATS = (".csv", ".json", ".npz", ".tact")
 _CHUNK = 4096  # rows per storage block: memory grows in steps of 4096 x N float32 (about 0.85 MB for 52)
 
 
+class GridRows:
+    """A growing ``(T, N)`` float32 table of rows on the recording's grid, stored in blocks of :data:`_CHUNK` rows
+    so that an hour-long take never copies what it holds so far."""
+
+    def __init__(self, n_columns: int):
+        self.n_columns = n_columns
+        self.blocks: list[np.ndarray] = []
+        self.n = 0
+        """Rows on the grid so far."""
+
+    def fill(self, start: int, stop: int, row: np.ndarray) -> None:
+        """Set rows ``start .. stop - 1`` to ``row`` ``(N,)``, growing the table as needed."""
+        while len(self.blocks) * _CHUNK < stop:
+            self.blocks.append(np.empty((_CHUNK, self.n_columns), dtype=np.float32))
+        k0 = start
+        while k0 < stop:  # block by block: the first and the last may be partial
+            b, i = divmod(k0, _CHUNK)
+            n = min(stop - k0, _CHUNK - i)
+            self.blocks[b][i:i + n] = row
+            k0 += n
+        self.n = max(self.n, stop)
+
+    def rows(self, start: int, stop: int) -> np.ndarray:
+        """``(stop - start, N)`` float32 grid rows."""
+        if stop <= start:
+            return np.zeros((0, self.n_columns), dtype=np.float32)
+        b0, b1 = start // _CHUNK, (stop - 1) // _CHUNK + 1
+        block = np.concatenate(self.blocks[b0:b1]) if b1 - b0 > 1 else self.blocks[b0]
+        return block[start - b0 * _CHUNK:stop - b0 * _CHUNK]
+
+
 class RecorderSink(Sink):
     """Records every frame to a journal as the show goes and writes the track at stop.
 
@@ -81,8 +112,7 @@ class RecorderSink(Sink):
         self.meta = dict(meta or {})
         self.time_scale = float(time_scale)
         self.flush_s = float(flush_s)
-        self._blocks: list[np.ndarray] = []
-        self._n = 0  # rows on the grid so far
+        self._grid = GridRows(len(actuators))
         self._committed = 0  # rows handed to the journal (they can no longer change)
         self._t0: Optional[float] = None
         self._last = np.zeros(len(self.actuators), dtype=np.float32)
@@ -110,11 +140,11 @@ class RecorderSink(Sink):
         if self._t0 is None:
             self._t0 = frame.created
         k = self._slot_at(frame.created)
-        if k >= self._n:
-            self._fill(self._n, k, self._last)  # hold the previous row over a gap
-            self._fill(k, k + 1, frame.row)
+        if k >= self._grid.n:
+            self._grid.fill(self._grid.n, k, self._last)  # hold the previous row over a gap
+            self._grid.fill(k, k + 1, frame.row)
         else:
-            self._fill(self._n - 1, self._n, frame.row)  # two frames in one grid slot: the newer wins
+            self._grid.fill(self._grid.n - 1, self._grid.n, frame.row)  # two frames in one slot: the newer wins
         self._last = np.asarray(frame.row, dtype=np.float32)
         self.stats.record(frame.received, frame.created, self.interval)
 
@@ -122,26 +152,9 @@ class RecorderSink(Sink):
         assert self._t0 is not None
         return int(round((when - self._t0) * self.time_scale * self.fps))
 
-    def _fill(self, start: int, stop: int, row: np.ndarray) -> None:
-        while len(self._blocks) * _CHUNK < stop:
-            self._blocks.append(np.empty((_CHUNK, len(self.actuators)), dtype=np.float32))
-        for k0 in range(start, stop, _CHUNK):
-            b, i = divmod(k0, _CHUNK)
-            n = min(stop - k0, _CHUNK - i)
-            self._blocks[b][i:i + n] = row
-        self._n = max(self._n, stop)
-
-    def _rows(self, start: int, stop: int) -> np.ndarray:
-        """``(stop - start, N)`` float32 grid rows."""
-        if stop <= start:
-            return np.zeros((0, len(self.actuators)), dtype=np.float32)
-        b0, b1 = start // _CHUNK, (stop - 1) // _CHUNK + 1
-        block = np.concatenate(self._blocks[b0:b1]) if b1 - b0 > 1 else self._blocks[b0]
-        return block[start - b0 * _CHUNK:stop - b0 * _CHUNK]
-
     def rows(self) -> np.ndarray:
         """``(T, N)`` float64 rows recorded so far."""
-        return self._rows(0, self._n).astype(np.float64)
+        return self._grid.rows(0, self._grid.n).astype(np.float64)
 
     def _advance(self, now: float, final: bool = False) -> None:
         """Hold the last row up to ``now`` (a silent source is recorded as silence, not cut out) and journal the
@@ -150,11 +163,11 @@ class RecorderSink(Sink):
         if self._t0 is None:
             return
         k_now = self._slot_at(now)
-        if k_now > self._n and not final:
-            self._fill(self._n, k_now, self._last)
-        upto = self._n if final else min(self._n, k_now)
+        if k_now > self._grid.n and not final:
+            self._grid.fill(self._grid.n, k_now, self._last)
+        upto = self._grid.n if final else min(self._grid.n, k_now)
         if upto > self._committed and self._journal is not None:
-            self._journal.append(format_rows(self._committed, self._rows(self._committed, upto), self.fps),
+            self._journal.append(format_rows(self._committed, self._grid.rows(self._committed, upto), self.fps),
                                  self._committed)
             self._committed = upto
             self._watch_journal()
@@ -197,16 +210,16 @@ class RecorderSink(Sink):
             log.warning("%s: nothing was played, no file written", self.name)
             return
         self._advance(time.perf_counter())  # the silent tail up to the stop is held ...
-        self._fill(self._n, self._n + 1, np.zeros(len(self.actuators)))  # ... then the turn-off
+        self._grid.fill(self._grid.n, self._grid.n + 1, np.zeros(len(self.actuators)))  # ... then the turn-off
         self._advance(time.perf_counter(), final=True)
         journal = self._journal
         if journal is not None:
             await asyncio.to_thread(journal.close)
             self._watch_journal()
             self._journal = None
-        track = HapticTrack(intensities=self.rows(), fps=self.fps, actuators=self.actuators, layout=self.layout,
-                            meta={**self.meta, "live": True})
         try:
+            track = HapticTrack(intensities=self.rows(), fps=self.fps, actuators=self.actuators, layout=self.layout,
+                                meta={**self.meta, "live": True})
             await asyncio.to_thread(save_track, track, self.path)
         except Exception as exc:  # the show is over; say so loudly rather than lose the take silently
             self.error = str(exc) or exc.__class__.__name__
