@@ -126,6 +126,30 @@ def test_report_covers_every_clip_without_nan(report):
     assert not list(out.glob("*.part"))
 
 
+def mirrored_locus_cm(track: HapticTrack, motion, facts) -> float:
+    """The locus error of ``track`` scored as if its mirroring were the other one (cm)."""
+    wrong = HapticTrack(track.intensities, track.fps, track.actuators, layout=track.layout,
+                        meta={**track.meta, "mirror": not track.meta["mirror"]}, debug=track.debug)
+    return score_track(wrong, motion, facts=facts)["locus_cm"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("clip", CLIPS, ids=lambda p: p.stem)
+def test_mirrored_locus_is_worse(clip):
+    """The locus metric's sanity on renders whose side is clear: the default preset keeps the active hand's side
+    (its felt locus lies off the midline while a hand leads), so scoring a render as if mirrored puts the centroid on
+    the wrong side, more than twice as far from the renderer's target (2.3-9.0x on these recordings)."""
+    from hapmotion.metrics.scorecard import motion_facts
+    from hapmotion.motion_files import load_motion
+
+    motion = load_motion(clip)
+    facts = motion_facts(motion)
+    for method in ("mst", "baseline"):
+        track = render(motion, method=method)
+        assert mirrored_locus_cm(track, motion, facts) > 2 * score_track(track, motion, facts=facts)["locus_cm"], \
+            method
+
+
 @pytest.mark.slow
 def test_report_values_are_sane(report):
     rep, _ = report
@@ -146,10 +170,12 @@ def test_report_values_are_sane(report):
             assert shifted["reach_lag_ms"] == pytest.approx(s["reach_lag_ms"] + 1000 * k / t.fps,
                                                              abs=1000 / t.fps + 1e-6)  # within one frame
         # the locus is read in the performer's frame: scoring the mirrored track as if it were not mirrored puts
-        # the centroid on the wrong side, more than twice as far from the target
-        wrong = HapticTrack(t.intensities, t.fps, t.actuators, layout=t.layout,
-                            meta={**t.meta, "mirror": not t.meta["mirror"]}, debug=t.debug)
-        assert score_track(wrong, clip.motion, facts=clip.facts)["locus_cm"] > 2 * s["locus_cm"]
+        # the centroid on the wrong side, more than twice as far from the target. Not for energy's MST: it keeps two
+        # hands that both carry weight one triangle, so two arms swinging alike are felt on the midline, where
+        # mirroring moves nothing (CMU 01_01 1.3x, the two-hand wave 1.8x); test_mirrored_locus_is_worse checks the
+        # metric on every recording with the default preset, whose side is clear
+        if (run.method, run.preset) != ("mst", "energy"):
+            assert mirrored_locus_cm(t, clip.motion, clip.facts) > 2 * s["locus_cm"], (run.clip, run.method)
         # power above the motors' bandwidth: the two-sided spectrum's share at |f| above it, pooled over actuators
         x = t.intensities / 100.0
         power = (np.abs(np.fft.fft(x - x.mean(axis=0), axis=0)) ** 2).sum(axis=1)
