@@ -165,9 +165,10 @@ def test_report_values_are_sane(report):
         late[k:] = t.intensities[:-k]
         shifted = score_track(HapticTrack(late, t.fps, t.actuators, layout=t.layout, meta=t.meta, debug=t.debug),
                               clip.motion, facts=clip.facts)
-        # ... nor a flat one: energy's MST on the one-hand wave keeps the raised arm's reach, a slow plateau, so
-        # r(reach, felt total) is 0.66-0.69 from -10 to 0 frames and a 6-frame shift moves no peak
-        flat = (run.clip, run.method, run.preset) == ("dataset-1_byebye_happy_001", "mst", "energy")
+        # ... nor a flat one: on the one-hand wave the raised arm's reach is a slow plateau, so r(reach, felt total)
+        # is flat over a third of a second (energy's MST: 0.66-0.69 from -10 to 0 frames) and with the moving-hand
+        # gate a 6-frame shift moves no peak (energy's MST, paper's baseline)
+        flat = run.clip == "dataset-1_byebye_happy_001"
         if s["reach_rho"] >= 0.5 and abs(s["reach_lag_ms"]) <= 300 and not flat:
             lag_checked += 1
             assert shifted["reach_lag_ms"] == pytest.approx(s["reach_lag_ms"] + 1000 * k / t.fps,
@@ -190,13 +191,12 @@ def test_report_values_are_sane(report):
         assert s["dead_zone"] == pytest.approx(np.count_nonzero(sent & ~running) / np.count_nonzero(sent))
     assert lag_checked >= 3
     # the energy preset's dead-zone lift (10 %) equals the motor model's start threshold (10 %): no command it sends
-    # stalls, while a share of the paper preset's do (it has no lift: 8-77 % of its MST commands on these recordings;
-    # 13-62 % before its glide, which holds the point between motors less often on the punches)
+    # stalls, while a share of the paper preset's do (it has no lift: 18-77 % of its MST commands on these recordings)
     for clip in {r.clip for r in rep.runs}:
         for method in ("mst", "baseline"):
             energy, paper = by[(clip, method, "energy")].scores, by[(clip, method, "paper")].scores
             assert energy["dead_zone"] == 0.0
-            assert paper["dead_zone"] > 0.05
+            assert paper["dead_zone"] > 0.1
 
 
 @pytest.mark.slow
