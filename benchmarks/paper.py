@@ -19,10 +19,12 @@ Run::
 
     PYTHONPATH=src python3 -m benchmarks.paper                       # paper and the default preset
     PYTHONPATH=src python3 -m benchmarks.paper --preset paper --preset "paper:idle_choice=keep"
+    PYTHONPATH=src python3 -m benchmarks.paper --preset paper+literal  # the pipeline as the paper writes it
     PYTHONPATH=src python3 -m benchmarks.paper --variants            # paper with each earlier reading restored
 
 ``NAME:field=value,...`` measures a preset with some fields changed; ``--variants`` adds the named variants of
-``hapmotion.renderer.params.PAPER_VARIANTS`` (the earlier readings of the paper), one column each.
+``hapmotion.renderer.params.PAPER_VARIANTS`` (the pipeline as written, without the non-paper choice hold, glide and
+moving-hand gate, and the earlier readings of the paper), one column each.
 """
 
 from __future__ import annotations

@@ -126,6 +126,30 @@ def test_report_covers_every_clip_without_nan(report):
     assert not list(out.glob("*.part"))
 
 
+def mirrored_locus_cm(track: HapticTrack, motion, facts) -> float:
+    """The locus error of ``track`` scored as if its mirroring were the other one (cm)."""
+    wrong = HapticTrack(track.intensities, track.fps, track.actuators, layout=track.layout,
+                        meta={**track.meta, "mirror": not track.meta["mirror"]}, debug=track.debug)
+    return score_track(wrong, motion, facts=facts)["locus_cm"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("clip", CLIPS, ids=lambda p: p.stem)
+def test_mirrored_locus_is_worse(clip):
+    """The locus metric's sanity on renders whose side is clear: the default preset keeps the active hand's side
+    (its felt locus lies off the midline while a hand leads), so scoring a render as if mirrored puts the centroid on
+    the wrong side, more than twice as far from the renderer's target (2.3-9.0x on these recordings)."""
+    from hapmotion.metrics.scorecard import motion_facts
+    from hapmotion.motion_files import load_motion
+
+    motion = load_motion(clip)
+    facts = motion_facts(motion)
+    for method in ("mst", "baseline"):
+        track = render(motion, method=method)
+        assert mirrored_locus_cm(track, motion, facts) > 2 * score_track(track, motion, facts=facts)["locus_cm"], \
+            method
+
+
 @pytest.mark.slow
 def test_report_values_are_sane(report):
     rep, _ = report
@@ -141,15 +165,21 @@ def test_report_values_are_sane(report):
         late[k:] = t.intensities[:-k]
         shifted = score_track(HapticTrack(late, t.fps, t.actuators, layout=t.layout, meta=t.meta, debug=t.debug),
                               clip.motion, facts=clip.facts)
-        if s["reach_rho"] >= 0.5 and abs(s["reach_lag_ms"]) <= 300:
+        # ... nor a flat one: on the one-hand wave the raised arm's reach is a slow plateau, so r(reach, felt total)
+        # is flat over a third of a second (energy's MST: 0.66-0.69 from -10 to 0 frames) and with the moving-hand
+        # gate a 6-frame shift moves no peak (energy's MST, paper's baseline)
+        flat = run.clip == "dataset-1_byebye_happy_001"
+        if s["reach_rho"] >= 0.5 and abs(s["reach_lag_ms"]) <= 300 and not flat:
             lag_checked += 1
             assert shifted["reach_lag_ms"] == pytest.approx(s["reach_lag_ms"] + 1000 * k / t.fps,
                                                              abs=1000 / t.fps + 1e-6)  # within one frame
         # the locus is read in the performer's frame: scoring the mirrored track as if it were not mirrored puts
-        # the centroid on the wrong side, more than twice as far from the target
-        wrong = HapticTrack(t.intensities, t.fps, t.actuators, layout=t.layout,
-                            meta={**t.meta, "mirror": not t.meta["mirror"]}, debug=t.debug)
-        assert score_track(wrong, clip.motion, facts=clip.facts)["locus_cm"] > 2 * s["locus_cm"]
+        # the centroid on the wrong side, more than twice as far from the target. Not for energy's MST: it keeps two
+        # hands that both carry weight one triangle, so two arms swinging alike are felt on the midline, where
+        # mirroring moves nothing (CMU 01_01 1.3x, the two-hand wave 1.8x); test_mirrored_locus_is_worse checks the
+        # metric on every recording with the default preset, whose side is clear
+        if (run.method, run.preset) != ("mst", "energy"):
+            assert mirrored_locus_cm(t, clip.motion, clip.facts) > 2 * s["locus_cm"], (run.clip, run.method)
         # power above the motors' bandwidth: the two-sided spectrum's share at |f| above it, pooled over actuators
         x = t.intensities / 100.0
         power = (np.abs(np.fft.fft(x - x.mean(axis=0), axis=0)) ** 2).sum(axis=1)
@@ -161,7 +191,7 @@ def test_report_values_are_sane(report):
         assert s["dead_zone"] == pytest.approx(np.count_nonzero(sent & ~running) / np.count_nonzero(sent))
     assert lag_checked >= 3
     # the energy preset's dead-zone lift (10 %) equals the motor model's start threshold (10 %): no command it sends
-    # stalls, while a share of the paper preset's do (it has no lift: 13-62 % of its commands on these recordings)
+    # stalls, while a share of the paper preset's do (it has no lift: 18-77 % of its MST commands on these recordings)
     for clip in {r.clip for r in rep.runs}:
         for method in ("mst", "baseline"):
             energy, paper = by[(clip, method, "energy")].scores, by[(clip, method, "paper")].scores

@@ -16,9 +16,8 @@ from hapmotion.renderer.params import PAPER_VARIANTS, PRESETS
 from hapmotion.renderer.steps.choice import appended_weights, choose_weighted
 from hapmotion.skeleton.joints import JOINT_INDEX
 
-STEADY_ENERGY = PRESETS["energy"].replace(active_speed_mps=0.2, weight_window_s=0.05, two_active="held",
-                                          choice_hold_s=0.2, point_smoothing_s=0.1)
-"""``energy`` with the steps that make its MST steadier than its baseline (docs/algorithm.md)."""
+STEADY_ENERGY = PRESETS["energy"]
+"""``energy``, whose steps make its MST steadier than its baseline (docs/algorithm.md)."""
 
 
 def run_appends(frames, n):
@@ -85,8 +84,9 @@ def test_paper_keeps_a_jerked_hand_weighted_for_three_frames_at_60_hz():
     the weight is back to 1 on frame 22."""
     frames = jerk_frames()
     motion = motion_from_frames(frames, fps=60.0)
-    acc = hapmotion.render(motion, preset="paper").debug["dynamic_point"]
-    per_frame = hapmotion.render(motion, params=PRESETS["paper"].replace(**PAPER_VARIANTS["frame-weights"]))
+    literal = PRESETS["paper"].replace(**PAPER_VARIANTS["literal"])  # Eq. 1's point, without the hold and glide
+    acc = hapmotion.render(motion, params=literal).debug["dynamic_point"]
+    per_frame = hapmotion.render(motion, params=literal.replace(**PAPER_VARIANTS["frame-weights"]))
     hl, sr, jt = (frames[25, JOINT_INDEX[k]] for k in ("HAND_LEFT", "SHOULDER_RIGHT", "SPINE_NAVEL"))
     for t in (20, 21, 22, 23):
         np.testing.assert_allclose(acc[t], (3 * hl + sr + jt) / 5, atol=1e-9)

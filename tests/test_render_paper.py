@@ -21,9 +21,14 @@ LAYOUT = load_layout()
 IDS = LAYOUT.actuators
 
 
+LITERAL = PRESETS["paper"].replace(**PAPER_VARIANTS["literal"])
+"""The ``paper`` preset without its choice hold and glide: the pipeline as the paper writes it."""
+
+
 def render_paper(motion, **options):
-    """The ``paper`` preset, named: these tests check the paper's own numbers, not the default preset's."""
-    return hapmotion.render(motion, preset="paper", **options)
+    """The paper's pipeline as written (``paper+literal``): these tests check the paper's own steps and numbers,
+    not the default preset's nor the hold and glide ``paper`` adds (tests/test_render_steady.py checks those)."""
+    return hapmotion.render(motion, params=LITERAL, **options)
 
 
 def col(name: str) -> int:
@@ -71,7 +76,7 @@ def test_intensity_filter_eq2_by_hand():
 def test_the_earlier_13_to_185_cm_reading_stays_available_as_a_variant():
     """``PAPER_VARIANTS["range-185"]``: D = (d - 0.13) / (1.85 - 0.13), the earlier reading."""
     hand = (0.89, 1.45, 0.0)
-    params = PRESETS["paper"].replace(**PAPER_VARIANTS["range-185"])
+    params = LITERAL.replace(**PAPER_VARIANTS["range-185"])
     track = hapmotion.render(still(pose(HAND_LEFT=hand), n=8), params=params)
     d = track.debug["distance"][0]
     expected = [6 * (d - 0.13) / 1.72 * (1 - 0.5 ** t) for t in range(1, 9)]
@@ -129,7 +134,7 @@ def test_on_the_body_under_13_cm_is_felt():
     expected = [6 * d[0] / 0.35 * (1 - 0.5 ** t) for t in range(1, 11)]
     np.testing.assert_allclose(track.debug["level"], expected, rtol=1e-12)
     assert track.intensities[-1].max() > 0.0
-    earlier = hapmotion.render(still(p, n=10), params=PRESETS["paper"].replace(**PAPER_VARIANTS["range-185"]))
+    earlier = hapmotion.render(still(p, n=10), params=LITERAL.replace(**PAPER_VARIANTS["range-185"]))
     assert earlier.intensities.max() == 0.0
 
 
@@ -210,7 +215,7 @@ def test_no_active_hand_re_picks_the_farther_hand():
     frames[20:, JOINT_INDEX["HAND_LEFT"], 0] += 0.05
     farther = render_paper(motion_from_frames(frames)).debug["active"]
     keep = hapmotion.render(motion_from_frames(frames),
-                            params=PRESETS["paper"].replace(**PAPER_VARIANTS["keep-last"])).debug["active"]
+                            params=LITERAL.replace(**PAPER_VARIANTS["keep-last"])).debug["active"]
     assert (farther[20] == [1, 0]).all() and (keep[20] == [1, 0]).all()
     assert (farther[-1] == [0, 1]).all()
     assert (keep[-1] == [1, 0]).all()

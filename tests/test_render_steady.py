@@ -12,7 +12,7 @@ import hapmotion
 from hapmotion.body.model import BodyModel
 from hapmotion.renderer.packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_NONE, CHOICE_RIGHT, ST_CHOICE, ST_PENDING_N,
                                        new_state)
-from hapmotion.renderer.params import PRESETS
+from hapmotion.renderer.params import PAPER_VARIANTS, PRESETS
 from hapmotion.renderer.steps.choice import held_choice
 from hapmotion.skeleton.joints import JOINT_INDEX
 
@@ -65,8 +65,9 @@ def test_the_point_glides_with_the_time_constant():
     world and body coordinates differ by a fixed offset and rotation)."""
     frames = np.repeat(pose(HAND_LEFT=(0.6, 1.3, 0.3))[None], 120, axis=0)
     frames[60:, JOINT_INDEX["HAND_LEFT"]] = (0.6, 1.3, 0.6)
-    params = PRESETS["paper"].replace(point_smoothing_s=0.1)
-    sharp = hapmotion.render(motion_from_frames(frames), params=PRESETS["paper"]).debug["dynamic_point"]
+    literal = PRESETS["paper"].replace(**PAPER_VARIANTS["literal"])  # Eq. 1's point, unglided
+    params = literal.replace(point_smoothing_s=0.1)
+    sharp = hapmotion.render(motion_from_frames(frames), params=literal).debug["dynamic_point"]
     soft = hapmotion.render(motion_from_frames(frames), params=params).debug["dynamic_point"]
     alpha = 1.0 - np.exp(-1.0 / (60 * 0.1))
     want = sharp.copy()

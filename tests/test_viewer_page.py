@@ -14,6 +14,7 @@ import hapmotion
 from hapmotion.cli import main
 from hapmotion.skeleton.joints import JOINT_INDEX
 from hapmotion.motion import new_motion
+from hapmotion.renderer.params import PAPER_VARIANTS, PRESETS
 from hapmotion.viewer import write_page
 from hapmotion.track_files.sniff import is_track_file
 from hapmotion.viewer.page import AudioPart, load_audio_part, read_page
@@ -68,8 +69,10 @@ def test_triangle_vertices_follow_the_paper_rule_by_hand():
 
 def test_dynamic_point_lies_inside_the_drawn_triangle_on_a_real_clip(salsa):
     # Eq. 1 makes the dynamic point a positive-weight mix of the triangle's corners: if the page drew another
-    # triangle than the renderer used, the point would leave it.
-    motion, (mst, _) = salsa
+    # triangle than the renderer used, the point would leave it. Rendered as the paper writes it: the `paper`
+    # preset's glide trails Eq. 1's point, which may then lie outside the current triangle.
+    motion, _ = salsa
+    mst = hapmotion.render(motion, params=PRESETS["paper"].replace(**PAPER_VARIANTS["literal"]))
     tri = triangle_vertices(mst.debug["active"], motion)
     corners = motion.positions[np.arange(motion.n_frames)[:, None], tri]          # (T, 3 corners, 3)
     a = np.stack([corners[:, 0] - corners[:, 2], corners[:, 1] - corners[:, 2]], axis=-1)

@@ -236,7 +236,8 @@ def held_choice(choice, idle, state, hold_frames):
     frames without a contrary choice; until then the current choice (``state[ST_CHOICE]``) stays.
 
     ``idle`` (no hand above its threshold this frame, so ``choice`` only repeats or re-picks) neither confirms nor
-    breaks a pending change: it keeps counting. A frame that makes the current choice again cancels it, another
+    breaks a pending change: it keeps counting; with no change pending, an idle re-pick of the other hand (the
+    farther hand, ``idle_choice = "farther"``) starts one, so the hold delays that re-pick instead of disabling it. A frame that makes the current choice again cancels it, another
     choice starts a new one. 0 or 1 frame, or no current choice yet: the choice is taken at once (the paper).
     Updates the pending choice and its count in ``state``.
 
@@ -250,6 +251,9 @@ def held_choice(choice, idle, state, hold_frames):
     if idle:
         if state[ST_PENDING_N] > 0.0:
             state[ST_PENDING_N] += 1.0
+        elif choice != current:  # an idle re-pick (``idle_choice = "farther"``) is a change too, held as any other
+            state[ST_PENDING] = choice
+            state[ST_PENDING_N] = 1.0
     elif choice == current:
         state[ST_PENDING_N] = 0.0
     elif int(state[ST_PENDING]) == choice and state[ST_PENDING_N] > 0.0:
