@@ -8,7 +8,9 @@ starts plays it from its first frame. A delete or purge of the key is a message 
 
 Each value must be the venue's (:class:`~hapmotion.audience.signing.SeatTrust`), parse
 (:func:`~hapmotion.audience.wire.parse_description`) and be no older than the description the seat plays (a
-replayed description is refused); every problem is logged once and the seat goes on waiting.
+replayed description is refused; on an unsigned show, one ``issued`` more than a minute ahead of the seat's clock
+is refused too, so a forged one cannot lock the real ones out); every problem is logged once and the seat goes on
+waiting.
 """
 
 from __future__ import annotations
@@ -36,6 +38,10 @@ REFRESH_S = 1.0
 """A seat reads the stored description again at most this often."""
 QUEUE = 16
 """Values kept while the seat is busy; the oldest goes first (only the latest matters)."""
+FUTURE_SLACK_S = 60.0
+"""An unsigned (rehearsal) show's description may be ``issued`` at most this far ahead of the seat's clock (two
+machines' clocks differ by that much at most once synchronised): anyone may store one, and one from the far future
+would otherwise have every later real description refused as older (a replay) until the seat restarts."""
 
 
 class DescriptionWatch:
@@ -130,6 +136,11 @@ class DescriptionWatch:
             desc = parse_description(message, self.show)
         except InputError as exc:
             self._refuse("invalid", str(exc))
+            return None
+        ahead = desc.issued - time.time()
+        if not self.trust.signed and ahead > FUTURE_SLACK_S:
+            self._refuse("invalid", f"show description {self.show}: issued more than {FUTURE_SLACK_S:g} s ahead "
+                                    f"of this seat's clock (forged, or a publisher's clock set wrong)")
             return None
         if self.latest is not None and desc.issued < self.latest.issued:
             self._refuse("replayed", f"show description {self.show}: run {desc.epoch} is older than run "

@@ -38,6 +38,7 @@ import json
 import math
 import re
 import struct
+import sys
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
@@ -149,6 +150,33 @@ def decode_frame(data: bytes, n_music: int) -> WireFrame:
     return WireFrame(int(epoch), int(seq), float(media_t), float(wall_t), skeleton, music)
 
 
+# ---------------------------------------------------------------------------------------------------- numbers
+def json_number(value: Any, what: str) -> float:
+    """A JSON number of a received message as a finite float; ValueError naming ``what`` otherwise.
+
+    Python's ``json`` reads an integer of any length (up to 4300 digits) and ``1e400`` as ``inf``: a 400-digit
+    integer has no float (``float()`` raises OverflowError, as ``math.isfinite`` does), so every number a seat
+    reads from the wire passes here first. A bool, NaN, an infinity or a subnormal float (below
+    ``sys.float_info.min``, 2.2e-308, where no field of this protocol has a meaning) is refused too."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        raise ValueError(f"{what}: expected a number, found {type(value).__name__}")
+    try:
+        number = float(value)
+    except (OverflowError, ValueError):  # an integer beyond float range: do not print its digits
+        raise ValueError(f"{what}: expected a number, found an integer beyond float range") from None
+    if not math.isfinite(number) or (number != 0.0 and abs(number) < sys.float_info.min):
+        raise ValueError(f"{what}: expected a finite number, found {number!r}")
+    return number
+
+
+def _description_number(value: Any, src: str, key: str) -> float:
+    """:func:`json_number` for a description's field: InputError naming ``key``."""
+    try:
+        return json_number(value, key)
+    except ValueError as exc:
+        raise InputError(src, key, str(exc).partition(": ")[2][:200]) from None
+
+
 # ---------------------------------------------------------------------------------------------------- events
 def encode_event(**fields: Any) -> bytes:
     """A cue or end event: a small JSON object (``epoch``, ``seq``, ``t`` and, for cues, ``name``, ``gain``)."""
@@ -156,7 +184,8 @@ def encode_event(**fields: Any) -> bytes:
 
 
 def decode_event(data: bytes) -> dict[str, Any]:
-    """ValueError when the event is not a JSON object with a whole ``epoch`` and ``seq`` and a finite ``t``."""
+    """ValueError when the event is not a JSON object with a whole ``epoch`` and ``seq`` (u32), a finite ``t`` and, when
+    it has one, a finite ``gain`` (both returned as floats, :func:`json_number`)."""
     if len(data) > 4096:
         raise ValueError(f"event of {len(data)} bytes, at most 4096")
     try:
@@ -168,10 +197,11 @@ def decode_event(data: bytes) -> dict[str, Any]:
     epoch, t, seq = obj.get("epoch"), obj.get("t"), obj.get("seq")
     if not isinstance(epoch, int) or isinstance(epoch, bool):
         raise ValueError("event without a whole epoch")
-    if not isinstance(seq, int) or isinstance(seq, bool) or seq < 0:
-        raise ValueError("event without a whole sequence number seq")
-    if not isinstance(t, (int, float)) or isinstance(t, bool) or not math.isfinite(t):
-        raise ValueError("event without a finite media time t")
+    if not isinstance(seq, int) or isinstance(seq, bool) or not 0 <= seq <= 0xFFFFFFFF:
+        raise ValueError("event without a whole sequence number seq (a u32, as a frame's)")
+    obj["t"] = json_number(t, "event media time t")
+    if "gain" in obj:
+        obj["gain"] = json_number(obj["gain"], "event gain")
     return obj
 
 
@@ -267,8 +297,8 @@ def parse_description(data: bytes, show: str) -> ShowDescription:
     epoch = need("epoch", int, "a whole number")
     if not 0 <= epoch <= 0xFFFFFFFF:
         raise InputError(src, "epoch", f"expected 0..{0xFFFFFFFF}, found {epoch}")
-    fps = float(need("fps", (int, float), "frames per second"))
-    if not (math.isfinite(fps) and FPS_RANGE[0] <= fps <= FPS_RANGE[1]):
+    fps = _description_number(obj.get("fps"), src, "fps")
+    if not FPS_RANGE[0] <= fps <= FPS_RANGE[1]:
         raise InputError(src, "fps", f"expected {FPS_RANGE[0]:g}..{FPS_RANGE[1]:g}, found {fps}")
     layout = obj.get("layout", "")
     if not isinstance(layout, str) or len(layout) > 200:
@@ -279,27 +309,29 @@ def parse_description(data: bytes, show: str) -> ShowDescription:
     if obj.get("joints") != list(JOINTS):
         raise InputError(src, "joints", "expected the 32 canonical joints in order")
     render = _check_render(need("render", dict, "an object"), src)
+    body = need("body", dict, "an object")
+    for key, value in body.items():  # numbers the body model could not even compare (a 400-digit integer)
+        if isinstance(value, (int, float)):
+            _description_number(value, src, f"body.{key}"[:100])
     try:
-        body = BodyModel.from_dict(need("body", dict, "an object")).to_dict()
+        body = BodyModel.from_dict(body).to_dict()
     except ValueError as exc:
         key, _, problem = str(exc).partition(": ")
         raise InputError(src, key, problem[:200]) from None
     music = None
     if render["mode"] != "motion":
         music = _check_music(obj.get("music"), len(actuators), src, render["mode"])
-    stall_ms = obj.get("stall_ms", 250.0)
-    if not (isinstance(stall_ms, (int, float)) and not isinstance(stall_ms, bool)
-            and math.isfinite(stall_ms) and 0 < stall_ms <= MAX_STALL_MS):
-        raise InputError(src, "stall_ms", f"expected 1..{MAX_STALL_MS:g} ms, found {stall_ms!r}"[:200])
-    issued = obj.get("issued", 0.0)
-    if not (isinstance(issued, (int, float)) and not isinstance(issued, bool) and math.isfinite(issued)
-            and issued >= 0):
-        raise InputError(src, "issued", f"expected a time stamp, found {issued!r}"[:200])
+    stall_ms = _description_number(obj.get("stall_ms", 250.0), src, "stall_ms")
+    if not 0 < stall_ms <= MAX_STALL_MS:
+        raise InputError(src, "stall_ms", f"expected 1..{MAX_STALL_MS:g} ms, found {stall_ms!r}")
+    issued = _description_number(obj.get("issued", 0.0), src, "issued")
+    if issued < 0:
+        raise InputError(src, "issued", f"expected a time stamp, found {issued!r}")
     frame_version, frame_joints, rate = 1, JOINTS, None
     if obj["version"] == VERSION_FRAMES:
         frame_version, frame_joints, rate = _check_frames(obj.get("frames"), fps, src)
-    return ShowDescription(show, epoch, fps, layout, tuple(actuators), render, body, music, float(stall_ms),
-                           float(issued), frame_version, frame_joints, rate)
+    return ShowDescription(show, epoch, fps, layout, tuple(actuators), render, body, music, stall_ms,
+                           issued, frame_version, frame_joints, rate)
 
 
 def _check_frames(frames: Any, fps: float, src: str) -> tuple[int, tuple[str, ...], Optional[float]]:
@@ -309,7 +341,7 @@ def _check_frames(frames: Any, fps: float, src: str) -> tuple[int, tuple[str, ..
     if not isinstance(frames, dict):
         raise InputError(src, "frames", "a version-2 description needs its frames object")
     version = frames.get("version")
-    if version not in (1, 2) or isinstance(version, bool):
+    if version not in (1, 2) or not isinstance(version, int) or isinstance(version, bool):
         raise InputError(src, "frames.version", f"expected 1 or 2, found {version!r}"[:200])
     joints = frames.get("joints")
     if not isinstance(joints, list):
@@ -320,10 +352,9 @@ def _check_frames(frames: Any, fps: float, src: str) -> tuple[int, tuple[str, ..
             and [JOINTS.index(j) for j in joints] == sorted({JOINTS.index(j) for j in joints})):
         raise InputError(src, "frames.joints", "expected 1 to 32 canonical joint names, each once, in canonical "
                                                "order")
-    rate = frames.get("rate")
-    if not (isinstance(rate, (int, float)) and not isinstance(rate, bool) and math.isfinite(rate) and rate > 0):
-        raise InputError(src, "frames.rate", f"expected frames per second, found {rate!r}"[:200])
-    steps = fps / rate
+    rate = _description_number(frames.get("rate"), src, "frames.rate")
+    # the bounds first: a rate of 5e-324 would make fps / rate infinite (and round() of it an OverflowError)
+    steps = fps / rate if fps / (MAX_RATE_STEPS + 0.5) <= rate <= fps * (1 + 1e-6) else 0.0
     if not (abs(steps - round(steps)) < 1e-6 and 1 <= round(steps) <= MAX_RATE_STEPS):
         raise InputError(src, "frames.rate", f"expected the render rate {fps:g} divided by 1 to {MAX_RATE_STEPS}, "
                                              f"found {rate:g}")
@@ -347,9 +378,11 @@ def _check_render(render: dict, src: str) -> dict[str, Any]:
         default = getattr(base, name, None)
         if default is None:
             raise InputError(src, f"render.overrides.{name}"[:100], "not a renderer parameter")
+        if isinstance(value, (int, float)) and not isinstance(value, bool):  # a finite float first
+            _description_number(value, src, f"render.overrides.{name}"[:100])
         same_kind = (isinstance(value, bool) if isinstance(default, bool) else
                      isinstance(value, str) if isinstance(default, str) else
-                     isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value))
+                     isinstance(value, (int, float)) and not isinstance(value, bool))
         if not same_kind:
             raise InputError(src, f"render.overrides.{name}",
                              f"expected a {type(default).__name__} like {default!r}, found {value!r}"[:200])
@@ -371,9 +404,8 @@ def _check_music(music: Any, n_actuators: int, src: str, mode: str) -> dict[str,
     except UsageError as exc:
         key, _, problem = str(exc).partition(": ")
         raise InputError(src, key, problem) from None
-    offset = music.get("audio_offset_s", 0.0)
-    if not (isinstance(offset, (int, float)) and not isinstance(offset, bool) and math.isfinite(offset)
-            and abs(offset) <= MAX_AUDIO_OFFSET_S):
+    offset = _description_number(music.get("audio_offset_s", 0.0), src, "music.audio_offset_s")
+    if not abs(offset) <= MAX_AUDIO_OFFSET_S:
         raise InputError(src, "music.audio_offset_s", f"expected seconds within +-{MAX_AUDIO_OFFSET_S:g}")
     params = music.get("audio_params", {})
     return {**checked, "audio_offset_s": float(offset), "audio_params": params if isinstance(params, dict) else {}}

@@ -186,6 +186,9 @@ class OutputStage:
             raise UsageError(f"music.mix_ratio: expected [audio, motion] weights, found {ratio!r}"[:200])
         try:
             ratio = check_ratio(ratio)
+        except OverflowError:  # a JSON integer of hundreds of digits has no float
+            raise UsageError("music.mix_ratio: expected [audio, motion] weights, found a number beyond float "
+                             "range") from None
         except UsageError as exc:
             raise UsageError(f"music.mix_ratio: {exc}") from None
         rule, preset = settings.get("mix_rule", "duck"), settings.get("params_preset", "felt")
@@ -194,8 +197,9 @@ class OutputStage:
         if not isinstance(preset, str) or preset not in PRESETS:
             raise UsageError(f"music.params_preset: expected one of {', '.join(PRESETS)}, found {preset!r}"[:200])
         limit = settings.get("power_limit")
+        # compared before math.isfinite: a 400-digit integer compares fine but has no float (OverflowError)
         if limit is not None and not (isinstance(limit, (int, float)) and not isinstance(limit, bool)
-                                      and math.isfinite(limit) and 0 < limit <= n_actuators):
+                                      and 0 < limit <= n_actuators and math.isfinite(limit)):
             raise UsageError(f"music.power_limit: expected null or a number in (0, {n_actuators}] (every motor at "
                              f"full drive), found {limit!r}"[:200])
         ceiling = show_power_limit(n_actuators)
