@@ -20,6 +20,21 @@ Whole percents (one byte per actuator, no palette) would be 13 bytes smaller but
 before the Player rounds, and whole-percent music changed a Player percent on 13-25 % of frames of real
 recordings. The seat decodes both versions; a compact frame's joints and music are the very float32 numbers a
 version-1 frame carries, so a seat renders the same rows from either.
+
+Packed frames (frame version 3, a ``nats://`` sink's ``frames=compact&pack=N``): the compact rows of up to N
+consecutive rendered frames in one message, so a 60 fps show goes out at 30 messages a second (``pack=2``) and every
+seat still renders each 60 fps frame exactly::
+
+    offset size  field
+     0     32    the header with version 3 (media_t: the first frame's; seq numbers the messages)
+    32     1     c, the frames in this message: 1..N (fewer only when the run ends mid-message)
+    33     ...   the first frame's joints and music, as in a compact frame
+    ...    8     the next frame's media_t (float64, after the one before), then its joints and music; c frames
+
+Why: a server's cost is per message, whatever its size (docs/audience.md, "Measured"), so 30 messages a second
+carry the audience of a 30 Hz stream; a 30 Hz stream interpolated by a cubic missed the 60 Hz render's side on fast
+dance (:mod:`hapmotion.audience.interpolation`). Each frame carries its media time because a live show's frames are
+not always one render interval apart.
 """
 
 from __future__ import annotations
