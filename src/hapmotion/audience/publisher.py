@@ -260,8 +260,9 @@ class NatsPublisherSink(Sink):
         music = self.music.row(frame.t) if self.music is not None else None
         if self._pack > 1:
             if self._held and ((self._held[0][1] is None) != (skeleton is None)
-                               or (self._held[0][2] is None) != (music is None)):
-                await self._send_held()  # a message's frames all have joints (music) or none has: send early
+                               or (self._held[0][2] is None) != (music is None) or frame.t <= self._held[-1][0].t):
+                # a message's frames all have joints (music) or none has, at ascending media times: send early
+                await self._send_held()
             self._held.append((frame, skeleton, music))
             if len(self._held) == self._pack:
                 await self._send_held()
