@@ -24,7 +24,7 @@ from hapmotion.audience.compact import (RENDERER_JOINTS, compact_joints, decode_
 from hapmotion.audience.interpolation import Upsampler
 from hapmotion.audience.listener import seat_show
 from hapmotion.audience.seat import Seat
-from hapmotion.audience.wire import WireFrame, encode_frame, parse_description
+from hapmotion.audience.wire import WireFrame, parse_description
 from hapmotion.body.model import BodyModel
 from hapmotion.errors import InputError
 from hapmotion.renderer.params import METHODS, PRESETS
