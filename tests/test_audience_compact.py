@@ -454,7 +454,8 @@ def test_over_nats_a_packed_30hz_show_plays_at_60_fps_on_a_seat(nats_server, cli
 
     tap, source, stats, engine = asyncio.run(asyncio.wait_for(scenario(), 60))
     assert (source.desc.frame_version, source.desc.pack, source.desc.frame_rate) == (3, 2, 30.0)
-    assert source.interpolation_extra_s == 0.0 and engine.sinks[0].published == 76
+    # 76 messages for 151 frames (fewer if the engine's newest-wins slot dropped a frame under load)
+    assert source.interpolation_extra_s == 0.0 and 70 <= engine.sinks[0].published <= 76
     got = tap.rendered()
     ks = [round(f.t * 60) for _, f in got]
     assert ks == sorted(set(ks)) and len(ks) >= 0.9 * motion.n_frames and ks[-1] == motion.n_frames - 1
