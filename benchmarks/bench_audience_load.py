@@ -72,7 +72,8 @@ class LightConnection(asyncio.Protocol):
                 size = int(chunk[at + 2:eol].split()[-1])
                 payload = chunk[eol + 2:eol + 2 + size]
                 if len(payload) == size:
-                    self.marks["bytes"] = size
+                    if self.marks.get("on"):  # (a packed show's last message, after the window, holds one frame)
+                        self.marks["bytes"] = size
                     offset = PREFIX_BYTES if payload.startswith(ENVELOPE) else 0  # a signed frame's envelope
                     header = HEADER.unpack_from(payload, offset)  # the same 32-byte header in every frame version
                     seq, wall = header[6], header[8]

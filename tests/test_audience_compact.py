@@ -1,7 +1,8 @@
 """Compact frames and a show published below its render rate: the bytes by hand, malformed frames refused, the
 rows a seat renders from compact frames identical to those of today's frames (real recordings, a real song, seat
-settings that change the renderer), a description lacking a joint a seat reads refused, and seat-side
-interpolation of a 30 Hz stream within its stated tolerance of the 60 Hz render on real recordings."""
+settings that change the renderer), a description lacking a joint a seat reads refused, seat-side interpolation of
+a 30 Hz stream within its stated tolerance of the 60 Hz render on real recordings, and packed frames (two rendered
+frames a 30 Hz message) giving rows identical to the 60 Hz render's, offline and over a real nats-server."""
 
 from __future__ import annotations
 
@@ -17,12 +18,13 @@ from support.data import AUDIO, MOTION
 from support.seat_offline import published, seat_rows, venue_show
 
 import hapmotion
-from hapmotion.audience.compact import (RENDERER_JOINTS, compact_joints, decode_compact_frame, encode_compact_frame,
-                                        encode_music, frame_decoder, missing_joints)
+from hapmotion.audience.compact import (RENDERER_JOINTS, compact_joints, decode_compact_frame, decode_packed_frame,
+                                        encode_compact_frame, encode_music, encode_packed_frame, frame_decoder,
+                                        missing_joints)
 from hapmotion.audience.interpolation import Upsampler
 from hapmotion.audience.listener import seat_show
 from hapmotion.audience.seat import Seat
-from hapmotion.audience.wire import WireFrame, encode_frame, parse_description
+from hapmotion.audience.wire import WireFrame, parse_description
 from hapmotion.body.model import BodyModel
 from hapmotion.errors import InputError
 from hapmotion.renderer.params import METHODS, PRESETS
@@ -159,7 +161,7 @@ def test_description_frames_object_checks():
     assert parse_description(desc.to_json(), "offline") == desc
     full, _ = venue_show(motion, None)
     assert json.loads(full.to_json())["version"] == 1 and "frames" not in json.loads(full.to_json())
-    for frames, place in [({"version": 3, "joints": ["PELVIS"], "rate": 30.0}, "frames.version"),
+    for frames, place in [({"version": 4, "joints": ["PELVIS"], "rate": 30.0}, "frames.version"),
                           ({"version": 2, "joints": ["NECK", "PELVIS"], "rate": 30.0}, "frames.joints"),
                           ({"version": 2, "joints": ["PELVIS", "PELVIS"], "rate": 30.0}, "frames.joints"),
                           ({"version": 1, "joints": ["PELVIS"], "rate": 120.0}, "frames.joints"),
@@ -280,6 +282,7 @@ def test_over_nats_a_compact_30hz_show_plays_at_60_fps_on_a_seat(nats_server, cl
     assert source.desc.frame_rate == 30.0 and source.desc.fps == 60.0 and engine.sinks[0].published <= 76
     got = tap.rendered()
     ks = [round(f.t * 60) for _, f in got]
+    ks = [round(f.t * 60) for _, f in got]
     assert ks == sorted(set(ks)) and len(ks) >= 0.9 * motion.n_frames and ks[-1] == motion.n_frames - 2
     assert sum(k % 2 for k in ks) >= 0.4 * len(ks)                     # the frames between, interpolated
     # the same frames decoded and interpolated here, rendered in the order the seat played them
@@ -327,3 +330,147 @@ def test_the_seat_s_delay_absorbs_the_interpolation_s(clips):
     assert extra(half, 0.15) == 0.0 and extra(half, 0.05) == pytest.approx(0.0, abs=1e-12)
     assert extra(half, 0.02) == pytest.approx(0.03) and extra(half, 0.0) == pytest.approx(0.05)
     assert extra(full, 0.0) == 0.0
+
+
+# ---------------------------------------------------------------------------------------------------- packed
+def test_a_packed_frame_byte_by_byte():
+    a, b = np.arange(21, dtype=float).reshape(7, 3) / 10.0, -np.arange(21, dtype=float).reshape(7, 3) / 10.0
+    data = encode_packed_frame(9, 4, 1000.25, [1.5, 1.5 + 1 / 60], [a, b],
+                               [np.array([0.0, 20.5, 0.0]), np.array([100.0, 100.0, 100.0])])
+    # header, count 2; frame 1: 7 x 3 float32, k = 2, two values, three indices; frame 2: its media time, joints,
+    # k = 1, one value, three indices
+    assert len(data) == 32 + 1 + (84 + 1 + 8 + 3) + (8 + 84 + 1 + 4 + 3)
+    assert struct.unpack_from("<2sBBHHIIdd", data) == (b"HM", 3, 1, 7, 3, 9, 4, 1.5, 1000.25)
+    assert data[32] == 2 and data[117] == 2 and struct.unpack_from("<2f", data, 118) == (0.0, 20.5)
+    assert list(data[126:129]) == [0, 1, 0] and struct.unpack_from("<d", data, 129) == (1.5 + 1 / 60,)
+    assert data[221] == 1 and struct.unpack_from("<f", data, 222) == (100.0,) and list(data[226:]) == [0, 0, 0]
+    first, second = decode_packed_frame(data, ROWS, 3, 2)
+    np.testing.assert_array_equal(first.skeleton[ROWS], a.astype(np.float32))
+    np.testing.assert_array_equal(second.skeleton[ROWS], b.astype(np.float32))
+    assert np.isnan(np.delete(second.skeleton, ROWS, axis=0)).all()
+    np.testing.assert_array_equal(second.music, [100.0, 100.0, 100.0])
+    assert (first.media_t, second.media_t, second.seq, second.wall_t) == (1.5, 1.5 + 1 / 60, 4, 1000.25)
+    # the end of a run: one frame alone; music only
+    (alone,) = decode_packed_frame(encode_packed_frame(9, 5, 0.0, [2.0], [None], [np.zeros(3)]), ROWS, 3, 2)
+    assert alone.skeleton is None and alone.media_t == 2.0 and (alone.music == 0).all()
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda b: b[:32], "no frame count"),
+    (lambda b: b[:32] + b"\x00" + b[33:], "0 frames in a message, expected 1 to 2"),
+    (lambda b: b[:32] + b"\x03" + b[33:], "3 frames in a message, expected 1 to 2"),
+    (lambda b: b[:32] + b"\x01" + b[33:], "expected 133"),                   # a second frame a one-frame message lacks
+    (lambda b: b[:2] + b"\x02" + b[3:], "version 2"),
+    (lambda b: b[:133] + struct.pack("<d", 0.5) + b[141:], "media_t 0.5 of frame 2"),
+    (lambda b: b[:133] + struct.pack("<d", float("nan")) + b[141:], "media_t nan of frame 2"),
+    (lambda b: b[:134], "too short for frame 2"),
+    (lambda b: b[:-1], "does not fit"),
+    (lambda b: b + b"\x00", "expected"),
+    (lambda b: b[:-1] + b"\x05", "palette index 5"),
+    (lambda b: b[:141] + struct.pack("<f", float("inf")) + b[145:], "infinite"),
+])
+def test_malformed_packed_frames_are_refused(change, message):
+    good = encode_packed_frame(1, 2, 9.0, [0.5, 0.5 + 1 / 60], [np.zeros((7, 3)), np.ones((7, 3))],
+                               [np.array([0.0, 50.0, 100.0]), np.array([0.0, 50.0, 100.0])])
+    assert len(decode_packed_frame(good, ROWS, 3, 2)) == 2
+    with pytest.raises(ValueError, match=message):
+        decode_packed_frame(change(good), ROWS, 3, 2)
+
+
+@pytest.mark.parametrize("name", ["01_01.bvh", "60_12_scaled.bvh", "gBR_sBM_cAll_d04_mBR0_ch03.pkl"])
+def test_a_seat_renders_the_60hz_rows_from_packed_30hz_messages(clips, name):
+    """Two rendered frames a message at 30 Hz: every seat setting plays each 60 fps frame's row exactly as from
+    today's 60 Hz frames, on real recordings with the song (an odd frame count ends on a message of one frame)."""
+    motion = clips[name]
+    for n in (motion.n_frames, motion.n_frames - 1):                     # both an even and an odd count of frames
+        clip = motion.slice(0, n)
+        full, music = venue_show(clip, SONG)
+        packed, _ = venue_show(clip, SONG, frames="compact", pack=2)
+        assert (packed.frame_version, packed.pack, packed.frame_rate, packed.fps) == (3, 2, 30.0, 60.0)
+        sent_full, sent_packed = published(full, clip, music), published(packed, clip, music)
+        assert len(sent_packed) == (n + 1) // 2 and sent_packed[-1][32] == 2 - n % 2   # an odd count: one alone
+        for label, seat in SEATS.items():
+            t_full, rows_full = seat_rows(full, sent_full, seat)
+            t_packed, rows_packed = seat_rows(packed, sent_packed, seat)
+            np.testing.assert_array_equal(t_packed, t_full)
+            np.testing.assert_array_equal(rows_packed, rows_full, err_msg=f"{name} {n} {label}")
+            assert rows_full.max() > 20, label
+
+
+def test_packed_description_and_sink_options_are_checked(clips):
+    from hapmotion.audience.publisher import frames_choice
+    from hapmotion.errors import UsageError
+
+    motion = clips["01_01.bvh"].slice(0, 10)                                # 60 fps
+    desc, _ = venue_show(motion, None, frames="compact", pack=2)
+    obj = json.loads(desc.to_json())
+    assert obj["version"] == 2 and obj["frames"] == {"version": 3, "joints": list(compact_joints()), "rate": 30.0,
+                                                     "pack": 2}
+    assert parse_description(desc.to_json(), "offline") == desc
+    assert desc.rendering_facts() != venue_show(motion, None, frames="compact", rate=30.0)[0].rendering_facts()
+    for frames, place in [({**obj["frames"], "pack": 3}, "frames.pack"),          # 60 fps at 30 Hz is 2 a message
+                          ({**obj["frames"], "pack": True}, "frames.pack"),
+                          ({k: v for k, v in obj["frames"].items() if k != "pack"}, "frames.pack"),
+                          ({**obj["frames"], "rate": 60.0, "pack": 1}, "frames.pack"),
+                          ({**obj["frames"], "version": 2}, "frames.pack")]:    # one frame a compact message
+        with pytest.raises(InputError, match=place):
+            parse_description(json.dumps({**obj, "frames": frames}).encode(), "offline")
+    assert frames_choice("compact", None, 60.0, "--sink X", pack=2) == (3, 30.0)
+    assert frames_choice("compact", 30.0, 60.0, "--sink X", pack=2) == (3, 30.0)
+    assert frames_choice("compact", None, 60.0, "--sink X", pack=4) == (3, 15.0)
+    for frames, rate, pack, message in [("full", None, 2, "pack=2: expected frames=compact"),
+                                        ("compact", None, 1, "pack=1"), ("compact", None, 9, "pack=9"),
+                                        ("compact", 20.0, 2, "rate=20: packing 2 frames")]:
+        with pytest.raises(UsageError, match=f"--sink X: {message}"):
+            frames_choice(frames, rate, 60.0, "--sink X", pack=pack)
+
+
+def test_over_nats_a_packed_30hz_show_plays_at_60_fps_on_a_seat(nats_server, clips):
+    """A real publisher (``?frames=compact&pack=2``) and seat over a real nats-server: 76 messages for 151 rendered
+    frames (the last alone, sent before the end event), and the seat plays every 60 fps frame, each row exactly
+    the row the seat's renderer and stage give for the 60 Hz frames, one frame 1/60 s after the other."""
+    import asyncio
+
+    from hapmotion.audience import PublisherSecurity, publishing
+    from support.audience import DelayedReplay, Tap, start_seat, stop
+    from support.live_fakes import start_session
+
+    motion = hapmotion.load_motion(MOTION / "gBR_sBM_cAll_d04_mBR0_ch03.pkl").slice(0, 151)
+    url = f"{nats_server.url}/packed"
+
+    async def scenario():
+        tap, task = Tap(), None
+        with publishing(PublisherSecurity(unsigned=True)):
+            show_task, engine = await start_session(DelayedReplay(motion), [f"{url}?frames=compact&pack=2"],
+                                                    audio=SONG)
+        try:
+            task, sessions = await start_seat(url, [lambda d, f: tap], Seat(delay_s=0.15))
+            stats = await show_task
+            await asyncio.sleep(0.5)
+        finally:
+            if task is not None:
+                await stop(task)
+        return tap, sessions[-1][1], stats, engine
+
+    tap, source, stats, engine = asyncio.run(asyncio.wait_for(scenario(), 60))
+    assert (source.desc.frame_version, source.desc.pack, source.desc.frame_rate) == (3, 2, 30.0)
+    # 76 messages for 151 frames (fewer if the engine's newest-wins slot dropped a frame under load)
+    assert source.interpolation_extra_s == 0.0 and 70 <= engine.sinks[0].published <= 76
+    got = tap.rendered()
+    ks = [round(f.t * 60) for _, f in got]
+    assert ks == sorted(set(ks)) and len(ks) >= 0.9 * motion.n_frames and ks[-1] == motion.n_frames - 1
+    assert sum(k % 2 for k in ks) >= 0.4 * len(ks)                     # the second frame of each message
+    # the 60 Hz frames of the same clip, rendered in the order the seat played them
+    full, music = venue_show(motion, SONG)
+    full = dataclasses.replace(full, body=source.desc.body, epoch=source.desc.epoch)
+    frames = {round(f.media_t * 60): f for f in (frame_decoder(1, full.frame_joints, 52)(data)
+                                                  for data in published(full, motion, music))}
+    parts = seat_show(full, Seat(delay_s=0.15))
+    expected = []
+    for k in ks:
+        parts.music.put(frames[k].media_t, frames[k].music)
+        expected.append(parts.stage.step(parts.renderer.step(frames[k].skeleton), frames[k].media_t))
+    np.testing.assert_allclose(np.array([f.row for _, f in got]), np.array(expected), rtol=0, atol=1e-9)
+    played = {round(f.t * 60): w for w, f in got}
+    gaps = [played[k + 1] - played[k] for k in ks if k + 1 in played]
+    assert abs(np.median(gaps) - 1 / 60) < 0.008

@@ -7,7 +7,7 @@ from typing import Optional
 
 import numpy as np
 
-from hapmotion.audience.compact import frame_decoder, frame_encoder
+from hapmotion.audience.compact import frame_encoder, message_decoder, packed_encoder
 from hapmotion.audience.interpolation import Upsampler
 from hapmotion.audience.listener import seat_show
 from hapmotion.audience.publisher import describe_show
@@ -18,14 +18,15 @@ from hapmotion.show.stage import OutputStage
 
 
 def venue_show(motion, song=None, *, frames: str = "full", rate: Optional[float] = None,
-               method: str = "mst", mirror: bool = True):
+               method: str = "mst", mirror: bool = True, pack: Optional[int] = None):
     """(description, music rows ``(T, N)`` or None) of a venue replaying ``motion`` at its own rate with ``song``."""
     show = Show(method=method, audio=song, mirror=mirror)
     layout = show.load_layout()
     mode = "multimodal" if song is not None else "motion"
     stage = OutputStage.for_show(show, mode, layout=layout, fps=motion.fps)
     desc = describe_show("offline", show=show, stage=stage, layout=layout, body=BodyModel.from_motion(motion),
-                         stall_ms=250.0, mirror=mirror, epoch=1, frames=frames, rate=rate)
+                         stall_ms=250.0, mirror=mirror, epoch=1, frames=frames, rate=rate,
+                         pack=pack)
     music = None
     if song is not None:
         music = song_track(show, fps=motion.fps, layout=layout).intensities
@@ -35,7 +36,13 @@ def venue_show(motion, song=None, *, frames: str = "full", rate: Optional[float]
 
 
 def published(desc, motion, music) -> list[bytes]:
-    """The frames the publisher sends for every rendered frame of ``motion`` (every ``fps / rate``-th one)."""
+    """The frames the publisher sends for every rendered frame of ``motion`` (every ``fps / rate``-th one; packed:
+    ``pack`` rendered frames a message, the last message fewer when the run ends mid-message)."""
+    if desc.pack > 1:
+        encode_packed, p = packed_encoder(desc.frame_joints), desc.pack
+        return [encode_packed(desc.epoch, i // p, 1000.0 + i / motion.fps, [k / motion.fps for k in ks],
+                              [motion.positions[k] for k in ks], [None if music is None else music[k] for k in ks])
+                for i in range(0, motion.n_frames, p) for ks in [range(i, min(i + p, motion.n_frames))]]
     encode = frame_encoder(desc.frame_version, desc.frame_joints)
     every = int(round(desc.fps / desc.frame_rate))
     return [encode(desc.epoch, i // every, k / motion.fps, 1000.0 + k / motion.fps, motion.positions[k],
@@ -48,10 +55,10 @@ def seat_rows(desc, frames: list[bytes], seat: Seat = Seat()) -> tuple[np.ndarra
     rate, rendered by the seat's renderer and output stage, zones applied, in the order the seat plays them."""
     parts = seat_show(desc, seat)
     zones = SeatStage(seat, parts.layout)
-    decode = frame_decoder(desc.frame_version, desc.frame_joints, len(desc.actuators))
-    up = Upsampler(desc.fps, desc.frame_rate)
+    decode = message_decoder(desc.frame_version, desc.frame_joints, len(desc.actuators), desc.pack)
+    up = Upsampler(desc.fps, desc.frame_rate * desc.pack)
     times, rows = [], []
-    played = [f for data in frames for f in up.feed(decode(data))] + up.flush()
+    played = [f for data in frames for c in decode(data) for f in up.feed(c)] + up.flush()
     for wf in played:
         if parts.music is not None:
             parts.music.put(wf.media_t, wf.music)

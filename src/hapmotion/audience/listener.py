@@ -49,7 +49,7 @@ from ..show.settings import Show
 from ..show.stage import OutputStage
 from ..show.timeline import RowTimeline
 from .clock import MediaClock
-from .compact import frame_decoder, missing_joints
+from .compact import message_decoder, missing_joints
 from .connection import NatsAuth, connect, connect_error, parse_server_url
 from .cue_gate import CueGate
 from .descriptions import DescriptionWatch
@@ -185,8 +185,8 @@ class AudienceSource(Source):
         self._latest_media_t: Optional[float] = None
         self._subs: list[Subscription] = []
         self._timers: set[asyncio.TimerHandle] = set()
-        self._decode = frame_decoder(desc.frame_version, desc.frame_joints, len(desc.actuators))
-        self.upsampler = Upsampler(desc.fps, desc.frame_rate)
+        self._decode = message_decoder(desc.frame_version, desc.frame_joints, len(desc.actuators), desc.pack)
+        self.upsampler = Upsampler(desc.fps, desc.frame_rate * desc.pack)  # packed frames: nothing to interpolate
         self.interpolation_extra_s = max(0.0, self.upsampler.delay_s - seat.delay_s)
         """The interpolation's delay beyond the seat's ``delay_s`` (which absorbs it), added to every frame."""
         self.published_at: OrderedDict[float, float] = OrderedDict()  # media time -> publisher wall time
@@ -262,10 +262,11 @@ class AudienceSource(Source):
         if data is None:
             return
         try:
-            wf = self._decode(data)
+            carried = self._decode(data)  # one frame, or a packed message's consecutive frames
         except ValueError as exc:
             faults.add("malformed", f"frame: {exc}")
             return
+        wf = carried[-1]  # a packed message's frames share its run, number and contents; the last is the latest
         if wf.epoch != self.desc.epoch:
             faults.add("other_run", f"frames of publisher run {wf.epoch}, not {self.desc.epoch}: waiting for its "
                                     f"description")
@@ -292,9 +293,10 @@ class AudienceSource(Source):
             faults.add("no_music", "a frame without the music's row; its music is silent")
         # a show published below its render rate: the frames up to the last one, with those between, shifted by the
         # part of the interpolation's delay the seat's own delay does not cover (a synchronised seat keys them by
-        # media time, as its offset moves while it tracks the music)
+        # media time, as its offset moves while it tracks the music); a packed message's frames keyed by its last,
+        # rendered just before it was sent
         due = self.clock.due(wf.media_t, arrival) + self.interpolation_extra_s
-        self._queue(self.upsampler.feed(wf), wf.media_t, due)
+        self._queue([f for c in carried for f in self.upsampler.feed(c)], wf.media_t, due)
         self._arrived.set()
 
     def _queue(self, frames: list[WireFrame], media_t: float, due: float) -> None:

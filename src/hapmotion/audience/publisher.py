@@ -20,6 +20,7 @@ from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import Iterator, Optional
 
+import numpy as np
 from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
 from nats.aio.client import Client as NatsClient
 from nats.js.errors import KeyNotFoundError
@@ -36,7 +37,7 @@ from ..show.settings import Show
 from ..show.stage import OutputStage
 from ..show.timeline import RowTimeline
 from ..skeleton.joints import JOINTS
-from .compact import FRAME_VERSIONS, compact_joints, frame_encoder
+from .compact import FRAME_VERSIONS, PACKED, compact_joints, frame_encoder, packed_encoder
 from .connection import NatsAuth, connect, connect_error, description_bucket, open_bucket, parse_server_url
 from .signing import VenueSigner
 from .sync_reference import ReferencePublisher
@@ -82,11 +83,22 @@ def publishing(security: PublisherSecurity) -> Iterator[PublisherSecurity]:
         PUBLISHER_SECURITY.reset(token)
 
 
-def frames_choice(frames: str, rate: Optional[float], fps: float, where: str) -> tuple[int, Optional[float]]:
-    """A publisher's ``frames`` (``full`` or ``compact``) and publish ``rate`` (None: the render rate) checked:
-    (frame version, rate or None); UsageError naming ``where`` otherwise."""
+def frames_choice(frames: str, rate: Optional[float], fps: float, where: str,
+                  pack: Optional[int] = None) -> tuple[int, Optional[float]]:
+    """A publisher's ``frames`` (``full`` or ``compact``), publish ``rate`` (None: the render rate) and ``pack``
+    (None: one rendered frame a message, the seats interpolating below the render rate; N: packed frames, N
+    rendered frames a message at ``fps / N`` messages a second) checked: (frame version, rate or None);
+    UsageError naming ``where`` otherwise."""
     if frames not in FRAME_VERSIONS:
         raise UsageError(f"{where}: frames={frames}: expected one of {', '.join(FRAME_VERSIONS)}")
+    if pack is not None:
+        if frames != "compact" or not 2 <= pack <= MAX_RATE_STEPS:
+            raise UsageError(f"{where}: pack={pack}: expected frames=compact and 2 to {MAX_RATE_STEPS} rendered "
+                             f"frames a message")
+        if rate is not None and abs(rate * pack - fps) > 1e-6 * fps:
+            raise UsageError(f"{where}: rate={rate:g}: packing {pack} frames of the show's {fps:g} fps sends "
+                             f"{fps / pack:g} messages a second (leave rate out or say rate={fps / pack:g})")
+        return PACKED, fps / pack
     if rate is None:
         return FRAME_VERSIONS[frames], None
     steps = fps / rate if rate > 0 else 0.0
@@ -98,12 +110,13 @@ def frames_choice(frames: str, rate: Optional[float], fps: float, where: str) ->
 
 def describe_show(show_name: str, *, show: Show, stage: OutputStage, layout: Layout, body: Optional[BodyModel],
                   stall_ms: float, mirror: bool, epoch: Optional[int] = None, frames: str = "full",
-                  rate: Optional[float] = None) -> ShowDescription:
+                  rate: Optional[float] = None, pack: Optional[int] = None) -> ShowDescription:
     """The description of a live show played through ``stage`` (see
     :class:`~hapmotion.audience.wire.ShowDescription`): the stage's serialised form is what each seat rebuilds.
     ``frames`` is ``full`` (version 1) or ``compact`` (:mod:`hapmotion.audience.compact`); ``rate`` the publish
-    rate (None: every rendered frame), the render rate divided by a whole number."""
-    frame_version, rate = frames_choice(frames, rate, stage.fps, f"nats://.../{show_name}")
+    rate (None: every rendered frame), the render rate divided by a whole number; ``pack`` the rendered frames
+    each message carries (packed frames, version 3; None: one)."""
+    frame_version, rate = frames_choice(frames, rate, stage.fps, f"nats://.../{show_name}", pack)
     body = body or BodyModel.default()
     music = None
     if stage.mode != "motion":
@@ -115,7 +128,7 @@ def describe_show(show_name: str, *, show: Show, stage: OutputStage, layout: Lay
         render={"method": show.method, "preset": show.preset, "mirror": bool(mirror), "mode": stage.mode,
                 "overrides": dict(show.overrides)},
         body=body.to_dict(), music=music, stall_ms=float(stall_ms), issued=time.time(), frame_version=frame_version,
-        frame_joints=compact_joints() if frame_version == 2 else JOINTS, rate=rate)
+        frame_joints=compact_joints() if frame_version != 1 else JOINTS, rate=rate, pack=pack or 1)
 
 
 class NatsPublisherSink(Sink):
@@ -160,8 +173,12 @@ class NatsPublisherSink(Sink):
         self._closing = False
         self._stored = self.signer.seal("description", description.to_json())
         self._encode = frame_encoder(description.frame_version, description.frame_joints)
-        self._every = max(1, int(round(description.fps / description.frame_rate)))
-        self._rendered = 0
+        self._encode_packed = packed_encoder(description.frame_joints)
+        self._pack = description.pack
+        self._every = 1 if self._pack > 1 else max(1, int(round(description.fps / description.frame_rate)))
+        self._held: list[tuple[OutFrame, Optional[np.ndarray], Optional[np.ndarray]]] = []
+        """Packed frames: the rendered frames (frame, skeleton, music row) of the message not yet sent."""
+        self._frames_sent = 0
 
     async def start(self) -> None:
         try:
@@ -235,27 +252,64 @@ class NatsPublisherSink(Sink):
     async def deliver(self, frame: OutFrame) -> None:
         if frame.kind != "frame":
             return  # fade and turn-off rows are each seat's own business: a silent show fades on every seat
-        self._rendered += 1
-        if (self._rendered - 1) % self._every:
-            return  # published below the render rate: the seats interpolate this one
-        if not self.nc.is_connected:
-            self.stats.skipped += 1  # never buffered: a frame sent late would be stale
+        if frame.seq % self._every:
+            # published below the render rate: the seats interpolate this one (chosen by the engine's frame number,
+            # so a frame the sink's slot dropped under load does not shift which frames go out)
             return
         skeleton = frame.skeleton if frame.skeleton is not None and frame.skeleton.shape == (32, 3) else None
         music = self.music.row(frame.t) if self.music is not None else None
-        data = self.signer.seal("frame", self._encode(self.description.epoch, self.seq, frame.t, time.time(),
-                                                      skeleton, music))
+        if self._pack > 1:
+            if self._held and ((self._held[0][1] is None) != (skeleton is None)
+                               or (self._held[0][2] is None) != (music is None) or frame.t <= self._held[-1][0].t):
+                # a message's frames all have joints (music) or none has, at ascending media times: send early
+                await self._send_held()
+            self._held.append((frame, skeleton, music))
+            if len(self._held) == self._pack:
+                await self._send_held()
+            return
+        if not self.nc.is_connected:
+            self.stats.skipped += 1  # never buffered: a frame sent late would be stale
+            return
+        data = self._encode(self.description.epoch, self.seq, frame.t, time.time(), skeleton, music)
+        if await self._publish_frame(data):
+            self.sent(frame)
+            self._frames_sent += 1
+            await self._publish_reference(frame.t)
+
+    async def _send_held(self) -> None:
+        """The held rendered frames as one packed message (all of them, or fewer when the run ends or a frame's
+        contents change)."""
+        held, self._held = self._held, []
+        if not held:
+            return
+        if not self.nc.is_connected:
+            self.stats.skipped += len(held)  # never buffered: a frame sent late would be stale
+            return
+        data = self._encode_packed(self.description.epoch, self.seq, time.time(), [f.t for f, _, _ in held],
+                                   [s for _, s, _ in held], [m for _, _, m in held])
+        if await self._publish_frame(data):
+            for frame, _, _ in held:
+                self.sent(frame)
+            self._frames_sent += len(held)
+            await self._publish_reference(held[-1][0].t)
+
+    async def _publish_frame(self, message: bytes) -> bool:
+        """Seal and publish one frame message; False (counted, logged once) when the publish failed."""
+        data = self.signer.seal("frame", message)
         self.seq += 1
         try:
             await self.nc.publish(self._subjects["frame"], data)
         except Exception as exc:
             self.stats.errors += 1
             self.warn_once("publish", "publish failed (%s)", exc)
-            return
+            return False
         self.published += 1
-        self.sent(frame)
+        return True
+
+    async def _publish_reference(self, t: float) -> None:
+        """The song's reference batch due at media time ``t`` (every 0.5 s, on its own subject), if any."""
         if self.reference is not None:
-            batch = self.reference.next_batch(frame.t)  # a batch every 0.5 s, on its own subject
+            batch = self.reference.next_batch(t)
             if batch is not None:
                 try:
                     await self.nc.publish(self._subjects["sync"], self.signer.seal("sync", batch))
@@ -279,8 +333,11 @@ class NatsPublisherSink(Sink):
             return
         self._closing = True
         try:
+            await self._send_held()  # packed frames: the last rendered frames, fewer than a message holds
             if self.nc.is_connected:
                 end_t = float(self.seq * self._every / self.fps)  # the rendered frames' time, whatever the rate
+                if self._pack > 1:
+                    end_t = float(self._frames_sent / self.fps)
                 await self.nc.publish(self._subjects["end"], self._event("end", t=end_t))
                 await self.nc.flush(timeout=1)
         except Exception as exc:
@@ -315,10 +372,15 @@ def publisher_sink(ep: Endpoint, *, fps: float, show: Show, stage: OutputStage, 
         rate = None if rate is None else float(rate)
     except ValueError:
         raise UsageError(f"--sink {ep.text!r}: rate={rate}: expected frames per second") from None
+    pack = ep.option("pack")
+    try:
+        pack = None if pack is None else int(pack)
+    except ValueError:
+        raise UsageError(f"--sink {ep.text!r}: pack={pack}: expected a whole number of frames") from None
     frames = ep.option("frames", "full")
-    frames_choice(frames, rate, stage.fps, f"--sink {ep.text!r}")  # the error names the SINK as given
+    frames_choice(frames, rate, stage.fps, f"--sink {ep.text!r}", pack)  # the error names the SINK as given
     desc = describe_show(name, show=show, stage=stage, layout=layout, body=body, stall_ms=stall_ms, mirror=mirror,
-                         frames=frames, rate=rate)
+                         frames=frames, rate=rate, pack=pack)
     reference = (ReferencePublisher.for_file(show.audio, show.audio_offset_s, desc.epoch)
                  if show.audio is not None else None)
     return NatsPublisherSink(server, desc, music=music, fps=fps, security=security, reference=reference)

@@ -23,9 +23,10 @@ Subjects for a show ``SHOW`` (letters, digits, ``-`` and ``_``)::
     32     12*n_joints   skeleton (n_joints, 3) float32 metres, +Y up, canonical joint order; NaN = not tracked
     ...    4*n_music     the music's haptic row (N,) float32, 0..100, in the description's actuator order
 
-Version 2, the compact frame (the renderer's joints, the music as a palette), is :mod:`hapmotion.audience.compact`;
-a description of such a show, or of one published below its render rate, has version 2 and a ``frames`` object
-(``ShowDescription.frame_version``, ``frame_joints``, ``rate``).
+Version 2, the compact frame (the renderer's joints, the music as a palette), and version 3, the packed frame
+(consecutive rendered frames' compact rows in one message), are :mod:`hapmotion.audience.compact`; a description
+of such a show, or of one published below its render rate, has version 2 and a ``frames`` object
+(``ShowDescription.frame_version``, ``frame_joints``, ``rate``, ``pack``).
 
 float32 because a frame goes to every seat 60 times a second: 384 bytes of skeleton instead of 768 for float64
 (and a fraction of JSON's size), while float32 resolves about 1 micrometre at 10 m, a thousand times finer than
@@ -233,7 +234,10 @@ class ShowDescription:
     frame_joints: tuple[str, ...] = JOINTS
     """The joints each frame carries, canonical order (all 32 for version 1)."""
     rate: Optional[float] = None
-    """Frames published per second: ``fps`` (None) or ``fps`` divided by 2..8, the seat interpolating between."""
+    """Messages published per second: ``fps`` (None) or ``fps`` divided by 2..8; the seat interpolates between
+    them, or for packed frames plays the ``pack`` frames each carries."""
+    pack: int = 1
+    """Rendered frames per message: 1, or 2..8 for packed frames (frame version 3, ``rate`` = ``fps / pack``)."""
     extra: dict[str, Any] = field(default_factory=dict, compare=False)
 
     @property
@@ -249,7 +253,7 @@ class ShowDescription:
         frames = {}
         if self.version == VERSION_FRAMES:
             frames = {"frames": {"version": self.frame_version, "joints": list(self.frame_joints),
-                                 "rate": self.frame_rate}}
+                                 "rate": self.frame_rate, **({"pack": self.pack} if self.pack > 1 else {})}}
         obj = {"protocol": PROTOCOL, "version": self.version, "show": self.show, "epoch": self.epoch, "fps": self.fps,
                "layout": self.layout, "actuators": list(self.actuators), "joints": list(JOINTS),
                "render": self.render, "body": self.body, "music": self.music, "stall_ms": self.stall_ms,
@@ -264,7 +268,7 @@ class ShowDescription:
         """Everything but the run (``epoch``): two runs with equal facts can share one seat session."""
         return (self.fps, self.layout, self.actuators, json.dumps(self.render, sort_keys=True),
                 json.dumps(self.body, sort_keys=True), json.dumps(self.music, sort_keys=True), self.stall_ms,
-                self.frame_version, self.frame_joints, self.frame_rate)
+                self.frame_version, self.frame_joints, self.frame_rate, self.pack)
 
     @property
     def mode(self) -> str:
@@ -327,22 +331,23 @@ def parse_description(data: bytes, show: str) -> ShowDescription:
     issued = _description_number(obj.get("issued", 0.0), src, "issued")
     if issued < 0:
         raise InputError(src, "issued", f"expected a time stamp, found {issued!r}")
-    frame_version, frame_joints, rate = 1, JOINTS, None
+    frame_version, frame_joints, rate, pack = 1, JOINTS, None, 1
     if obj["version"] == VERSION_FRAMES:
-        frame_version, frame_joints, rate = _check_frames(obj.get("frames"), fps, src)
+        frame_version, frame_joints, rate, pack = _check_frames(obj.get("frames"), fps, src)
     return ShowDescription(show, epoch, fps, layout, tuple(actuators), render, body, music, stall_ms,
-                           issued, frame_version, frame_joints, rate)
+                           issued, frame_version, frame_joints, rate, pack)
 
 
-def _check_frames(frames: Any, fps: float, src: str) -> tuple[int, tuple[str, ...], Optional[float]]:
-    """A version-2 description's ``frames`` object: the frame version (1 or 2), the joints each frame carries
-    (canonical names in canonical order; all 32 for version 1) and the publish rate (the render rate divided by
-    1..8); (version, joints, rate or None for the render rate)."""
+def _check_frames(frames: Any, fps: float, src: str) -> tuple[int, tuple[str, ...], Optional[float], int]:
+    """A version-2 description's ``frames`` object: the frame version (1, 2, or 3 for packed frames), the joints
+    each frame carries (canonical names in canonical order; all 32 for version 1), the publish rate (the render
+    rate divided by 1..8) and, for packed frames, ``pack``, the rendered frames per message (the render rate over
+    the publish rate); (version, joints, rate or None for the render rate, pack)."""
     if not isinstance(frames, dict):
         raise InputError(src, "frames", "a version-2 description needs its frames object")
     version = frames.get("version")
-    if version not in (1, 2) or not isinstance(version, int) or isinstance(version, bool):
-        raise InputError(src, "frames.version", f"expected 1 or 2, found {version!r}"[:200])
+    if version not in (1, 2, 3) or not isinstance(version, int) or isinstance(version, bool):
+        raise InputError(src, "frames.version", f"expected 1, 2 or 3, found {version!r}"[:200])
     joints = frames.get("joints")
     if not isinstance(joints, list):
         raise InputError(src, "frames.joints", "expected a list of joint names")
@@ -358,7 +363,15 @@ def _check_frames(frames: Any, fps: float, src: str) -> tuple[int, tuple[str, ..
     if not (abs(steps - round(steps)) < 1e-6 and 1 <= round(steps) <= MAX_RATE_STEPS):
         raise InputError(src, "frames.rate", f"expected the render rate {fps:g} divided by 1 to {MAX_RATE_STEPS}, "
                                              f"found {rate:g}")
-    return version, tuple(joints), None if round(steps) == 1 else float(rate)
+    pack = frames.get("pack", 1)
+    if version == 3 and not (isinstance(pack, int) and not isinstance(pack, bool) and pack == round(steps) > 1):
+        raise InputError(src, "frames.pack", f"packed frames carry the {round(steps)} rendered frames of each "
+                                             f"message (the render rate {fps:g} over the rate {rate:g}), found "
+                                             f"{pack!r}"[:200])
+    if version != 3 and pack != 1:
+        raise InputError(src, "frames.pack", f"only packed frames (version 3) carry more than one frame, found "
+                                             f"{pack!r}"[:200])
+    return version, tuple(joints), None if round(steps) == 1 else float(rate), pack
 
 
 def _check_render(render: dict, src: str) -> dict[str, Any]:

@@ -179,7 +179,7 @@ SINK_KINDS: dict[str, Kind] = {k.name: k for k in (
     Kind("record", "record", "record:PATH", "the session as a track at stop (.csv .json .npz .tact)",
          factory=_record_sink),
     Kind("nats", "nats", "nats://HOST:PORT/SHOW", "publish the show to an audience (hapmotion listen)", NATS,
-         {"frames": "full|compact", "rate": "HZ"}, publishes_show=True, provider="hapmotion.audience"),
+         {"frames": "full|compact", "rate": "HZ", "pack": "N"}, publishes_show=True, provider="hapmotion.audience"),
 )}
 """Every SINK kind, by :attr:`Kind.name`, in the order the help lists them."""
 
