@@ -64,5 +64,5 @@ def seat_rows(desc, frames: list[bytes], seat: Seat = Seat()) -> tuple[np.ndarra
             parts.music.put(wf.media_t, wf.music)
         incoming = parts.renderer.step(wf.skeleton) if parts.renderer is not None else None
         times.append(wf.media_t)
-        rows.append(zones(parts.stage.step(incoming, wf.media_t)))
+        rows.append(zones(parts.stage.step(incoming, wf.media_t, wf.skeleton)))
     return np.array(times), np.array(rows)

@@ -1,4 +1,4 @@
-"""Compact frames (frame version 2, sans-I/O): only the joints a seat's renderer reads, and the music row as a
+"""Compact frames (frame version 2, sans-I/O): only the joints a seat's renderer and glove layer read, and the music row as a
 palette, inside the same 32-byte header as version 1 (docs/audience.md, "Compact frame").
 
     offset size  field
@@ -13,7 +13,8 @@ palette, inside the same 32-byte header as version 1 (docs/audience.md, "Compact
            or, for k = 0, 4*n_music bytes: the row as float32
 
 Why: the renderer reads 7 of the 32 joints (:data:`hapmotion.skeleton.joints.RENDER_JOINTS`, whatever the method,
-preset or parameters), so the other 25 are 300 bytes a frame no seat uses; and a music row holds a few distinct
+preset or parameters) and a seat's glove layer 4 more (:data:`hapmotion.show.hands.GLOVE_JOINTS`), so the other 21
+are 252 bytes a frame no seat uses; and a music row holds a few distinct
 intensities (a song's bands spread over zones: at most 3 distinct values per row on the recordings here), so a
 palette of float32 values and one byte per actuator carries the row exactly in about a quarter of its float32 size.
 Whole percents (one byte per actuator, no palette) would be 13 bytes smaller but not exact: the seat mixes the music
@@ -45,6 +46,7 @@ from typing import Callable, Optional, Sequence
 
 import numpy as np
 
+from ..show.hands import GLOVE_JOINTS
 from ..skeleton.joints import JOINT_INDEX, JOINTS, RENDER_JOINTS
 from .wire import (HEADER, KIND_FRAME, MAGIC, MAX_MEDIA_T, MAX_POSITION_M, N_JOINTS, WireFrame, decode_frame,
                    encode_frame)
@@ -65,16 +67,21 @@ RENDERER_JOINTS: tuple[str, ...] = tuple(j for j in JOINTS if j in RENDER_JOINTS
 """The joints a seat's renderer reads, in canonical order: the kernel's joints (``RENDER_JOINTS``), the same for
 every method, preset and parameter (``Renderer`` takes exactly these rows of a frame), so no seat setting can need
 a joint a compact frame of these lacks. A description naming fewer is refused by the seat (``seat_show``)."""
+SEAT_JOINTS: tuple[str, ...] = tuple(j for j in JOINTS if j in RENDER_JOINTS or j in GLOVE_JOINTS)
+"""The joints a compact frame carries, in canonical order: the renderer's and those the glove layer of a seat
+wearing gloves reads beyond them (:data:`~hapmotion.show.hands.GLOVE_JOINTS`: elbows and hand tips, 48 bytes)."""
 
 
 def compact_joints() -> tuple[str, ...]:
-    """The joints a compact frame carries: those every seat's renderer reads (:data:`RENDERER_JOINTS`)."""
-    return RENDERER_JOINTS
+    """The joints a compact frame carries (:data:`SEAT_JOINTS`)."""
+    return SEAT_JOINTS
 
 
-def missing_joints(frame_joints: Sequence[str]) -> list[str]:
-    """The joints a seat's renderer reads that frames of ``frame_joints`` do not carry (empty: it can render)."""
-    return [j for j in RENDERER_JOINTS if j not in frame_joints]
+def missing_joints(frame_joints: Sequence[str], gloves: bool = False) -> list[str]:
+    """The joints a seat's renderer reads (and, with ``gloves``, its glove layer) that frames of ``frame_joints``
+    do not carry (empty: it can render)."""
+    need = SEAT_JOINTS if gloves else RENDERER_JOINTS
+    return [j for j in need if j not in frame_joints]
 
 
 # ---------------------------------------------------------------------------------------------------- music

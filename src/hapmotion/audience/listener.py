@@ -441,10 +441,10 @@ def seat_show(desc: ShowDescription, seat: Seat, cues: Optional[CueList] = None)
         layout = show.load_layout()
     except UsageError as exc:
         raise InputError(src, "render", str(exc)) from None
-    missing = missing_joints(desc.frame_joints)
+    missing = missing_joints(desc.frame_joints, gloves=bool(layout.hand_devices))
     if missing and mode != "audio":
         raise InputError(src, "frames.joints", f"the show's frames lack {', '.join(missing)}, which this seat's "
-                                               f"renderer reads")
+                                               f"{'renderer and gloves read' if layout.hand_devices else 'renderer reads'}")
     if tuple(layout.actuators) != desc.actuators:
         raise InputError(src, "actuators", f"the show's {len(desc.actuators)} actuators ({desc.layout}) are not "
                                            f"this seat's layout {layout.name}")

@@ -86,6 +86,9 @@ HAND_JOINTS: tuple[str, ...] = (
     "ELBOW_RIGHT", "SHOULDER_LEFT", "SHOULDER_RIGHT", "NECK", "SPINE_CHEST", "SPINE_NAVEL", "PELVIS",
 )
 """Every joint the glove layer reads (a caller that keeps only some joints of a motion keeps these for gloves)."""
+GLOVE_JOINTS: tuple[str, ...] = ("ELBOW_LEFT", "ELBOW_RIGHT", "HANDTIP_LEFT", "HANDTIP_RIGHT")
+"""The joints the glove layer reads beyond the renderer's (:data:`~hapmotion.skeleton.joints.RENDER_JOINTS`): the
+rest of :data:`HAND_JOINTS` are the renderer's or fallbacks for them (a wrist for a hand, the chest for the neck)."""
 _SIDES = ("LEFT", "RIGHT")
 _J = JOINT_INDEX
 
