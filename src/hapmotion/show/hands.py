@@ -14,8 +14,9 @@ fingertips and the palm), in 0..100 %:
   palms, ``100 min(1, closing speed / clap_full)`` fading to 0 over ``clap_pulse_s`` (a clap is an impact: felt
   at once and gone, as the sound is);
 - **wave**: a raised hand (its forearm level or up) that reverses its side-to-side direction relative to the neck
-  (along the shoulder line, at ``wave_min_speed`` m/s or faster and mostly sideways) ``wave_turns`` (3) times
-  within ``wave_window_s``: its whole glove at ``100 min(1, hand speed / wave_full)``, so the vibration swells in
+  (along the shoulder line, at ``wave_min_speed`` m/s or faster and mostly sideways), each time at least
+  ``wave_min_swing_m`` along that line from where it last reversed, ``wave_turns`` (3) times within
+  ``wave_window_s`` (tracker jitter reverses a still hand's velocity all the time, but only millimetres apart): its whole glove at ``100 min(1, hand speed / wave_full)``, so the vibration swells in
   each swing and dips at each turn, the wave's own rhythm (no wave within ``wave_window_s`` of a clap: clapping
   hands reverse too);
 - **point**: a hand that reaches ``point_reach`` of its arm's length above the navel, arriving at ``point_speed``
@@ -63,6 +64,12 @@ class HandRules:
     wave_lateral: float = 0.6
     """A swing counts when its side-to-side part is at least this share of the hand's speed (a jab forward is no
     wave)."""
+    wave_min_swing_m: float = 0.06
+    """A reversal counts as a turn only this far (m, along the shoulder line, relative to the neck) from the hand's
+    previous reversal. Webcam trackers jitter a still hand by 5-10 mm per frame, which reverses its smoothed velocity
+    every few frames at the same place: two reversals of 10 mm jitter are 14 mm apart (sigma), so 6 cm is over 4
+    sigma. A wave swings the hand 15-40 cm from side to side (the forearm pivoting 15-40 degrees about the elbow,
+    a hand about 0.3 m from it; the benchmarks' smallest synthetic wave swings 16 cm)."""
     wave_below_elbow_m: float = 0.08
     """A hand is raised when it is no lower than this under its elbow (the forearm level or up; a hanging hand is
     25 cm or more under it)."""
@@ -115,7 +122,14 @@ class HandGestures:
         self.reset()
 
     MAX_GAP_S = 0.25
-    """Frames further apart than this (a stalled or restarted source) start the hands' velocities afresh."""
+    """Frames further apart than this, or whose show time goes back (a stalled or restarted source), start the
+    hands' velocities afresh."""
+    MIN_DT_S = 1e-3
+    """Frames closer in show time than this (a sender's duplicate or mis-stamped frame) are taken this far apart:
+    no tracker sends faster than 1 kHz, and a difference over a tiny step would make the velocity infinite."""
+    MAX_HAND_SPEED = 30.0
+    """A hand moving faster than this (m/s) jumped (a tracking glitch, a swapped skeleton): its velocity starts
+    afresh. The fastest human hand movements, throws and punches, stay under about 15 m/s."""
 
     def reset(self) -> None:
         """Forget all history: the next frame is a first frame."""
@@ -131,6 +145,7 @@ class HandGestures:
         self._clap_level = 0.0
         self._clap_at = -math.inf
         self._sign = [0, 0]
+        self._flip_x: list[Optional[float]] = [None, None]
         self._turns: list[list[float]] = [[], []]
         self._peak_speed = [0.0, 0.0]
         self._point_armed = [False, False]
@@ -148,13 +163,17 @@ class HandGestures:
         frame = np.asarray(frame, dtype=np.float64)
         if frame.shape != (32, 3):
             raise ValueError(f"frame must be (32, 3), got {frame.shape}")
+        with np.errstate(all="ignore"):  # huge coordinates overflow; the checks below drop what is not finite
+            return self._step(frame, t)
+
+    def _step(self, frame: np.ndarray, t: Optional[float]) -> np.ndarray:
         r, dt = self.rules, self.dt
         if t is not None and math.isfinite(t):
             gap = t - self._last_t if self._last_t is not None else dt
-            if gap > self.MAX_GAP_S:
-                self._prev, self._neck = [None, None], None  # no velocity across a gap
-            if 0.0 < gap <= self.MAX_GAP_S:
-                dt = gap
+            if not 0.0 <= gap <= self.MAX_GAP_S:
+                self._prev, self._neck = [None, None], None  # no velocity across a gap or a restart
+            else:
+                dt = max(gap, self.MIN_DT_S)
             self._last_t = t
         self.t += dt
         self._alpha = 1.0 - math.exp(-dt / r.velocity_tau_s)
@@ -166,7 +185,13 @@ class HandGestures:
                 self._vel[h] = 0.0
                 continue
             if self._prev[h] is not None:
-                self._vel[h] += self._alpha * ((p - self._prev[h]) / dt - self._vel[h])
+                moved = (p - self._prev[h]) / dt
+                if np.isfinite(moved).all() and float(np.linalg.norm(moved)) <= self.MAX_HAND_SPEED:
+                    self._vel[h] += self._alpha * (moved - self._vel[h])
+                else:  # a jump: no velocity across it
+                    self._vel[h] = 0.0
+            if not np.isfinite(self._vel[h]).all():  # never carry a non-finite state to the next frame
+                self._vel[h] = 0.0
             self._prev[h] = p.copy()
             speed[h] = float(np.linalg.norm(self._vel[h]))
         neck = _joint(frame, "NECK", "SPINE_CHEST")
@@ -174,7 +199,9 @@ class HandGestures:
             self._neck, self._neck_vel = None, np.zeros(3)
         else:
             if self._neck is not None:
-                self._neck_vel += self._alpha * ((neck - self._neck) / dt - self._neck_vel)
+                moved = (neck - self._neck) / dt
+                ok = np.isfinite(moved).all() and float(np.linalg.norm(moved)) <= self.MAX_HAND_SPEED
+                self._neck_vel = self._neck_vel + self._alpha * (moved - self._neck_vel) if ok else np.zeros(3)
             self._neck = neck.copy()
         out = np.zeros((2, N_PLACES))
         self._clap(hands)
@@ -230,10 +257,18 @@ class HandGestures:
             own = self._vel[h] - self._neck_vel  # the hand's own swing, not the body swaying or travelling
             u = float(np.dot(own, axis))
             lateral = abs(u) > r.wave_min_speed and abs(u) >= r.wave_lateral * float(np.linalg.norm(own))
-            if p is not None and lateral:
+            if p is None:
+                self._flip_x[h] = None
+            elif lateral:
                 sign = 1 if u > 0 else -1
-                if self._sign[h] and sign != self._sign[h]:
-                    turns.append(self.t)
+                # where along the shoulder line the hand is, relative to the neck when known
+                x = float(np.dot(p - self._neck if self._neck is not None else p, axis))
+                if self._flip_x[h] is None:  # the first swing is measured from where it was first seen
+                    self._flip_x[h] = x
+                elif self._sign[h] and sign != self._sign[h]:
+                    if abs(x - self._flip_x[h]) >= r.wave_min_swing_m:
+                        turns.append(self.t)
+                    self._flip_x[h] = x
                 self._sign[h] = sign
             while turns and turns[0] < self.t - r.wave_window_s:
                 turns.pop(0)
