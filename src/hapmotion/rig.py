@@ -34,7 +34,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .bhaptics.wearables import Motor, Wearable, bundled_wearables, find_wearable
+from .bhaptics.wearables import Motor, Wearable, bundled_wearables, find_wearable, shown
 from .errors import InputError, UsageError
 from .layout import Device, Layout, default_layout
 from .track import HapticTrack
@@ -240,13 +240,13 @@ def parse_rig(text: str, *, energy: bool = True) -> Rig:
     unknown or two wearables claim the same bHaptics position."""
     parts = [p for p in str(text).split("+")]
     if not parts or any(not p.strip() for p in parts):
-        raise UsageError(f"--rig {text!r}: expected wearables joined by '+', e.g. {DEFAULT_RIG} or pro+gloves")
+        raise UsageError(f"--rig {shown(text, 80)}: expected wearables joined by '+', e.g. {DEFAULT_RIG} or pro+gloves")
     wearables = tuple(find_wearable(p) for p in parts)
     owner: dict[str, str] = {}
     for w in wearables:
         for d in {m.sdk1_position for m in w.motors} | {m.device for m in w.motors}:
             if d in owner:
-                raise UsageError(f"--rig {text!r}: {owner[d]} and {w.name} are both on {d}; a rig has one "
+                raise UsageError(f"--rig {shown(text, 80)}: {owner[d]} and {w.name} are both on {d}; a rig has one "
                                  "wearable per bHaptics position")
             owner[d] = w.name
     return Rig(wearables, energy=energy)
