@@ -9,10 +9,12 @@ import os
 import sys
 
 import numpy as np
+import pytest
 from support.live_fakes import FakePlayerSdk1, FakePlayerSdk2, free_port, self_signed_cert
 
 from hapmotion.layout import load_layout
 from hapmotion.live.player_check import PlayerReport, pattern_steps, pattern_track
+from hapmotion.rig import parse_rig
 
 LAYOUT = load_layout()
 HAPMOTION = [sys.executable, "-c", "import sys; from hapmotion.cli import cli, main, check; "
@@ -143,3 +145,45 @@ def test_an_audience_sink_is_refused_in_one_line():
     assert code == 2 and out == ""
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert len(lines) == 1 and "only 'hapmotion live' publishes one" in lines[0] and "Traceback" not in err
+
+
+def _sdk2_report(devices) -> PlayerReport:
+    report = PlayerReport("player-v3", reachable=True)
+    report.read_sdk2_devices(devices, LAYOUT)
+    return report
+
+
+def test_device_names_are_printed_printable_and_cut_short():
+    report = _sdk2_report([{"position": 0, "deviceName": "\x1b]0;pwned\x07\x1b[2JTactSuitX40", "connected": True},
+                           {"position": 1, "deviceName": "A" * 1_000_000, "connected": True},
+                           {"position": 10 ** 400, "deviceName": "Tactosy2_V3 (R)\nx", "connected": True,
+                            "battery": 10 ** 400}])
+    lines = report.lines()
+    text = "\n".join(lines)
+    assert all(c == "\n" or c.isprintable() for c in text) and "\x1b" not in text
+    assert max(len(line) for line in lines) < 300
+    assert "  ?]0;pwned??[2JTactSuitX40: SDK2 position 0, connected" in lines
+    assert f"  {'A' * 57}...: SDK2 position 1, connected" in lines
+    # a 400-digit position or battery is no device's: shown as unknown, not printed
+    assert "  Tactosy2_V3 (R)?x: SDK2 position None, connected" in lines
+
+
+def test_a_list_of_100k_devices_prints_a_bounded_report_saying_how_many_were_left_out():
+    lines = _sdk2_report([{"position": 0, "deviceName": f"d{i}", "connected": True} for i in range(100_000)]).lines()
+    assert len(lines) < 40 and sum(map(len, lines)) < 3000
+    assert "  (44 more devices of the list not shown)" in lines
+    assert "  99936 entries of the list not understood or beyond its first 64 devices (skipped)" in lines
+    assert lines[0].endswith("d18, d19 and 44 more")
+
+
+@pytest.mark.parametrize("names, rig, left_out", [
+    (["TactSuitX40", "TactSuitAir"], "x40", "air (TactSuitAir) left out: VestBack is taken by x40"),
+    (["TactSuitPro", "TactSuitX40", "Tactosy2_V3 (L)"], "pro+tactosy", "x40 (TactSuitX40) left out: VestBack is taken by pro"),
+])
+def test_two_vests_suggest_a_rig_that_parses_and_say_which_was_left_out(names, rig, left_out):
+    report = _sdk2_report([{"position": 0 if n.startswith("TactSuit") else 1, "deviceName": n, "connected": True}
+                           for n in names])
+    assert report.rig() == rig and parse_rig(rig).name == rig
+    lines = report.lines()
+    assert f"  {left_out} (a rig has one wearable per bHaptics position)" in lines
+    assert lines[-1] == f"  these devices make the rig {rig} (play, live and listen take it with --rig {rig})"

@@ -362,3 +362,57 @@ def test_live_frames_at_an_uneven_rate_are_timed_by_their_show_time():
     claps = np.flatnonzero(out[:, 0, PALM] > 0)
     assert out[:, :, PALM].max() == pytest.approx(100 * 1.5 / 1.6, abs=0.5)
     assert len(claps) and (np.diff(claps) == 1).all() and out[:, :, :PALM].max() == 0
+
+
+def _raised_still(jitter_m: float, n: int = 300, seed: int = 1) -> np.ndarray:
+    """The right hand of :func:`_wave` held still at its centre, with a webcam tracker's jitter: Gaussian noise of
+    ``jitter_m`` (m, per axis, per frame) on the hand."""
+    pos = _wave(n, amplitude=0.0)
+    pos[:, J["HAND_RIGHT"]] += np.random.default_rng(seed).normal(0.0, jitter_m, (n, 3))
+    return pos
+
+
+@pytest.mark.parametrize("jitter_m", [0.002, 0.005, 0.01, 0.02])
+def test_tracker_jitter_on_a_raised_still_hand_is_no_wave(jitter_m):
+    # the jitter reverses the smoothed velocity at well over wave_min_speed every few frames; those reversals are
+    # a few jitters apart, under 5 times the jitter the layer estimates, so they are no turns (50 s per seed)
+    for seed in range(3):
+        out, g = _run(_raised_still(jitter_m, n=3000, seed=seed))
+        assert not any(f[1].any() for f in g.flags) and out.max() == 0
+        # the estimate follows the jitter, a little above it (it rises faster than it falls)
+        assert jitter_m <= g._jitter2[1] ** 0.5 <= 1.6 * jitter_m
+
+
+def test_a_small_wave_is_still_a_wave_and_a_jittery_wave_too():
+    # a 16 cm swing (amplitude 8 cm), the benchmarks' smallest synthetic wave, with 10 mm of jitter on top
+    pos = _wave(amplitude=0.08)
+    pos[:, J["HAND_RIGHT"]] += np.random.default_rng(2).normal(0.0, 0.01, (len(pos), 3))
+    out, g = _run(pos)
+    waving = np.array([f[1][1] for f in g.flags])
+    assert waving[len(pos) // 2:].mean() > 0.9 and out[:, 1].max() > 50
+
+
+@pytest.mark.parametrize("gap", [5e-324, 0.0, -1.0 / 60, 1e-300])
+def test_a_tiny_zero_or_backward_time_step_never_silences_the_gloves(gap):
+    pos = _wave()
+    t = np.arange(len(pos)) / FPS
+    t[100:] += gap - 1.0 / FPS  # frame 100 comes `gap` s after frame 99, the rest follow at the usual rate
+    g = HandGestures(FPS)
+    out = np.array([g.step(f, float(s)) for f, s in zip(pos, t)])
+    assert np.isfinite(out).all() and np.isfinite(g._vel).all()
+    clean = HandGestures(FPS).run(pos, np.arange(len(pos)) / FPS)
+    # still waving a second after the odd step, as without it
+    assert out[160:, 1].min() > 0 and clean[160:, 1].min() > 0
+
+
+def test_non_finite_or_impossible_hand_moves_leave_no_lasting_state():
+    pos = _wave()
+    pos[100, J["HAND_RIGHT"]] = (1e308, 1.7, 0.1)  # finite, but the step from the last frame is not
+    pos[101, J["HAND_RIGHT"]] = (-1e308, 1.7, 0.1)
+    pos[130, J["HAND_RIGHT"]] = (1e3, 1.7, 0.1)  # a 1 km jump: a glitch, not a movement
+    g = HandGestures(FPS)
+    out = g.run(pos)
+    assert np.isfinite(out).all() and np.isfinite(g._vel).all()
+    assert out[200:, 1].min() > 0  # the wave is felt again
+    g._vel[1] = np.nan  # whatever got in, the next frame starts afresh
+    assert np.isfinite(g.step(pos[-1])).all() and np.isfinite(g._vel).all()

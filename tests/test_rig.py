@@ -222,3 +222,12 @@ def test_the_paper_rig_renders_the_same_numbers_on_real_recordings(clip, preset)
     rigged = rig_track(plain, LAYOUT.with_rig(parse_rig(DEFAULT_RIG, energy=preset != "paper")))
     assert rigged.actuators == plain.actuators and np.array_equal(rigged.intensities, plain.intensities)
     assert plain.intensities.max() > 0
+
+
+@pytest.mark.parametrize("text, echoed", [("a" * 100_000, 100_000), ("x40+" + "b" * 100_000, 100_000),
+                                          ("x40+" * 20_000 + "x40", 80_003)])
+def test_a_long_rig_text_is_echoed_cut_short(text, echoed):
+    with pytest.raises(UsageError) as info:
+        parse_rig(text)
+    msg = str(info.value)
+    assert len(msg) < 400 and "\n" not in msg and f"... ({echoed} characters)" in msg, msg

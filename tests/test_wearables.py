@@ -9,6 +9,7 @@ from importlib import resources
 import pytest
 
 from hapmotion.bhaptics.devices import bhaptics_devices
+from hapmotion.cli import main
 from hapmotion.bhaptics.wearables import bundled_wearables, find_wearable, load_wearable
 from hapmotion.errors import InputError, UsageError
 from hapmotion.layout import default_layout, load_layout
@@ -124,6 +125,10 @@ def test_a_slot_used_twice_is_refused(tmp_path):
     (lambda d: d["motors"][0]["sdk2"].update(index=[40]), ("field motors[0].sdk2.index", "0..39")),
     (lambda d: d.update(name="a+b"), ("field name",)),
     (lambda d: d["motors"].pop(3), ("field motors", "VestFront's motors numbered 0..n-1")),
+    # 1.0 and true equal 1 in Python, but are no SDK2 position
+    (lambda d: d["motors"][0]["sdk2"].update(position=1.0), ("field motors[0].sdk2.position", "found 1.0")),
+    (lambda d: d["motors"][0]["sdk2"].update(position=True), ("field motors[0].sdk2.position", "found True")),
+    (lambda d: d["motors"][0]["sdk1"].update(position="V" * 100_000), ("field motors[0].sdk1",)),
 ])
 def test_bad_fields_are_named(tmp_path, change, needles):
     doc = _doc("x40")
@@ -132,4 +137,38 @@ def test_bad_fields_are_named(tmp_path, change, needles):
 
 
 def test_not_json_is_refused(tmp_path):
-    _refused(tmp_path, "{nope", "expected wearable JSON")
+    _refused(tmp_path, "{nope", "line 1 column 2: expected valid wearable JSON")
+
+
+@pytest.mark.parametrize("limb, face", [("head", "front"), ("torso", "front"), ("hand", "front"), ("foot", "front")])
+def test_a_limb_its_device_cannot_carry_is_refused(tmp_path, limb, face):
+    doc = _doc("tactosy")  # ForearmL motors first
+    for m in doc["motors"]:
+        m.update(limb=limb, face=face, across=0.1)
+    _refused(tmp_path, doc, "field motors[0].limb", "expected forearm or shoulder for a motor of ForearmL",
+             f"found {limb}")
+
+
+BIG = "1" + "0" * 400
+
+
+@pytest.mark.parametrize("text, needles", [
+    ("[" * 100_000 + "]" * 100_000, ("nested at most 8 levels deep, found 100000",)),
+    (json.dumps(_doc("tactosy"))[:-1] + ', "x": ' + "[" * 50_000 + "]" * 50_000 + "}", ("nested at most 8",)),
+    (json.dumps(_doc("tactosy")).replace('"across": 0.0', '"across": ' + BIG, 1),
+     ("line 1", "numbers of at most 20 digits, found 401")),
+    (json.dumps(_doc("tactosy")).replace('"across": 0.0', '"across": NaN', 1), ("no NaN",)),
+])
+def test_deep_nesting_and_huge_numbers_are_one_line_naming_the_file(tmp_path, text, needles):
+    assert '"across": 0.0' in json.dumps(_doc("tactosy"))
+    _refused(tmp_path, text, *needles)
+
+
+def test_a_bad_rig_file_is_one_line_from_the_command_line(tmp_path, capsys):
+    path = tmp_path / "deep.json"
+    path.write_text("[" * 100_000 + "]" * 100_000)
+    motion = resources.files("hapmotion").joinpath("examples/60_12_scaled.bvh")
+    code = main(["render", str(motion), "--rig", str(path), "-o", str(tmp_path / "o.csv")])
+    err = capsys.readouterr().err
+    assert code != 0 and "internal error" not in err and not (tmp_path / "o.csv").exists()
+    assert f"{path}: expected wearable JSON nested at most 8 levels deep" in err and len(err.strip().splitlines()) == 1, err

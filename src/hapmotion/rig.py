@@ -34,7 +34,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .bhaptics.wearables import Motor, Wearable, bundled_wearables, find_wearable
+from .bhaptics.wearables import Motor, Wearable, bundled_wearables, find_wearable, shown
 from .errors import InputError, UsageError
 from .layout import Device, Layout, default_layout
 from .track import HapticTrack
@@ -240,13 +240,13 @@ def parse_rig(text: str, *, energy: bool = True) -> Rig:
     unknown or two wearables claim the same bHaptics position."""
     parts = [p for p in str(text).split("+")]
     if not parts or any(not p.strip() for p in parts):
-        raise UsageError(f"--rig {text!r}: expected wearables joined by '+', e.g. {DEFAULT_RIG} or pro+gloves")
+        raise UsageError(f"--rig {shown(text, 80)}: expected wearables joined by '+', e.g. {DEFAULT_RIG} or pro+gloves")
     wearables = tuple(find_wearable(p) for p in parts)
     owner: dict[str, str] = {}
     for w in wearables:
         for d in {m.sdk1_position for m in w.motors} | {m.device for m in w.motors}:
             if d in owner:
-                raise UsageError(f"--rig {text!r}: {owner[d]} and {w.name} are both on {d}; a rig has one "
+                raise UsageError(f"--rig {shown(text, 80)}: {owner[d]} and {w.name} are both on {d}; a rig has one "
                                  "wearable per bHaptics position")
             owner[d] = w.name
     return Rig(wearables, energy=energy)
@@ -269,30 +269,41 @@ def player_wearable(device_name: str) -> Optional[Wearable]:
     return None
 
 
-def rig_from_player(sdk2_names: Sequence[str] = (), sdk1_positions: Sequence[str] = ()) -> Optional[str]:
-    """The rig a Player's connected devices make, as ``--rig`` takes it, or None when it says nothing we know.
+def choose_rig(sdk2_names: Sequence[str] = (), sdk1_positions: Sequence[str] = ()) -> tuple[Optional[str], list[str]]:
+    """The rig a Player's connected devices make, as ``--rig`` takes it (None when they say nothing we know), and
+    one note per wearable left out of it.
 
     SDK2 ``ServerDevices`` names each device (``TactSuitX40``, ``Tactosy2_V3 (L)``): the wearable whose
     ``player_names`` starts the name is connected (:func:`player_wearable`). A device known only by its position
     (``Vest``, ``ForearmL`` ...: SDK1's ``ConnectedPositions``, or an SDK2 device of an unknown name) is taken as
     :data:`SDK1_POSITION_WEARABLES` says. A wearable on a position an earlier one already covers is left out (a
-    rig has one wearable per position), so the result always parses."""
+    rig has one wearable per position: two vests make no rig), so the result always parses (:func:`parse_rig`);
+    its note says which, e.g. ``air (TactSuitAir) left out: VestFront is taken by x40``."""
     chosen: list[Wearable] = []
-    taken: set = set()
+    taken: dict[str, str] = {}
+    notes: list[str] = []
 
-    def add(w: Optional[Wearable]) -> None:
+    def add(w: Optional[Wearable], said: str) -> None:
         if w is None or w in chosen:
             return
-        covers = {m.device for m in w.motors} | {m.sdk1_position for m in w.motors}
-        if not covers & taken:
+        covers = sorted({m.device for m in w.motors} | {m.sdk1_position for m in w.motors})
+        clash = [c for c in covers if c in taken]
+        if clash:
+            notes.append(f"{w.name} ({said}) left out: {clash[0]} is taken by {taken[clash[0]]}")
+        else:
             chosen.append(w)
-            taken.update(covers)
+            taken.update((c, w.name) for c in covers)
 
     for name in sdk2_names:
-        add(player_wearable(name))
+        add(player_wearable(name), str(name))
     for pos in sdk1_positions:
-        add(bundled_wearables().get(SDK1_POSITION_WEARABLES.get(str(pos), "")))
-    return "+".join(w.name for w in chosen) or None
+        add(bundled_wearables().get(SDK1_POSITION_WEARABLES.get(str(pos), "")), str(pos))
+    return "+".join(w.name for w in chosen) or None, notes
+
+
+def rig_from_player(sdk2_names: Sequence[str] = (), sdk1_positions: Sequence[str] = ()) -> Optional[str]:
+    """The rig of :func:`choose_rig`, without its notes."""
+    return choose_rig(sdk2_names, sdk1_positions)[0]
 
 
 def default_rig(energy: bool = True) -> Rig:

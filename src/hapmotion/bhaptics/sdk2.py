@@ -14,7 +14,7 @@ from typing import Any, Optional
 import numpy as np
 
 from .device_map import DeviceMap
-from ..rig import player_wearable, rig_from_player
+from ..rig import choose_rig, player_wearable
 from .player_json import get_ci, json_object, to_int_percent
 
 SDK2_PORT = 15882
@@ -121,14 +121,32 @@ class Sdk2Device:
         return f"{self.name or '(no name)'}: SDK2 position {self.position}, {state}{battery}"
 
 
+MAX_NAME_CHARS = 60
+"""Longest device name kept from a Player's list (bHaptics names are about 20 characters: ``Tactosy2_V3 (L)``)."""
+MAX_DEVICES = 64
+"""Most devices kept from one ``ServerDevices`` list (SDK2 has 10 positions; a Player pairs a few devices per
+position at most); the rest are counted, not kept."""
+
+
+def printable(text: str, limit: int = MAX_NAME_CHARS) -> str:
+    """``text`` as a terminal may show it: every character that is not printable (escape codes, newlines) as
+    ``?``, at most ``limit`` characters (cut ones end in ``...``)."""
+    text = text[:limit + 1]
+    out = "".join(c if c.isprintable() else "?" for c in text)
+    return out if len(out) <= limit else out[:limit - 3] + "..."
+
+
 def _int(v: Any) -> Optional[int]:
-    return v if isinstance(v, int) and not isinstance(v, bool) else None
+    """A whole number as a Player may send one; None for anything else, or one too long to be a position or a
+    battery level (a 400-digit number is no device's)."""
+    return v if isinstance(v, int) and not isinstance(v, bool) and -1_000_000 < v < 1_000_000 else None
 
 
 def parse_server_devices(payload: Any) -> Optional[tuple[list[Sdk2Device], int]]:
     """The devices of a ``ServerDevices`` payload (a list, or its JSON text; keys in any casing) and the number of
-    entries skipped (not an object, or with neither a name nor a position number); None when the payload is no list.
-    ``connected`` counts only when it is JSON ``true``."""
+    entries skipped (not an object, or with neither a name nor a position number, or beyond the first
+    :data:`MAX_DEVICES`); None when the payload is no list. ``connected`` counts only when it is JSON ``true``;
+    names are kept :func:`printable`."""
     if isinstance(payload, (str, bytes)):
         try:
             payload = json.loads(payload)
@@ -138,22 +156,32 @@ def parse_server_devices(payload: Any) -> Optional[tuple[list[Sdk2Device], int]]
         return None
     devices, skipped = [], 0
     for item in payload:
+        if len(devices) >= MAX_DEVICES:
+            skipped += 1
+            continue
         name = get_ci(item, "deviceName") if isinstance(item, dict) else None
         position = _int(get_ci(item, "position")) if isinstance(item, dict) else None
         if not isinstance(item, dict) or (not isinstance(name, str) or not name) and position is None:
             skipped += 1
             continue
         battery = _int(get_ci(item, "battery"))
-        devices.append(Sdk2Device(position, name if isinstance(name, str) else "", get_ci(item, "connected") is True,
+        devices.append(Sdk2Device(position, printable(name) if isinstance(name, str) else "",
+                                  get_ci(item, "connected") is True,
                                   battery if battery is not None and 0 <= battery <= 100 else None))
     return devices, skipped
 
 
-def rig_of_devices(devices: "list[Sdk2Device]") -> Optional[str]:
+def rig_choice_of_devices(devices: "list[Sdk2Device]") -> tuple[Optional[str], list[str]]:
     """The rig (``--rig`` text) the connected devices make: each by its name (a wearable file's ``player_names``),
     or, when no wearable knows the name, by its position (:data:`hapmotion.rig.SDK1_POSITION_WEARABLES`); None when
-    no connected device is of either kind (:func:`hapmotion.rig.rig_from_player`)."""
+    no connected device is of either kind; and a note per wearable left out because its position was taken
+    (:func:`hapmotion.rig.choose_rig`)."""
     on = [d for d in devices if d.connected]
     named = [d.name for d in on if player_wearable(d.name) is not None]
     by_position = [d.position_name for d in on if player_wearable(d.name) is None and d.position_name]
-    return rig_from_player(named, by_position)
+    return choose_rig(named, by_position)
+
+
+def rig_of_devices(devices: "list[Sdk2Device]") -> Optional[str]:
+    """The rig of :func:`rig_choice_of_devices`, without its notes."""
+    return rig_choice_of_devices(devices)[0]

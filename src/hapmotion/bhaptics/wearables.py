@@ -36,9 +36,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Optional
 
-import numpy as np
-
 from ..errors import InputError, UsageError
+from ..json_scan import scan_json
+from ..limits import parse_json_text
 
 LIMBS = ("torso", "shoulder", "forearm", "hand", "head", "foot")
 SIDES = ("left", "right", "center")
@@ -46,6 +46,19 @@ FACES = ("front", "back", "top", "around")
 SDK2_POSITIONS = range(0, 10)
 """SDK2 positions: Vest 0, ForearmL 1, ForearmR 2, Head 3, HandL 4, HandR 5, FootL 6, FootR 7, GloveL 8, GloveR 9
 (github.com/bhaptics/tact-js ``sdk/src/internal/position.ts``)."""
+
+DEVICE_LIMBS = {"Vest": ("torso",), "VestFront": ("torso",), "VestBack": ("torso",),
+                "ForearmL": ("forearm", "shoulder"), "ForearmR": ("forearm", "shoulder"), "Left": ("forearm", "shoulder"),
+                "Right": ("forearm", "shoulder"), "Head": ("head",), "HandL": ("hand",), "HandR": ("hand",),
+                "GloveL": ("hand",), "GloveR": ("hand",), "FootL": ("foot",), "FootR": ("foot",)}
+"""The limbs a motor of each bHaptics position can sit on (a sleeve is worn on the forearm or, the Tactosy on the
+shoulders, over the shoulder); a device not listed here may carry any limb."""
+
+MAX_DEPTH = 8
+"""Deepest nesting a wearable file needs is 4 (``motors[k].sdk2.index``); a deeper file is refused before it is
+parsed (:func:`_parse`)."""
+MAX_NUMBER_DIGITS = 20
+"""Digits in one number of a wearable file (places are written with 4 decimals, slots with 1-2 digits)."""
 
 MAX_MOTORS = 256
 """Most motors one wearable file may list (the largest bHaptics wearable has 40)."""
@@ -113,9 +126,19 @@ def _fail(source: str, place: str, problem: str) -> InputError:
     return InputError(source, place, problem)
 
 
+def shown(v: Any, limit: int = 40) -> str:
+    """A value as a one-line message shows it: its ``repr`` (control characters escaped), at most ``limit``
+    characters, and how long it was when cut."""
+    text = repr(v)
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit - 3]}... ({len(str(v))} characters)" if isinstance(v, str) else text[:limit - 3] + "..."
+
+
 def _num(v: Any, source: str, place: str) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) or not 0.0 <= v <= 1.0:
-        raise _fail(source, place, f"expected a number in 0..1, found {v!r}")
+    # a comparison, not np.isfinite: it takes an integer of any size, and NaN fails it
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 <= v <= 1.0:
+        raise _fail(source, place, f"expected a number in 0..1, found {shown(v)}")
     return float(v)
 
 
@@ -132,27 +155,33 @@ def _motor(d: Any, k: int, source: str, lengths: dict) -> Motor:
         raise _fail(source, place, "expected an object")
     for key, allowed in (("limb", LIMBS), ("side", SIDES), ("face", FACES)):
         if d.get(key) not in allowed:
-            raise _fail(source, f"{place}.{key}", f"expected one of {', '.join(allowed)}, found {d.get(key)!r}")
+            raise _fail(source, f"{place}.{key}", f"expected one of {', '.join(allowed)}, found {shown(d.get(key))}")
     device = d.get("device")
     if not isinstance(device, str) or device not in lengths:
         raise _fail(source, f"{place}.device", f"expected one of the file's devices {', '.join(lengths)}, "
-                                               f"found {device!r}")
+                                               f"found {shown(device)}")
+    limbs = DEVICE_LIMBS.get(device)
+    if limbs is not None and d["limb"] not in limbs:
+        raise _fail(source, f"{place}.limb", f"expected {' or '.join(limbs)} for a motor of {device}, "
+                                             f"found {d['limb']}")
     index = d.get("index")
     if not isinstance(index, int) or isinstance(index, bool) or not 0 <= index < MAX_MOTORS:
-        raise _fail(source, f"{place}.index", f"expected a whole number 0..{MAX_MOTORS - 1}, found {index!r}")
+        raise _fail(source, f"{place}.index", f"expected a whole number 0..{MAX_MOTORS - 1}, found {shown(index)}")
     across = _num(d.get("across"), source, f"{place}.across")
     height = _num(d.get("height"), source, f"{place}.height")
     sdk1 = d.get("sdk1")
-    if not isinstance(sdk1, dict) or not isinstance(sdk1.get("position"), str):
-        raise _fail(source, f"{place}.sdk1", "expected {position, index: [...]}")
+    if not isinstance(sdk1, dict) or not isinstance(sdk1.get("position"), str) or not 0 < len(sdk1["position"]) <= 40:
+        raise _fail(source, f"{place}.sdk1", "expected {position: a bHaptics position name, index: [...]}")
     slots1 = _ints(sdk1.get("index"), source, f"{place}.sdk1.index", 64)
     sdk2 = d.get("sdk2")
     if sdk2 is None:
         pos2, slots2 = -1, ()
     else:
-        if not isinstance(sdk2, dict) or sdk2.get("position") not in SDK2_POSITIONS or lengths[device] is None:
-            raise _fail(source, f"{place}.sdk2", "expected {position: 0..9, index: [...]} on a device with an "
-                                                  "sdk2_length")
+        pos = sdk2.get("position") if isinstance(sdk2, dict) else None
+        # type(...) is int: 1.0 and true equal 1 but are no SDK2 position
+        if type(pos) is not int or pos not in SDK2_POSITIONS or lengths[device] is None:
+            raise _fail(source, f"{place}.sdk2.position", f"expected a whole number 0..9 on a device with an "
+                                                           f"sdk2_length, found {shown(pos)}")
         pos2 = int(sdk2["position"])
         slots2 = _ints(sdk2.get("index"), source, f"{place}.sdk2.index", lengths[device])
     m = Motor(device, index, d["limb"], d["side"], d["face"], across, height, sdk1["position"], slots1, pos2, slots2)
@@ -171,8 +200,26 @@ def _motor(d: Any, k: int, source: str, lengths: dict) -> Motor:
     return m
 
 
-def load_wearable(path: "str | os.PathLike[str]", *, text: Optional[str] = None) -> Wearable:
-    """Read one wearable file; :class:`~hapmotion.errors.InputError` naming the field when it does not fit."""
+def _parse(source: str, text: str) -> Any:
+    """Wearable JSON text parsed once its bytes are checked (:func:`hapmotion.json_scan.scan_json`): nested at
+    most :data:`MAX_DEPTH` deep (Python's parser recurses per level: 100,000 ``[`` end in RecursionError) and no
+    number over :data:`MAX_NUMBER_DIGITS` digits; NaN and Infinity refused."""
+    raw = text.encode("utf-8", "surrogatepass")
+    shape = scan_json(raw)
+    if shape.depth > MAX_DEPTH:
+        raise _fail(source, None, f"expected wearable JSON nested at most {MAX_DEPTH} levels deep, found "
+                                  f"{shape.depth}")
+    if shape.longest_number > MAX_NUMBER_DIGITS:
+        line = raw.count(b"\n", 0, shape.longest_number_at) + 1
+        raise _fail(source, f"line {line}", f"expected numbers of at most {MAX_NUMBER_DIGITS} digits, found "
+                                            f"{shape.longest_number}")
+    return parse_json_text(source, text, "wearable JSON")
+
+
+def load_wearable(path: "str | os.PathLike[str]", *, text: Optional[str] = None, bundled: bool = False) -> Wearable:
+    """Read one wearable file (``text``: its text, already read); :class:`~hapmotion.errors.InputError` naming the
+    file and the field when it does not fit. ``bundled`` (the package's own files, known good): parsed without
+    the byte scan of :func:`_parse`, which would load numba at every start-up."""
     source = os.fspath(path)
     if text is None:
         p = Path(source)
@@ -182,15 +229,16 @@ def load_wearable(path: "str | os.PathLike[str]", *, text: Optional[str] = None)
             text = p.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as err:
             raise _fail(source, None, f"expected a readable wearable JSON file ({err.__class__.__name__})") from None
-    try:
+    if bundled:
         doc = json.loads(text)
-    except ValueError as err:
-        raise _fail(source, f"line {getattr(err, 'lineno', '?')}", "expected wearable JSON") from None
+    else:
+        doc = _parse(source, text)
     if not isinstance(doc, dict):
         raise _fail(source, None, "expected a JSON object")
     name = doc.get("name")
     if not isinstance(name, str) or not name or "+" in name or len(name) > 60:
-        raise _fail(source, "field name", f"expected a name without '+', found {name!r}")
+        raise _fail(source, "field name", f"expected a name without '+' of at most 60 characters, found "
+                                          f"{shown(name)}")
     devices = doc.get("devices")
     if not isinstance(devices, dict) or not devices or not all(
             isinstance(k, str) and k and "_" not in k and isinstance(v, dict) for k, v in devices.items()):
@@ -199,7 +247,8 @@ def load_wearable(path: "str | os.PathLike[str]", *, text: Optional[str] = None)
     for dev, info in devices.items():
         n = info.get("sdk2_length")
         if n is not None and (not isinstance(n, int) or isinstance(n, bool) or not 1 <= n <= 64):
-            raise _fail(source, f"field devices.{dev}.sdk2_length", f"expected a whole number 1..64, found {n!r}")
+            raise _fail(source, f"field devices.{dev}.sdk2_length", f"expected a whole number 1..64, found "
+                                                                   f"{shown(n)}")
         lengths[dev] = n
     raw = doc.get("motors")
     if not isinstance(raw, list) or not 1 <= len(raw) <= MAX_MOTORS:
@@ -248,7 +297,7 @@ def bundled_wearables() -> dict[str, Wearable]:
     out = {}
     for entry in sorted(folder.iterdir(), key=lambda e: e.name):
         if entry.name.endswith(".json"):
-            w = load_wearable(f"data/wearables/{entry.name}", text=entry.read_text(encoding="utf-8"))
+            w = load_wearable(f"data/wearables/{entry.name}", text=entry.read_text(encoding="utf-8"), bundled=True)
             out[w.name] = w
     return out
 
@@ -259,14 +308,15 @@ def find_wearable(name: str) -> Wearable:
     text = name.strip()
     if text.lower().endswith(".json"):
         if not Path(text).is_file():
-            raise UsageError(f"wearable file {text} not found")
+            raise UsageError(f"wearable file {shown(text, 200)} not found")
         return load_wearable(text)
     key = text.lower().replace("_", "-")
     for w in bundled_wearables().values():
         if key == w.name or key in (a.lower() for a in w.aliases):
             return w
-    raise UsageError(f"unknown wearable {name!r}: expected one of {', '.join(bundled_wearables())} "
+    raise UsageError(f"unknown wearable {shown(name)}: expected one of {', '.join(bundled_wearables())} "
                      "(or a wearable .json file)")
 
 
-__all__ = ["FACES", "LIMBS", "Motor", "SIDES", "Wearable", "bundled_wearables", "find_wearable", "load_wearable"]
+__all__ = ["FACES", "LIMBS", "Motor", "SIDES", "Wearable", "bundled_wearables", "find_wearable", "load_wearable",
+           "shown"]

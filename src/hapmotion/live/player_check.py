@@ -39,10 +39,10 @@ import numpy as np
 from websockets.asyncio.client import connect
 
 from ..bhaptics.device_map import DeviceMap
-from ..bhaptics.sdk2 import Sdk2Device, parse_server_devices, rig_of_devices, v3_stop_all
+from ..bhaptics.sdk2 import MAX_DEVICES, Sdk2Device, parse_server_devices, printable, rig_choice_of_devices, v3_stop_all
 from ..errors import UsageError
 from ..layout import CHART_BACK, CHART_FRONT, CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT, Layout
-from ..rig import Rig, rig_from_player
+from ..rig import Rig, choose_rig
 from ..track import HapticTrack
 from .kinds import build_sink
 from .sinks import PlayerSdk1Sink, PlayerSdk2Sink, Sink
@@ -54,6 +54,10 @@ CHECK_FPS = PLAYER_TICK_FPS
 
 _DEVICE_WORDS = {CHART_FRONT: "vest front", CHART_BACK: "vest back", CHART_SHOULDER_LEFT: "left shoulder sleeve",
                  CHART_SHOULDER_RIGHT: "right shoulder sleeve"}
+MAX_LISTED = 20
+"""Most devices (and notes) one report prints; the rest are counted in one line."""
+MAX_POSITIONS = 64
+"""Most ``ConnectedPositions`` an SDK1 status is read for (the Player has 10 positions)."""
 _TOLERANCE_M = 0.01
 """Motors within 1 cm of a device's extreme coordinate belong to that edge's column or row."""
 
@@ -182,11 +186,16 @@ class PlayerReport:
         if not self.answered:
             return [f"{self.sink}: connected, but the Player did not report its devices in time; the test pattern "
                     "plays anyway"]
-        out = [f"{self.sink}: {len(self.connected)} device(s) connected: {', '.join(self.connected) or 'none'}"]
+        shown = self.connected[:MAX_LISTED]
+        more = f" and {len(self.connected) - len(shown)} more" if len(self.connected) > len(shown) else ""
+        out = [f"{self.sink}: {len(self.connected)} device(s) connected: {', '.join(shown) or 'none'}{more}"]
         out += [f"  {d}" for d in self.details]
         for device, ok in self.layout_devices.items():
             out.append(f"  {device}: " + ("connected" if ok else "NOT connected: its steps will not be felt"))
-        rig = self.rig()
+        rig, notes = self.rig_choice()
+        out += [f"  {note} (a rig has one wearable per bHaptics position)" for note in notes[:MAX_LISTED]]
+        if len(notes) > MAX_LISTED:
+            out.append(f"  ({len(notes) - MAX_LISTED} more wearables left out)")
         if rig:
             out.append(f"  these devices make the rig {rig} (play, live and listen take it with --rig {rig})")
         else:
@@ -196,12 +205,16 @@ class PlayerReport:
     def rig(self) -> Optional[str]:
         """The rig the connected devices make (``--rig`` text), or None: an SDK2 Player's devices by name, else by
         position (:func:`hapmotion.bhaptics.sdk2.rig_of_devices`); an SDK1 Player's by position
-        (:func:`hapmotion.rig.rig_from_player`)."""
+        (:func:`hapmotion.rig.choose_rig`). It always parses: one wearable per position."""
+        return self.rig_choice()[0]
+
+    def rig_choice(self) -> tuple[Optional[str], list[str]]:
+        """:meth:`rig` and a note per wearable left out of it (its position taken by another)."""
         if not self.answered:
-            return None
+            return None, []
         if self.sdk2_devices is not None:
-            return rig_of_devices(self.sdk2_devices)
-        return rig_from_player((), self.connected)
+            return rig_choice_of_devices(self.sdk2_devices)
+        return choose_rig((), self.connected)
 
     def read_sdk1_status(self, status: dict, layout: Layout) -> None:
         """Take in the Player's SDK1 status object (:func:`~hapmotion.bhaptics.sdk1.parse_v2_status`): its
@@ -211,9 +224,9 @@ class PlayerReport:
         if not isinstance(positions, list):
             return
         self.answered = True
-        self.connected = [str(p) for p in positions]
+        self.connected = [printable(str(p)) for p in positions[:MAX_POSITIONS]]
         count = status.get("ConnectedDeviceCount")
-        if isinstance(count, int) and not isinstance(count, bool):
+        if isinstance(count, int) and not isinstance(count, bool) and 0 <= count < 1_000_000:
             self.details.append(f"ConnectedDeviceCount {count}")
         names = set(self.connected)
         for d in layout.devices:
@@ -230,14 +243,18 @@ class PlayerReport:
         self.answered = True
         self.sdk2_devices, skipped = parsed
         by_position: dict[int, bool] = {}
-        for d in self.sdk2_devices:
+        for k, d in enumerate(self.sdk2_devices):
             if d.connected:
                 self.connected.append(d.name)
-            self.details.append(d.describe())
+            if k < MAX_LISTED:
+                self.details.append(d.describe())
             if d.position is not None:
                 by_position[d.position] = by_position.get(d.position, False) or d.connected
+        if len(self.sdk2_devices) > MAX_LISTED:
+            self.details.append(f"({len(self.sdk2_devices) - MAX_LISTED} more devices of the list not shown)")
         if skipped:
-            self.details.append(f"{skipped} entr{'y' if skipped == 1 else 'ies'} of the list not understood (skipped)")
+            self.details.append(f"{skipped} entr{'y' if skipped == 1 else 'ies'} of the list not understood or beyond "
+                                f"its first {MAX_DEVICES} devices (skipped)")
         for dev in layout.devices:
             self.layout_devices[dev.name] = by_position.get(dev.sdk2_position, False)
 

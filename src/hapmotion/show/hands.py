@@ -14,7 +14,9 @@ fingertips and the palm), in 0..100 %:
   palms, ``100 min(1, closing speed / clap_full)`` fading to 0 over ``clap_pulse_s`` (a clap is an impact: felt
   at once and gone, as the sound is);
 - **wave**: a raised hand (its forearm level or up) that reverses its side-to-side direction relative to the neck
-  (along the shoulder line, at ``wave_min_speed`` m/s or faster and mostly sideways) ``wave_turns`` (3) times
+  (along the shoulder line, at ``wave_min_speed`` m/s or faster and mostly sideways), each time far enough along
+  that line from where it last reversed (``wave_min_swing_m``, and 5 times the tracker's jitter on that hand:
+  jitter reverses a still hand's velocity all the time, but only a few jitters apart), ``wave_turns`` (3) times
   within ``wave_window_s``: its whole glove at ``100 min(1, hand speed / wave_full)``, so the vibration swells in
   each swing and dips at each turn, the wave's own rhythm (no wave within ``wave_window_s`` of a clap: clapping
   hands reverse too);
@@ -31,6 +33,7 @@ performer's left hand on the left glove, swapped when the show is mirrored, as t
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass
 from typing import Optional
 
@@ -43,6 +46,10 @@ PALM = [name for name, _, _ in HAND_PLACES].index("palm")
 INDEX_TIP = [name for name, _, _ in HAND_PLACES].index("index")
 TIPS = [k for k, (name, _, _) in enumerate(HAND_PLACES) if name != "palm"]
 N_PLACES = len(HAND_PLACES)
+JITTER_DIFFERENCE = np.array([1.0, -4.0, 6.0, -4.0, 1.0])
+"""The fourth difference, oldest position first; on independent noise of variance s^2 it has variance
+:data:`JITTER_VARIANCE` s^2 (the sum of the squared weights)."""
+JITTER_VARIANCE = float(np.sum(JITTER_DIFFERENCE ** 2))
 
 
 @dataclass(frozen=True)
@@ -63,6 +70,19 @@ class HandRules:
     wave_lateral: float = 0.6
     """A swing counts when its side-to-side part is at least this share of the hand's speed (a jab forward is no
     wave)."""
+    wave_min_swing_m: float = 0.008
+    wave_jitter_swing: float = 5.0
+    """A reversal counts as a turn only when it is at least ``max(wave_min_swing_m, wave_jitter_swing * s)`` (m,
+    along the shoulder line, relative to the neck) from the hand's previous reversal, ``s`` the tracker's jitter on
+    that hand (per axis and frame, estimated from the hand's fourth differences, :meth:`HandGestures._track_jitter`).
+    Jitter reverses a still hand's smoothed velocity every few frames, at places ``s sqrt 2`` apart (sigma): 5 s is
+    3.5 sigma, and three such turns within ``wave_window_s`` did not happen in 150 s of 2-20 mm jitter at 60 fps
+    (``tests/test_hands.py``); webcam trackers jitter by 5-10 mm, so a swing of 2.5-5 cm is then needed. Motion
+    capture hardly jitters, and there the ``HAND_*`` joint, at the wrist, of a bye-bye wave made with the hand
+    alone swings only 1-2 cm (the waving recording ``dataset-1_byebye_happy_001`` of the benchmarks): 8 mm keeps it
+    a wave."""
+    jitter_rise_frames: float = 20.0
+    jitter_fall_frames: float = 120.0
     wave_below_elbow_m: float = 0.08
     """A hand is raised when it is no lower than this under its elbow (the forearm level or up; a hanging hand is
     25 cm or more under it)."""
@@ -118,13 +138,23 @@ class HandGestures:
         self.reset()
 
     MAX_GAP_S = 0.25
-    """Frames further apart than this (a stalled or restarted source) start the hands' velocities afresh."""
+    """Frames further apart than this, or whose show time goes back (a stalled or restarted source), start the
+    hands' velocities afresh."""
+    MIN_DT_S = 1e-3
+    """Frames closer in show time than this (a sender's duplicate or mis-stamped frame) are taken this far apart:
+    no tracker sends faster than 1 kHz, and a difference over a tiny step would make the velocity infinite."""
+    MAX_HAND_SPEED = 30.0
+    """A hand moving faster than this (m/s) jumped (a tracking glitch, a swapped skeleton): its velocity starts
+    afresh. The fastest human hand movements, throws and punches, stay under about 15 m/s."""
 
     def reset(self) -> None:
         """Forget all history: the next frame is a first frame."""
         self.t = 0.0
         self._last_t: Optional[float] = None
         self._prev: list[Optional[np.ndarray]] = [None, None]
+        self._history = [deque(maxlen=len(JITTER_DIFFERENCE)), deque(maxlen=len(JITTER_DIFFERENCE))]
+        self._jitter2 = [0.0, 0.0]
+        self._jitter_n = [0, 0]
         self._vel = np.zeros((2, 3))
         self._neck: Optional[np.ndarray] = None
         self._neck_vel = np.zeros(3)
@@ -134,6 +164,7 @@ class HandGestures:
         self._clap_level = 0.0
         self._clap_at = -math.inf
         self._sign = [0, 0]
+        self._flip_x: list[Optional[float]] = [None, None]
         self._turns: list[list[float]] = [[], []]
         self._peak_speed = [0.0, 0.0]
         self._point_armed = [False, False]
@@ -151,13 +182,19 @@ class HandGestures:
         frame = np.asarray(frame, dtype=np.float64)
         if frame.shape != (32, 3):
             raise ValueError(f"frame must be (32, 3), got {frame.shape}")
+        with np.errstate(all="ignore"):  # huge coordinates overflow; the checks below drop what is not finite
+            return self._step(frame, t)
+
+    def _step(self, frame: np.ndarray, t: Optional[float]) -> np.ndarray:
         r, dt = self.rules, self.dt
         if t is not None and math.isfinite(t):
             gap = t - self._last_t if self._last_t is not None else dt
-            if gap > self.MAX_GAP_S:
-                self._prev, self._neck = [None, None], None  # no velocity across a gap
-            if 0.0 < gap <= self.MAX_GAP_S:
-                dt = gap
+            if not 0.0 <= gap <= self.MAX_GAP_S:
+                self._prev, self._neck = [None, None], None  # no velocity across a gap or a restart
+                for history in self._history:
+                    history.clear()
+            else:
+                dt = max(gap, self.MIN_DT_S)
             self._last_t = t
         self.t += dt
         self._alpha = 1.0 - math.exp(-dt / r.velocity_tau_s)
@@ -166,10 +203,22 @@ class HandGestures:
         for h, p in enumerate(hands):
             if p is None:
                 self._prev[h] = None
+                self._history[h].clear()
                 self._vel[h] = 0.0
                 continue
-            if self._prev[h] is not None:
-                self._vel[h] += self._alpha * ((p - self._prev[h]) / dt - self._vel[h])
+            prev, history = self._prev[h], self._history[h]
+            if prev is not None:
+                moved = (p - prev) / dt
+                if np.isfinite(moved).all() and float(np.linalg.norm(moved)) <= self.MAX_HAND_SPEED:
+                    self._vel[h] += self._alpha * (moved - self._vel[h])
+                else:  # a jump: no velocity across it
+                    self._vel[h] = 0.0
+                    history.clear()
+            if not np.isfinite(self._vel[h]).all():  # never carry a non-finite state to the next frame
+                self._vel[h] = 0.0
+            history.append(p.copy())
+            if len(history) == len(JITTER_DIFFERENCE):
+                self._track_jitter(h, JITTER_DIFFERENCE @ np.array(history))
             self._prev[h] = p.copy()
             speed[h] = float(np.linalg.norm(self._vel[h]))
         neck = _joint(frame, "NECK", "SPINE_CHEST")
@@ -177,7 +226,9 @@ class HandGestures:
             self._neck, self._neck_vel = None, np.zeros(3)
         else:
             if self._neck is not None:
-                self._neck_vel += self._alpha * ((neck - self._neck) / dt - self._neck_vel)
+                moved = (neck - self._neck) / dt
+                ok = np.isfinite(moved).all() and float(np.linalg.norm(moved)) <= self.MAX_HAND_SPEED
+                self._neck_vel = self._neck_vel + self._alpha * (moved - self._neck_vel) if ok else np.zeros(3)
             self._neck = neck.copy()
         out = np.zeros((2, N_PLACES))
         self._clap(hands)
@@ -195,6 +246,21 @@ class HandGestures:
                 out[h, TIPS] = np.maximum(out[h, TIPS], 0.5 * level)
                 out[h, INDEX_TIP] = max(out[h, INDEX_TIP], level)
         return np.clip(out, 0.0, 100.0)
+
+    def _track_jitter(self, h: int, diff: np.ndarray) -> None:
+        """Follow the tracker's jitter on hand ``h`` from the fourth difference ``diff`` (m, ``(3,)``) of its last
+        five positions: for independent noise of sigma s per axis and frame, each axis of it has variance 70 s^2,
+        while a movement's own share shrinks by (2 sin(pi f / fps))^4 (a 2.5 Hz wave at 30 fps: by 14), so a
+        hand's own quick wiggle is not taken for jitter. The estimate of s^2 is the mean of the first samples,
+        then rises within ``jitter_rise_frames`` and falls over ``jitter_fall_frames`` (counted in frames: the
+        show times may be anything)."""
+        r = self.rules
+        var = float(np.dot(diff, diff)) / (3.0 * JITTER_VARIANCE)
+        if not math.isfinite(var):
+            return
+        n = r.jitter_rise_frames if var > self._jitter2[h] else r.jitter_fall_frames
+        self._jitter_n[h] += 1  # the first estimates are plain means (not an average with a start at 0)
+        self._jitter2[h] += max(1.0 / self._jitter_n[h], 1.0 - math.exp(-1.0 / n)) * (var - self._jitter2[h])
 
     def _clap(self, hands: list) -> None:
         r = self.rules
@@ -233,10 +299,19 @@ class HandGestures:
             own = self._vel[h] - self._neck_vel  # the hand's own swing, not the body swaying or travelling
             u = float(np.dot(own, axis))
             lateral = abs(u) > r.wave_min_speed and abs(u) >= r.wave_lateral * float(np.linalg.norm(own))
-            if p is not None and lateral:
+            if p is None:
+                self._flip_x[h] = None
+            elif lateral:
                 sign = 1 if u > 0 else -1
-                if self._sign[h] and sign != self._sign[h]:
-                    turns.append(self.t)
+                # where along the shoulder line the hand is, relative to the neck when known
+                x = float(np.dot(p - self._neck if self._neck is not None else p, axis))
+                if self._flip_x[h] is None:  # the first swing is measured from where it was first seen
+                    self._flip_x[h] = x
+                elif self._sign[h] and sign != self._sign[h]:
+                    need = max(r.wave_min_swing_m, r.wave_jitter_swing * math.sqrt(self._jitter2[h]))
+                    if abs(x - self._flip_x[h]) >= need:
+                        turns.append(self.t)
+                    self._flip_x[h] = x
                 self._sign[h] = sign
             while turns and turns[0] < self.t - r.wave_window_s:
                 turns.pop(0)
