@@ -187,3 +187,14 @@ def test_info_says_a_rigs_track_needs_its_rig(tmp_path):
     code, out = _cli("info", path)
     assert code == 0 and "air (the columns are its motors: play with --rig air)" in out
     assert "play refuses it without --rig air" in out
+
+
+def test_the_play_startup_line_names_the_rig(tmp_path, capsys):
+    path = tmp_path / "air.csv"
+    hapmotion.save_track(air_track(), path)
+    assert main(["play", str(path), "--rig", "air", "--sink", f"record:{tmp_path / 'take.csv'}", "-q"]) == 0
+    assert "on --rig air to record" in capsys.readouterr().err
+    assert main(["play", str(HEARTBEAT), "--sink", f"record:{tmp_path / 'take2.csv'}", "-q"]) == 0
+    assert "on the layout's own devices (no --rig) to record" in capsys.readouterr().err
+    take = hapmotion.load_track(tmp_path / "take.csv")  # the recorder keeps the rig's motors, named as such
+    assert take.layout == "air" and take.intensities.max() == pytest.approx(80.0)

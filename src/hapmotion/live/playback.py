@@ -24,10 +24,10 @@ from typing import Any, Callable, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
+from ..bhaptics.device_map import DeviceMap
 from ..errors import InputError, UsageError
 from ..layout import Layout
 from ..limits import LimitsArg
-from ..bhaptics.device_map import DeviceMap
 from ..rig import lift_track, motor_columns, own_rig, rig_hint, rig_places
 from ..show.cues import Cue, pattern_rows
 from ..show.settings import Show
@@ -262,4 +262,5 @@ def run_play(*args: Any, **kwargs: Any) -> LiveStats:
     return asyncio.run(play(*args, **kwargs))
 
 
-__all__ = ["MAX_PLAY_FPS", "MIN_PLAY_FPS", "StoredRows", "TrackSource", "layout_rows", "own_rig_session", "play", "play_rate", "run_play"]
+__all__ = ["MAX_PLAY_FPS", "MIN_PLAY_FPS", "StoredRows", "TrackSource", "layout_rows", "own_rig_session", "play",
+           "play_rate", "run_play"]
