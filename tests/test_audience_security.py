@@ -551,3 +551,51 @@ def test_a_certificate_that_does_not_verify_is_named_in_the_one_line_error(tmp_p
                      "--nats-ca", stranger_ca])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and "CERTIFICATE_VERIFY_FAILED" in err, err
+    assert err.rstrip().endswith("(give the venue's CA with --nats-ca FILE)"), err
+
+
+def test_a_tls_seat_without_the_venues_ca_is_told_to_give_it(tmp_path, capsys):
+    from hapmotion.cli import main
+
+    with Venue(tmp_path, show="concert") as venue:  # the server's certificate is of the venue's own CA
+        code = main(["listen", f"{venue.url}/concert", "--sink", "player", "--venue-pubkey",
+                     str(venue.paths["venue_pub"]), "--nats-nkey", str(venue.paths["seat_nkey"])])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "CERTIFICATE_VERIFY_FAILED" in err, err
+    assert "(give the venue's CA with --nats-ca FILE)" in err, err
+
+
+def test_venue_setup_refuses_tls_files_it_cannot_read_before_writing_anything(tmp_path, capsys):
+    from hapmotion.cli import main
+    from support.audience import make_tls
+
+    (tmp_path / "tls").mkdir()
+    tls = make_tls(tmp_path / "tls")
+    key = tls["key"]
+    cases = [
+        (["--tls-cert", str(tmp_path / "server.pem"), "--tls-key", str(tmp_path / "server-key.pem")],
+         "--tls-cert", "no such file"),
+        (["--tls-cert", tls["cert"], "--tls-key", tls["ca"]], "--tls-key", "expected a PEM private key"),
+        (["--tls-cert", key, "--tls-key", key], "--tls-cert", "expected a PEM certificate"),
+        (["--tls-cert", tls["cert"], "--tls-key", key, "--tls-ca", str(tmp_path)], "--tls-ca", "found a folder"),
+        (["--tls-cert", tls["cert"]], "--tls-cert and --tls-key go together", ""),
+    ]
+    for k, (args, option, message) in enumerate(cases):
+        code = main(["venue-setup", str(tmp_path / f"venue{k}"), "--show", "show", *args])
+        err = capsys.readouterr().err
+        assert code == 2 and option in err and message in err and err.count("\n") == 1, err
+        assert not (tmp_path / f"venue{k}").exists()  # nothing written
+    assert main(["venue-setup", str(tmp_path / "good"), "--tls-cert", tls["cert"], "--tls-key", key]) == 0
+    assert 'cert_file: "' in (tmp_path / "good" / "nats-server.conf").read_text()
+
+
+def test_the_publishers_startup_line_names_its_frames_and_rate(motion):
+    s, layout = Show(), load_layout()
+    stage = OutputStage.for_show(s, "motion", layout=layout, fps=60.0)
+    common = dict(show=s, stage=stage, layout=layout, body=BodyModel.from_motion(motion), stall_ms=250.0, mirror=True)
+    rehearsal = PublisherSecurity(unsigned=True)
+    compact = NatsPublisherSink("nats://127.0.0.1:4222", describe_show("concert", frames="compact", rate=30.0,
+                                                                     **common), security=rehearsal)
+    full = NatsPublisherSink("nats://127.0.0.1:4222", describe_show("concert", **common), security=rehearsal)
+    assert "frames=compact, published at 30/s of 60" in compact.describe(), compact.describe()
+    assert "frames=full, published at 60/s of 60" in full.describe(), full.describe()

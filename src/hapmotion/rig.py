@@ -177,6 +177,12 @@ class Rig:
         return tuple((pos, s, k) for pos, pairs in by_pos.items() for s, k in sorted(pairs))
 
     @property
+    def motor_wearables(self) -> tuple[str, ...]:
+        """The wearable name of each motor (the columns :attr:`actuators`): what a CSV track's column ids start
+        with (``air:VestFront_0``), so that the file says which rig it is for."""
+        return tuple(w.name for w in self.wearables for d in w.devices for _ in w.device_motors(d))
+
+    @property
     def actuators(self) -> tuple[str, ...]:
         """Motor ids ``<device>_<index>`` (an Air: ``VestFront_0`` ... ``VestFront_7``): what a rig's track holds."""
         return tuple(f"{m.device}_{m.index}" for m in self.motors)
@@ -306,6 +312,25 @@ def rig_from_player(sdk2_names: Sequence[str] = (), sdk1_positions: Sequence[str
     return choose_rig(sdk2_names, sdk1_positions)[0]
 
 
+def rig_hint(devices: Sequence[str]) -> str:
+    """``--rig`` wearables that play ``devices`` (positions or device names a track holds and the body chart lacks:
+    ``GloveL``, ``Head``), after the default rig's: ``x40+tactosy-shoulders+gloves``; ``""`` when no bundled
+    wearable has them (or they cannot be worn with the default rig)."""
+    names: list[str] = []
+    for d in devices:
+        name = SDK1_POSITION_WEARABLES.get(str(d))
+        if name is None:
+            name = next((w.name for w in bundled_wearables().values() if any(m.device == d for m in w.motors)), None)
+        if name is not None and name not in names:
+            names.append(name)
+    if not names:
+        return ""
+    try:
+        return parse_rig("+".join([DEFAULT_RIG] + names)).name
+    except (UsageError, InputError):
+        return ""
+
+
 def default_rig(energy: bool = True) -> Rig:
     """:data:`DEFAULT_RIG`."""
     return parse_rig(DEFAULT_RIG, energy=energy)
@@ -344,6 +369,41 @@ def _track_rig(name: str, ids: Sequence[str]) -> Optional[Rig]:
     except (UsageError, InputError):
         return None
     return rig if tuple(rig.actuators) == tuple(ids) else None
+
+
+def own_rig(track: HapticTrack) -> Optional[Rig]:
+    """The rig whose motors ``track``'s columns are (a track rendered with ``--rig``: its layout name is the rig's,
+    its columns ``rig.actuators``), or None for a body-chart track, a pattern or a track of the default rig (whose
+    motors are the body chart's places). An Air's ``VestFront_0..7`` are not an X40's first eight dots: such a track
+    is played as it is only on a rig with the same motors (:func:`motor_columns`)."""
+    return _track_rig(track.layout, track.actuators)
+
+
+def motor_columns(rig: Rig, ids: Sequence[str], places: Sequence[tuple[str, float, float]], *,
+                  other_devices: bool = False) -> Optional[np.ndarray]:
+    """``(K,)``: the column of ``ids`` each of ``rig``'s motors is, when every motor has a column of its id at its
+    own place (``places``, ``(chart, across, height)`` per id, within :data:`SNAP`): the rows then play on those
+    columns exactly, with no split; None when a motor is missing or elsewhere (an Air's ``VestFront_1`` is not at an
+    X40's ``VestFront_1``). ``other_devices``: motors of a device ``ids`` has none of (an X40 + gloves track on the
+    body chart: the gloves) are -1 instead of None (what plays them leaves them out, and says so)."""
+    index = {a: j for j, a in enumerate(ids)}
+    have = {a.rpartition("_")[0] for a in ids}
+    out = []
+    for a, m in zip(rig.actuators, rig.motors):
+        j = index.get(a)
+        if other_devices and m.device not in have:
+            out.append(-1)
+            continue
+        if j is None or places[j][0] != m.chart or abs(places[j][1] - m.across) > SNAP \
+                or abs(places[j][2] - m.height) > SNAP:
+            return None
+        out.append(j)
+    return np.array(out, dtype=np.intp)
+
+
+def rig_places(rig: Rig) -> tuple[tuple[str, float, float], ...]:
+    """``(chart, across, height)`` of each of ``rig``'s motors (the columns ``rig.actuators``)."""
+    return tuple((m.chart, m.across, m.height) for m in rig.motors)
 
 
 def lift(ids: Sequence[str], rows: np.ndarray, layout: Optional[Layout] = None, *, energy: bool = True,
@@ -424,6 +484,19 @@ def rig_track(track: HapticTrack, layout: Layout, *, slots: bool = False) -> Hap
     rig = layout.rig
     if rig is None:
         return track
+    own = own_rig(track)
+    if own is None and tuple(track.actuators) == rig.actuators \
+            and motor_columns(rig, layout.played_actuators, layout.played_places()) is None:
+        own = rig  # exactly this rig's motors, which are not the chart's: a rig's track that does not say so
+    cols = motor_columns(own, rig.actuators, rig_places(rig)) if own is not None else None
+    if cols is not None:  # the track's own motors (or the same ones on a larger rig): as they are, no split
+        rows = np.zeros((track.n_frames, len(rig.actuators)))
+        rows[:, cols] = track.intensities
+        meta = dict(track.meta, rig=rig.name)
+        if slots:
+            return HapticTrack(rows[:, rig.slot_motor], track.fps, rig.slot_ids, layout=rig.name, meta=meta,
+                               debug=dict(track.debug))
+        return HapticTrack(rows, track.fps, rig.actuators, layout=rig.name, meta=meta, debug=dict(track.debug))
     on_chart, missing = lift_track(track, layout)
     if on_chart is track and missing:
         raise UsageError(f"the track's devices ({', '.join(missing)}) have no place on the body chart, so the rig "
@@ -444,4 +517,5 @@ def rig_track(track: HapticTrack, layout: Layout, *, slots: bool = False) -> Hap
 
 
 __all__ = ["DEFAULT_RIG", "FOLDS", "Projection", "Rig", "SDK1_POSITION_WEARABLES", "default_rig", "lift", "lift_track",
-           "parse_rig", "player_wearable", "rig_from_player", "rig_track", "transfer"]
+           "motor_columns", "own_rig", "parse_rig", "player_wearable", "rig_from_player", "rig_hint", "rig_places",
+           "rig_track", "transfer"]

@@ -245,7 +245,19 @@ def connect_error(what: str, exc: BaseException) -> UsageError:
     """The one-line error for a failed first connection: a refusal or an absent server."""
     if isinstance(exc, AuthRefused):
         return UsageError(f"{what}: {exc}")
-    return UsageError(f"{what}: cannot reach the NATS server ({exc.__class__.__name__}: {exc})")
+    hint = " (give the venue's CA with --nats-ca FILE)" if _unverified(exc) else ""
+    return UsageError(f"{what}: cannot reach the NATS server ({exc.__class__.__name__}: {exc}){hint}")
+
+
+def _unverified(exc: Optional[BaseException]) -> bool:
+    """Whether ``exc`` (or what it was raised from) is a server certificate this client could not verify: a
+    self-signed one, or one of a CA the client was not given."""
+    seen = 0
+    while exc is not None and seen < 8:  # the NATS client may wrap the ssl error
+        if isinstance(exc, ssl.SSLCertVerificationError) or "CERTIFICATE_VERIFY_FAILED" in str(exc):
+            return True
+        exc, seen = exc.__cause__ or exc.__context__, seen + 1
+    return False
 
 
 def _no_jetstream(exc: Exception) -> bool:

@@ -231,7 +231,9 @@ class NatsPublisherSink(Sink):
                 self.warn_once("description", "could not check the stored show description (%s)", exc)
 
     def describe(self) -> str:
-        return f"{self.name} ({self.signer.describe()})"
+        frames = "compact" if self.description.frame_version == 2 else "full"
+        return (f"{self.name} ({self.signer.describe()}; frames={frames}, published at "
+                f"{self.description.frame_rate:g}/s of {self.description.fps:g})")
 
     def _on_state(self, state: str) -> None:
         if self._closing:

@@ -87,6 +87,35 @@ def _write_secret(path: Path, data: bytes) -> None:
         f.write(data + b"\n")
 
 
+PEM_MARKS = {"--tls-cert": ("-----BEGIN CERTIFICATE-----", "a PEM certificate"),
+             "--tls-key": ("PRIVATE KEY-----", "a PEM private key"),
+             "--tls-ca": ("-----BEGIN CERTIFICATE-----", "a PEM CA certificate")}
+"""What each TLS file of :func:`write_venue` must hold (nats-server reads PEM only), and how an error names it."""
+
+PEM_MAX_BYTES = 1 << 20
+"""Most bytes of a TLS file read to check it (a certificate chain is a few KB)."""
+
+
+def check_tls_file(path: Optional[str], option: str) -> None:
+    """UsageError (one line, naming ``option`` and the file) unless ``path`` is None or a readable file holding
+    what :data:`PEM_MARKS` says: nats-server would otherwise fail only when it starts, away from this command."""
+    if path is None:
+        return
+    mark, what = PEM_MARKS[option]
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(PEM_MAX_BYTES)
+    except FileNotFoundError:
+        raise UsageError(f"{option} {path}: no such file (docs/audience.md, 'A certificate for the server', "
+                         "shows how to make one)") from None
+    except IsADirectoryError:
+        raise UsageError(f"{option} {path}: expected {what} file, found a folder") from None
+    except OSError as exc:
+        raise UsageError(f"{option} {path}: cannot read it ({exc.strerror or exc})") from None
+    if mark.encode() not in head:
+        raise UsageError(f"{option} {path}: expected {what} ({mark}), found none")
+
+
 def write_venue(folder: "str | os.PathLike[str]", *, show: str = "*", host: str = "0.0.0.0", port: int = 4222,
                 tls_cert: Optional[str] = None, tls_key: Optional[str] = None, tls_ca: Optional[str] = None,
                 store_dir: Optional[str] = None) -> dict[str, Path]:
@@ -96,6 +125,10 @@ def write_venue(folder: "str | os.PathLike[str]", *, show: str = "*", host: str 
         check_show_name(show)
     if not (0 < port < 65536):
         raise UsageError(f"--port {port}: expected 1..65535")
+    if (tls_cert is None) != (tls_key is None):
+        raise UsageError("--tls-cert and --tls-key go together (the server's certificate and its key)")
+    for path, option in ((tls_cert, "--tls-cert"), (tls_key, "--tls-key"), (tls_ca, "--tls-ca")):
+        check_tls_file(path, option)  # before anything is written
     out = Path(folder)
     names = {"venue_key": "venue.key", "venue_pub": "venue.pub", "venue_nkey": "venue.nk", "seat_nkey": "seat.nk",
              "config": "nats-server.conf"}

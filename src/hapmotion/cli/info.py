@@ -71,7 +71,16 @@ def track_summary(track: HapticTrack, path: "str | os.PathLike[str]") -> dict[st
     devices: dict[str, list[int]] = {}
     for col, name in enumerate(track.actuators):
         devices.setdefault(name.rsplit("_", 1)[0], []).append(col)
-    known = {a.rsplit("_", 1)[0] for a in load_layout().actuators}
+    from ..rig import motor_columns, own_rig, rig_hint
+
+    chart = load_layout()
+    known = {a.rsplit("_", 1)[0] for a in chart.actuators}
+    own = own_rig(track)  # a track rendered with --rig: its columns are that rig's motors
+    lacking = sorted(set(devices) - known)
+    elsewhere = own is not None and motor_columns(own, chart.actuators, chart.places(), other_devices=True) is None
+    if elsewhere:
+        lacking = sorted(devices)  # same names as the X40's (an Air's VestFront_0..7), other motors
+    hint = own.name if own is not None else rig_hint(lacking)
     rows = max(track.n_frames, 1)
     made = {k: track.meta[k] for k in ("method", "preset", "mode", "mirror") if k in track.meta}
     return {
@@ -88,7 +97,10 @@ def track_summary(track: HapticTrack, path: "str | os.PathLike[str]") -> dict[st
             name: {"motors": len(cols), "peak": float(x[:, cols].max()) if x.size else 0.0,
                    "felt_pct": 100.0 * float(np.count_nonzero((x[:, cols] >= FELT_LEVEL).any(axis=1))) / rows}
             for name, cols in devices.items()},
-        "devices_not_in_default_layout": sorted(set(devices) - known),
+        "rig": own.name if own is not None else None,
+        "devices_not_in_default_layout": lacking,
+        "rig_hint": hint or None,
+        "needs_rig": elsewhere,
         "made_with": made,
     }
 
@@ -108,7 +120,11 @@ def describe_track(s: dict[str, Any]) -> list[tuple[str, str]]:
         (f"devices ({len(s['devices'])})", "; ".join(
             f"{name}: {d['motors']} motors, peak {d['peak']:.0f}, felt in {d['felt_pct']:.0f}% of rows"
             for name, d in s["devices"].items())),
-        ("not in the default layout", (", ".join(lacking) + " (play and cues leave them out; --layout FILE "
-                                       "to map them)") if lacking else "none"),
+        ("rig", f"{s['rig']} (the columns are its motors: play with --rig {s['rig']})" if s["rig"]
+         else "none recorded (the body chart's places, or a pattern)"),
+        ("not in the default layout", "none" if not lacking else ", ".join(lacking) + (
+            f" (other motors than the X40's of those names: play refuses it without --rig {s['rig']})"
+            if s["needs_rig"] else " (play and cues leave them out; play them with --rig "
+            f"{s['rig_hint'] or 'WEARABLES'}, or map them with --layout FILE)")),
         ("made with", ", ".join(f"{k} {v}" for k, v in s["made_with"].items()) or "not recorded"),
     ]

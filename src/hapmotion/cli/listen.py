@@ -10,8 +10,8 @@ import click
 from ..show.comfort import Comfort
 from .audience_options import seat_security_options, seat_sync_options
 from .show_options import (comfort_options, cues_option, layout_option, method_option, mirror_option, mode_option,
-                           param_option, parse_param_overrides, preset_option, read_cues, rig_of, rig_option,
-                           split_values)
+                           param_option, parse_param_overrides, preset_option, read_cues, rig_line, rig_of,
+                           rig_option, split_values)
 
 HELP = """Render a show published with `hapmotion live ... --sink nats://HOST:PORT/SHOW` on this seat's vest.
 
@@ -86,7 +86,8 @@ def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Opti
         trust = engine.source.trust.describe()
         timing = (f"delay {delay_ms:g} ms" if sync is None else
                   f"--sync audio from {engine.source.sync.audio.describe()}, fine offset {delay_ms:g} ms")
-        click.echo(f"listen: {show_url} ({timing}, {trust}); sinks: {names}; Ctrl-C stops", err=True)
+        click.echo(f"listen: {show_url} ({timing}, {trust}); on {rig_line(layout)}; sinks: {names}; Ctrl-C stops",
+                   err=True)
 
     try:
         run_listen(show_url, list(sinks), seat=seat, security=security, on_ready=ready, sessions=sessions, sync=sync,

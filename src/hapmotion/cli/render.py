@@ -10,7 +10,8 @@ from typing import Optional
 import click
 
 from ..errors import UsageError
-from ..rig import rig_track
+from ..layout import load_layout
+from ..rig import motor_columns, own_rig, rig_places, rig_track
 from ..show.settings import Show
 from ..track_files.sniff import is_track_file
 from .motion_options import CLI_SPELLING, motion_options, read_motion, read_track
@@ -99,9 +100,16 @@ def convert_track(path: str, output: str, show: Show, motion_opts: dict) -> None
     track = read_track(path, **motion_opts)
     if show.fps is not None:
         track = track.resample(show.fps)
+    tact = Path(output).suffix.lower() == ".tact"
+    own, how = own_rig(track), ""
     if rig_of(show):  # a pattern of one wearable played on another, through the body chart
-        track = rig_track(track, show.load_layout(), slots=Path(output).suffix.lower() == ".tact")
+        layout = show.load_layout()
+        if own is not None and motor_columns(own, layout.rig.actuators, rig_places(layout.rig)) is None:
+            how = f", from the rig {own.name} through the body chart"
+        track = rig_track(track, layout, slots=tact)
+    elif own is not None and tact:  # a rig's own track: its motors on the SDK1 slots they play, as they are
+        track = rig_track(track, load_layout().with_rig(own), slots=True)
     written = save_track(track, Path(output))
     also = f" and {', '.join(p.name for p in written[1:])}" if len(written) > 1 else ""
     click.echo(f"wrote {output}{also} ({track.n_frames} frames at {track.fps:g} fps, {track.duration:.2f} s, "
-               f"converted from {path})")
+               f"converted from {path}{how})")

@@ -181,6 +181,13 @@ def with_rig(show: Show, rig: Optional[str], credentials: tuple = (None, None)) 
                                                       credentials=credentials)))
 
 
+def rig_line(layout: Any) -> str:
+    """What a start-up line says the rows are played on: ``--rig air``, or ``the layout's own devices (no --rig)``
+    for a layout (a :class:`~hapmotion.layout.Layout`, a layout file or None) without a rig."""
+    rig = getattr(layout, "rig", None)
+    return f"--rig {rig.name}" if rig is not None else "the layout's own devices (no --rig)"
+
+
 def rig_of(text: str, layout: Any, *, energy: bool, credentials: tuple = (None, None)) -> Any:
     """The :class:`~hapmotion.rig.Rig` a ``--rig`` value names: wearables joined by '+', or ``player[://HOST:PORT]``
     / ``player-v3[://HOST:PORT]`` (the devices that SDK1 or SDK2 Player reports connected, asked with the SDK2

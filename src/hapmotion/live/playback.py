@@ -24,9 +24,11 @@ from typing import Any, Callable, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
+from ..bhaptics.device_map import DeviceMap
 from ..errors import InputError, UsageError
+from ..layout import Layout
 from ..limits import LimitsArg
-from ..rig import lift_track
+from ..rig import lift_track, motor_columns, own_rig, rig_hint, rig_places
 from ..show.cues import Cue, pattern_rows
 from ..show.settings import Show
 from ..show.stage import OutputStage
@@ -34,7 +36,9 @@ from ..show.timeline import RowTimeline
 from ..track import HapticTrack, parse_actuator_id
 from ..track_files import load_track
 from .frames import SkeletonFrame
+from .kinds import build_sink
 from .session import Session, SinkOptions, SinkSpec
+from .urls import parse_sink
 from .sources import Source
 from .stats import LiveStats
 
@@ -57,9 +61,10 @@ def play_rate(fps: float) -> float:
     return min(fps, MAX_PLAY_FPS)
 
 
-def layout_rows(track: HapticTrack, actuators: Sequence[str], name: str = "track") -> np.ndarray:
+def layout_rows(track: HapticTrack, actuators: Sequence[str], name: str = "track", rig: str = "") -> np.ndarray:
     """The track's rows ``(T, N)`` 0..100 in the session's actuator order, matched by actuator id (columns of the
-    session that the track lacks are 0). Devices of the track the session lacks are logged once; a track of which
+    session that the track lacks are 0). Devices of the track the session lacks are logged once, with the ``--rig``
+    that plays them (``rig``, the track's own, or one :func:`hapmotion.rig.rig_hint` makes); a track of which
     nothing maps is an :class:`~hapmotion.errors.InputError`."""
     index = {a: i for i, a in enumerate(actuators)}
     present = sorted({parse_actuator_id(a)[0] for a in track.actuators if a in index})
@@ -71,8 +76,10 @@ def layout_rows(track: HapticTrack, actuators: Sequence[str], name: str = "track
     notes: list[str] = []
     rows = pattern_rows(track, fps=track.fps, actuators=actuators, mirror_map=np.arange(len(actuators)),
                         cue=Cue(0.0, Path(name), place="played"), notes=notes)
+    lacking = sorted({parse_actuator_id(a)[0] for a in track.actuators if a not in index})
+    hint = rig or rig_hint(lacking)
     for note in notes:
-        log.warning("%s", note)
+        log.warning("%s%s", note, f" (give the rig that has them with --rig, e.g. --rig {hint})" if hint else "")
     return rows
 
 
@@ -192,13 +199,18 @@ async def play(
         log.info("%s: %g rows/s played at %g rows/s (%s)", name, track.fps, fps,
                  "each row repeated" if fps > track.fps else "resampled, peaks kept")
         track = track.resample(fps)
-    track, _ = lift_track(track, session_layout)  # another wearable's pattern onto the body chart (docs/wearables.md)
-    rows = layout_rows(track, session_layout.played_actuators, name)
+    meta: dict[str, Any] = {}  # filled below; a rig's sinks are built when the session starts
+    session_layout, sinks, exact = own_rig_session(track, name, session_layout, list(sinks),
+                                                   SinkOptions(workspace_id, api_key, meta, speed))
+    if not exact:  # another wearable's pattern onto the body chart (docs/wearables.md)
+        track, _ = lift_track(track, session_layout)
+    own = own_rig(track)
+    rows = layout_rows(track, session_layout.played_actuators, name, own.name if own is not None else "")
     stage = OutputStage.identity(session_layout.played_actuators, fps,
                                  mirror_map=session_layout.played_mirror_map(),
                                  comfort=show.comfort, cues=show.load_cues(limits))
     source = TrackSource(rows.shape[0], fps, speed=speed, loop=loop, name=name, marks=marks, on_mark=on_mark)
-    meta = {"mode": "playback", "source": source.describe(), "track": name, "fps": fps}
+    meta.update({"mode": "playback", "source": source.describe(), "track": name, "fps": fps})
     # The source is this process's own clock: the stall watchdog only has to see through a late wake-up, so its
     # time covers three rows whatever the rate.
     engine_options.setdefault("stall_s", max(0.25, 3.0 / source.rate))
@@ -208,9 +220,47 @@ async def play(
     return await session.run()
 
 
+def own_rig_session(track: HapticTrack, name: str, layout: Layout, sinks: list,
+                    context: SinkOptions) -> tuple[Layout, list, bool]:
+    """The session layout and sinks that play a rig's own track (:func:`hapmotion.rig.own_rig`: rendered with
+    ``--rig``) exactly: on the body chart when the rig's motors are the chart's places (an X40's), else straight to
+    the motors of the session's ``--rig`` when it has the track's motors at their places (its motor layout, the
+    Player's messages through :meth:`DeviceMap.for_rig`, as ``hapmotion check`` plays). A rig's track is never put
+    on another rig's motors by this: that is a UsageError naming ``--rig`` (``hapmotion render TRACK --rig ...``
+    puts it on another rig through the body chart). A track that does not name its rig but has exactly the
+    ``--rig``'s motors, which are not the chart's, is taken as that rig's. Returns ``(layout, sinks, exact)``:
+    ``exact`` when the track's columns are played as they are, by id (else it goes on the body chart first)."""
+    if track.layout == layout.name and tuple(track.actuators) in (layout.actuators, layout.played_actuators):
+        return layout, sinks, False  # already the session's columns (check's pattern on a rig's motor layout)
+    rig, own = layout.rig, own_rig(track)
+    if own is None and rig is not None and tuple(track.actuators) == rig.actuators \
+            and motor_columns(rig, layout.played_actuators, layout.played_places()) is None:
+        own = rig
+    if own is None:
+        return layout, sinks, False
+    if rig is None and motor_columns(own, layout.played_actuators, layout.played_places(), other_devices=True) \
+            is not None:
+        return layout, sinks, True  # an X40's motors are the chart's own; gloves, a visor ... are left out, noted
+    if rig is not None and motor_columns(own, rig.actuators, rig_places(rig)) is not None:
+        dmap = DeviceMap.for_rig(rig)
+
+        def motors(spec: SinkSpec) -> SinkSpec:
+            if not isinstance(spec, str):
+                return spec
+            return lambda _dmap, rate: build_sink(parse_sink(spec), dmap=dmap, layout_name=rig.name, fps=rate,
+                                                  workspace_id=context.workspace_id, api_key=context.api_key,
+                                                  meta=context.meta, time_scale=context.time_scale)
+        return rig.motor_layout(), [motors(s) for s in sinks], True
+    on = f"the rig {rig.name}" if rig is not None else "the body chart (no --rig: an X40 and two shoulder sleeves)"
+    raise UsageError(f"{name} holds the motors of the rig {own.name}, which {on} does not have: play it with "
+                     f"--rig {own.name}, or put it on another rig through the body chart first ('hapmotion render "
+                     f"{name} --rig WEARABLES -o OUT')")
+
+
 def run_play(*args: Any, **kwargs: Any) -> LiveStats:
     """Blocking :func:`play` (its own event loop); SIGINT/SIGTERM/SIGHUP stop it cleanly with turn-off."""
     return asyncio.run(play(*args, **kwargs))
 
 
-__all__ = ["MAX_PLAY_FPS", "MIN_PLAY_FPS", "StoredRows", "TrackSource", "layout_rows", "play", "play_rate", "run_play"]
+__all__ = ["MAX_PLAY_FPS", "MIN_PLAY_FPS", "StoredRows", "TrackSource", "layout_rows", "own_rig_session", "play",
+           "play_rate", "run_play"]

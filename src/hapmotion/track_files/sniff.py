@@ -18,8 +18,9 @@ SNIFF_BYTES = 4096
 HEADER_MAX_BYTES = 1 << 20
 """Longest CSV header line read to decide track or motion (a 52-actuator track header is about 600 bytes)."""
 
-TRACK_COLUMN_RE = re.compile(r"^[A-Za-z][A-Za-z0-9]*_\d+$")
-"""A track CSV column after ``time_s``: ``<Device>_<index>`` such as ``VestFront_12``. Motion-table joint columns
+TRACK_COLUMN_RE = re.compile(r"^([A-Za-z0-9][A-Za-z0-9._-]*:)?[A-Za-z][A-Za-z0-9]*_\d+$")
+"""A track CSV column after ``time_s``: ``<Device>_<index>`` such as ``VestFront_12``, after its wearable's name in
+a rig's track (``air:VestFront_0``, :mod:`.csv_track`). Motion-table joint columns
 (``PELVIS_x``, ``HAND_LEFT_conf``: docs/formats.md) never match: they end in a letter suffix, and joint names hold
 underscores."""
 

@@ -49,7 +49,8 @@ def _files(track: HapticTrack, path: Path) -> dict[Path, tuple[str, list[str]]]:
         t = type_for_position(dev, len(track.device_columns(dev)))
         if t is None:
             raise UsageError(f"cannot write {dev!r} to a .tact file: expected a bHaptics position with its motor "
-                             "count (VestFront/VestBack 20, ForearmL/ForearmR 6, ...)")
+                             "count (VestFront/VestBack 20, ForearmL/ForearmR 6, ...); a rig's motors (an "
+                             "Air's VestFront_0..7) go on its slots with --rig, e.g. --rig air")
         vest = t.name == "Tactot"
         target = path if vest else path.with_name(f"{path.stem}.{dev}{path.suffix}")
         plan.setdefault(target, (t.name, []))[1].append(dev)
