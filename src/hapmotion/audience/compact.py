@@ -1,5 +1,5 @@
-"""Compact frames (frame version 2, sans-I/O): only the joints a seat's renderer and glove layer read, and the music row as a
-palette, inside the same 32-byte header as version 1 (docs/audience.md, "Compact frame").
+"""Compact frames (frame version 2, sans-I/O): only the joints a seat's renderer and glove layer read, and the
+music row as a palette, inside the same 32-byte header as version 1 (docs/audience.md, "Compact frame").
 
     offset size  field
      0     32    the header of version 1 (wire.HEADER) with version 2: magic, version, kind, n_joints, n_music,
