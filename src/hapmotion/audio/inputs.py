@@ -9,9 +9,16 @@ or a file or pipe, all as blocks of mono samples stamped with the local time the
 * ``mic``: the default microphone;
 * ``device:NAME``: a device by (part of) the name ``hapmotion listen --list-audio-inputs`` shows;
 * ``file:PATH``: an audio file (WAV, FLAC, Ogg, ...) played in real time from the moment the seat starts;
-* ``wav:PATH`` or ``wav:-``: a WAV stream from a named pipe or standard input, stamped as it arrives;
+* ``wav:PATH`` or ``wav:-``: a WAV stream from a named pipe or standard input, stamped as it arrives (a streaming
+  WAV, whose data size is a placeholder, is read to its end: :mod:`hapmotion.audio.wav_stream`);
 * ``raw:PATH?rate=48000&channels=2&format=s16`` (or ``raw:-?...``): headerless PCM (``s16`` little-endian or
   ``f32``) from a pipe or standard input, stamped as it arrives (``parec --format=s16le`` writes this).
+
+Every input has a rate of ``MIN_SAMPLE_RATE..MAX_SAMPLE_RATE`` (:mod:`hapmotion.audio.io`) and 1..32 channels.
+Samples that are not finite (a float stream's inf or NaN) become 0 and float samples are clipped to -1..1, so the
+levels stay finite. A pipe is read no faster than real time: a writer that runs ahead (``raw:/dev/zero``, a file
+on standard input) is held back to the sample clock once it is :data:`AHEAD_S` ahead, at the cost of no CPU.
+Both are counted in :attr:`AudioInput.faults` and logged once per kind.
 
 Devices are read with SoundCard (PyPI ``soundcard``), which captures the output's loopback on Windows (WASAPI) and
 Linux (PulseAudio and PipeWire's pulse server) with no driver to install, where PortAudio (``sounddevice``) has no
@@ -22,10 +29,10 @@ machine without sound, never loads it. Nothing read here leaves the machine: the
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
 import time
-import wave
 from dataclasses import dataclass
 from typing import BinaryIO, Optional
 from urllib.parse import parse_qs
@@ -34,11 +41,19 @@ import numpy as np
 import soundfile as sf
 
 from ..errors import InputError, UsageError
-from .io import downmix
+from .io import MAX_SAMPLE_RATE, MIN_SAMPLE_RATE, downmix, probe
+from .wav_stream import read_header
+
+log = logging.getLogger("hapmotion.live")
 
 BLOCK_S = 0.02
 """Samples per block read, seconds (devices and files); pipes hand over what has arrived, up to this."""
 DEVICE_RATE = 48000
+MAX_CHANNELS = 32
+"""Most channels an input may have (a header claiming thousands would make every block that many times larger)."""
+AHEAD_S = 1.0
+"""How far a pipe may run ahead of real time before it is held back, seconds: room for what a writer buffered
+before the seat started reading (a 64 KiB pipe holds 0.34 s of 48 kHz stereo s16) and for its bursts."""
 SPECS = "loopback, mic, device:NAME, file:PATH, wav:PATH|-, raw:PATH|-?rate=R&channels=C&format=s16|f32"
 
 
@@ -48,6 +63,26 @@ class AudioInput:
 
     sample_rate: float = DEVICE_RATE
     name: str = ""
+    faults: dict[str, int]
+    """What was wrong with the audio, counted per kind (``non_finite`` samples, ``too_fast`` blocks held back)."""
+
+    def _fault(self, kind: str, count: int, text: str) -> None:
+        """Count ``count`` faults of ``kind``; log ``text`` the first time."""
+        faults = self.__dict__.setdefault("faults", {})
+        if kind not in faults:
+            log.warning("seat sync: %s: %s (counted; logged once)", self.name, text)
+        faults[kind] = faults.get(kind, 0) + count
+
+    def _clean(self, x: np.ndarray, scale: float = 1.0) -> np.ndarray:
+        """``(n, channels)`` samples times ``scale`` (full scale 1) -> ``(n,)`` float64 mono; non-finite samples
+        0 (counted), the rest clipped to -1..1."""
+        x = np.asarray(x)
+        if x.dtype.kind == "f":
+            bad = ~np.isfinite(x)
+            if bad.any():   # replaced before any arithmetic: a signalling NaN would warn in the cast
+                self._fault("non_finite", int(bad.sum()), "samples that are not numbers (inf/NaN) read as 0")
+                x = np.where(bad, x.dtype.type(0), x)
+        return downmix(np.clip(x.astype(np.float64) * scale, -1.0, 1.0))
 
     def read(self) -> tuple[Optional[np.ndarray], float]:
         raise NotImplementedError
@@ -65,10 +100,14 @@ class FileInput(AudioInput):
     def __init__(self, path: str):
         if not os.path.isfile(path):
             raise UsageError(f"--audio-input file:{path}: no such file")
+        info = probe(path)   # the rate MIN_SAMPLE_RATE..MAX_SAMPLE_RATE, channels, samples: one line naming the file
+        if info.channels > MAX_CHANNELS:
+            raise InputError(path, "header", f"expected 1..{MAX_CHANNELS} channels, found {info.channels}")
         try:
             self._f = sf.SoundFile(path)
         except (sf.LibsndfileError, RuntimeError, OSError) as exc:
             raise InputError(path, "", f"cannot read it as audio: {exc}") from None
+        self.faults = {}
         self.sample_rate = float(self._f.samplerate)
         self.name = f"file {path}"
         self._block = max(1, int(BLOCK_S * self.sample_rate))
@@ -87,7 +126,7 @@ class FileInput(AudioInput):
         wait = due - time.perf_counter()
         if wait > 0:
             time.sleep(wait)
-        return np.nan_to_num(downmix(data)), due
+        return self._clean(data), due
 
     def close(self) -> None:
         self._f.close()
@@ -98,29 +137,30 @@ def _open_stream(where: str, spec: str) -> BinaryIO:
         return sys.stdin.buffer
     if not os.path.exists(where):
         raise UsageError(f"--audio-input {spec}: no such file or pipe {where}")
-    return open(where, "rb", buffering=0)
+    try:
+        return open(where, "rb", buffering=0)
+    except OSError as exc:  # a directory, no permission: the user's mistake, in one line
+        raise UsageError(f"--audio-input {spec}: cannot read {where} ({exc.strerror})") from None
 
 
 class PipeInput(AudioInput):
-    """Raw PCM or a WAV stream from a pipe or standard input, each block stamped on arrival."""
+    """Raw PCM or a WAV stream from a pipe or standard input, each block stamped on arrival; held back to real time
+    once it runs :data:`AHEAD_S` ahead (module docstring)."""
 
     def __init__(self, spec: str, kind: str, rest: str):
         where, _, query = rest.partition("?")
         self.name = f"{kind} stream {where}"
+        self.faults = {}
         self._stream = _open_stream(where, spec)
+        self._left: Optional[int] = None
+        """Bytes of samples the WAV header announced that are still to come (None: until the stream ends)."""
         if kind == "wav":
-            try:
-                self._wav: Optional[wave.Wave_read] = wave.open(self._stream, "rb")
-            except (wave.Error, EOFError) as exc:
-                raise InputError(where, "header", f"expected a PCM WAV stream ({exc})") from None
-            self.sample_rate = float(self._wav.getframerate())
-            self.channels = self._wav.getnchannels()
-            width = self._wav.getsampwidth()
-            if width not in (2, 4):
-                raise InputError(where, "header", f"expected 16- or 32-bit PCM, found {8 * width}-bit")
-            self._dtype = np.dtype("<i2") if width == 2 else np.dtype("<i4")
+            header = read_header(self._stream, where)
+            self.sample_rate = float(header.sample_rate)
+            self.channels = header.channels
+            self._dtype = header.dtype
+            self._left = header.data_bytes
         else:
-            self._wav = None
             q = {k: v[-1] for k, v in parse_qs(query).items()}
             unknown = set(q) - {"rate", "channels", "format"}
             if unknown:
@@ -135,16 +175,28 @@ class PipeInput(AudioInput):
             if fmt not in ("s16", "f32"):
                 raise UsageError(f"--audio-input {spec}: format s16 or f32, not {fmt!r}")
             self._dtype = np.dtype("<i2") if fmt == "s16" else np.dtype("<f4")
-        if not (4000 <= self.sample_rate <= 384000 and 1 <= self.channels <= 32):
-            raise UsageError(f"--audio-input {spec}: expected a rate of 4000..384000 Hz and 1..32 channels")
+        if not (MIN_SAMPLE_RATE <= self.sample_rate <= MAX_SAMPLE_RATE and 1 <= self.channels <= MAX_CHANNELS):
+            raise UsageError(f"--audio-input {spec}: expected a rate of {MIN_SAMPLE_RATE}..{MAX_SAMPLE_RATE} Hz and "
+                             f"1..{MAX_CHANNELS} channels, found {self.sample_rate:g} Hz and {self.channels}")
         self._frame_bytes = self._dtype.itemsize * self.channels
         self._max = max(1, int(BLOCK_S * self.sample_rate)) * self._frame_bytes
         self._carry = b""
+        self._started: Optional[float] = None
+        self._frames = 0
+
+    def _chunk(self) -> bytes:
+        want = self._max if self._left is None else min(self._max, self._left)
+        chunk = self._stream.read(want) if want else b""
+        if self._left is not None:
+            self._left -= len(chunk)
+        return chunk
 
     def read(self) -> tuple[Optional[np.ndarray], float]:
         while True:
-            chunk = self._wav.readframes(self._max // self._frame_bytes) if self._wav else self._stream.read(self._max)
+            chunk = self._chunk()
             now = time.perf_counter()
+            if self._started is None:
+                self._started = now
             if not chunk:
                 return None, now
             data = self._carry + chunk
@@ -153,8 +205,17 @@ class PipeInput(AudioInput):
             if usable:
                 break
         x = np.frombuffer(data[:usable], dtype=self._dtype).reshape(-1, self.channels)
+        self._frames += x.shape[0]
+        # A writer faster than real time (raw:/dev/zero) would be read, analysed and matched as fast as a core
+        # allows, and its stamps would say the music runs fast: hold the block until the sample clock is due
+        # (the writer then blocks on a full pipe, costing nothing).
+        due = self._started + self._frames / self.sample_rate - AHEAD_S
+        if due > now:
+            self._fault("too_fast", 1, "the input delivers audio faster than real time; reading it at real time")
+            time.sleep(due - now)
+            now = time.perf_counter()
         scale = 1.0 if self._dtype.kind == "f" else 1.0 / float(np.iinfo(self._dtype).max + 1)
-        return np.nan_to_num(downmix(x.astype(np.float64) * scale)), now
+        return self._clean(x, scale), now
 
     def close(self) -> None:
         if self._stream is not sys.stdin.buffer:
@@ -197,6 +258,7 @@ class DeviceInput(AudioInput):
             raise UsageError(f"--audio-input {spec}: no such audio input ({exc.__class__.__name__}: {exc}); "
                              f"hapmotion listen --list-audio-inputs shows what there is") from None
         self.name = f"device {mic.name}"
+        self.faults = {}
         self.sample_rate = float(DEVICE_RATE)
         self._block = int(BLOCK_S * DEVICE_RATE)
         try:
@@ -207,7 +269,7 @@ class DeviceInput(AudioInput):
 
     def read(self) -> tuple[Optional[np.ndarray], float]:
         data = self._rec.record(numframes=self._block)
-        return np.nan_to_num(downmix(np.asarray(data))), time.perf_counter()
+        return self._clean(data), time.perf_counter()
 
     def close(self) -> None:
         try:

@@ -134,8 +134,10 @@ def seat_sync_options(command: Callable) -> Callable:
 
             sync = SyncSettings(input=spec or "loopback", unsynced=unsynced or "delay",
                                 max_delay_s=max_delay_ms / 1000.0)
-        elif spec is not None or unsynced is not None:
-            raise click.UsageError("--audio-input and --unsynced need --sync audio")
+        else:
+            given = click.get_current_context().get_parameter_source("sync_max_delay")
+            if spec is not None or unsynced is not None or given is not click.core.ParameterSource.DEFAULT:
+                raise click.UsageError("--audio-input, --unsynced and --sync-max-delay need --sync audio")
         return command(sync=sync, **kwargs)
 
     options = [

@@ -1,0 +1,177 @@
+"""The seat's file and pipe audio inputs on hostile and streaming input: a file's sample rate is checked, a WAV
+stream with a placeholder data size is read to its end, inf/NaN samples become 0 (counted), a pipe faster than
+real time is held to real time (counted), and --sync-max-delay needs --sync audio."""
+
+from __future__ import annotations
+
+import logging
+import os
+import struct
+import threading
+import time
+
+import click
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from support.sync_signals import SR, real_song
+
+from hapmotion.audio import inputs
+from hapmotion.audio.inputs import open_input
+from hapmotion.audio.sync_features import LevelStream
+from hapmotion.cli.audience_options import seat_sync_options
+from hapmotion.errors import InputError, UsageError
+
+
+def wav_header(rate: int, channels: int, data_size: int, riff_size: int = 0xFFFFFFFF, tag: int = 1,
+               bits: int = 16) -> bytes:
+    fmt = struct.pack("<HHIIHH", tag, channels, rate, rate * channels * bits // 8, channels * bits // 8, bits)
+    return (b"RIFF" + struct.pack("<I", riff_size) + b"WAVEfmt " + struct.pack("<I", 16) + fmt + b"data"
+            + struct.pack("<I", data_size))
+
+
+def read_all(inp) -> np.ndarray:
+    got = []
+    while True:
+        block, _ = inp.read()
+        if block is None:
+            break
+        got.append(block)
+    inp.close()
+    return np.concatenate(got) if got else np.zeros(0)
+
+
+def from_pipe(payload: bytes):
+    """A pipe whose writer sends ``payload`` and closes: the ``/dev/fd/N`` path of its reading end."""
+    r, w = os.pipe()
+
+    def write() -> None:
+        with os.fdopen(w, "wb") as f:
+            f.write(payload)
+
+    threading.Thread(target=write, daemon=True).start()
+    return r, f"/dev/fd/{r}"
+
+
+# ---------------------------------------------------------------------------------------------------- file:
+def test_a_file_whose_header_claims_2_ghz_is_refused_in_one_line_naming_it(tmp_path):
+    path = tmp_path / "liar.wav"
+    path.write_bytes(wav_header(2_000_000_000, 1, 4000, riff_size=36 + 4000) + b"\x01\x00" * 2000)
+    with pytest.raises(InputError) as info:
+        open_input(f"file:{path}")
+    text = str(info.value)
+    assert "\n" not in text and str(path) in text and "4000..768000 Hz" in text and "2000000000" in text
+
+
+# ---------------------------------------------------------------------------------------------------- wav:
+@pytest.mark.parametrize("data_size,riff_size", [(0, 8), (0xFFFFFFFF, 0xFFFFFFFF), (0x7FFFF000, 0x7FFFF024)])
+def test_a_streaming_wav_is_read_to_its_end(data_size, riff_size):
+    """libsndfile writes RIFF size 8 and data size 0 to a pipe, ffmpeg 0xFFFFFFFF, arecord 0x7FFFF000: a real
+    song's second comes through whole, and its levels equal those of the song itself."""
+    song = real_song(seconds=1.0)
+    pcm = np.round(song * 32767).astype("<i2")
+    r, where = from_pipe(wav_header(SR, 1, data_size, riff_size) + pcm.tobytes())
+    inp = open_input(f"wav:{where}")
+    assert inp.sample_rate == SR
+    x = read_all(inp)
+    os.close(r)
+    assert x.size == song.size
+    assert np.abs(x - song).max() < 2 / 32768
+    assert np.allclose(LevelStream(SR).push(x), LevelStream(SR).push(pcm / 32768.0))
+
+
+def test_a_wav_stream_with_a_real_data_size_ends_there_and_skips_other_chunks():
+    pcm = np.array([16384, -16384, 8192, 0] * 50, dtype="<i2").reshape(-1, 2)     # 100 stereo frames
+    head = wav_header(8000, 2, pcm.nbytes)
+    list_chunk = b"LIST" + struct.pack("<I", 5) + b"INFOx\x00"                      # odd size: padded
+    blob = head[:36] + list_chunk + head[36:] + pcm.tobytes() + b"junk after the samples"
+    r, where = from_pipe(blob)
+    x = read_all(open_input(f"wav:{where}"))
+    os.close(r)
+    assert x.size == 100 and np.allclose(x[:2], [0.0, 0.125])
+
+
+@pytest.mark.parametrize("blob,said", [
+    (b"", "ended in the RIFF header"),
+    (b"hello world!" * 3, "RIFF ... WAVE"),
+    (wav_header(8000, 1, 0, bits=8), "found format 1 with 8-bit samples"),
+    (b"RIFF\xff\xff\xff\xffWAVELIST" + struct.pack("<I", 200_000_000) + b"x" * 100, "at most 1048576 bytes"),
+    (wav_header(1, 2, 0), "expected a rate of 4000..768000 Hz and 1..32 channels, found 1 Hz and 2"),
+])
+def test_bad_wav_streams_are_one_line_errors(blob, said):
+    r, where = from_pipe(blob)
+    with pytest.raises((InputError, UsageError)) as info:
+        open_input(f"wav:{where}")
+    os.close(r)
+    assert said in str(info.value) and "\n" not in str(info.value)
+
+
+# ---------------------------------------------------------------------------------------------------- raw:
+def test_inf_and_nan_samples_read_as_0_and_are_counted_and_logged_once(caplog):
+    x = np.full(8000, 0.5, dtype="<f4")
+    x[::100] = np.inf
+    x[50::100] = np.nan
+    x[1::100] = 3e38                                                   # finite but absurd: clipped to full scale
+    r, where = from_pipe(x.tobytes())
+    inp = open_input(f"raw:{where}?rate=8000&channels=1&format=f32")
+    with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
+        y = read_all(inp)
+    os.close(r)
+    assert y.size == 8000
+    assert np.all(y[::100] == 0.0) and np.all(y[50::100] == 0.0) and np.all(y[1::100] == 1.0)
+    assert inp.faults == {"non_finite": 160}
+    assert sum("not numbers" in m for m in caplog.messages) == 1
+    levels = LevelStream(8000).push(y)
+    assert levels.shape[0] > 0 and np.isfinite(levels).all()
+
+
+def test_a_pipe_faster_than_real_time_is_held_to_real_time_at_little_cpu(monkeypatch, caplog):
+    """raw:/dev/zero delivers as fast as it is read: past AHEAD_S ahead it is held to the sample clock (load can
+    only make the wall time longer, never shorter), logged once, and the reading costs a fraction of a core."""
+    monkeypatch.setattr(inputs, "AHEAD_S", 0.2)
+    inp = open_input("raw:/dev/zero?rate=8000&channels=2")
+    t0, cpu0, n = time.perf_counter(), time.thread_time(), 0
+    with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
+        while n < int(1.2 * 8000):
+            block, _ = inp.read()
+            n += block.size
+    wall, cpu = time.perf_counter() - t0, time.thread_time() - cpu0
+    inp.close()
+    assert wall >= n / 8000 - 0.2 - 0.03                         # the sample clock, less the allowance and a block
+    assert cpu < 0.5 * wall                                      # unpaced, the loop is all CPU
+    assert inp.faults["too_fast"] > 0
+    assert sum("faster than real time" in m for m in caplog.messages) == 1
+
+
+def test_a_writer_within_the_allowance_is_not_held_back():
+    pcm = np.zeros(int(0.5 * 8000) * 2, dtype="<i2")           # 0.5 s written at once: a pipe's buffered start
+    r, where = from_pipe(pcm.tobytes())
+    inp = open_input(f"raw:{where}?rate=8000&channels=2")
+    assert read_all(inp).size == 4000
+    os.close(r)
+    assert inp.faults == {}
+
+
+def test_a_directory_is_a_one_line_usage_error(tmp_path):
+    with pytest.raises(UsageError) as info:
+        open_input(f"raw:{tmp_path}?rate=8000")
+    assert "cannot read" in str(info.value) and "\n" not in str(info.value)
+
+
+# ---------------------------------------------------------------------------------------------------- options
+@click.command()
+@seat_sync_options
+def _listen(sync) -> None:
+    click.echo(f"max_delay_s={sync.max_delay_s if sync else None}")
+
+
+@pytest.mark.parametrize("args", [["--sync-max-delay", "5000"], ["--sync-max-delay", "10000"],
+                                  ["--sync", "off", "--sync-max-delay", "5000"]])
+def test_sync_max_delay_without_sync_audio_is_refused(args):
+    result = CliRunner().invoke(_listen, args)
+    assert result.exit_code == 2 and "--sync-max-delay need --sync audio" in result.output
+
+
+def test_sync_max_delay_with_sync_audio_is_taken():
+    assert CliRunner().invoke(_listen, ["--sync", "audio", "--sync-max-delay", "5000"]).output == "max_delay_s=5.0\n"
+    assert CliRunner().invoke(_listen, []).output == "max_delay_s=None\n"
