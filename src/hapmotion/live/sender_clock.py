@@ -24,11 +24,12 @@ What a sender cannot make the engine do (its timestamps and ``seq`` are its own 
 
 * follow a rate outside :data:`MIN_FOLLOWED_FPS` .. :data:`MAX_FOLLOWED_FPS` (the tracker rates above): such a
   measurement is counted (fault ``rate_out_of_range``, logged once) and the rate in use kept;
-* follow timestamps that disagree with arrival: once the frames' arrival rate is known (over the frames the
-  timestamps were measured over, at least :data:`CHECK_PAIRS` intervals and :data:`CHECK_S` seconds; counted by
-  ``seq`` so that lost frames do not slow it; kept across ``seq`` restarts and stalls), timestamps claiming a rate
-  more than :data:`AGREE` away from it (without ``seq``: below it by more than that, or above it by more than
-  :data:`MAX_UNCOUNTED_LOSS` of lost frames explain) are refused (fault ``stamps_refused``) and arrival is used;
+* follow timestamps that disagree with arrival: once :data:`CHECK_S` seconds of frame intervals have arrived (at
+  least :data:`CHECK_PAIRS`; counted by ``seq`` so that lost frames do not matter; kept across ``seq`` restarts
+  and stalls, a restart's own interval left out), the sender's time they span is compared with their arrival time.
+  More than :data:`AGREE` apart (without ``seq``: the timestamps slower by more than that, or faster than
+  :data:`MAX_UNCOUNTED_LOSS` of lost frames explain), the timestamps are refused (fault ``stamps_refused``) and the
+  rate is measured from arrival (across ``seq`` restarts when the frames since the last are too few to tell);
   they are trusted again only after agreeing for :data:`REAGREE_FRAMES` frames in a row;
 * change the rate often: after the first change, a new rate is taken at most once per :data:`MIN_CHANGE_S`
   seconds, and only when measured at :data:`CONFIRM_FRAMES` frames in a row.
@@ -54,8 +55,9 @@ MAX_FOLLOWED_FPS = COMMON_RATES[-1]
 its render cap, newest frame wins."""
 CHECK_PAIRS = 16
 """Frame intervals of arrival needed before timestamps are checked against it (before that they are believed) ..."""
-CHECK_S = 0.25
-"""... spanning at least this many seconds (+-5 ms of jitter is then at most 4 % of the span)."""
+CHECK_S = 1.0
+"""... spanning at least this many seconds: +-5 ms of jitter is then 1 % of the span, and a machine that pauses for
+50 ms and catches up 5 %."""
 AGREE = 0.08
 """How far (relative) a rate from timestamps may be from the arrival rate: arrival over 16 frames is within a few
 per cent with +-5 ms of jitter, and ``seq`` accounts for lost frames; a 72 frames/s claim at 60 is 20 % off."""
@@ -64,9 +66,6 @@ MAX_UNCOUNTED_LOSS = 0.25
 (a quarter of the frames lost on the way)."""
 REAGREE_FRAMES = 128
 """Refused timestamps are trusted again after agreeing with arrival for this many frames in a row."""
-COMMON_ARRIVAL_S = 1.0
-"""Seconds of kept arrival intervals that settle a common rate when the frames since the last ``seq`` restart
-cannot (a sender restarting its ``seq`` every few frames)."""
 MAX_PAIR_GAP_S = 0.5
 """An arrival gap longer than this (a stall) is not a frame interval."""
 CONFIRM_FRAMES = 8
@@ -111,8 +110,9 @@ class SenderClock:
         self._pair_steps = np.zeros(self._size)
         self._pair_dt = np.zeros(self._size)
         self._pair_seq = np.zeros(self._size, dtype=bool)  # the interval was counted by seq
+        self._pair_stamp = np.full(self._size, np.nan)  # seconds of the sender's time (NaN: not stamped)
         self._pairs = 0
-        self._prev: Optional[tuple[Optional[int], float]] = None  # the last frame's (seq, arrival)
+        self._prev: Optional[tuple[Optional[int], Optional[float], float]] = None  # last frame's (seq, t, arrival)
         self._agreed_from: Optional[int] = None  # the frame since which refused timestamps agree with arrival
         self._changed_at = -math.inf  # arrival time of the last change of rate
         self._candidate: Optional[float] = None  # a new rate measured, not yet taken ...
@@ -135,7 +135,7 @@ class SenderClock:
     def note(self, seq: Optional[int], t: Optional[float], received: float) -> Optional[float]:
         """Take one accepted frame: its ``seq`` and sender time ``t`` (either may be None) and its arrival
         ``received`` (seconds). Returns the newly measured rate when it differs from :attr:`rate`, else None."""
-        self._note_pair(seq, received)
+        self._note_pair(seq, t, received)
         self._now = received
         self._frames += 1
         k = self._last_k + 1.0
@@ -164,10 +164,11 @@ class SenderClock:
         self._since = 0
         return self._estimate()
 
-    def _note_pair(self, seq: Optional[int], received: float) -> None:
-        """Keep the interval from the last frame to this one (frames by ``seq`` where sent, seconds of arrival)."""
+    def _note_pair(self, seq: Optional[int], t: Optional[float], received: float) -> None:
+        """Keep the interval from the last frame to this one (frames by ``seq`` where sent, seconds of arrival and
+        of the sender's time)."""
         if self._prev is not None:
-            last_seq, last_received = self._prev
+            last_seq, last_t, last_received = self._prev
             counted = seq is not None and last_seq is not None
             steps = float(seq - last_seq) if counted else 1.0
             dt = received - last_received
@@ -175,46 +176,54 @@ class SenderClock:
                 steps = 0.0
             i = self._pairs % self._size
             self._pair_steps[i], self._pair_dt[i], self._pair_seq[i] = steps, dt, counted
+            self._pair_stamp[i] = t - last_t if t is not None and last_t is not None and t > last_t else np.nan
             self._pairs += 1
-        self._prev = (seq, received)
+        self._prev = (seq, t, received)
 
-    def arrival_rate(self, frames: int = CHECK_PAIRS, seconds: float = CHECK_S) -> Optional[tuple[float, bool]]:
-        """Frames per second arriving (lost ones counted by ``seq``) over the newest kept intervals, at least
-        ``frames`` - 1 and :data:`CHECK_PAIRS` of them and at least ``seconds``, and whether every one of them was
-        counted by ``seq``; None while fewer have arrived."""
+    def _kept(self, seconds: float, stamped: bool = False) -> Optional[tuple[float, float, float, bool]]:
+        """The newest kept intervals (only those with the sender's time too, if ``stamped``), at least
+        :data:`CHECK_PAIRS` of them and ``seconds`` of arrival: their ``(frames, arrival seconds, sender seconds,
+        all counted by seq)``; None while fewer have arrived."""
         m = min(self._pairs, self._size)
         order = (np.arange(self._pairs - 1, self._pairs - 1 - m, -1)) % self._size  # newest first
-        steps, dt, counted = self._pair_steps[order], self._pair_dt[order], self._pair_seq[order]
-        valid = steps > 0
-        counted = counted[valid]
-        steps, dt = np.cumsum(steps[valid]), np.cumsum(dt[valid])
-        enough = np.flatnonzero((np.arange(1, steps.size + 1) >= max(CHECK_PAIRS, frames - 1)) & (dt >= seconds))
+        steps, dt, stamp = self._pair_steps[order], self._pair_dt[order], self._pair_stamp[order]
+        use = (steps > 0) & (np.isfinite(stamp) if stamped else True)
+        counted = self._pair_seq[order][use]
+        steps, dt, stamp = np.cumsum(steps[use]), np.cumsum(dt[use]), np.cumsum(stamp[use])
+        enough = np.flatnonzero((np.arange(1, steps.size + 1) >= CHECK_PAIRS) & (dt >= seconds))
         if not enough.size:
             return None
         i = int(enough[0])
-        return float(steps[i] / dt[i]), bool(counted[:i + 1].all())
+        return float(steps[i]), float(dt[i]), float(stamp[i]), bool(counted[:i + 1].all())
+
+    def arrival_rate(self, seconds: float = CHECK_S) -> Optional[float]:
+        """Frames per second arriving (lost ones counted by ``seq``) over the newest kept intervals (at least
+        :data:`CHECK_PAIRS` and ``seconds``), or None while fewer have arrived."""
+        kept = self._kept(seconds)
+        return kept[0] / kept[1] if kept is not None and kept[1] > 0.0 else None
 
     def _common_arrival_rate(self) -> Optional[float]:
-        """The common rate the kept arrival intervals (over :data:`COMMON_ARRIVAL_S`: +-5 ms of jitter is then
-        within 1 %) are within 1.5 % of, if one."""
-        measured = self.arrival_rate(CHECK_PAIRS, COMMON_ARRIVAL_S)
-        if measured is None:
+        """The common rate the kept arrival intervals are within 1.5 % of, if one (over :data:`CHECK_S`: +-5 ms of
+        jitter is then within 1 %)."""
+        rate = self.arrival_rate()
+        if rate is None:
             return None
-        near = [r for r in COMMON_RATES if abs(measured[0] / r - 1.0) <= 0.015]
+        near = [r for r in COMMON_RATES if abs(rate / r - 1.0) <= 0.015]
         return near[0] if len(near) == 1 else None
 
-    def _check_stamps(self, rate: float, frames: int) -> None:
-        """Refuse timestamps whose ``rate`` (over the newest ``frames``) disagrees with arrival over the same
-        frames; trust them again after a sustained agreement."""
-        measured = self.arrival_rate(frames)
-        if measured is None:
+    def _check_stamps(self) -> None:
+        """Refuse timestamps that disagree with arrival over the same frame intervals (the newest ones, at least
+        :data:`CHECK_S` seconds of them); trust them again after a sustained agreement."""
+        kept = self._kept(CHECK_S, stamped=True)
+        if kept is None or not kept[1] > 0.0:
             return  # too few frames to tell yet: timestamps are believed
-        arrival, counted = measured
-        ratio = rate / arrival  # (without seq, frames lost on the way make arrival slower than the timestamps)
+        frames, arrival_s, sender_s, counted = kept
+        ratio = arrival_s / sender_s  # the timestamps' rate over the arrival rate
+        # (without seq, frames lost on the way make arrival slower than the timestamps)
         if not 1.0 - AGREE <= ratio <= (1.0 + AGREE if counted else 1.0 / (1.0 - MAX_UNCOUNTED_LOSS)):
             if not self.refused_stamps and self.on_fault is not None:
-                self.on_fault("stamps_refused", f"timestamps give {rate:g} frames/s but frames arrive at "
-                                                f"{arrival:.1f}/s: arrival is used")
+                self.on_fault("stamps_refused", f"timestamps give {frames / sender_s:.3g} frames/s but frames arrive "
+                                                f"at {frames / arrival_s:.1f}/s: arrival is used")
             self.refused_stamps = True
             self._agreed_from = None
         elif self.refused_stamps:
@@ -239,14 +248,13 @@ class SenderClock:
         rate: Optional[float] = None
         if stamped >= 2:
             sidx = idx[n - stamped:]
-            rate = _settle(self._k[sidx], self._stamp[sidx])
-            if rate is not None:  # timestamps in other units, frozen or lying: trust what arrives
-                self._check_stamps(rate, stamped)
+            self._check_stamps()  # timestamps in other units, frozen or lying: trust what arrives
+            rate = _settle(self._k[sidx], self._stamp[sidx]) if not self.refused_stamps else None
             source = "timestamps"
         if stamped < 2 or self.refused_stamps:
             rate = _settle(self._k[idx], arrival, exact=n >= MIN_MEASURED_FRAMES) if n >= 3 else None
-            if rate is None:  # (a sender restarting its seq every few frames is measured across the restarts)
-                rate = self._common_arrival_rate()
+            if rate is None and n < CHECK_PAIRS:  # too few since a restart: measured across the restarts (a
+                rate = self._common_arrival_rate()  # sender restarting its seq every few frames)
             source = "arrival"
         if rate is None:
             return None
