@@ -112,7 +112,7 @@ def test_the_rate_changes_at_most_once_a_second():
     assert len(changes) <= 2 and clock.rate == 60.0
     # a sender that really switches between 72 and 60 frames/s every half second (stamps and arrival agree):
     # at most one change a second
-    t, times, stamps = 0.0, [], []
+    t, times = 0.0, []
     for k in range(1200):
         t += 1 / 72 if (k // 36) % 2 == 0 else 1 / 60
         times.append(t)
@@ -154,7 +154,7 @@ def test_the_engine_rebuilds_and_logs_a_changing_rate_sparingly(caplog):
     assert len(rate_lines) <= 2
     # a sender that changes its rate every 1.2 s for a minute: a change a second at most, four logged one by one,
     # the rest counted under one warning
-    t, times, k = 0.0, [], 0
+    t, times = 0.0, []
     while t < 60.0:
         t += 1 / 72 if int(t / 1.2) % 2 == 0 else 1 / 60
         times.append(t)

@@ -59,8 +59,9 @@ CHECK_S = 1.0
 """... spanning at least this many seconds: +-5 ms of jitter is then 1 % of the span, and a machine that pauses for
 50 ms and catches up 5 %."""
 AGREE = 0.08
-"""How far (relative) a rate from timestamps may be from the arrival rate: arrival over 16 frames is within a few
-per cent with +-5 ms of jitter, and ``seq`` accounts for lost frames; a 72 frames/s claim at 60 is 20 % off."""
+"""How far (relative) the timestamps' rate may be from the arrival rate over the same intervals (:data:`CHECK_S`
+of them: within about 5 % of each other for an honest sender on a busy machine, ``seq`` accounting for lost
+frames); a 72 frames/s claim at 60 is 20 % off, one alternating 72 and 60 frames/s 9 %."""
 MAX_UNCOUNTED_LOSS = 0.25
 """Without ``seq``, lost frames cannot be counted: timestamps may then claim up to 1 / 0.75 times the arrival rate
 (a quarter of the frames lost on the way)."""
