@@ -60,6 +60,10 @@ MIN_GRACE_S = 0.04
 """The fade never starts sooner than this after the last frame: a sender or a machine that pauses for a moment
 (a 90 fps sender's frame 20 ms late) is not a stall. Two 20 ms Player ticks, the least a Player holds a row."""
 
+LOGGED_RATE_CHANGES = 4
+"""Changes of a stream's rate after the first (warned about) logged one by one; later ones are counted (fault
+``rate_changes``, logged once)."""
+
 
 class LiveEngine:
     """Runs one live session.
@@ -127,7 +131,6 @@ class LiveEngine:
         self.stall_s = float(stall_s)
         self.max_abs = max_abs
         self.render_cap = float(render_cap)
-        self.clock = SenderClock(self.fps)
         self.stop_timeout = stop_timeout
         self.handle_signals = handle_signals
         self.stats_interval = stats_interval
@@ -135,6 +138,7 @@ class LiveEngine:
         self.on_stats = on_stats or (lambda text: log.info("stats: %s", text))
         self._required = np.array([JOINT_INDEX[j] for j in RENDER_JOINTS], dtype=np.intp)
         self.faults = Faults(source_name, log)
+        self.clock = SenderClock(self.fps, on_fault=self.faults.add)  # its refusals: counted, logged once a kind
         self.stats = LiveStats(self.faults, fps=self.fps)
         for s in self.sinks:
             name = s.name
@@ -262,8 +266,10 @@ class LiveEngine:
             self._warned_rate = True
             log.warning("%s sends %g frames/s (%s), not --fps %g: %s", self.faults.source, rate, how, self.fps,
                         action)
-        else:
+        elif self.clock.changes <= 1 + LOGGED_RATE_CHANGES:
             log.info("%s now sends %g frames/s (%s): %s", self.faults.source, rate, how, action)
+        else:  # a sender that keeps changing its rate must not fill the log (the clock allows one a second)
+            self.faults.add("rate_changes", f"the rate keeps changing (now {rate:g} frames/s, {how})")
 
     # ------------------------------------------------------------------ control
     def request_stop(self, reason: str) -> None:
