@@ -64,9 +64,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "src" / "hapmotion" / "examples"
-SHARED = ROOT.parent / "shared" / "data"
-if not SHARED.is_dir():  # a worktree beside the main checkout
-    SHARED = Path("/work/shared/data")
+SHARED = ROOT.parent / "shared" / "data"  # ../shared beside the checkout, as CI has it
 
 # A show is described here by a plain dict (the "spec"): method, preset, mode, audio, mix_rule, cues (path or None),
 # comfort ((gain, max_duty) or None). Only the adapters below turn it into package objects.
