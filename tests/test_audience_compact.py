@@ -24,7 +24,7 @@ from hapmotion.audience.compact import (RENDERER_JOINTS, compact_joints, decode_
 from hapmotion.audience.interpolation import Upsampler
 from hapmotion.audience.listener import seat_show
 from hapmotion.audience.seat import Seat
-from hapmotion.audience.wire import WireFrame, parse_description
+from hapmotion.audience.wire import WireFrame, decode_frame, encode_frame, parse_description
 from hapmotion.body.model import BodyModel
 from hapmotion.errors import InputError
 from hapmotion.renderer.params import METHODS, PRESETS
@@ -498,3 +498,21 @@ def test_a_seat_wearing_gloves_feels_the_same_hands_from_compact_frames():
     with pytest.raises(InputError, match="ELBOW_LEFT"):
         seat_show(lacking, seat)
     seat_show(lacking, Seat())                                         # a seat without gloves plays it
+
+
+def test_a_signalling_nan_in_a_frame_is_read_quietly():
+    """A forged signalling NaN (float32 0x7fa00000) reads as a joint not tracked, in both frame versions, without
+    numpy's "invalid value" warning on every frame."""
+    import warnings
+
+    snan = struct.pack("<I", 0x7FA00000)
+    compact = encode_compact_frame(1, 2, 0.5, 9.0, np.zeros((7, 3)), np.array([0.0, 50.0, 100.0]))
+    compact = compact[:32] + snan + compact[36:]
+    full = encode_frame(1, 2, 0.5, 9.0, np.zeros((32, 3)), None)
+    full = full[:32] + snan + full[36:]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        wf = decode_compact_frame(compact, ROWS7, 3)
+        assert np.isnan(wf.skeleton[ROWS7[0], 0]) and wf.skeleton[ROWS7[0], 1] == 0.0
+        wf = decode_frame(full, 0)
+        assert np.isnan(wf.skeleton[0, 0]) and wf.skeleton[0, 1] == 0.0

@@ -49,7 +49,7 @@ import numpy as np
 from ..show.hands import GLOVE_JOINTS
 from ..skeleton.joints import JOINT_INDEX, JOINTS, RENDER_JOINTS
 from .wire import (HEADER, KIND_FRAME, MAGIC, MAX_MEDIA_T, MAX_POSITION_M, N_JOINTS, WireFrame, decode_frame,
-                   encode_frame)
+                   encode_frame, read_f32)
 
 COMPACT = 2
 """The compact frame's version byte."""
@@ -105,11 +105,11 @@ def _decode_music(data: bytes, offset: int, n_music: int) -> tuple[np.ndarray, i
         end = offset + 4 * n_music
         if end > len(data):
             raise ValueError("music row shorter than its actuator count")
-        return np.frombuffer(data, dtype="<f4", count=n_music, offset=offset).astype(np.float64), end
+        return read_f32(data, offset, n_music), end
     end = offset + 4 * k + n_music
     if end > len(data):
         raise ValueError(f"music palette of {k} values and {n_music} indices does not fit in the frame")
-    values = np.frombuffer(data, dtype="<f4", count=k, offset=offset).astype(np.float64)
+    values = read_f32(data, offset, k)
     index = np.frombuffer(data, dtype=np.uint8, count=n_music, offset=offset + 4 * k)
     if int(index.max()) >= k:
         raise ValueError(f"music palette index {int(index.max())} beyond its {k} values")
@@ -146,7 +146,7 @@ def _decode_rows(data: bytes, offset: int, joint_rows: np.ndarray, n_j: int,
         raise ValueError(f"{len(data)} bytes, too short for {n_j} joints")
     skeleton = None
     if n_j:
-        xyz = np.frombuffer(data, dtype="<f4", count=3 * n_j, offset=start).astype(np.float64).reshape(n_j, 3)
+        xyz = read_f32(data, start, 3 * n_j).reshape(n_j, 3)
         if np.isinf(xyz).any() or (np.abs(np.nan_to_num(xyz)) > MAX_POSITION_M).any():
             raise ValueError(f"joint positions infinite or beyond {MAX_POSITION_M:g} m")
         skeleton = np.full((N_JOINTS, 3), np.nan)

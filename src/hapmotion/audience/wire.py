@@ -120,6 +120,13 @@ def encode_frame(epoch: int, seq: int, media_t: float, wall_t: float, skeleton: 
     return b"".join(parts)
 
 
+def read_f32(data: bytes, offset: int, count: int = -1) -> np.ndarray:
+    """``count`` little-endian float32 values of ``data`` from ``offset`` (-1: to the end) as float64. A forged
+    signalling NaN becomes a quiet one without numpy's "invalid value" warning: the caller refuses or keeps it."""
+    with np.errstate(invalid="ignore"):
+        return np.frombuffer(data, dtype="<f4", count=count, offset=offset).astype(np.float64)
+
+
 def decode_frame(data: bytes, n_music: int) -> WireFrame:
     """Parse one frame; ``n_music`` is the description's actuator count. ValueError naming the field on anything
     that does not fit (callers count it as ``malformed``)."""
@@ -141,7 +148,7 @@ def decode_frame(data: bytes, n_music: int) -> WireFrame:
         raise ValueError(f"media_t {media_t}, expected finite seconds")
     if not math.isfinite(wall_t):
         raise ValueError(f"wall_t {wall_t}, expected a finite time stamp")
-    values = np.frombuffer(data, dtype="<f4", offset=HEADER.size).astype(np.float64)
+    values = read_f32(data, HEADER.size)
     skeleton = values[:3 * n_j].reshape(n_j, 3) if n_j else None
     if skeleton is not None and (np.isinf(skeleton).any() or (np.abs(np.nan_to_num(skeleton)) > MAX_POSITION_M).any()):
         raise ValueError(f"joint positions infinite or beyond {MAX_POSITION_M:g} m")

@@ -235,9 +235,9 @@ def _soundcard():
         else:
             import soundcard
     except Exception as exc:  # no PulseAudio/PipeWire server, no CoreAudio/WASAPI: one line, not a traceback
+        detail = f": {exc}" if str(exc) else ""  # SoundCard says nothing more than a bare assertion here
         raise UsageError(f"no sound system to capture from (SoundCard found no PulseAudio/PipeWire, WASAPI or "
-                         f"CoreAudio server: {exc.__class__.__name__}{': ' + str(exc) if str(exc) else ''}); use --audio-input file:PATH, wav:- or raw:- "
-                         f"instead") from None
+                         f"CoreAudio server{detail}); use --audio-input file:PATH, wav:- or raw:- instead") from None
     return soundcard
 
 
