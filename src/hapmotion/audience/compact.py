@@ -49,7 +49,7 @@ import numpy as np
 from ..show.hands import GLOVE_JOINTS
 from ..skeleton.joints import JOINT_INDEX, JOINTS, RENDER_JOINTS
 from .wire import (HEADER, KIND_FRAME, MAGIC, MAX_MEDIA_T, MAX_POSITION_M, N_JOINTS, WireFrame, decode_frame,
-                   encode_frame, read_f32)
+                   encode_frame, read_f32, read_header)
 
 COMPACT = 2
 """The compact frame's version byte."""
@@ -116,27 +116,6 @@ def _decode_music(data: bytes, offset: int, n_music: int) -> tuple[np.ndarray, i
     return values[index], end
 
 
-def _header(data: bytes, version: int, n_joints: int, n_music: int) -> tuple[int, int, float, float, int, int]:
-    """(epoch, seq, media_t, wall_t, n_joints, n_music) of a compact or packed frame's header, checked against
-    the description (``n_joints`` its frame joints, ``n_music`` its actuators); ValueError naming the field."""
-    if len(data) < HEADER.size:
-        raise ValueError(f"{len(data)} bytes, shorter than the {HEADER.size}-byte header")
-    magic, got, kind, n_j, n_m, epoch, seq, media_t, wall_t = HEADER.unpack_from(data)
-    if magic != MAGIC:
-        raise ValueError(f"magic {magic!r}, expected {MAGIC!r}")
-    if got != version or kind != KIND_FRAME:
-        raise ValueError(f"version {got} kind {kind}, expected version {version} kind {KIND_FRAME}")
-    if n_j not in (0, n_joints):
-        raise ValueError(f"n_joints {n_j}, expected 0 or {n_joints} (the description's frame joints)")
-    if n_m not in (0, n_music):
-        raise ValueError(f"n_music {n_m}, expected 0 or {n_music} (the description's actuators)")
-    if not (math.isfinite(media_t) and abs(media_t) <= MAX_MEDIA_T):
-        raise ValueError(f"media_t {media_t}, expected finite seconds")
-    if not math.isfinite(wall_t):
-        raise ValueError(f"wall_t {wall_t}, expected a finite time stamp")
-    return int(epoch), int(seq), float(media_t), float(wall_t), n_j, n_m
-
-
 def _decode_rows(data: bytes, offset: int, joint_rows: np.ndarray, n_j: int,
                  n_m: int) -> tuple[Optional[np.ndarray], Optional[np.ndarray], int]:
     """One frame's (skeleton ``(32, 3)`` or None, music ``(N,)`` or None, offset after them) from ``offset``."""
@@ -179,7 +158,7 @@ def decode_compact_frame(data: bytes, joint_rows: np.ndarray, n_music: int) -> W
     """Parse a compact frame whose joints are the canonical rows ``joint_rows`` ``(J,)``; the skeleton comes back
     as ``(32, 3)`` with NaN (not sent) in the other rows, as a seat's engine takes it. ValueError naming the
     field on anything that does not fit (callers count it as ``malformed``)."""
-    epoch, seq, media_t, wall_t, n_j, n_m = _header(data, COMPACT, len(joint_rows), n_music)
+    epoch, seq, media_t, wall_t, n_j, n_m = read_header(data, COMPACT, len(joint_rows), n_music)
     skeleton, music, offset = _decode_rows(data, HEADER.size, joint_rows, n_j, n_m)
     if offset != len(data):
         raise ValueError(f"{len(data)} bytes, expected {offset} for {n_j} joints and {n_m} music values")
@@ -234,7 +213,7 @@ def decode_packed_frame(data: bytes, joint_rows: np.ndarray, n_music: int, pack:
     """The frames ``[WireFrame]`` (1 to ``pack``, the description's ``frames.pack``) of one packed frame, each
     skeleton ``(32, 3)`` with NaN in the rows not sent; ValueError naming the field on anything that does not fit
     (a count of 0 or beyond ``pack``, media times not ascending or finite, a short or long message)."""
-    epoch, seq, media_t, wall_t, n_j, n_m = _header(data, PACKED, len(joint_rows), n_music)
+    epoch, seq, media_t, wall_t, n_j, n_m = read_header(data, PACKED, len(joint_rows), n_music)
     if len(data) < HEADER.size + COUNT.size:
         raise ValueError(f"{len(data)} bytes, no frame count after the header")
     (count,) = COUNT.unpack_from(data, HEADER.size)

@@ -127,27 +127,35 @@ def read_f32(data: bytes, offset: int, count: int = -1) -> np.ndarray:
         return np.frombuffer(data, dtype="<f4", count=count, offset=offset).astype(np.float64)
 
 
-def decode_frame(data: bytes, n_music: int) -> WireFrame:
-    """Parse one frame; ``n_music`` is the description's actuator count. ValueError naming the field on anything
-    that does not fit (callers count it as ``malformed``)."""
+def read_header(data: bytes, version: int, n_joints: int, n_music: int) -> tuple[int, int, float, float, int, int]:
+    """(epoch, seq, media_t, wall_t, n_joints, n_music) of a frame's header of ``version`` (every frame version
+    shares it), checked against the description (``n_joints`` its frame joints, ``n_music`` its actuators);
+    ValueError naming the field."""
     if len(data) < HEADER.size:
         raise ValueError(f"{len(data)} bytes, shorter than the {HEADER.size}-byte header")
-    magic, version, kind, n_j, n_m, epoch, seq, media_t, wall_t = HEADER.unpack_from(data)
+    magic, got, kind, n_j, n_m, epoch, seq, media_t, wall_t = HEADER.unpack_from(data)
     if magic != MAGIC:
         raise ValueError(f"magic {magic!r}, expected {MAGIC!r}")
-    if version != VERSION or kind != KIND_FRAME:
-        raise ValueError(f"version {version} kind {kind}, expected version {VERSION} kind {KIND_FRAME}")
-    if n_j not in (0, N_JOINTS):
-        raise ValueError(f"n_joints {n_j}, expected 0 or {N_JOINTS}")
+    if got != version or kind != KIND_FRAME:
+        raise ValueError(f"version {got} kind {kind}, expected version {version} kind {KIND_FRAME}")
+    if n_j not in (0, n_joints):
+        raise ValueError(f"n_joints {n_j}, expected 0 or {n_joints} (the description's frame joints)")
     if n_m not in (0, n_music):
         raise ValueError(f"n_music {n_m}, expected 0 or {n_music} (the description's actuators)")
-    if len(data) != HEADER.size + 4 * (3 * n_j + n_m):
-        raise ValueError(f"{len(data)} bytes, expected {HEADER.size + 4 * (3 * n_j + n_m)} for {n_j} joints and "
-                         f"{n_m} music values")
     if not (math.isfinite(media_t) and abs(media_t) <= MAX_MEDIA_T):
         raise ValueError(f"media_t {media_t}, expected finite seconds")
     if not math.isfinite(wall_t):
         raise ValueError(f"wall_t {wall_t}, expected a finite time stamp")
+    return int(epoch), int(seq), float(media_t), float(wall_t), n_j, n_m
+
+
+def decode_frame(data: bytes, n_music: int) -> WireFrame:
+    """Parse one frame; ``n_music`` is the description's actuator count. ValueError naming the field on anything
+    that does not fit (callers count it as ``malformed``)."""
+    epoch, seq, media_t, wall_t, n_j, n_m = read_header(data, VERSION, N_JOINTS, n_music)
+    if len(data) != HEADER.size + 4 * (3 * n_j + n_m):
+        raise ValueError(f"{len(data)} bytes, expected {HEADER.size + 4 * (3 * n_j + n_m)} for {n_j} joints and "
+                         f"{n_m} music values")
     values = read_f32(data, HEADER.size)
     skeleton = values[:3 * n_j].reshape(n_j, 3) if n_j else None
     if skeleton is not None and (np.isinf(skeleton).any() or (np.abs(np.nan_to_num(skeleton)) > MAX_POSITION_M).any()):
@@ -155,7 +163,7 @@ def decode_frame(data: bytes, n_music: int) -> WireFrame:
     music = values[3 * n_j:] if n_m else None
     if music is not None and not (np.isfinite(music).all() and music.min() >= 0.0 and music.max() <= 100.0):
         raise ValueError("music values outside 0..100")
-    return WireFrame(int(epoch), int(seq), float(media_t), float(wall_t), skeleton, music)
+    return WireFrame(epoch, seq, media_t, wall_t, skeleton, music)
 
 
 # ---------------------------------------------------------------------------------------------------- numbers
