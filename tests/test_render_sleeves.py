@@ -66,14 +66,24 @@ def test_a_hand_below_the_shoulder_leaves_the_sleeves_alone():
     assert x[:, SLEEVE_L | SLEEVE_R].max() == 0.0 and x.max() > 0.0
 
 
-def test_the_sleeves_speak_on_every_recording():
-    """Every recording here drives a sleeve motor to 15 or more with the default preset, and the sleeves hold at
-    most half of the energy (a hand fully up or out gives its sleeve as much of the frame's drive as the vest)."""
+def test_the_sleeves_speak_on_every_recording_with_a_raised_hand():
+    """Every recording here in which a hand rises 5 cm above its shoulder drives a sleeve motor to 15 or more with
+    the default preset, and on every recording the sleeves hold at most half of the energy (a hand fully up or out
+    gives its sleeve as much of the frame's drive as the vest). CMU 01_01 (jumps) never raises a hand above its
+    shoulders; its only sleeve frames were 7 frames of a hand 21 cm out at the side while both hands moved alike,
+    rendered while the active-joint choice was stuck on that hand for the whole recording."""
+    raised_any = 0
     for path in sorted(MOTION.glob("*.bvh")) + sorted(MOTION.glob("*.pkl")):
-        x = hapmotion.render(hapmotion.load_motion(path)).intensities
+        motion = hapmotion.load_motion(path)
+        x = hapmotion.render(motion).intensities
         e = x ** 2
-        assert x[:, SLEEVE_L | SLEEVE_R].max() >= 15, path.name
+        raised = any((motion.joint(f"HAND_{s}")[:, 1] - motion.joint(f"SHOULDER_{s}")[:, 1]).max() > 0.05
+                     for s in ("LEFT", "RIGHT"))
+        if raised:
+            raised_any += 1
+            assert x[:, SLEEVE_L | SLEEVE_R].max() >= 15, path.name
         assert e[:, SLEEVE_L | SLEEVE_R].sum() / e.sum() <= 0.5, path.name
+    assert raised_any >= 3
 
 
 @pytest.mark.parametrize("method", ["mst", "baseline"])

@@ -24,8 +24,8 @@ from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENE
                      P_SILENCE, P_TOL, P_W_GAIN, P_W_MAX, P_WINDOW, S_TPX, S_TPY, S_TPZ, ST_AXES, ST_CHOICE,
                      ST_LEVEL, ST_PREV_DP, ST_SEEN, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE,
                      P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA, P_TORSO_START, P_TORSO_FULL, P_SLEEVE_SHARE, P_SLEEVE_REACH,
-                     P_LIFT_FRAME, P_DRIVE_MOTORS, P_W_WINDOW, P_BOTH_HELD)
-from .steps.choice import (active_hand, active_hands, appended_weights, choose_weighted, choose_active, hand_accelerations, held_choice, moving_only,
+                     P_LIFT_FRAME, P_DRIVE_MOTORS, P_W_WINDOW, P_BOTH_HELD, P_LEAD_RATIO, P_LEAD_ALPHA)
+from .steps.choice import (active_hand, active_hands, leading_choice, appended_weights, choose_weighted, choose_active, hand_accelerations, held_choice, moving_only,
                            update_speeds, update_thresholds, upper_body_speed)
 from .steps.held_joints import hold_joints
 from .steps.intensity import boosted_level, filtered_level, level_drive, normalised_distance, speed_reach_drive
@@ -97,6 +97,7 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
     speed_n = np.zeros(2)
     by_speed = prm[P_SPEED_ON] > 0.5
     moving_gate = prm[P_ACTIVE_SPEED] > 0.0
+    by_lead = prm[P_LEAD_RATIO] > 0.0
     lift_frame = prm[P_LIFT_FRAME] > 0.5
     lit = np.zeros(n_act, dtype=np.int64)
     above = np.zeros(2, dtype=np.bool_)
@@ -152,6 +153,8 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             choice = choose_active(above[0], above[1], dist_l, dist_r, int(state[ST_CHOICE]),
                                    prm[P_IDLE_FARTHER] > 0.5)
         choice = held_choice(choice, not (held[0] or held[1]), state, int(prm[P_HOLD]))
+        if by_lead:  # beyond the paper: a hand that clearly leads by speed is the active joint
+            choice = leading_choice(choice, state, prm[P_LEAD_RATIO], prm[P_ACTIVE_SPEED], prm[P_LEAD_ALPHA])
         state[ST_CHOICE] = choice
         hand, hand_excess = active_hand(choice, dist_l, dist_r, excess)
 

@@ -34,8 +34,8 @@ J_NECK = RENDER_JOINTS.index("NECK")
  P_ATTACK, P_RELEASE, P_BOOST, P_BOOST_FULL, P_MAX_LEVEL, P_PCT, P_PHANTOM_ENERGY, P_TOL, P_BETA, P_DEAD,
  P_REL_DECAY, P_FPS, P_IFAR, P_SILENCE, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE, P_ACTIVE_SPEED,
  P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA, P_TORSO_START, P_TORSO_FULL,
- P_SLEEVE_SHARE, P_SLEEVE_REACH, P_LIFT_FRAME, P_DRIVE_MOTORS, P_W_WINDOW, P_BOTH_HELD) = range(44)
-N_PARAMS = 44
+ P_SLEEVE_SHARE, P_SLEEVE_REACH, P_LIFT_FRAME, P_DRIVE_MOTORS, P_W_WINDOW, P_BOTH_HELD, P_LEAD_RATIO, P_LEAD_ALPHA) = range(46)
+N_PARAMS = 46
 
 # ---- surface vector (float64): BodyModel.as_array(), body frame metres
 (S_A, S_B, S_YBOT, S_YTOP, S_YROW0, S_YROWN, S_YSLEEVE, S_TPX, S_TPY, S_TPZ) = range(10)
@@ -70,7 +70,8 @@ ST_PREV_UPPER = ST_PENDING_N + 1  # (3,) last neck position relative to the pelv
 ST_TORSO_SPEED = ST_PREV_UPPER + 3  # smoothed speed of the neck relative to the pelvis, m/s
 ST_WHIST_POS = ST_TORSO_SPEED + 1  # next write position of the ring of appended weights
 ST_WHIST = ST_WHIST_POS + 1  # (2, MAX_WINDOW) ring of each hand's appended extra weight + 1 (0: not above)
-ST_OUT = ST_WHIST + 2 * MAX_WINDOW  # (N,) last output row, percent (per-actuator release)
+ST_LEAD_SPEED = ST_WHIST + 2 * MAX_WINDOW  # (2,) hand speeds relative to J_T over the choice hold, m/s
+ST_OUT = ST_LEAD_SPEED + 2  # (N,) last output row, percent (per-actuator release)
 N_STATE_BASE = ST_OUT
 
 # ---- debug columns

@@ -40,7 +40,7 @@ _RANGES = (
     ("perceptual_exponent", 0.0, 5.0), ("dead_zone", 0.0, 99.0), ("silence_floor", 0.0, 50.0),
     ("actuator_release_s", 0.0, 10.0), ("speed_start_mps", 0.0, 10.0), ("speed_full_mps", 0.0, 20.0),
     ("reach_share", 0.0, 1.0), ("active_speed_mps", 0.0, 10.0), ("opposite_weight", 0.0, 10.0),
-    ("speed_smoothing_s", 0.0, 1.0), ("speed_weight", 0.0, 100.0), ("choice_hold_s", 0.0, 2.0),
+    ("speed_smoothing_s", 0.0, 1.0), ("speed_weight", 0.0, 100.0), ("choice_hold_s", 0.0, 2.0), ("lead_ratio", 0.0, 100.0),
     ("point_smoothing_s", 0.0, 2.0), ("upper_speed_start_mps", 0.0, 10.0), ("upper_speed_full_mps", 0.0, 20.0),
     ("sleeve_share", 0.0, 1.0), ("sleeve_reach_m", 0.01, 2.0), ("frame_drive_motors", 0.1, 8.0),
     ("weight_window_s", 0.0, 0.5),
@@ -196,6 +196,15 @@ class Params:
     level. 0 = off (the hands alone)."""
     upper_speed_start_mps: float = 0.05
     """m/s. Below this smoothed upper-body speed its term is 0 (capture noise, breathing)."""
+    lead_ratio: float = 0.0
+    """A hand whose speed relative to J_T, averaged over the choice hold (a one-pole filter of time constant
+    ``choice_hold_s``), is at least ``active_speed_mps`` and this many times the other's clearly leads, and is the
+    one active joint from that frame on, whatever the accelerations and the choice hold say (ours; 0 = off, the
+    paper's acceleration rule alone). Averaged over the hold, a hand slowing at the end of each swing does not hand
+    the lead to the other.
+    The three-frame acceleration threshold says which hand is changing speed, not which one leads, and under the
+    choice hold a hand that keeps re-crossing its threshold keeps the choice: at 120 Hz the choice then never
+    changes over a whole recording."""
 
     def __post_init__(self) -> None:
         if self.idle_choice not in IDLE_CHOICES:
@@ -288,6 +297,7 @@ PRESETS: dict[str, Params] = {
         choice_hold_s=0.2,
         point_smoothing_s=0.15,
         sleeve_share=1.0,
+        lead_ratio=1.5,
     ),
 }
 """Named parameter sets. ``paper``: the paper's values and readings, with the choice hold, the glide and the

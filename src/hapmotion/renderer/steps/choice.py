@@ -16,7 +16,7 @@ from numba import njit
 from ..packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_NONE, CHOICE_RIGHT, J_HAND_L, J_HAND_R, J_NECK, J_PELVIS,
                       J_TORSO, MAX_WINDOW, ST_PREV_UPPER, ST_TORSO_SPEED,
                       ST_CHOICE, ST_HIST, ST_HIST_COUNT, ST_HIST_POS, ST_PENDING, ST_PENDING_N, ST_PREV_REL, ST_PREV_VEL,
-                      ST_SEEN, ST_SPEED, ST_WHIST, ST_WHIST_POS)
+                      ST_SEEN, ST_SPEED, ST_WHIST, ST_WHIST_POS, ST_LEAD_SPEED)
 from .numeric import clip
 
 
@@ -265,6 +265,42 @@ def held_choice(choice, idle, state, hold_frames):
         state[ST_PENDING_N] = 0.0
         return int(state[ST_PENDING])
     return current
+
+
+@njit(cache=True, inline="always")
+def leading_choice(choice, state, ratio, min_speed, alpha):
+    """Beyond the paper: a hand that clearly leads is the one active joint, at once.
+
+    Each hand's speed relative to J_T (``|v_t|`` of :func:`hand_accelerations`, run first this frame) is averaged
+    by a one-pole filter ``s += alpha (|v_t| - s)`` (``alpha`` from the choice hold's time constant; ``state
+    [ST_LEAD_SPEED]``, m/s). A hand leads when its average is at least ``min_speed`` (m/s) and ``ratio`` times the
+    other's. Its choice (``CHOICE_LEFT`` / ``CHOICE_RIGHT``) replaces ``choice`` (the held acceleration choice) and
+    any pending change is dropped; with no hand leading (or ``ratio`` 0) ``choice`` is returned as it is.
+
+    Leading is judged on speeds rather than on accelerations above their three-frame mean, which say which hand is
+    changing speed. A hand that starts moving while the other is still leads as soon as its average passes
+    ``min_speed``; between two moving hands the lead changes only when the averages swap by ``ratio`` squared, and
+    between the two ratios (``ratio`` one way, ``1 / ratio`` the other) the held choice stays, so it does not flip.
+    """
+    for h in range(2):
+        v2 = 0.0
+        for k in range(3):
+            v = state[ST_PREV_VEL + 3 * h + k]
+            v2 += v * v
+        state[ST_LEAD_SPEED + h] += alpha * (np.sqrt(v2) - state[ST_LEAD_SPEED + h])
+    if ratio <= 0.0:
+        return choice
+    s_l = state[ST_LEAD_SPEED]
+    s_r = state[ST_LEAD_SPEED + 1]
+    lead = CHOICE_NONE
+    if s_l >= min_speed and s_l >= ratio * s_r:
+        lead = CHOICE_LEFT
+    elif s_r >= min_speed and s_r >= ratio * s_l:
+        lead = CHOICE_RIGHT
+    if lead == CHOICE_NONE:
+        return choice
+    state[ST_PENDING_N] = 0.0
+    return lead
 
 
 @njit(cache=True, inline="always")

@@ -1,0 +1,116 @@
+"""The leading hand (``lead_ratio``, beyond the paper; on in ``felt``, off in ``paper`` and ``energy``): a hand that
+clearly leads by speed is the active joint, and its mirrored side carries the energy, within a short latency."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from support.data import MOTION
+from support.synthetic import motion_from_frames, pose
+
+import hapmotion
+from hapmotion.renderer.packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, ST_LEAD_SPEED, ST_PENDING_N,
+                                       ST_PREV_VEL, new_state)
+from hapmotion.renderer.params import PRESETS
+from hapmotion.renderer.steps.choice import leading_choice
+from hapmotion.skeleton.joints import JOINT_INDEX
+
+FELT = PRESETS["felt"]
+NO_LEAD = FELT.replace(lead_ratio=0.0)
+
+
+def _lead(v_left: float, v_right: float, choice: int, ratio: float = 1.5, min_speed: float = 0.2) -> tuple[int, float]:
+    """One call of :func:`leading_choice` with the hands at these speeds (m/s) and no averaging (alpha 1)."""
+    state = new_state(52)
+    state[ST_PREV_VEL] = v_left  # the x components of the left and right hand velocities
+    state[ST_PREV_VEL + 3] = v_right
+    state[ST_PENDING_N] = 5.0
+    out = leading_choice(choice, state, ratio, min_speed, 1.0)
+    assert state[ST_LEAD_SPEED] == pytest.approx(abs(v_left)) and state[ST_LEAD_SPEED + 1] == pytest.approx(
+        abs(v_right))
+    return out, state[ST_PENDING_N]
+
+
+def test_leading_by_hand():
+    assert _lead(1.0, 0.5, CHOICE_RIGHT) == (CHOICE_LEFT, 0.0)  # 2x as fast: leads, the pending change dropped
+    assert _lead(-0.4, 0.2, CHOICE_RIGHT) == (CHOICE_LEFT, 0.0)  # a velocity counts by its size
+    assert _lead(0.3, 0.6, CHOICE_BOTH) == (CHOICE_RIGHT, 0.0)  # exactly 2x: the right hand
+    assert _lead(1.0, 0.8, CHOICE_RIGHT) == (CHOICE_RIGHT, 5.0)  # 1.25x: nobody leads, the held choice stays
+    assert _lead(0.15, 0.0, CHOICE_RIGHT) == (CHOICE_RIGHT, 5.0)  # under min_speed: capture noise, no lead
+    assert _lead(1.0, 0.0, CHOICE_RIGHT, ratio=0.0) == (CHOICE_RIGHT, 5.0)  # off
+
+
+def test_the_average_is_over_the_hold():
+    """alpha < 1: the lead speeds follow ``s += alpha (|v| - s)``, so a hand that pauses for a frame (the end of a
+    swing) keeps most of its average."""
+    state = new_state(52)
+    state[ST_PREV_VEL] = 1.0
+    for _ in range(50):
+        leading_choice(CHOICE_LEFT, state, 1.5, 0.2, 0.1)
+    assert state[ST_LEAD_SPEED] == pytest.approx(1.0 - 0.9 ** 50)
+    state[ST_PREV_VEL] = 0.0
+    state[ST_PREV_VEL + 3] = 0.5
+    assert leading_choice(CHOICE_RIGHT, state, 1.5, 0.2, 0.1) == CHOICE_LEFT  # 0.9 vs 0.05: still the left
+    assert state[ST_LEAD_SPEED] == pytest.approx(0.9 * (1.0 - 0.9 ** 50))
+
+
+def _swap_lead(fps: float) -> tuple[np.ndarray, float]:
+    """``(T, 32, 3)`` frames at ``fps``: for 1.5 s the right hand swings side to side in front of the chest (0.15 m,
+    1.5 Hz, about 1.4 m/s peak) while the left swings at a third of that; then they swap for 2 s. Returns the frames
+    and the time of the swap."""
+    t = np.arange(int(3.5 * fps)) / fps
+    swap = 1.5
+    frames = np.repeat(pose()[None], t.size, axis=0)
+    for name, side in (("HAND_LEFT", 1.0), ("HAND_RIGHT", -1.0)):
+        leads = (t >= swap) if side > 0 else (t < swap)
+        amp = np.where(leads, 0.15, 0.05)
+        j = JOINT_INDEX[name]
+        frames[:, j, 0] = side * (0.25 + amp * np.sin(2 * np.pi * 1.5 * t))
+        frames[:, j, 1] = 1.25
+        frames[:, j, 2] = 0.30
+    return frames, swap
+
+
+@pytest.mark.parametrize("fps", [30.0, 60.0, 120.0])
+def test_the_leading_hand_is_felt_on_its_mirrored_side_within_the_latency(fps):
+    """After the swap the left hand leads (3x the right's speed): its choice comes within 0.25 s (the lead's average
+    over the 0.2 s hold catching up), and from 0.5 s after the swap on the wearer's right half (mirrored) carries
+    more energy than the left in every 0.25 s window."""
+    frames, swap = _swap_lead(fps)
+    motion = motion_from_frames(frames, fps)
+    track = hapmotion.render(motion, params=FELT)
+    act = track.debug["active"]
+    t = np.arange(motion.n_frames) / fps
+    left_chosen = (act[:, 0] == 1) & (act[:, 1] == 0)
+    first = t[np.flatnonzero(left_chosen & (t >= swap))[0]]
+    assert first - swap <= 0.25
+    assert left_chosen[t >= first].all()  # and it stays
+    assert not left_chosen[(t > 0.5) & (t < swap)].any()  # before the swap the right hand leads
+    x = hapmotion.load_layout().positions()[:, 0]
+    e = track.intensities ** 2
+    n = int(round(0.25 * fps))
+    start = int(np.searchsorted(t, swap + 0.5))
+    for a in range(start, motion.n_frames - n + 1, n):
+        w = e[a:a + n]
+        assert w[:, x > 0].sum() > w[:, x < 0].sum(), a / fps
+
+
+def test_without_the_lead_the_held_choice_never_changes_at_120_hz():
+    """What the lead fixes: at 120 Hz the slower right hand re-crosses its three-frame acceleration threshold within
+    every 0.2 s hold, so the held choice never becomes the leading left hand alone after the swap (it stays on the
+    right hand, or on both)."""
+    frames, swap = _swap_lead(120.0)
+    act = hapmotion.render(motion_from_frames(frames, 120.0), params=NO_LEAD).debug["active"]
+    t = np.arange(len(frames)) / 120.0
+    after = t > swap + 0.5
+    assert (act[after, 1] == 1).all() and not ((act[:, 0] == 1) & (act[:, 1] == 0))[after].any()
+
+
+def test_a_jumping_recording_changes_its_choice():
+    """CMU 01_01 (jumps, 120 Hz, both hands moving): the held acceleration choice alone stays on one hand for the
+    whole recording; with the lead each hand is the active one for at least a quarter of it."""
+    motion = hapmotion.load_motion(MOTION / "01_01.bvh")
+    old = hapmotion.render(motion, params=NO_LEAD).debug["active"]
+    new = hapmotion.render(motion, params=FELT).debug["active"]
+    assert np.unique(old, axis=0).shape[0] == 1
+    assert min(new[:, 0].mean(), new[:, 1].mean()) >= 0.25
