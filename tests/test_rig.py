@@ -46,13 +46,15 @@ def test_the_paper_rig_and_forearm_sleeves_are_a_plain_copy(name):
 
 
 def test_one_x40_motor_on_an_x16_by_hand():
-    # VestFront row 1 col 0 (height 0.25) sits between the X16's rows at 0.125 and 0.75: weights 0.8 and 0.2
+    # the X16's rows sit where the X40's rows 1 and 3 do (heights 0.25 and 0.75): row 1 col 0 is the upper left
+    # motor's alone, and row 2 col 0 (height 0.5, the vest's middle) is split half and half
     rig = parse_rig("x16", energy=False)
-    out = _out(rig, _row(VestFront_4=50.0))
-    assert out == pytest.approx({"VestFront_0": 40.0, "VestFront_4": 10.0})  # the X16's upper and lower left motor
-    energy = _out(parse_rig("x16", energy=True), _row(VestFront_4=50.0))
-    assert energy["VestFront_0"] == pytest.approx(50 * np.sqrt(0.8)) and energy["VestFront_4"] == pytest.approx(
-        50 * np.sqrt(0.2))
+    assert _out(rig, _row(VestFront_4=50.0)) == pytest.approx({"VestFront_0": 50.0})
+    out = _out(rig, _row(VestFront_8=50.0))
+    assert out == pytest.approx({"VestFront_0": 25.0, "VestFront_4": 25.0})  # the X16's upper and lower left motor
+    energy = _out(parse_rig("x16", energy=True), _row(VestFront_8=50.0))
+    assert energy["VestFront_0"] == pytest.approx(50 * np.sqrt(0.5)) and energy["VestFront_4"] == pytest.approx(
+        50 * np.sqrt(0.5))
 
 
 @pytest.mark.parametrize("name", RIGS)
