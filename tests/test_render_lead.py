@@ -1,5 +1,6 @@
-"""The leading hand (``lead_ratio``, beyond the paper; on in ``felt``, off in ``paper`` and ``energy``): a hand that
-clearly leads by speed is the active joint, and its mirrored side carries the energy, within a short latency."""
+"""One-hand gestures (beyond the paper; on in ``felt``, off in ``paper`` and ``energy``): a hand that clearly leads by
+speed is the active joint (``lead_ratio``), within a short latency, and its point stays on its own side of the body
+(``hand_side_m``), so its mirrored side carries the energy."""
 
 from __future__ import annotations
 
@@ -13,10 +14,12 @@ from hapmotion.renderer.packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, S
                                        ST_PREV_VEL, new_state)
 from hapmotion.renderer.params import PRESETS
 from hapmotion.renderer.steps.choice import leading_choice
-from hapmotion.skeleton.joints import JOINT_INDEX
+from hapmotion.renderer.steps.triangle import keep_on_hand_side
+from hapmotion.skeleton.joints import JOINT_INDEX, RENDER_JOINTS
 
 FELT = PRESETS["felt"]
 NO_LEAD = FELT.replace(lead_ratio=0.0)
+JOINT_INDEX_RENDER = {name: i for i, name in enumerate(RENDER_JOINTS)}
 
 
 def _lead(v_left: float, v_right: float, choice: int, ratio: float = 1.5, min_speed: float = 0.2) -> tuple[int, float]:
@@ -114,3 +117,40 @@ def test_a_jumping_recording_changes_its_choice():
     new = hapmotion.render(motion, params=FELT).debug["active"]
     assert np.unique(old, axis=0).shape[0] == 1
     assert min(new[:, 0].mean(), new[:, 1].mean()) >= 0.25
+
+
+def test_keep_on_hand_side_by_hand():
+    axes = np.array([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])  # facing +Z: the body's right is -X
+    torso = np.array([0.0, 1.1, 0.0])
+    dp = np.array([-0.05, 1.2, 0.2])  # 5 cm to the performer's right
+    keep_on_hand_side(JOINT_INDEX_RENDER["HAND_RIGHT"], torso, axes, 0.03, dp)
+    assert dp == pytest.approx([-0.05, 1.2, 0.2])  # the right hand's point is on its side already
+    keep_on_hand_side(JOINT_INDEX_RENDER["HAND_LEFT"], torso, axes, 0.03, dp)
+    assert dp == pytest.approx([0.03, 1.2, 0.2])  # the left hand's: moved to 3 cm on the performer's left
+
+
+def _crossing(fps: float = 60.0) -> np.ndarray:
+    """3 s of the left hand swinging (0.1 m, 1.5 Hz) in front of the chest on the performer's right side (it has
+    crossed the body), the right hand hanging still."""
+    t = np.arange(int(3 * fps)) / fps
+    frames = np.repeat(pose()[None], t.size, axis=0)
+    j = JOINT_INDEX["HAND_LEFT"]
+    frames[:, j, 0] = -0.20 + 0.10 * np.sin(2 * np.pi * 1.5 * t)
+    frames[:, j, 1] = 1.25
+    frames[:, j, 2] = 0.35
+    return frames
+
+
+def test_a_hand_across_the_body_is_felt_on_its_own_side():
+    """The left hand alone, swinging on the performer's right: mirrored, the wearer's right half carries more energy
+    over the gesture (at least 60 %); Eq. 1's point alone (hand_side_m 0) puts it on the wearer's left."""
+    motion = motion_from_frames(_crossing())
+    x = hapmotion.load_layout().positions()[:, 0]
+
+    def right_share(params):
+        e = (hapmotion.render(motion, params=params).intensities[30:] ** 2)
+        return e[:, x > 0].sum() / (e[:, x > 0].sum() + e[:, x < 0].sum())
+
+    assert FELT.hand_side_m == 0.03
+    assert right_share(FELT) >= 0.6
+    assert right_share(FELT.replace(hand_side_m=0.0)) < 0.5

@@ -24,7 +24,7 @@ from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENE
                      P_SILENCE, P_TOL, P_W_GAIN, P_W_MAX, P_WINDOW, S_TPX, S_TPY, S_TPZ, ST_AXES, ST_CHOICE,
                      ST_LEVEL, ST_PREV_DP, ST_SEEN, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE,
                      P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA, P_TORSO_START, P_TORSO_FULL, P_SLEEVE_SHARE, P_SLEEVE_REACH,
-                     P_LIFT_FRAME, P_DRIVE_MOTORS, P_W_WINDOW, P_BOTH_HELD, P_LEAD_RATIO, P_LEAD_ALPHA)
+                     P_LIFT_FRAME, P_DRIVE_MOTORS, P_W_WINDOW, P_BOTH_HELD, P_LEAD_RATIO, P_LEAD_ALPHA, P_SIDE_MARGIN)
 from .steps.choice import (active_hand, active_hands, leading_choice, appended_weights, choose_weighted, choose_active, hand_accelerations, held_choice, moving_only,
                            update_speeds, update_thresholds, upper_body_speed)
 from .steps.held_joints import hold_joints
@@ -33,7 +33,8 @@ from .steps.numeric import dist3
 from .steps.output import share_frame_drive, write_outputs, write_silence
 from .steps.phantom import spread_on_charts
 from .steps.sleeves import carried_hand, carry_on_sleeve
-from .steps.triangle import dynamic_point, glide, previous_dynamic_point, salient_triangle, speed_weighted
+from .steps.triangle import (dynamic_point, glide, keep_on_hand_side, previous_dynamic_point, salient_triangle,
+                             speed_weighted)
 from .steps.warping import locate_on_body
 
 
@@ -171,6 +172,8 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             dynamic_point(jt[j_a], jt[j_r], torso, w_a, w_r, 1.0, dp)  # J_T keeps weight 1
             if prm[P_DP_ALPHA] < 1.0:  # beyond the paper: the point glides
                 glide(torso, axes, state, prm[P_DP_ALPHA], dp)
+            if prm[P_SIDE_MARGIN] > 0.0 and choice != CHOICE_BOTH:  # beyond the paper: on the hand's own side
+                keep_on_hand_side(hand, torso, axes, prm[P_SIDE_MARGIN], dp)
             carried = carried_hand(choice, hand)
         for k in range(3):
             state[ST_PREV_DP + k] = dp[k]

@@ -41,6 +41,7 @@ _RANGES = (
     ("actuator_release_s", 0.0, 10.0), ("speed_start_mps", 0.0, 10.0), ("speed_full_mps", 0.0, 20.0),
     ("reach_share", 0.0, 1.0), ("active_speed_mps", 0.0, 10.0), ("opposite_weight", 0.0, 10.0),
     ("speed_smoothing_s", 0.0, 1.0), ("speed_weight", 0.0, 100.0), ("choice_hold_s", 0.0, 2.0), ("lead_ratio", 0.0, 100.0),
+    ("hand_side_m", 0.0, 0.5),
     ("point_smoothing_s", 0.0, 2.0), ("upper_speed_start_mps", 0.0, 10.0), ("upper_speed_full_mps", 0.0, 20.0),
     ("sleeve_share", 0.0, 1.0), ("sleeve_reach_m", 0.01, 2.0), ("frame_drive_motors", 0.1, 8.0),
     ("weight_window_s", 0.0, 0.5),
@@ -205,6 +206,12 @@ class Params:
     The three-frame acceleration threshold says which hand is changing speed, not which one leads, and under the
     choice hold a hand that keeps re-crossing its threshold keeps the choice: at 120 Hz the choice then never
     changes over a whole recording."""
+    hand_side_m: float = 0.0
+    """m. MST with one active hand: its dynamic point stays at least this far on that hand's side of the body's
+    midline (along the body's right axis), so a one-hand gesture is felt on the hand's own side (the wearer's
+    opposite side, mirrored) even when the hand crosses in front of the body (ours; 0 = off, the paper: where Eq. 1
+    puts it). 3 cm is about the torso's vibrotactile acuity (2-3 cm, van Erp, "Vibrotactile Spatial Acuity on the
+    Torso", WHC 2005): a point that far off the midline is felt on its side."""
 
     def __post_init__(self) -> None:
         if self.idle_choice not in IDLE_CHOICES:
@@ -298,6 +305,7 @@ PRESETS: dict[str, Params] = {
         point_smoothing_s=0.15,
         sleeve_share=1.0,
         lead_ratio=1.5,
+        hand_side_m=0.03,
     ),
 }
 """Named parameter sets. ``paper``: the paper's values and readings, with the choice hold, the glide and the

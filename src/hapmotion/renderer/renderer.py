@@ -103,6 +103,7 @@ def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
                                if params.speed_smoothing_s > 0 else 1.0)
     p[packed.P_SPEED_W] = params.speed_weight
     p[packed.P_LEAD_RATIO] = params.lead_ratio
+    p[packed.P_SIDE_MARGIN] = params.hand_side_m
     p[packed.P_LEAD_ALPHA] = (1.0 - float(np.exp(-1.0 / (fps * params.choice_hold_s)))
                               if params.choice_hold_s > 0 else 1.0)
     return p

@@ -110,3 +110,22 @@ def dynamic_point(va, vr, vt, w_a, w_r, w_t, out):
     for k in range(3):
         jc = (va[k] + vr[k] + vt[k]) / 3.0
         out[k] = jc + (w_a * (va[k] - jc) + w_r * (vr[k] - jc) + w_t * (vt[k] - jc)) / (w_a + w_r + w_t)
+
+
+@njit(cache=True, inline="always")
+def keep_on_hand_side(hand, torso, axes, margin, dp):
+    """Beyond the paper: the dynamic point of one active hand stays on that hand's side of the body.
+
+    ``hand`` is the active hand's joint row (``J_HAND_L``: the performer's left, the body's -right side), ``torso``
+    ``(3,)`` J_T and ``axes`` ``(3, 3)`` the body frame (rows right, up, forward). When ``dp`` ``(3,)`` (world m)
+    lies less than ``margin`` (m) on the hand's side of the midline plane through J_T, it is moved along the right
+    axis to ``margin`` on that side; its height and depth stay as they are.
+    """
+    side = -1.0 if hand == J_HAND_L else 1.0
+    x = 0.0
+    for k in range(3):
+        x += axes[0, k] * (dp[k] - torso[k])
+    if side * x < margin:
+        shift = side * margin - x
+        for k in range(3):
+            dp[k] += shift * axes[0, k]
