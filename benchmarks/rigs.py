@@ -6,13 +6,14 @@ motors (:mod:`hapmotion.rig`). The clips are the recordings of the motion folder
 judged per gesture, and, in a second table, the seeded synthetic one-hand gestures of ``benchmarks.feel`` (whole
 clips, the hand known by construction).
 
-A one-hand gesture (the reading used here) is a run of at least 0.5 s in which one hand leads: each hand's
-movement is the RMS displacement of its position relative to the neck about its own mean over a centred 0.5 s
-window (m; relative to the neck so that jumping, travelling and turning the whole body move neither hand), and a
-hand leads while its movement is at least 1.5 times the other's and at least 5 mm (a still hand's capture jitter
-and sway stay under it). It catches a wave of the hand alone (the ``byebye`` recording's right hand, 1-2 cm
-swings at 0.1-0.2 m/s), which a speed threshold misses, and judges every gesture on its own: a clip with many
-gestures counts each. ``--old-reading`` gives the earlier reading instead: per clip, the frames where one hand
+A one-hand gesture (the reading used here) is a run of at least 0.5 s in which one hand leads, by its movement or
+by its speed, each taken over a centred 0.5 s window: a hand's movement is the RMS displacement of its position
+relative to the neck about its own mean (m; relative to the neck so that jumping, travelling and turning the whole
+body move neither hand), its speed the mean of its speed relative to the hips; a hand leads while its movement is
+at least 1.5 times the other's and at least 5 mm (a still hand's capture jitter and sway stay under it), or its
+speed at least 1.5 times the other's and at least 0.5 m/s. The movement catches a wave of the hand alone (the
+``byebye`` recording's right hand, 1-2 cm swings at 0.1-0.2 m/s), which a speed threshold misses; the speed catches
+a fast hand whose path is short. Every gesture is judged on its own: a clip with many gestures counts each. ``--old-reading`` gives the earlier reading instead: per clip, the frames where one hand
 moves faster than 0.5 m/s relative to the hips and at least twice as fast as the other
 (``hapmotion.metrics.locus.active_hand``), in clips with at least 0.5 s of them.
 
@@ -63,7 +64,8 @@ gloves and with forearm sleeves, and the X40 alone."""
 ONE_HAND_S = 0.5  # seconds: a gesture run lasts at least this long
 MOVE_WINDOW_S = 0.5  # seconds: the window of a hand's movement (RMS displacement about its mean)
 LEAD_RATIO = 1.5  # a hand leads while its movement is at least this many times the other's ...
-LEAD_FLOOR_M = 0.005  # ... and at least this (m)
+LEAD_FLOOR_M = 0.005  # ... and at least this (m); or its mean speed LEAD_RATIO times the other's and ...
+LEAD_SPEED = 0.5  # ... at least this (m/s, relative to the hips: benchmarks.feel's "a hand moves")
 RAISED_M = 0.05   # a hand this far above its shoulder is raised
 RAISED_S = 0.5    # for at least this long
 TARGETS = {"side": 0.95, "raised": 0.90, "energy_db": 1.0}
@@ -148,12 +150,20 @@ def movement(motion) -> np.ndarray:
 
 def leading_hand(motion) -> np.ndarray:
     """``(T,)`` the hand that leads per frame (0 left, 1 right, -1 neither): its :func:`movement` at least
-    :data:`LEAD_RATIO` times the other's and at least :data:`LEAD_FLOOR_M`."""
+    :data:`LEAD_RATIO` times the other's and at least :data:`LEAD_FLOOR_M`, or its speed relative to the hips,
+    averaged over the same centred window, at least :data:`LEAD_RATIO` times the other's and at least
+    :data:`LEAD_SPEED`; where movement and speed name different hands, neither leads."""
     mv = movement(motion)
-    out = np.full(motion.n_frames, -1)
-    for h in (0, 1):
-        out[(mv[:, h] >= LEAD_RATIO * mv[:, 1 - h]) & (mv[:, h] >= LEAD_FLOOR_M)] = h
-    return out
+    n = max(2, int(round(MOVE_WINDOW_S * motion.fps)))
+    sp = hand_speeds(motion)
+    speed = np.stack([smooth(sp[:, 0], n), smooth(sp[:, 1], n)], axis=1)
+    by = []
+    for x, floor in ((mv, LEAD_FLOOR_M), (speed, LEAD_SPEED)):
+        lead = np.full(motion.n_frames, -1)
+        for h in (0, 1):
+            lead[(x[:, h] >= LEAD_RATIO * x[:, 1 - h]) & (x[:, h] >= floor)] = h
+        by.append(lead)
+    return np.where(by[0] == -1, by[1], np.where((by[1] == -1) | (by[1] == by[0]), by[0], -1))
 
 
 def gestures(clip, old_reading: bool = False) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -272,7 +282,7 @@ def main(argv=None) -> int:
     real = [c for c in real_clips(args.motion_dir) if gestures(c, args.old_reading)]
     reading = ("old reading: per clip, frames one hand > 0.5 m/s and 2x the other" if args.old_reading else
                f"gesture runs >= {ONE_HAND_S} s of one hand moving {LEAD_RATIO}x the other and >= "
-               f"{LEAD_FLOOR_M * 1000:.0f} mm")
+               f"{LEAD_FLOOR_M * 1000:.0f} mm, or {LEAD_RATIO}x as fast and >= {LEAD_SPEED} m/s")
     print(f"recordings with one-hand gestures ({reading}): {', '.join(c.name for c in real)}")
     ok = report("recordings", measure(real, rig_names, args.verbose, show, args.old_reading), pitch, len(real))
     if not args.no_synthetic:
