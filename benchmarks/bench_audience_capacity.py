@@ -195,6 +195,12 @@ def profile(pid: int, seconds: float) -> dict[str, float]:
                         f"{seconds:g}"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
         report = subprocess.run(["perf", "report", "-i", data, "--children", "--sort", "sym", "--stdio", "-g", "none"],
                                 capture_output=True, text=True, check=False).stdout
+    return perf_shares(report)
+
+
+def perf_shares(report: str) -> dict[str, float]:
+    """The share (%) of each of :data:`PERF_PARTS` in the text of ``perf report --children --sort sym --stdio -g
+    none`` (its first line naming the function), with ``samples`` their count."""
     shares = {"samples": float(m.group(1)) for m in re.finditer(r"^# Samples: (\d+)", report, re.M)}
     for line in report.splitlines():
         m = re.match(r"\s+([\d.]+)%\s+[\d.]+%\s+\[[.k]\]\s+(\S.*?)\s*$", line)
