@@ -243,57 +243,64 @@ def saturation(a: float, b: float) -> float:
     return (1.0 - a) / b if b > 0 else float("inf")
 
 
+def line_fits(points: list[tuple[int, float, float]]) -> tuple[tuple[float, float], list[tuple[float, float]]]:
+    """``(pass, x, cpu)`` points: the fit over all of them and over each pass alone."""
+    every = fit([x for _, x, _ in points], [c for _, _, c in points])
+    return every, [fit([x for p, x, _ in points if p == k], [c for p, _, c in points if p == k]) for k in (0, 1)]
+
+
 def summarise(rows: dict[str, list[tuple[int, int, dict]]], kinds: dict[str, tuple[str, float]],
               steps: list[int]) -> None:
     """The fits of the sweep (module doc), the ratios beside their target, and where the server's CPU goes."""
-    streams = list(rows)
-    print(f"per stream: server CPU = a + b N fitted over N = {', '.join(str(n) for n in steps if n > 0)} "
-          "(both passes; spread: each pass fitted alone)")
+    streams, top = list(rows), max(steps)
+    print(f"per stream, over N = {', '.join(str(n) for n in steps if n > 0)} (both passes; in brackets each pass "
+          "fitted alone):")
     figures = {}
-    top = max(steps)
     for s in streams:
         rate = kinds[s][1]
-        fitted = [(n, w["cpu"]) for n, _, w in rows[s] if n > 0]
-        a_, b_ = fit(*zip(*fitted))
-        passes = [fit(*zip(*[(n, w["cpu"]) for n, p, w in rows[s] if n > 0 and p == k])) for k in (0, 1)]
-        seats = [saturation(*f) for f in passes]
+        mine = [(p, n, w) for n, p, w in rows[s] if n > 0]
+        (a_, b_), passes = line_fits([(p, n, w["cpu"]) for p, n, w in mine])
+        (a_w, per_write), write_passes = line_fits([(p, w["writes"], w["cpu"]) for p, _, w in mine])
         zero = [w["cpu"] for n, _, w in rows[s] if n == 0]
-        p99 = max(w["p99"] for n, _, w in rows[s] if n == top)
-        figures[s] = {"seats": saturation(a_, b_), "range": (min(seats), max(seats)), "p99": p99}
-        print(f"  {s}: a = {a_ * 100:.1f} % of a core (passes {passes[0][0] * 100:.1f} / {passes[1][0] * 100:.1f}; "
-              f"with no seats {np.mean(zero) * 100 if zero else float('nan'):.1f} %), b = {b_ / rate * 1e6:.2f} us a "
-              f"seat-message ({b_ * 100:.4f} % of a core a seat) -> {figures[s]['seats']:,.0f} seats per server "
-              f"core at saturation (passes {seats[0]:,.0f} / {seats[1]:,.0f}) [reported]; at N = {top}: "
-              f"p99 {p99:.1f} ms [target < {P99_TARGET_MS:g} ms]")
+        at_top = [w for n, _, w in rows[s] if n == top]
+        kept = lambda a, b: saturation(a, b * rate)  # noqa: E731  (b: CPU a write; one write a message)
+        figures[s] = {"fit": saturation(a_, b_), "fit_passes": [saturation(*f) for f in passes],
+                      "kept": kept(a_w, per_write), "kept_passes": [kept(*f) for f in write_passes],
+                      "p99": max(w["p99"] for w in at_top)}
+        f = figures[s]
+        print(f"  {s}: CPU = a + b N: a = {a_ * 100:.1f} % of a core (with no seats {np.mean(zero) * 100:.1f} %), "
+              f"b = {b_ / rate * 1e6:.2f} us a seat-message -> {f['fit']:,.0f} seats per server core where the line "
+              f"reaches a core ({' / '.join(f'{x:,.0f}' for x in f['fit_passes'])}) [reported]")
+        print(f"  {s}: CPU = a + w x write calls: w = {per_write * 1e6:.2f} us a write "
+              f"({' / '.join(f'{x[1] * 1e6:.2f}' for x in write_passes)}) -> {f['kept']:,.0f} seats per server core "
+              f"with every message written on its own, as a server that keeps up writes them "
+              f"({' / '.join(f'{x:,.0f}' for x in f['kept_passes'])}) [reported]; at N = {top}: "
+              + ", ".join(f"{w['writes'] / max(w['delivered'], 1):.2f} writes a message, p99 {w['p99']:.1f} ms"
+                          for w in at_top) + f" [target p99 < {P99_TARGET_MS:g} ms]")
     ref = streams[0]
     for s in streams[1:]:
-        r = figures[s]["seats"] / figures[ref]["seats"]
-        lo = figures[s]["range"][0] / figures[ref]["range"][1]
-        hi = figures[s]["range"][1] / figures[ref]["range"][0]
-        held = figures[s]["p99"] < P99_TARGET_MS
-        print(f"  {s} against {ref}: {r:.2f}x the seats per server core (passes crossed: {lo:.2f}-{hi:.2f}x), "
-              f"p99 {figures[s]['p99']:.1f} ms at N = {top} [target >= {COMPACT_TARGET:g}x at p99 < "
-              f"{P99_TARGET_MS:g} ms: {'met' if r >= COMPACT_TARGET and held else 'missed'}]")
+        for key, how in (("kept", "every message written on its own"), ("fit", "the lines through N")):
+            r = figures[s][key] / figures[ref][key]
+            lo = min(figures[s][key + "_passes"]) / max(figures[ref][key + "_passes"])
+            hi = max(figures[s][key + "_passes"]) / min(figures[ref][key + "_passes"])
+            held = figures[s]["p99"] < P99_TARGET_MS
+            print(f"  {s} against {ref} ({how}): {r:.2f}x the seats per server core (passes crossed: "
+                  f"{lo:.2f}-{hi:.2f}x), p99 {figures[s]['p99']:.1f} ms at N = {top} [target >= {COMPACT_TARGET:g}x "
+                  f"at p99 < {P99_TARGET_MS:g} ms: {'met' if r >= COMPACT_TARGET and held else 'missed'}]")
 
-    windows = [(s, w) for s in streams for n, _, w in rows[s] if n > 0]
-    cpu = np.array([w["cpu"] for _, w in windows])
-    writes = np.array([w["writes"] for _, w in windows])
-    shared = np.array([max(0.0, w["delivered"] - w["writes"]) for _, w in windows])
+    windows = [w for s in streams for n, _, w in rows[s] if n > 0]
+    cpu = np.array([w["cpu"] for w in windows])
+    writes = np.array([w["writes"] for w in windows])
+    shared = np.array([max(0.0, w["delivered"] - w["writes"]) for w in windows])
     both = np.column_stack([np.ones_like(cpu), writes, shared])
     (c0, per_write, per_shared), *_ = np.linalg.lstsq(both, cpu, rcond=None)
     alone = np.column_stack([np.ones_like(cpu), writes + shared])
     per_message = np.linalg.lstsq(alone, cpu, rcond=None)[0]
     rms = lambda x, coef: float(np.sqrt(np.mean((x @ coef - cpu) ** 2))) * 100  # noqa: E731
     print(f"where the CPU goes, every window with seats, every stream: CPU = {c0 * 100:.1f} % of a core + "
-          f"{per_write * 1e6:.2f} us a write system call + {per_shared * 1e6:.2f} us a message that shared a write "
-          f"with the one before (rms {rms(both, [c0, per_write, per_shared]):.2f} % of a core; counting messages "
-          f"alone, {per_message[1] * 1e6:.2f} us each: rms {rms(alone, per_message):.2f} %)")
-    for s in streams:
-        mine = [w for n, _, w in rows[s] if n > 0]
-        a_w, b_w = fit([w["writes"] for w in mine], [w["cpu"] for w in mine])
-        top = [w["writes"] / w["delivered"] for n, _, w in rows[s] if n == steps[-1] and w["delivered"]]
-        print(f"  {s}: {b_w * 1e6:.2f} us a write fitted on its own windows; writes a message at N = {steps[-1]}: "
-              + " / ".join(f"{x:.2f}" for x in top) + " (below 1: a seat's writer late, two messages in one write)")
+          f"{per_write * 1e6:.2f} us a write call + {per_shared * 1e6:.2f} us a message that shared a write with the "
+          f"one before (rms {rms(both, [c0, per_write, per_shared]):.2f} % of a core; counting messages alone, "
+          f"{per_message[1] * 1e6:.2f} us each: rms {rms(alone, per_message):.2f} %)")
 
 
 def main(argv=None) -> None:

@@ -120,3 +120,30 @@ def test_the_perf_report_is_read_by_function():
     shares = cap.perf_shares(REPORT)
     assert shares == {"samples": 920.0, "seats' write path": 78.48, "fan-out": 13.5, "sysmon": 3.5,
                       "scheduler": 2.5}
+
+
+def synthetic_rows(rate: float, per_write: float, late: float = 0.0) -> list[tuple[int, int, dict]]:
+    """Windows of a server costing 2 % of a core plus ``per_write`` seconds a write call, at N = 200, 500, 900 in
+    two passes, ``late`` of the messages at N = 900 written together with the one before."""
+    rows = []
+    for n in (0, 200, 500, 900):
+        for p in (0, 1):
+            delivered = n * rate
+            writes = delivered * (1 - (late if n == 900 else 0.0))
+            rows.append((n, p, {"cpu": 0.02 + per_write * writes, "writes": writes, "delivered": delivered,
+                                "p99": 10.0}))
+    return rows
+
+
+def test_summary_counts_seats_with_every_message_written_on_its_own(capsys):
+    # 12 us a write: (1 - 0.02) / (12e-6 x 60) = 1,361 seats per core at 60 Hz and 2,722 at 30 Hz (2.00x), even
+    # when the 60 Hz server wrote a third of its messages at N = 900 together with the one before (late), which
+    # flatters the line through N (the reference's CPU bends down)
+    rows = {"full@60": synthetic_rows(60.0, 12e-6, late=1 / 3), "compact@30": synthetic_rows(30.0, 12e-6)}
+    cap.summarise(rows, {"full@60": ("full", 60.0), "compact@30": ("compact", 30.0)}, [0, 200, 500, 900])
+    out = capsys.readouterr().out
+    assert "1,361 seats per server core with every message written on its own" in out
+    assert "2,722 seats per server core with every message written on its own" in out
+    assert "(every message written on its own): 2.00x" in out and "met]" in out
+    fitted = float(out.split("(the lines through N): ")[1].split("x")[0])
+    assert fitted < 2.0  # the late 60 Hz writes make today's frames look cheaper per message
