@@ -22,10 +22,15 @@ wait (/proc/PID/task/*/status and schedstat), the messages the seats
 received (frame age: arrival minus the publisher's stamp). Per stream, the server's CPU a second is fitted over the
 steps with N > 0 as ``a + b N`` (least squares over both windows of each step; the spread is the two passes fitted
 apart): ``a`` the part that does not grow with the seats, ``b / rate`` the server CPU one more seat costs per
-message, and the seats one server core carries at saturation ``(1 - a) / b`` (a straight line extrapolated from
-the steps run: check it on the target machine). Printed beside it: the p99 frame age at the largest N run, and
-compact (packed) 30 Hz against today's 60 Hz, the target being at least twice the seats per server core at p99
-under 50 ms.
+message, and the seats where that line reaches one server core, ``(1 - a) / b``. nats-server writes each seat's
+queued messages with one write call: a server that keeps up writes every message on its own, one that runs late
+(its threads waiting for a CPU, as on a loaded machine) writes two or more together, which costs less CPU a
+message and makes the messages older; the line through N then bends down and flatters the stream that runs late
+first (today's 60 Hz). So the CPU is also fitted against the write calls, ``a + w W``, and the capacity plan's
+figure is the seats one core carries with every message written on its own, ``(1 - a) / (w x rate)`` (both are
+straight lines extrapolated from the steps run, mostly well below a core: check them on the target machine).
+Printed beside them: the p99 frame age at the largest N run, and compact (packed) 30 Hz against today's 60 Hz, the
+target being at least twice the seats per server core at p99 under 50 ms.
 
 The other streams' publishers keep publishing while one is measured (the server receives 120 messages a second it
 sends nobody: its cost is in ``a``, and N = 0 shows it). Full seats (``listen`` to a fake Player) are not run here:
@@ -292,6 +297,9 @@ def summarise(rows: dict[str, list[tuple[int, int, dict]]], kinds: dict[str, tup
     cpu = np.array([w["cpu"] for w in windows])
     writes = np.array([w["writes"] for w in windows])
     shared = np.array([max(0.0, w["delivered"] - w["writes"]) for w in windows])
+    if shared.sum() < 0.01 * writes.sum():  # nothing to tell a shared message's cost from noise
+        print("every message was written on its own (fewer than 1 % shared a write): the CPU is per write call")
+        return
     both = np.column_stack([np.ones_like(cpu), writes, shared])
     (c0, per_write, per_shared), *_ = np.linalg.lstsq(both, cpu, rcond=None)
     alone = np.column_stack([np.ones_like(cpu), writes + shared])
