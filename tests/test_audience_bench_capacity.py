@@ -35,7 +35,7 @@ def test_a_seat_moved_to_another_show_receives_only_that_shows_frames():
 
     async def scenario():
         with LocalNatsServer() as server:
-            reader, writer = await asyncio.open_connection("127.0.0.1", server.port)
+            _, writer = await asyncio.open_connection("127.0.0.1", server.port)
             writer.write(b'CONNECT {"verbose":false,"pedantic":false}\r\n')
 
             async def publish(show: str, seq: int) -> None:
