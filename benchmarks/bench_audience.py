@@ -39,8 +39,11 @@ are the payload plus the NATS ``MSG`` line the server writes with it (TCP/IP and
 
 Server cost is what sizes an audience: nats-server CPU per delivered seat-frame (its CPU seconds over the frames it
 delivered), and from it the seats one server core carries at the publish rate (1 / (CPU per seat-frame x rate)).
-With several subscriptions per connection (``--subs-per-connection``, multiplexed) the server writes one batch to
-many subscribers and the figure overstates what real seats get about tenfold: the output says so.
+Beside it, the server's write system calls per delivered message (/proc/PID/io): one when every message is
+written to its seat on its own, fewer when the server ran late and wrote two or more together, which makes a message
+cheaper and older. ``bench_audience_capacity`` sweeps N and fits the server's CPU against it, the capacity plan's
+seats per core. With several subscriptions per connection (``--subs-per-connection``, multiplexed) the server writes
+one batch to many subscribers and the figure overstates what real seats get about tenfold: the output says so.
 
 With three servers the seats are spread over them (cluster routes on loopback, started and stopped here); each
 server's CPU per seat-frame is measured on its own deliveries (route traffic included). On a machine with fewer
@@ -98,6 +101,12 @@ def cpu_of(pid: int) -> float:
     """User + system CPU seconds of a process so far (Linux /proc)."""
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def writes_of(pid: int) -> int:
+    """Write system calls of a process so far (Linux /proc/PID/io ``syscw``): nats-server writes each seat's
+    queued messages in one call, so fewer calls than messages means two or more sent together (its writer late)."""
+    return int(dict(line.split(": ") for line in Path(f"/proc/{pid}/io").read_text().splitlines())["syscw"])
 
 
 def security(venue: str | None, role: str):
@@ -323,9 +332,11 @@ def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connectio
         for proc in (*subs.values(), seats):
             tell(proc, "GO")
         cpu0, t0 = [cpu_of(srv.proc.pid) for srv in servers], time.perf_counter()
+        writes0 = [writes_of(srv.proc.pid) for srv in servers]
         time.sleep(seconds)
         wall = time.perf_counter() - t0
         cpu = [(cpu_of(srv.proc.pid) - c0) / wall for srv, c0 in zip(servers, cpu0)]
+        writes = [(writes_of(srv.proc.pid) - w0) / wall for srv, w0 in zip(servers, writes0)]
         for proc in procs:
             tell(proc, "STOP")
         out = {"publisher": result(pub), "subscribers": {i: result(p) for i, p in subs.items()},
@@ -341,7 +352,7 @@ def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connectio
         full = k if i == len(servers) - 1 else 0
         delivered = (part["received"] / part["seconds"] if part else 0.0) + full * fps
         out["servers"].append({"seats": shares[i] + full, "delivered_per_s": delivered, "cpu_per_s": cpu[i],
-                               "idle_cpu_per_s": idle[i],
+                               "idle_cpu_per_s": idle[i], "writes_per_message": writes[i] / max(delivered, 1e-9),
                                "cpu_per_seat_frame_us": cpu[i] / max(delivered, 1e-9) * 1e6})
     return out
 
@@ -399,7 +410,9 @@ def report(n: int, fps: float, r: dict, per_connection: int, frames: str = "full
     for i, srv in enumerate(r["servers"]):
         print(f"  nats-server {i}: {srv['seats']} seats, {srv['delivered_per_s']:,.0f} frames/s delivered, CPU "
               f"{srv['cpu_per_s'] * 100:.1f} % of a core = {srv['cpu_per_seat_frame_us']:.1f} us per seat-frame "
-              f"(with the subscribers connected and nothing published: {srv['idle_cpu_per_s'] * 100:.1f} % of a core)")
+              f"(with the subscribers connected and nothing published: {srv['idle_cpu_per_s'] * 100:.1f} % of a core); "
+              f"{srv['writes_per_message']:.2f} write calls a delivered message (below 1: messages written together, "
+              "the server late)")
     print(f"  server CPU per seat-frame {s['per_frame_us']:.1f} us -> {s['seats_per_core']:,.0f} seats per server "
           f"core at {fps:g} Hz  [reported]")
     for i, part in r["subscribers"].items():

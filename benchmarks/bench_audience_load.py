@@ -49,6 +49,13 @@ class LightConnection(asyncio.Protocol):
         connect = '{"verbose":false,"pedantic":false,"protocol":1' + self.connect + '}'
         transport.write(f"CONNECT {connect}\r\n".encode() + subs.encode() + b"PING\r\n")
 
+    def follow(self, subject_name: str) -> None:
+        """Subscribe to ``subject_name`` instead (the same sids; the server applies it before anything sent later):
+        the capacity sweep moves every seat to another show's stream without reconnecting."""
+        subs = "".join(f"UNSUB {i}\r\nSUB {subject_name} {i}\r\n" for i in range(1, self.n + 1))
+        self.subject_name = subject_name
+        self.transport.write(subs.encode())
+
     def connection_lost(self, exc) -> None:
         if not self.ready.done():
             self.ready.set_exception(ConnectionError(f"closed by the server: {b' '.join(self.errors)[:200]!r}"))
@@ -121,16 +128,17 @@ async def _secure_connection(loop, factory, host: str, port: int, venue: str) ->
 
 
 async def open_light_connection(url: str, n: int, ages: list, marks: dict, venue: str | None = None,
-                                tries: int = 1) -> LightConnection:
+                                tries: int = 1, show: str = SHOW) -> LightConnection:
     """A load-generator connection as a seat makes it: plain for a rehearsal; with ``venue`` (``--secure``) the
     server's INFO is read, TLS is started on the socket (the venue's CA checked, as nats-py does when the server
     requires TLS: the INFO-then-upgrade of the NATS protocol) and the CONNECT carries the seat's NKey and its
     signature of the server's nonce (as nats-py sends it). A connection the server closed while it was being
     made (its TLS handshake timed out on a loaded machine) is made again, up to ``tries`` times in all, as a
-    seat's client reconnects; a certificate that does not verify is never retried."""
+    seat's client reconnects; a certificate that does not verify is never retried. ``show``: the show whose frames
+    it subscribes to."""
     host, port = urlsplit(url).hostname, urlsplit(url).port
     loop = asyncio.get_running_loop()
-    factory = lambda credentials: (lambda: LightConnection(subject(SHOW, "frame"), n, ages, marks,  # noqa: E731
+    factory = lambda credentials: (lambda: LightConnection(subject(show, "frame"), n, ages, marks,  # noqa: E731
                                                             credentials))
     for attempt in range(1, tries + 1):
         try:

@@ -1,0 +1,149 @@
+"""The audience capacity sweep's parts: a load-generator seat moved to another show receives that show's frames
+only, the fit and the saturation figure on numbers worked out by hand, the server counters read from /proc, and the
+perf report read as its text says. Not timed."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hapmotion.audience.server import LocalNatsServer
+from hapmotion.audience.wire import encode_frame, subject
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # the benchmarks package lives beside tests/ (python -m pytest puts it there too)
+    sys.path.insert(0, str(ROOT))
+from benchmarks import bench_audience_capacity as cap  # noqa: E402
+from benchmarks import bench_audience_load as load  # noqa: E402
+
+
+def test_a_seat_moved_to_another_show_receives_only_that_shows_frames():
+    # one publisher connection: its messages reach a subscriber in the order sent, so once a show's last frame has
+    # arrived, a frame of the other show sent before it would have arrived first had the seat been subscribed to it
+    async def until(predicate) -> None:
+        for _ in range(500):
+            if predicate():
+                return
+            await asyncio.sleep(0.02)
+        raise AssertionError("not received in 10 s")
+
+    async def scenario():
+        with LocalNatsServer() as server:
+            _, writer = await asyncio.open_connection("127.0.0.1", server.port)
+            writer.write(b'CONNECT {"verbose":false,"pedantic":false}\r\n')
+
+            async def publish(show: str, seq: int) -> None:
+                payload = encode_frame(1, seq, seq / 60, time.time(), np.zeros((32, 3)), None)
+                writer.write(f"PUB {subject(show, 'frame')} {len(payload)}\r\n".encode() + payload + b"\r\n")
+                await writer.drain()
+
+            ages: list[float] = []
+            marks = {"on": True}
+            conn = await load.open_light_connection(server.url, 1, ages, marks, show="one")
+            for seq in range(1, 4):
+                await publish("two", 100 + seq)
+                await publish("one", seq)
+            await until(lambda: marks.get("last") == 3)
+            assert conn.count == 3
+
+            conn.follow(subject("two", "frame"))
+            probe = 200
+            while marks["last"] < 200:  # the new subscription in place (another connection: no order between them)
+                probe += 1
+                await publish("two", probe)
+                await asyncio.sleep(0.02)
+            await until(lambda: marks["last"] == probe)
+            base = conn.count
+            for seq in range(4, 9):
+                await publish("one", seq)
+                await publish("two", 100 + seq)
+            await until(lambda: marks["last"] == 108)
+            assert conn.count - base == 5
+            assert all(0 <= a < 10 for a in ages)
+            conn.transport.close()
+            writer.close()
+
+    asyncio.run(asyncio.wait_for(scenario(), 60))
+
+
+def test_fit_and_saturation_on_numbers_worked_out_by_hand():
+    # 2 % of a core fixed, 0.05 % a seat: a core at (1 - 0.02) / 0.0005 = 1,960 seats
+    ns = [200, 500, 900]
+    a, b = cap.fit(ns, [0.02 + 0.0005 * n for n in ns])
+    assert a == pytest.approx(0.02) and b == pytest.approx(0.0005)
+    assert cap.saturation(a, b) == pytest.approx(1960.0)
+    assert cap.saturation(0.01, 0.0) == float("inf")  # a server whose CPU does not grow with the seats
+
+
+def test_server_counters_follow_this_process():
+    before = cap.server_counters(os.getpid())
+    fd = os.open(os.devnull, os.O_WRONLY)
+    try:
+        for _ in range(50):
+            os.write(fd, b"x")
+    finally:
+        os.close(fd)
+    end = time.process_time() + 0.05
+    while time.process_time() < end:
+        pass
+    after = cap.server_counters(os.getpid())
+    assert after["writes"] - before["writes"] >= 50
+    assert after["cpu"] - before["cpu"] >= 0.04  # nanoseconds on a CPU, summed over the threads
+    assert all(after[k] >= before[k] for k in before)
+
+
+REPORT = """# Total Lost Samples: 0
+#
+# Samples: 920  of event 'cpu-clock:pppH'
+# Event count (approx.): 1843687310
+#
+# Children      Self  Symbol
+# ........  ........  ..............................................
+#
+    91.12%     0.00%  [.] runtime.goexit.abi0
+    78.48%     1.08%  [.] github.com/nats-io/nats-server/v2/server.(*client).writeLoop
+    39.43%     0.67%  [k] do_syscall_64
+    13.50%     0.00%  [.] github.com/nats-io/nats-server/v2/server.(*client).readLoop
+     3.50%     0.54%  [.] runtime.sysmon
+     2.50%     0.54%  [.] runtime.schedule
+     0.40%     0.40%  [.] runtime.(*timers).schedule
+"""
+
+
+def test_the_perf_report_is_read_by_function():
+    shares = cap.perf_shares(REPORT)
+    assert shares == {"samples": 920.0, "seats' write path": 78.48, "fan-out": 13.5, "sysmon": 3.5,
+                      "scheduler": 2.5}
+
+
+def synthetic_rows(rate: float, per_write: float, late: float = 0.0) -> list[tuple[int, int, dict]]:
+    """Windows of a server costing 2 % of a core plus ``per_write`` seconds a write call, at N = 200, 500, 900 in
+    two passes, ``late`` of the messages at N = 900 written together with the one before."""
+    rows = []
+    for n in (0, 200, 500, 900):
+        for p in (0, 1):
+            delivered = n * rate
+            writes = delivered * (1 - (late if n == 900 else 0.0))
+            rows.append((n, p, {"cpu": 0.02 + per_write * writes, "writes": writes, "delivered": delivered,
+                                "p99": 10.0}))
+    return rows
+
+
+def test_summary_counts_seats_with_every_message_written_on_its_own(capsys):
+    # 12 us a write: (1 - 0.02) / (12e-6 x 60) = 1,361 seats per core at 60 Hz and 2,722 at 30 Hz (2.00x), even
+    # when the 60 Hz server wrote a third of its messages at N = 900 together with the one before (late), which
+    # flatters the line through N (the reference's CPU bends down)
+    rows = {"full@60": synthetic_rows(60.0, 12e-6, late=1 / 3), "compact@30": synthetic_rows(30.0, 12e-6)}
+    cap.summarise(rows, {"full@60": ("full", 60.0), "compact@30": ("compact", 30.0)}, [0, 200, 500, 900])
+    out = capsys.readouterr().out
+    assert "1,361 seats per server core with every message written on its own" in out
+    assert "2,722 seats per server core with every message written on its own" in out
+    assert "(every message written on its own): 2.00x" in out and "met]" in out
+    fitted = float(out.split("(the lines through N): ")[1].split("x")[0])
+    assert fitted < 2.0  # the late 60 Hz writes make today's frames look cheaper per message
