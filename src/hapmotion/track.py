@@ -68,12 +68,31 @@ class HapticTrack:
     debug: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        self._settle(in_range=False)
+
+    @classmethod
+    def of_rows_in_range(cls, intensities: np.ndarray, fps: float, actuators: tuple[str, ...],
+                         layout: str = "x40_shoulders", meta: dict[str, Any] | None = None,
+                         debug: dict[str, np.ndarray] | None = None) -> "HapticTrack":
+        """A track of ``(T, N)`` float64 ``intensities`` that its maker has found within 0..100 (no NaN) as it wrote
+        them (the renderer's kernel checks each row while it is in the cache): kept as given without the pass over
+        every value that the constructor makes (an hour at 60 Hz is 90 MB). Everything else is checked as by the
+        constructor; rows of another type are converted and checked as by the constructor."""
+        track = cls.__new__(cls)
+        track.intensities, track.fps, track.actuators, track.layout = intensities, fps, actuators, layout
+        track.meta = {} if meta is None else meta
+        track.debug = {} if debug is None else debug
+        track._settle(in_range=isinstance(intensities, np.ndarray) and intensities.dtype == np.float64)
+        return track
+
+    def _settle(self, in_range: bool) -> None:
+        """Check and normalise the fields (``in_range``: the intensities are known to be float64 within 0..100)."""
         if not (np.isfinite(self.fps) and self.fps > 0):
             raise ValueError(f"fps must be a positive number, got {self.fps}")
         arr = np.asarray(self.intensities, dtype=np.float64)
         if arr.ndim != 2 or arr.shape[1] != len(self.actuators):
             raise ValueError(f"intensities must be (T, {len(self.actuators)}), got {arr.shape}")
-        if not _clean(arr):
+        if not (in_range or _clean(arr)):
             if not np.isfinite(arr).all():
                 raise ValueError("intensities must be finite (no NaN or inf)")
             arr = np.clip(arr, 0.0, 100.0)

@@ -29,7 +29,23 @@ def _kernel():
 
 
 _RENDER_IDX = np.array([JOINT_INDEX[n] for n in RENDER_JOINTS], dtype=np.intp)
-"""Rows of the canonical 32 joints that the frame loop receives, in ``RENDER_JOINTS`` order."""
+"""Rows of the canonical 32 joints that the frame loop reads, in ``RENDER_JOINTS`` order."""
+
+_GATHERED_IDX = np.arange(len(RENDER_JOINTS), dtype=np.intp)
+"""Rows of the render joints in a gathered ``(T, N_RENDER_JOINTS, 3)`` copy (:func:`_frames_for_kernel`)."""
+
+
+def _frames_for_kernel(positions: np.ndarray, start: int, stop: int,
+                       buf: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """Frames ``start:stop`` of ``(T, 32, 3)`` float64 ``positions`` as the frame loop reads them, with the rows of
+    the render joints in them: the positions themselves (any strides), or, when they are read-only (numba types those
+    apart, and would compile the whole loop again for them), the render joints gathered into ``buf``
+    ``(>= stop - start, N_RENDER_JOINTS, 3)``."""
+    if positions.flags.writeable:
+        return positions[start:stop], _RENDER_IDX
+    if buf is None or buf.shape[0] < stop - start:
+        buf = np.empty((stop - start, packed.N_RENDER_JOINTS, 3))
+    return np.take(positions[start:stop], _RENDER_IDX, axis=1, out=buf[:stop - start]), _GATHERED_IDX
 
 
 def resolve_params(preset: str | Params | None, params: Params | None = None, **overrides: Any) -> Params:
@@ -168,7 +184,7 @@ class Renderer:
         self._out = np.zeros((1, n))
         self._dbg_f = np.zeros((1, packed.N_DEBUG_F))
         self._dbg_i = np.zeros((1, packed.N_DEBUG_I), dtype=np.int8)
-        self._frame = np.zeros((1, packed.N_RENDER_JOINTS, 3))
+        self._frame = np.zeros((1, 32, 3))
         self._render_frames = _kernel()
 
     @property
@@ -194,8 +210,8 @@ class Renderer:
         f = np.asarray(frame, dtype=np.float64)
         if f.shape != (32, 3):
             raise ValueError(f"frame must be (32, 3), got {f.shape}")
-        self._frame[0] = f[_RENDER_IDX]
-        self._render_frames(self._frame, self._prm, self._surf, self._charts, self._mirror, self._state,
+        self._frame[0] = f  # a copy of 96 numbers: the caller's frame may be read-only or of any layout
+        self._render_frames(self._frame, _RENDER_IDX, self._prm, self._surf, self._charts, self._mirror, self._state,
                         self._out, self._dbg_f, self._dbg_i)
         return self._out[0].copy()
 
@@ -212,12 +228,13 @@ class Renderer:
         pos = np.asarray(positions, dtype=np.float64)
         if pos.ndim != 3 or pos.shape[1:] != (32, 3):
             raise ValueError(f"positions must be (T, 32, 3), got {pos.shape}")
-        joints = np.take(pos, _RENDER_IDX, axis=1)  # 3x faster than pos[:, _RENDER_IDX, :], same values
-        n = joints.shape[0]
+        n = pos.shape[0]
+        frames, rows = _frames_for_kernel(pos, 0, n, None)
         out = np.zeros((n, self.layout.n_actuators))
         dbg_f = np.zeros((n, packed.N_DEBUG_F))
         dbg_i = np.zeros((n, packed.N_DEBUG_I), dtype=np.int8)
-        self._render_frames(joints, self._prm, self._surf, self._charts, self._mirror, self._state, out, dbg_f, dbg_i)
+        self._render_frames(frames, rows, self._prm, self._surf, self._charts, self._mirror, self._state, out, dbg_f,
+                            dbg_i)
         return out, _debug_dict(dbg_f, dbg_i)
 
 
@@ -248,13 +265,14 @@ def render(
     dbg_f = np.zeros((n, packed.N_DEBUG_F))
     dbg_i = np.zeros((n, packed.N_DEBUG_I), dtype=np.int8)
     positions = np.asarray(motion.positions, dtype=np.float64)
-    joints = np.empty((min(n, chunk), packed.N_RENDER_JOINTS, 3))  # one buffer for every chunk's render joints
+    buf = None  # the render joints of a chunk, gathered only from read-only positions
+    in_range = True
     for start in range(0, n, chunk):
         stop = min(n, start + chunk)
-        # np.take gathers the render joints 3x faster than fancy indexing (positions[:, _RENDER_IDX, :])
-        part = np.take(positions[start:stop], _RENDER_IDX, axis=1, out=joints[:stop - start])
-        r._render_frames(part, r._prm, r._surf, r._charts, r._mirror, r._state, intensities[start:stop],
-                         dbg_f[start:stop], dbg_i[start:stop])
+        frames, rows = _frames_for_kernel(positions, start, stop, buf)
+        buf = frames if rows is _GATHERED_IDX else None
+        in_range &= r._render_frames(frames, rows, r._prm, r._surf, r._charts, r._mirror, r._state,
+                                     intensities[start:stop], dbg_f[start:stop], dbg_i[start:stop])
         if progress is not None:
             progress(stop - start)
     debug = _debug_dict(dbg_f, dbg_i)
@@ -267,5 +285,8 @@ def render(
         "source": motion.meta.get("path"),
         "mode": "motion",
     }
-    return HapticTrack(intensities=intensities, fps=motion.fps, actuators=r.actuators, layout=r.layout.name,
-                       meta=meta, debug=debug)
+    # the kernel checked every row it wrote: the track need not pass over them again (anything else, which no
+    # input is known to cause, goes through the track's own check and is clipped or refused as ever)
+    make = HapticTrack.of_rows_in_range if in_range else HapticTrack
+    return make(intensities=intensities, fps=motion.fps, actuators=r.actuators, layout=r.layout.name, meta=meta,
+                debug=debug)
