@@ -21,6 +21,18 @@ def parse_actuator_id(actuator: str) -> tuple[str, int]:
     return actuator, -1
 
 
+def covered_rows(n_in: int, fps_in: float, fps: float) -> tuple[np.ndarray, np.ndarray]:
+    """The input rows each output row covers when ``n_in`` rows at ``fps_in`` are resampled to ``fps``
+    (:meth:`HapticTrack.resample`): ``(lo, hi)``, ``(n_out,)`` int64 each, output row ``j`` covering input rows
+    ``lo[j]`` to ``hi[j] - 1`` (at least one); ``n_out = ceil(n_in * fps / fps_in)``, 0 for no input."""
+    n_out = max(1, int(np.ceil(n_in * fps / fps_in - 1e-9))) if n_in else 0
+    ratio = fps_in / fps  # input rows per output row
+    j = np.arange(n_out, dtype=np.float64)
+    lo = np.minimum(np.floor(j * ratio + 1e-9).astype(np.int64), max(n_in - 1, 0))
+    hi = np.clip(np.ceil((j + 1) * ratio - 1e-9).astype(np.int64), lo + 1, n_in)  # exclusive
+    return lo, hi
+
+
 _RESAMPLE_BLOCK = 8192
 """Output rows :meth:`HapticTrack.resample` makes at a time."""
 
@@ -147,11 +159,8 @@ class HapticTrack:
             return HapticTrack(self.intensities.copy(), self.fps, self.actuators, self.layout, meta, dict(self.debug))
         meta.setdefault("resampled_from_fps", self.fps)
         n_in = self.n_frames
-        n_out = max(1, int(np.ceil(n_in * fps / self.fps - 1e-9))) if n_in else 0
-        ratio = self.fps / fps  # input rows per output row
-        j = np.arange(n_out, dtype=np.float64)
-        lo = np.minimum(np.floor(j * ratio + 1e-9).astype(np.int64), max(n_in - 1, 0))
-        hi = np.clip(np.ceil((j + 1) * ratio - 1e-9).astype(np.int64), lo + 1, n_in)  # exclusive
+        lo, hi = covered_rows(n_in, self.fps, fps)
+        n_out = len(lo)
         out = np.zeros((n_out, self.intensities.shape[1]))
         if n_in:
             span = int((hi - lo).max(initial=1))

@@ -34,7 +34,7 @@ from ...errors import InputError, UsageError
 from ...filesafety import atomic_path
 from ...layout import load_layout
 from ...limits import DEFAULT_LIMITS, InputLimits, check_frames, load_json
-from ...track import HapticTrack
+from ...track import HapticTrack, covered_rows
 from ..devices import bhaptics_devices, position_order, type_for_position
 from .project import parse_project
 from ..tick import PLAYER_TICK_FPS, PLAYER_TICK_MS
@@ -131,6 +131,19 @@ def _project(name: str, type_name: str, duration_ms: int) -> dict:
     }
 
 
+def _tick_levels(track: HapticTrack) -> np.ndarray:
+    """``(n_ticks, N)`` uint8: the track on the Player's 20 ms tick in whole percents, the Player's resolution: each
+    tick the maximum of the rows it overlaps (:meth:`HapticTrack.resample`, so no short peak is lost), rounded by
+    ``np.rint`` (ties to even), made at once for every file by one compiled pass (:mod:`.text_compiled`)."""
+    from .text_compiled import tick_levels  # numba on first use, as in _feedback_text
+
+    lo, hi = covered_rows(track.n_frames, track.fps, PLAYER_TICK_FPS)
+    levels = np.empty((len(lo), track.intensities.shape[1]), dtype=np.uint8)
+    if not tick_levels(track.intensities, lo, hi, levels):  # a HapticTrack's rows are within 0..100: never
+        raise ValueError(f"intensities must be within 0..{_MAX_LEVEL} % to be written to a .tact file")
+    return levels
+
+
 def _tact_text(name: str, type_name: str, levels: dict[str, np.ndarray],
                duration_ms: int) -> list[bytes | np.ndarray]:
     """The compact JSON text of one ``.tact`` file as ASCII bytes, in parts to be written one after the other: the
@@ -158,12 +171,8 @@ def _columns(track: HapticTrack, rows: np.ndarray, device: str) -> np.ndarray:
 def write_tact(track: HapticTrack, path: Path) -> list[Path]:
     """Write the vest file at ``path`` and one file per other device beside it; return the files, ``path`` first."""
     plan = _files(track, path)
-    ticked = track.resample(PLAYER_TICK_FPS)
-    duration_ms = ticked.n_frames * PLAYER_TICK_MS
-    # whole percents, the Player's resolution (np.rint: ties to even), once for every file: 0..100 fits a byte.
-    # The ticked rows are resample's own new array, rounded in place (no second 75 MB for an hour)
-    levels = np.rint(ticked.intensities, out=ticked.intensities).astype(np.uint8)
-    del ticked
+    levels = _tick_levels(track)
+    duration_ms = levels.shape[0] * PLAYER_TICK_MS
     with contextlib.ExitStack() as stack:
         # every file is complete before any is renamed into place; one file's text is made at a time
         tmps = {target: stack.enter_context(atomic_path(target)) for target in plan}

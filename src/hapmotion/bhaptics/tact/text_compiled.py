@@ -1,9 +1,12 @@
-"""The compiled pass that writes one position's dot-mode frames of a ``.tact`` file as JSON text
-(:func:`hapmotion.bhaptics.tact.files.write_tact` calls it; the format is described there).
+"""The compiled passes of the ``.tact`` writer (:func:`hapmotion.bhaptics.tact.files.write_tact`; the format is
+described there): a track's rows to whole-percent levels on the Player's tick, and one position's dot-mode frames
+as JSON text.
 
 Apart from :mod:`hapmotion.bhaptics.tact.files` so that importing the track files (every command's start-up does)
-does not import numba. One pass over the ticks finds the runs of identical rows and writes their text straight into a
-byte buffer (a first pass counts its bytes): no string or array per point, motor or run.
+does not import numba. The levels are the maximum of the rows each tick covers (:meth:`HapticTrack.resample`'s
+rule) rounded as ``np.rint`` rounds, made in one pass without the ticked track's float rows; the text is written
+by one pass over the ticks that finds the runs of identical rows and writes their text straight into a byte buffer
+(a first pass counts its bytes): no string or array per point, motor or run.
 """
 
 from __future__ import annotations
@@ -21,6 +24,24 @@ _LIST_END = np.frombuffer(b"]}]", dtype=np.uint8)
 
 MAX_LEVEL = 100
 """Largest quantised intensity (rows are 0..100 %)."""
+
+
+@njit(cache=True)
+def tick_levels(rows, lo, hi, levels):
+    """Whole-percent levels on the Player's tick into ``levels`` ``(n_ticks, N)`` uint8: per column, ``np.rint`` of
+    the maximum of ``rows`` ``(T, N)`` float64 (0..100 %) ``lo[j]`` to ``hi[j] - 1`` for tick ``j``
+    (:func:`hapmotion.track.covered_rows`). Returns False (``levels`` incomplete) when a level would be outside
+    0..MAX_LEVEL (a NaN included)."""
+    for j in range(lo.shape[0]):
+        for k in range(rows.shape[1]):
+            v = rows[lo[j], k]
+            for i in range(lo[j] + 1, hi[j]):
+                v = max(v, rows[i, k])
+            q = np.rint(v)
+            if not (q >= 0.0 and q <= MAX_LEVEL):
+                return False
+            levels[j, k] = np.uint8(q)
+    return True
 
 
 @njit(cache=True, inline="always")
