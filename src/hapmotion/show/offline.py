@@ -19,20 +19,21 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from typing import Any, Callable, Optional, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Optional, Sequence
 
 import numpy as np
 
-from ..audio.analysis import AudioAnalysis
 from ..errors import UsageError
 from ..motion import Motion
 from ..renderer.params import PRESETS
 from ..renderer.renderer import render
 from ..track import HapticTrack
-from .music import song_track
 from .hands import HAND_JOINTS
 from .settings import Show
 from .stage import OutputStage, show_power_limit
+
+if TYPE_CHECKING:
+    from ..audio.analysis import AudioAnalysis
 
 # how to extend a motion debug array past the motion's end: these keys become "nothing happens", the rest hold
 # their last value (points stay where they were; every value stays finite)
@@ -106,7 +107,7 @@ def _stage(show: Show, mode: str, actuators: tuple[str, ...], fps: float) -> Out
 
 
 def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Optional[HapticTrack] = None,
-                progress: Progress = None, analysis: Optional[AudioAnalysis] = None) -> HapticTrack:
+                progress: Progress = None, analysis: Optional["AudioAnalysis"] = None) -> HapticTrack:
     """The track of a whole show: the motion rendered (or ``motion_track``, already rendered with this show), the
     music analysed, both through the show's output stage.
 
@@ -132,6 +133,10 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
 
     music = None
     if show.audio is not None:
+        # imported with the music only: the analysis loads soundfile and scipy's signal, which a render of motion
+        # alone (`hapmotion render clip.bvh`) need not start
+        from .music import song_track
+
         music = song_track(show, fps=fps, layout=show.load_layout() if motion_track is None or
                            stage.positions is not None else list(ids), analysis=analysis)
     n_motion = motion_track.n_frames if motion_track is not None else 0
