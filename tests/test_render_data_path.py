@@ -139,3 +139,19 @@ def test_a_track_of_rows_in_range_is_kept_and_everything_else_still_checked():
         HapticTrack.of_rows_in_range(rows[:, :5], 60.0, ids)
     with pytest.raises(ValueError, match="fps"):
         HapticTrack.of_rows_in_range(rows, 0.0, ids)
+
+
+@pytest.mark.parametrize("clip", ["01_01.bvh", "dataset-1_dance-short_normal_001.bvh"])
+def test_without_debug_values_the_rows_are_the_same(clip):
+    """``render(debug=False)`` (``hapmotion render`` to .tact) has the kernel overwrite one row of debug values:
+    the same rows, in one chunk or several, and a show's rows through the stage too."""
+    from hapmotion.show import render_show
+    from hapmotion.show.settings import Show
+
+    motion = hapmotion.load_motion(MOTION / clip)
+    want = hapmotion.render(motion)
+    for chunk in (100_000, 333):
+        got = hapmotion.render(motion, debug=False, chunk=chunk)
+        assert same(got.intensities, want.intensities) and got.debug == {} and got.meta == want.meta, chunk
+    show = Show()
+    assert same(render_show(show, motion, debug=False).intensities, render_show(show, motion).intensities)

@@ -108,7 +108,8 @@ def render_frames(positions, rows, prm, surf, charts, mirror_map, state, out, db
     out:
         ``(T, N)`` intensities 0..100, written.
     dbg_f, dbg_i:
-        ``(T, N_DEBUG_F)`` float and ``(T, N_DEBUG_I)`` int8 per-frame debug values, written (``D_*`` slots).
+        ``(T, N_DEBUG_F)`` float and ``(T, N_DEBUG_I)`` int8 per-frame debug values, written (``D_*`` slots); or
+        one row each, which every frame overwrites, for a caller that keeps no debug values.
 
     Returns
     -------
@@ -154,12 +155,13 @@ def render_frames(positions, rows, prm, surf, charts, mirror_map, state, out, db
         borrowed(charts)
     mirror_map, state, out, dbg_f, dbg_i = borrowed(mirror_map), borrowed(state), borrowed(out), borrowed(dbg_f), \
         borrowed(dbg_i)
+    last_dbg = dbg_f.shape[0] - 1  # 0: one row of debug values, overwritten by every frame
     in_range = True
     for t in range(positions.shape[0]):
         # step 1: joints in, missing ones held
         if not hold_joints(positions, t, rows, state, jt):
             write_silence(state, out[t])
-            record_silence(dbg_f[t], dbg_i[t])
+            record_silence(dbg_f[min(t, last_dbg)], dbg_i[min(t, last_dbg)])
             continue
 
         # step 2: J_T and the body frame (the last frame's axes are kept when this one's are degenerate)
@@ -250,7 +252,7 @@ def render_frames(positions, rows, prm, surf, charts, mirror_map, state, out, db
 
         to_world_into(hit, torso, axes, hit_w)
         to_world_into(tp_body, torso, axes, tp_w)
-        record_debug(dbg_f[t], dbg_i[t], dp, hit, hit_w, tp_w, total_level, u, v, dist, energy, choice, chart)
+        record_debug(dbg_f[min(t, last_dbg)], dbg_i[min(t, last_dbg)], dp, hit, hit_w, tp_w, total_level, u, v, dist, energy, choice, chart)
         state[ST_SEEN] += 1.0
     state[ST_AXES:ST_AXES + 9] = axes.ravel()
     keep_alive(owners)
