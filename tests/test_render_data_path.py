@@ -1,6 +1,6 @@
 """How ``render`` hands data to its kernel and back: the joints read straight from the motion's own array (any memory
-layout, read-only ones through a gathered copy), the body sized from it in place, and the rows' range checked by the
-kernel as it writes them. The bytes are those of the gathered path (tests/support/previous_render.py) on every real
+layout, writable or read-only, through one compiled signature), the body sized from it in place, and the rows' range
+checked by the kernel as it writes them. The bytes are those of the gathered path (tests/support/previous_render.py) on every real
 recording, and a NaN or an out-of-range value still never reaches a track."""
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ numbers are the same to the bit. The body-frame height sums its three products i
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import float64, intp, njit, types, void
 
 from .frame_compiled import body_axes_into
 
@@ -24,7 +24,13 @@ _BLOCK = 512
 """Frames whose sizing joints :func:`body_samples` copies out of the positions at a time."""
 
 
-@njit(cache=True)
+SIGNATURE = void(types.Array(float64, 3, "A", readonly=True), intp[::1], float64[:, ::1], float64[::1],
+                 float64[::1], float64[::1])
+"""``body_samples``' one compiled signature: positions in any layout, writable or not (one compile, which the
+install step's warm-up makes, for a motion of any reader, the render joints alone or a read-only array)."""
+
+
+@njit(SIGNATURE, cache=True)
 def body_samples(positions, rows, default_axes, width, shoulder_y, pelvis_y):
     """Per frame ``t`` of ``positions`` ``(T, J, 3)`` (metres, any strides), whose rows ``rows`` ``(5,)`` are the
     :data:`SIZING_JOINTS` (shoulders ``sl`` and ``sr``, pelvis, neck, navel): the shoulder width ``|sr - sl|`` into

@@ -12,14 +12,14 @@ quarter of the rendering), and checks each output row as it writes it, while the
 track need not pass over its rows again to find them within 0..100.
 
 One compiled version serves every caller: the signature takes the positions in any memory layout (a motion's
-frame-major array, ``Motion.render_joints_only``'s joint-major one, a single frame), where numba would otherwise
-compile the whole loop again (about 10 s of CPU) for each layout it meets.
+frame-major array, ``Motion.render_joints_only``'s joint-major one, a single frame), writable or read-only, where
+numba would otherwise compile the whole loop again (about 10 s of CPU) for each kind of array it meets.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import boolean, float64, int8, intp, njit
+from numba import boolean, float64, int8, intp, njit, types
 
 from ..body.frame import body_axes_into, to_world_into
 from ..layout import CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT
@@ -83,9 +83,10 @@ def row_in_range(row):
     return ok
 
 
-SIGNATURE = boolean(float64[:, :, :], intp[::1], float64[::1], float64[::1], float64[:, ::1], intp[::1],
-                    float64[::1], float64[:, ::1], float64[:, ::1], int8[:, ::1])
-"""``render_frames``' one compiled signature: positions in any layout (``[:, :, :]``), the rest C-contiguous."""
+SIGNATURE = boolean(types.Array(float64, 3, "A", readonly=True), intp[::1], float64[::1], float64[::1],
+                    float64[:, ::1], intp[::1], float64[::1], float64[:, ::1], float64[:, ::1], int8[:, ::1])
+"""``render_frames``' one compiled signature: positions in any layout, writable or not (numba takes a writable
+array where a read-only one is declared), the rest C-contiguous."""
 
 
 @njit(SIGNATURE, cache=True)

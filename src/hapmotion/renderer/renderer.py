@@ -31,22 +31,6 @@ def _kernel():
 _RENDER_IDX = np.array([JOINT_INDEX[n] for n in RENDER_JOINTS], dtype=np.intp)
 """Rows of the canonical 32 joints that the frame loop reads, in ``RENDER_JOINTS`` order."""
 
-_GATHERED_IDX = np.arange(len(RENDER_JOINTS), dtype=np.intp)
-"""Rows of the render joints in a gathered ``(T, N_RENDER_JOINTS, 3)`` copy (:func:`_frames_for_kernel`)."""
-
-
-def _frames_for_kernel(positions: np.ndarray, start: int, stop: int,
-                       buf: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    """Frames ``start:stop`` of ``(T, 32, 3)`` float64 ``positions`` as the frame loop reads them, with the rows of
-    the render joints in them: the positions themselves (any strides), or, when they are read-only (numba types those
-    apart, and would compile the whole loop again for them), the render joints gathered into ``buf``
-    ``(>= stop - start, N_RENDER_JOINTS, 3)``."""
-    if positions.flags.writeable:
-        return positions[start:stop], _RENDER_IDX
-    if buf is None or buf.shape[0] < stop - start:
-        buf = np.empty((stop - start, packed.N_RENDER_JOINTS, 3))
-    return np.take(positions[start:stop], _RENDER_IDX, axis=1, out=buf[:stop - start]), _GATHERED_IDX
-
 
 def resolve_params(preset: str | Params | None, params: Params | None = None, **overrides: Any) -> Params:
     """The parameter set for a call: a preset name or a Params object, then field overrides."""
@@ -184,7 +168,6 @@ class Renderer:
         self._out = np.zeros((1, n))
         self._dbg_f = np.zeros((1, packed.N_DEBUG_F))
         self._dbg_i = np.zeros((1, packed.N_DEBUG_I), dtype=np.int8)
-        self._frame = np.zeros((1, 32, 3))
         self._render_frames = _kernel()
 
     @property
@@ -210,8 +193,7 @@ class Renderer:
         f = np.asarray(frame, dtype=np.float64)
         if f.shape != (32, 3):
             raise ValueError(f"frame must be (32, 3), got {f.shape}")
-        self._frame[0] = f  # a copy of 96 numbers: the caller's frame may be read-only or of any layout
-        self._render_frames(self._frame, _RENDER_IDX, self._prm, self._surf, self._charts, self._mirror, self._state,
+        self._render_frames(f[None], _RENDER_IDX, self._prm, self._surf, self._charts, self._mirror, self._state,
                         self._out, self._dbg_f, self._dbg_i)
         return self._out[0].copy()
 
@@ -229,12 +211,11 @@ class Renderer:
         if pos.ndim != 3 or pos.shape[1:] != (32, 3):
             raise ValueError(f"positions must be (T, 32, 3), got {pos.shape}")
         n = pos.shape[0]
-        frames, rows = _frames_for_kernel(pos, 0, n, None)
         out = np.zeros((n, self.layout.n_actuators))
         dbg_f = np.zeros((n, packed.N_DEBUG_F))
         dbg_i = np.zeros((n, packed.N_DEBUG_I), dtype=np.int8)
-        self._render_frames(frames, rows, self._prm, self._surf, self._charts, self._mirror, self._state, out, dbg_f,
-                            dbg_i)
+        self._render_frames(pos, _RENDER_IDX, self._prm, self._surf, self._charts, self._mirror, self._state, out,
+                            dbg_f, dbg_i)
         return out, _debug_dict(dbg_f, dbg_i)
 
 
@@ -269,14 +250,12 @@ def render(
     dbg_f = np.zeros((n_dbg, packed.N_DEBUG_F))
     dbg_i = np.zeros((n_dbg, packed.N_DEBUG_I), dtype=np.int8)
     positions = np.asarray(motion.positions, dtype=np.float64)
-    buf = None  # the render joints of a chunk, gathered only from read-only positions
     in_range = True
     for start in range(0, n, chunk):
         stop = min(n, start + chunk)
-        frames, rows = _frames_for_kernel(positions, start, stop, buf)
-        buf = frames if rows is _GATHERED_IDX else None
         rows_dbg = slice(start, stop) if debug else slice(0, 1)
-        in_range &= r._render_frames(frames, rows, r._prm, r._surf, r._charts, r._mirror, r._state,
+        # the kernel reads the render joints straight from the positions (any layout): no gathered copy
+        in_range &= r._render_frames(positions[start:stop], _RENDER_IDX, r._prm, r._surf, r._charts, r._mirror, r._state,
                                      intensities[start:stop], dbg_f[rows_dbg], dbg_i[rows_dbg])
         if progress is not None:
             progress(stop - start)

@@ -12,7 +12,7 @@ by one pass over the ticks that finds the runs of identical rows and writes thei
 from __future__ import annotations
 
 import numpy as np
-from numba import boolean, int64, njit, uint8
+from numba import boolean, float64, int64, njit, types, uint8
 
 _FRAME_HEAD = np.frombuffer(b'{"startTime":', dtype=np.uint8)
 _FRAME_END = np.frombuffer(b',"endTime":', dtype=np.uint8)
@@ -26,10 +26,11 @@ MAX_LEVEL = 100
 """Largest quantised intensity (rows are 0..100 %)."""
 
 
-@njit(cache=True)
+@njit(boolean(types.Array(float64, 2, "A", readonly=True), int64[::1], int64[::1], uint8[:, ::1]), cache=True)
 def tick_levels(rows, lo, hi, levels):
     """Whole-percent levels on the Player's tick into ``levels`` ``(n_ticks, N)`` uint8: per column, ``np.rint`` of
-    the maximum of ``rows`` ``(T, N)`` float64 (0..100 %) ``lo[j]`` to ``hi[j] - 1`` for tick ``j``
+    the maximum of ``rows`` ``(T, N)`` float64 (0..100 %; any layout, writable or not) ``lo[j]`` to ``hi[j] - 1``
+    for tick ``j``
     (:func:`hapmotion.track.covered_rows`). Returns False (``levels`` incomplete) when a level would be outside
     0..MAX_LEVEL (a NaN included)."""
     for j in range(lo.shape[0]):
