@@ -68,18 +68,24 @@ def test_chart_table_columns_are_the_slots_the_renderer_reads():
 def test_hold_joints_holds_the_last_finite_value_and_waits_for_every_joint():
     state = new_state(4)
     jt = np.empty((N_RENDER_JOINTS, 3))
+    rows = np.arange(N_RENDER_JOINTS, dtype=np.intp)
     frame = np.arange(N_RENDER_JOINTS * 3, dtype=np.float64).reshape(-1, 3)
     partial = frame.copy()
     partial[J_NECK] = np.nan
-    assert not hold_joints(partial, state, jt)  # the neck has never been seen
-    assert hold_joints(frame, state, jt)
+    assert not hold_joints(partial[None], 0, rows, state, jt)  # the neck has never been seen
+    assert hold_joints(frame[None], 0, rows, state, jt)
     np.testing.assert_array_equal(jt, frame)
     moved = frame + 1.0
     moved[J_HAND_L, 1] = np.inf  # one bad coordinate holds the whole joint
-    assert hold_joints(moved, state, jt)
+    assert hold_joints(np.stack([frame, moved]), 1, rows, state, jt)  # frame t of several
     expected = frame + 1.0
     expected[J_HAND_L] = frame[J_HAND_L]
     np.testing.assert_array_equal(jt, expected)
+    # the joints are read through their rows, from a frame of any joints in any order and any strides
+    wide = np.full((9, 3), 7.0)[::-1]
+    wide[rows[::-1] + 2] = expected + 1.0
+    assert hold_joints(np.asfortranarray(np.stack([wide, wide])), 1, rows[::-1].copy() + 2, state, jt)
+    np.testing.assert_array_equal(jt, expected + 1.0)
 
 
 # ---------------------------------------------------------------- steps 3-4: accelerations, thresholds, choice

@@ -344,3 +344,20 @@ def test_tact_writer_edge_cases_match_the_reference(tmp_path):
     (tmp_path / "sleeves").mkdir()
     assert _assert_same_as_reference(HapticTrack(rng.uniform(0, 100, (90, 12)), 50.0, tuple(sleeves)),
                                      tmp_path / "sleeves") == 2
+    # other rates: each tick the maximum of the rows it covers, as HapticTrack.resample takes it
+    for fps in (30.0, 120.0, 29.97, 7.0):
+        (tmp_path / f"at_{fps:g}").mkdir()
+        _assert_same_as_reference(HapticTrack(cases["noise"], fps, ids), tmp_path / f"at_{fps:g}")
+
+
+def test_tact_writer_refuses_rows_outside_0_to_100_it_was_told_were_within(tmp_path):
+    """The compiled writer looks each level's text up in a table of 0..100: a track made by
+    ``HapticTrack.of_rows_in_range`` from rows outside the range (a maker's bug) is refused, never read past the
+    table, and no file is left behind."""
+    ids = load_layout().actuators
+    for bad in (100.6, -0.6, np.nan):
+        rows = np.full((5, len(ids)), 40.0)
+        rows[3, 7] = bad
+        with pytest.raises(ValueError, match="0..100"):
+            save_track(HapticTrack.of_rows_in_range(rows, 50.0, ids), tmp_path / "bad.tact")
+        assert not list(tmp_path.iterdir())

@@ -21,6 +21,18 @@ def parse_actuator_id(actuator: str) -> tuple[str, int]:
     return actuator, -1
 
 
+def covered_rows(n_in: int, fps_in: float, fps: float) -> tuple[np.ndarray, np.ndarray]:
+    """The input rows each output row covers when ``n_in`` rows at ``fps_in`` are resampled to ``fps``
+    (:meth:`HapticTrack.resample`): ``(lo, hi)``, ``(n_out,)`` int64 each, output row ``j`` covering input rows
+    ``lo[j]`` to ``hi[j] - 1`` (at least one); ``n_out = ceil(n_in * fps / fps_in)``, 0 for no input."""
+    n_out = max(1, int(np.ceil(n_in * fps / fps_in - 1e-9))) if n_in else 0
+    ratio = fps_in / fps  # input rows per output row
+    j = np.arange(n_out, dtype=np.float64)
+    lo = np.minimum(np.floor(j * ratio + 1e-9).astype(np.int64), max(n_in - 1, 0))
+    hi = np.clip(np.ceil((j + 1) * ratio - 1e-9).astype(np.int64), lo + 1, n_in)  # exclusive
+    return lo, hi
+
+
 _RESAMPLE_BLOCK = 8192
 """Output rows :meth:`HapticTrack.resample` makes at a time."""
 
@@ -68,12 +80,31 @@ class HapticTrack:
     debug: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        self._settle(in_range=False)
+
+    @classmethod
+    def of_rows_in_range(cls, intensities: np.ndarray, fps: float, actuators: tuple[str, ...],
+                         layout: str = "x40_shoulders", meta: dict[str, Any] | None = None,
+                         debug: dict[str, np.ndarray] | None = None) -> "HapticTrack":
+        """A track of ``(T, N)`` float64 ``intensities`` that its maker has found within 0..100 (no NaN) as it wrote
+        them (the renderer's kernel checks each row while it is in the cache): kept as given without the pass over
+        every value that the constructor makes (an hour at 60 Hz is 90 MB). Everything else is checked as by the
+        constructor; rows of another type are converted and checked as by the constructor."""
+        track = cls.__new__(cls)
+        track.intensities, track.fps, track.actuators, track.layout = intensities, fps, actuators, layout
+        track.meta = {} if meta is None else meta
+        track.debug = {} if debug is None else debug
+        track._settle(in_range=isinstance(intensities, np.ndarray) and intensities.dtype == np.float64)
+        return track
+
+    def _settle(self, in_range: bool) -> None:
+        """Check and normalise the fields (``in_range``: the intensities are known to be float64 within 0..100)."""
         if not (np.isfinite(self.fps) and self.fps > 0):
             raise ValueError(f"fps must be a positive number, got {self.fps}")
         arr = np.asarray(self.intensities, dtype=np.float64)
         if arr.ndim != 2 or arr.shape[1] != len(self.actuators):
             raise ValueError(f"intensities must be (T, {len(self.actuators)}), got {arr.shape}")
-        if not _clean(arr):
+        if not (in_range or _clean(arr)):
             if not np.isfinite(arr).all():
                 raise ValueError("intensities must be finite (no NaN or inf)")
             arr = np.clip(arr, 0.0, 100.0)
@@ -128,11 +159,8 @@ class HapticTrack:
             return HapticTrack(self.intensities.copy(), self.fps, self.actuators, self.layout, meta, dict(self.debug))
         meta.setdefault("resampled_from_fps", self.fps)
         n_in = self.n_frames
-        n_out = max(1, int(np.ceil(n_in * fps / self.fps - 1e-9))) if n_in else 0
-        ratio = self.fps / fps  # input rows per output row
-        j = np.arange(n_out, dtype=np.float64)
-        lo = np.minimum(np.floor(j * ratio + 1e-9).astype(np.int64), max(n_in - 1, 0))
-        hi = np.clip(np.ceil((j + 1) * ratio - 1e-9).astype(np.int64), lo + 1, n_in)  # exclusive
+        lo, hi = covered_rows(n_in, self.fps, fps)
+        n_out = len(lo)
         out = np.zeros((n_out, self.intensities.shape[1]))
         if n_in:
             span = int((hi - lo).max(initial=1))

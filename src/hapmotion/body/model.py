@@ -22,6 +22,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from ..skeleton.joints import JOINT_INDEX
 from .frame import DEFAULT_AXES
 
 # Proportions relative to the shoulder width / torso length; see the module docstring.
@@ -59,23 +60,33 @@ class BodyModel:
 
     @classmethod
     def from_motion(cls, motion) -> "BodyModel":
-        """Median dimensions over all frames of a :class:`~hapmotion.motion.Motion`."""
-        return cls.from_joints(motion.joint)
+        """Median dimensions over all frames of a :class:`~hapmotion.motion.Motion` (:meth:`from_positions`)."""
+        return cls.from_positions(motion.positions, JOINT_INDEX)
 
     @classmethod
     def from_joints(cls, joint) -> "BodyModel":
         """Median dimensions over all frames of the joints ``joint(name)`` returns, ``(T, 3)`` metres each (a
-        motion's :meth:`~hapmotion.motion.Motion.joint`, or a table of the render joints alone): the shoulders'
-        distance, and the shoulders' midpoint and the pelvis in the body frame (:mod:`hapmotion.body.frame`)."""
-        # numba on first use, as the renderer's kernel: see hapmotion.body.sizing_compiled
-        from .sizing_compiled import body_samples
+        motion's :meth:`~hapmotion.motion.Motion.joint`, or a table of the render joints alone), as
+        :meth:`from_positions` measures them."""
+        from .sizing_compiled import SIZING_JOINTS  # numba on first use: see from_positions
 
-        sl = joint("SHOULDER_LEFT")
-        n = sl.shape[0]
+        table = np.stack([np.asarray(joint(name), dtype=np.float64) for name in SIZING_JOINTS], axis=1)
+        return cls.from_positions(table, {name: i for i, name in enumerate(SIZING_JOINTS)})
+
+    @classmethod
+    def from_positions(cls, positions: np.ndarray, rows: Mapping[str, int]) -> "BodyModel":
+        """Median dimensions over all frames of ``positions`` ``(T, J, 3)`` float64 metres, any strides, whose row
+        ``rows[name]`` holds each joint (``JOINT_INDEX`` for a motion's positions): the shoulders' distance, and the
+        shoulders' midpoint and the pelvis in the body frame (:mod:`hapmotion.body.frame`)."""
+        # numba on first use, as the renderer's kernel: see hapmotion.body.sizing_compiled
+        from .sizing_compiled import SIZING_JOINTS, body_samples
+
+        n = positions.shape[0]
         width, sh, ph = np.empty(n), np.empty(n), np.empty(n)
-        body_samples(sl, joint("SHOULDER_RIGHT"), joint("PELVIS"), joint("NECK"), joint("SPINE_NAVEL"), DEFAULT_AXES,
+        body_samples(positions, np.array([rows[name] for name in SIZING_JOINTS], dtype=np.intp), DEFAULT_AXES,
                      width, sh, ph)
-        width, sh, ph = float(np.median(width)), float(np.median(sh)), float(np.median(ph))
+        # the samples are this function's own: partitioned in place instead of copied (the same medians)
+        width, sh, ph = (float(np.median(a, overwrite_input=True)) for a in (width, sh, ph))
         if not (width > 0.05):
             width = cls.shoulder_width
         if not (sh - ph > 0.1):  # a broken skeleton: keep the proportions of the default body

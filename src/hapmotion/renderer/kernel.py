@@ -6,13 +6,20 @@ state vector carries everything between calls. The loop only sequences the paper
 Reality 28:13, 2024, Section 4); each step is a compiled function of :mod:`hapmotion.renderer.steps`, and
 docs/algorithm.md maps the steps onto them with every interpretation.
 
-The loop allocates its scratch arrays once per call and nothing per frame (about a microsecond per frame).
+The loop allocates its scratch arrays once per call and nothing per frame (about a microsecond per frame). It reads
+the joints straight from the caller's positions through a row index (a gathered copy of the render joints cost a
+quarter of the rendering), and checks each output row as it writes it, while the row is in the cache, so that the
+track need not pass over its rows again to find them within 0..100.
+
+One compiled version serves every caller: the signature takes the positions in any memory layout (a motion's
+frame-major array, ``Motion.render_joints_only``'s joint-major one, a single frame), writable or read-only, where
+numba would otherwise compile the whole loop again (about 10 s of CPU) for each kind of array it meets.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import boolean, float64, int8, intp, njit, types
 
 from ..body.frame import body_axes_into, to_world_into
 from ..layout import CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT
@@ -25,6 +32,7 @@ from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENE
                      ST_LEVEL, ST_PREV_DP, ST_SEEN, P_SPEED_ON, P_SPEED_START, P_SPEED_FULL, P_REACH_SHARE,
                      P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA, P_TORSO_START, P_TORSO_FULL, P_SLEEVE_SHARE, P_SLEEVE_REACH,
                      P_LIFT_FRAME, P_DRIVE_MOTORS, P_W_WINDOW, P_BOTH_HELD, P_LEAD_RATIO, P_LEAD_ALPHA, P_SIDE_MARGIN)
+from .borrowed import borrowed, keep_alive
 from .steps.choice import (active_hand, active_hands, leading_choice, appended_weights, choose_weighted, choose_active, hand_accelerations, held_choice, moving_only,
                            update_speeds, update_thresholds, upper_body_speed)
 from .steps.held_joints import hold_joints
@@ -66,15 +74,34 @@ def record_silence(dbg_f, dbg_i):
     dbg_i[DI_CHART] = -1
 
 
-@njit(cache=True)
-def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_i):
+@njit(cache=True, inline="always")
+def row_in_range(row):
+    """Whether every value of ``row`` ``(N,)`` is within 0..100 (False for NaN): no branch per value, so that LLVM
+    vectorises it."""
+    ok = True
+    for k in range(row.shape[0]):
+        ok &= (row[k] >= 0.0) & (row[k] <= 100.0)
+    return ok
+
+
+SIGNATURE = boolean(types.Array(float64, 3, "A", readonly=True), intp[::1], float64[::1], float64[::1],
+                    float64[:, ::1], intp[::1], float64[::1], float64[:, ::1], float64[:, ::1], int8[:, ::1])
+"""``render_frames``' one compiled signature: positions in any layout, writable or not (numba takes a writable
+array where a read-only one is declared), the rest C-contiguous."""
+
+
+@njit(SIGNATURE, cache=True)
+def render_frames(positions, rows, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_i):
     """Render ``T`` frames, continuing from ``state``.
 
     Parameters
     ----------
-    joints:
-        ``(T, N_RENDER_JOINTS, 3)`` world metres in ``RENDER_JOINTS`` order; NaN = not received (the last finite
-        value is held; frames before every joint has been seen render silence).
+    positions:
+        ``(T, J, 3)`` world metres, any strides (written nothing); NaN = not received (the last finite value is
+        held; frames before every joint has been seen render silence).
+    rows:
+        ``(N_RENDER_JOINTS,)`` the row of ``positions`` of each joint in ``RENDER_JOINTS`` order (the canonical
+        indices for a ``(T, 32, 3)`` motion, ``0..6`` for the render joints alone).
     prm, surf, charts, mirror_map:
         Packed parameters (``pack_params``), body surface (``BodyModel.as_array``), chart table
         (``Layout.chart_table``) and output permutation (identity, or ``Layout.mirror_map`` when mirrored).
@@ -83,7 +110,12 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
     out:
         ``(T, N)`` intensities 0..100, written.
     dbg_f, dbg_i:
-        ``(T, N_DEBUG_F)`` float and ``(T, N_DEBUG_I)`` int8 per-frame debug values, written (``D_*`` slots).
+        ``(T, N_DEBUG_F)`` float and ``(T, N_DEBUG_I)`` int8 per-frame debug values, written (``D_*`` slots); or
+        one row each, which every frame overwrites, for a caller that keeps no debug values.
+
+    Returns
+    -------
+    True when every value written to ``out`` is within 0..100 (none NaN).
     """
     n_act = out.shape[1]
     baseline = prm[P_METHOD] > 0.5
@@ -112,11 +144,27 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
     hit_w = np.zeros(3)
     tp_w = np.zeros(3)
     tp_body = np.array([surf[S_TPX], surf[S_TPY], surf[S_TPZ]])
-    for t in range(joints.shape[0]):
+    # every array the steps are given, borrowed (hapmotion.renderer.borrowed: no atomic reference counting in the
+    # loop, a third of its time); the arguments live as long as the call, the scratch arrays as long as `owners`
+    owners = (raw, jt, axes, acc, thr, excess, speed_n, lit, above, held, w_excess, prev_dp, dp, p, hit, hit_w, tp_w,
+              tp_body)
+    raw, jt, axes, acc, thr, excess = borrowed(raw), borrowed(jt), borrowed(axes), borrowed(acc), borrowed(thr), \
+        borrowed(excess)
+    speed_n, lit, above, held, w_excess = borrowed(speed_n), borrowed(lit), borrowed(above), borrowed(held), \
+        borrowed(w_excess)
+    prev_dp, dp, p, hit, hit_w, tp_w, tp_body = borrowed(prev_dp), borrowed(dp), borrowed(p), borrowed(hit), \
+        borrowed(hit_w), borrowed(tp_w), borrowed(tp_body)
+    positions, rows, prm, surf, charts = borrowed(positions), borrowed(rows), borrowed(prm), borrowed(surf), \
+        borrowed(charts)
+    mirror_map, state, out, dbg_f, dbg_i = borrowed(mirror_map), borrowed(state), borrowed(out), borrowed(dbg_f), \
+        borrowed(dbg_i)
+    last_dbg = dbg_f.shape[0] - 1  # 0: one row of debug values, overwritten by every frame
+    in_range = True
+    for t in range(positions.shape[0]):
         # step 1: joints in, missing ones held
-        if not hold_joints(joints[t], state, jt):
+        if not hold_joints(positions, t, rows, state, jt):
             write_silence(state, out[t])
-            record_silence(dbg_f[t], dbg_i[t])
+            record_silence(dbg_f[min(t, last_dbg)], dbg_i[min(t, last_dbg)])
             continue
 
         # step 2: J_T and the body frame (the last frame's axes are kept when this one's are degenerate)
@@ -207,9 +255,12 @@ def render_frames(joints, prm, surf, charts, mirror_map, state, out, dbg_f, dbg_
             share_frame_drive(raw, amp, prm[P_DEAD], prm[P_SILENCE], prm[P_PHANTOM_ENERGY] > 0.5, prm[P_DRIVE_MOTORS],
                               lit)
         write_outputs(raw, prm[P_DEAD], prm[P_SILENCE], prm[P_REL_DECAY], mirror_map, state, out[t], not lift_frame)
+        in_range &= row_in_range(out[t])  # silent rows are zeros
 
         to_world_into(hit, torso, axes, hit_w)
         to_world_into(tp_body, torso, axes, tp_w)
-        record_debug(dbg_f[t], dbg_i[t], dp, hit, hit_w, tp_w, total_level, u, v, dist, energy, choice, chart)
+        record_debug(dbg_f[min(t, last_dbg)], dbg_i[min(t, last_dbg)], dp, hit, hit_w, tp_w, total_level, u, v, dist, energy, choice, chart)
         state[ST_SEEN] += 1.0
     state[ST_AXES:ST_AXES + 9] = axes.ravel()
+    keep_alive(owners)
+    return in_range

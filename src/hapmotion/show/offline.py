@@ -19,20 +19,21 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from typing import Any, Callable, Optional, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Optional, Sequence
 
 import numpy as np
 
-from ..audio.analysis import AudioAnalysis
 from ..errors import UsageError
 from ..motion import Motion
 from ..renderer.params import PRESETS
 from ..renderer.renderer import render
 from ..track import HapticTrack
-from .music import song_track
 from .hands import HAND_JOINTS
 from .settings import Show
 from .stage import OutputStage, show_power_limit
+
+if TYPE_CHECKING:
+    from ..audio.analysis import AudioAnalysis
 
 # how to extend a motion debug array past the motion's end: these keys become "nothing happens", the rest hold
 # their last value (points stay where they were; every value stays finite)
@@ -41,12 +42,14 @@ _DEBUG_PAD = {"active": 0, "level": 0.0, "motion_energy": 0.0, "chart": -1}
 Progress = Optional[Callable[[int], object]]
 
 
-def render_motion(show: Show, motion: Motion, progress: Progress = None) -> HapticTrack:
+def render_motion(show: Show, motion: Motion, progress: Progress = None, debug: bool = True) -> HapticTrack:
     """The motion channel alone: ``motion`` resampled to ``show.fps`` (if set) and rendered with the show's
-    renderer; ``progress(n_frames)`` is called as frames are done."""
+    renderer; ``progress(n_frames)`` is called as frames are done; ``debug=False``: without the renderer's debug
+    values (:func:`~hapmotion.renderer.render`)."""
     if show.fps is not None:
         motion = motion.resample(show.fps)
-    track = render(motion, method=show.method, params=show.params(), layout=show.load_layout(), progress=progress)
+    track = render(motion, method=show.method, params=show.params(), layout=show.load_layout(), progress=progress,
+                   debug=debug)
     track.meta["preset"] = show.preset
     return track
 
@@ -106,7 +109,8 @@ def _stage(show: Show, mode: str, actuators: tuple[str, ...], fps: float) -> Out
 
 
 def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Optional[HapticTrack] = None,
-                progress: Progress = None, analysis: Optional[AudioAnalysis] = None) -> HapticTrack:
+                progress: Progress = None, analysis: Optional["AudioAnalysis"] = None,
+                debug: bool = True) -> HapticTrack:
     """The track of a whole show: the motion rendered (or ``motion_track``, already rendered with this show), the
     music analysed, both through the show's output stage.
 
@@ -116,13 +120,15 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
     Returns ``(T, N)`` intensities 0..100. With music, ``meta`` records mode, ratio, rule, audio path, offset,
     length rule, power limit and the analysis facts, and ``debug`` holds the motion track's arrays (extended past
     its end) and the music's (``audio_envelope``, ``audio_kick``, ...); ``meta["cues"]`` names the cue list and
-    ``meta["comfort"]`` the wearer's limits when they change anything.
+    ``meta["comfort"]`` the wearer's limits when they change anything. ``debug=False`` renders the motion without
+    the renderer's debug values (the music's are kept; a caller writing ``.tact`` drops both): the rows are the
+    same.
     """
     mode = show.resolved_mode(motion is not None or motion_track is not None)
     own_rows = motion_track is None and motion is not None  # the motion's rows are made here
     if own_rows:
         # rendered in audio mode too: the music then plays on the motion's timeline (rate, length rule, debug)
-        motion_track = render_motion(show, motion, progress)
+        motion_track = render_motion(show, motion, progress, debug=debug)
     if motion_track is not None:
         fps, ids, layout_name = motion_track.fps, tuple(motion_track.actuators), motion_track.layout
     else:
@@ -132,6 +138,10 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
 
     music = None
     if show.audio is not None:
+        # imported with the music only: the analysis loads soundfile and scipy's signal, which a render of motion
+        # alone (`hapmotion render clip.bvh`) need not start
+        from .music import song_track
+
         music = song_track(show, fps=fps, layout=show.load_layout() if motion_track is None or
                            stage.positions is not None else list(ids), analysis=analysis)
     n_motion = motion_track.n_frames if motion_track is not None else 0
@@ -147,15 +157,15 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
     rows = stage.rows(motion_rows, music_rows, skeleton, out=motion_rows if own_rows else music_rows)
 
     meta: dict[str, Any] = dict(motion_track.meta) if motion_track is not None else {}
-    debug: dict[str, np.ndarray] = dict(motion_track.debug) if motion_track is not None else {}
+    values: dict[str, np.ndarray] = dict(motion_track.debug) if motion_track is not None else {}
     if music is not None:
         meta.update({
             "mode": mode, "mix_ratio": [stage.ratio[0], stage.ratio[1]], "mix_rule": stage.rule,
             "audio_path": os.fspath(show.audio), "audio_offset_s": show.audio_offset_s, "length": show.length,
             "power_limit": stage.power_limit, "frames_motion": n_motion, "frames_audio": n_music,
             "audio": music.meta["audio"], "audio_params": music.meta["audio_params"]})
-        debug = _fit_debug(debug, n_frames, motion=True) if motion_track is not None else {}
-        debug.update(_fit_debug(music.debug, n_frames, motion=False))
+        values = _fit_debug(values, n_frames, motion=True) if motion_track is not None else {}
+        values.update(_fit_debug(music.debug, n_frames, motion=False))
     if stage.cue_list is not None:
         meta["cues"] = os.fspath(stage.cue_list.source)
         if stage.cue_list.notes:
@@ -163,7 +173,7 @@ def render_show(show: Show, motion: Optional[Motion] = None, *, motion_track: Op
     if not show.comfort.is_neutral:
         meta["comfort"] = show.comfort.to_dict()
     return HapticTrack(intensities=rows, fps=fps, actuators=stage.actuators, layout=layout_name, meta=meta,
-                       debug=debug)
+                       debug=values)
 
 
 def render_variants(show: Show, motion: Optional[Motion], methods: Sequence[str], presets: Sequence[str],

@@ -34,7 +34,7 @@ from ...errors import InputError, UsageError
 from ...filesafety import atomic_path
 from ...layout import load_layout
 from ...limits import DEFAULT_LIMITS, InputLimits, check_frames, load_json
-from ...track import HapticTrack
+from ...track import HapticTrack, covered_rows
 from ..devices import bhaptics_devices, position_order, type_for_position
 from .project import parse_project
 from ..tick import PLAYER_TICK_FPS, PLAYER_TICK_MS
@@ -70,57 +70,42 @@ _DOT_FEEDBACK = '"dotConnected":false,"feedback":[]'
 frames are put in its place. The text cannot occur inside a JSON string (its quotes would be escaped)."""
 
 
-def _feedback_json(rows: np.ndarray) -> str:
-    """:func:`_feedback_parts` joined: the JSON text of one position's frames."""
-    return "".join(_feedback_parts(rows))
-
-
-def _feedback_parts(rows: np.ndarray) -> list[str]:
-    """The dot-mode frames for one position from ``rows`` (T, M) on the 20 ms tick, as the JSON text of the list
-    (what ``json.dumps(..., separators=(",", ":"))`` writes for it, byte for byte).
+def _feedback_text(levels: np.ndarray) -> np.ndarray:
+    """The dot-mode frames for one position from ``levels`` (T, M) uint8, whole percents on the 20 ms tick, as the
+    ASCII bytes ``(n,)`` uint8 of the JSON text of the list (what ``json.dumps(..., separators=(",", ":"))`` writes
+    for it, byte for byte).
 
     Runs of identical ticks become one frame ``{"startTime":..,"endTime":..,"playbackType":"NONE","pointList":
-    [{"index":i,"intensity":x},..]}`` (silent runs left out), intensities quantised to 1 % as ``round(q / 100, 2)``.
-    Built from a table of every point's text (``{"index":i,"intensity":x}`` for each motor and level, with and
-    without the comma before it), picked by numpy for every point of a block of frames and joined, instead of a dict
-    per frame and point and a ``json.dumps`` over them: an hour of ticks is written several times faster, and no
-    string is made per point (the memory is the output text and one block's references).
+    [{"index":i,"intensity":x},..]}`` (silent runs left out), intensities as ``round(q / 100, 2)``. Written by one
+    compiled pass over the ticks (:mod:`.text_compiled`), which counts the bytes first so that the text is made in
+    one buffer of its own size.
     """
-    q = np.rint(rows).astype(np.int64)
-    n, m = q.shape
-    if n == 0:
-        return ["[]"]
-    change = np.ones(n, dtype=bool)
-    change[1:] = (q[1:] != q[:-1]).any(axis=1)
-    starts = np.flatnonzero(change)
-    ends = np.append(starts[1:], n)
-    runs = q[starts]
-    keep = runs.any(axis=1)  # silent runs are left out
-    starts, ends, runs = starts[keep], ends[keep], runs[keep]
-    if not len(starts):
-        return ["[]"]
-    levels = int(runs.max()) + 1  # rows are 0..100, so at most 101
-    # np.int64 / 100.0 rounded by numpy, exactly as the frames were always written
-    value = [json.dumps(round(np.int64(v) / 100.0, 2)) for v in range(levels)]
-    point = np.array([f'{comma}{{"index":{i},"intensity":{value[v]}}}' for comma in ("", ",") for i in range(m)
-                      for v in range(levels)], dtype=object)  # point[(comma * m + i) * levels + v]
-    out = []
-    for b0 in range(0, len(starts), _RUNS_PER_BLOCK):
-        block = runs[b0:b0 + _RUNS_PER_BLOCK]
-        run_of, motor = np.nonzero(block)  # row-major: by run, then by motor, as the pointList lists them
-        first = np.ones(len(run_of), dtype=bool)
-        first[1:] = run_of[1:] != run_of[:-1]
-        cells = point.take((~first * m + motor) * levels + block[run_of, motor])
-        heads = [f'{"" if b0 + k == 0 else "]},"}{{"startTime":{s * PLAYER_TICK_MS},"endTime":{e * PLAYER_TICK_MS},'
-                 '"playbackType":"NONE","pointList":['
-                 for k, (s, e) in enumerate(zip(starts[b0:b0 + len(block)].tolist(),
-                                                ends[b0:b0 + len(block)].tolist()))]
-        out.append("".join(np.insert(cells, np.flatnonzero(first), heads).tolist()))
-    return ["[", *out, "]}]"]  # parts, not one joined copy: an hour's text is written as it is
+    # numba on first use: importing the track files (every command's start-up) does not load it
+    from .text_compiled import dot_frames_text
+
+    text, start = _LEVEL_TEXT
+    size = dot_frames_text(levels, PLAYER_TICK_MS, text, start, np.empty(0, dtype=np.uint8), False)
+    if size < 0:  # a HapticTrack's rows are within 0..100: never
+        raise ValueError(f"intensities must be within 0..{_MAX_LEVEL} % to be written to a .tact file")
+    out = np.empty(size, dtype=np.uint8)
+    dot_frames_text(levels, PLAYER_TICK_MS, text, start, out, True)
+    return out
 
 
-_RUNS_PER_BLOCK = 8192
-"""Frames of one position turned into text at a time by :func:`_feedback_json` (bounds its temporary arrays)."""
+_MAX_LEVEL = 100
+"""Largest quantised intensity, percent (the compiled pass's table of texts ends there)."""
+
+
+def _level_text_table() -> tuple[np.ndarray, np.ndarray]:
+    """The text of every quantised intensity ``q`` 0..100 as the frames were always written (``np.int64(q) / 100.0``
+    rounded to 2 places by numpy, then ``json.dumps``): ``(bytes uint8, start (102,) int64)``, the text of ``q``
+    being ``bytes[start[q]:start[q + 1]]``."""
+    texts = [json.dumps(round(np.int64(q) / 100.0, 2)).encode("ascii") for q in range(_MAX_LEVEL + 1)]
+    start = np.cumsum([0] + [len(t) for t in texts]).astype(np.int64)
+    return np.frombuffer(b"".join(texts), dtype=np.uint8).copy(), start
+
+
+_LEVEL_TEXT = _level_text_table()
 
 
 def _project(name: str, type_name: str, duration_ms: int) -> dict:
@@ -146,40 +131,56 @@ def _project(name: str, type_name: str, duration_ms: int) -> dict:
     }
 
 
-def _tact_text(name: str, type_name: str, rows: dict[str, np.ndarray], duration_ms: int) -> list[str]:
-    """The compact JSON text of one ``.tact`` file, in parts to be written one after the other: the skeleton from
-    :func:`_project` with each position's frames (:func:`_feedback_parts`) put in place of its empty dot-mode list,
-    positions in the device type's order."""
+def _tick_levels(track: HapticTrack) -> np.ndarray:
+    """``(n_ticks, N)`` uint8: the track on the Player's 20 ms tick in whole percents, the Player's resolution: each
+    tick the maximum of the rows it overlaps (:meth:`HapticTrack.resample`, so no short peak is lost), rounded by
+    ``np.rint`` (ties to even), made at once for every file by one compiled pass (:mod:`.text_compiled`)."""
+    from .text_compiled import tick_levels  # numba on first use, as in _feedback_text
+
+    lo, hi = covered_rows(track.n_frames, track.fps, PLAYER_TICK_FPS)
+    levels = np.empty((len(lo), track.intensities.shape[1]), dtype=np.uint8)
+    if not tick_levels(track.intensities, lo, hi, levels):  # a HapticTrack's rows are within 0..100: never
+        raise ValueError(f"intensities must be within 0..{_MAX_LEVEL} % to be written to a .tact file")
+    return levels
+
+
+def _tact_text(name: str, type_name: str, levels: dict[str, np.ndarray],
+               duration_ms: int) -> list[bytes | np.ndarray]:
+    """The compact JSON text of one ``.tact`` file as ASCII bytes, in parts to be written one after the other: the
+    skeleton from :func:`_project` with each position's frames (:func:`_feedback_text` of its ``levels``) put in
+    place of its empty dot-mode list, positions in the device type's order."""
     positions = bhaptics_devices()[type_name].positions
-    parts = json.dumps(_project(name, type_name, duration_ms), separators=(",", ":")).split(_DOT_FEEDBACK)
+    skeleton = json.dumps(_project(name, type_name, duration_ms), separators=(",", ":"))  # ASCII: names escaped
+    parts = skeleton.encode("ascii").split(_DOT_FEEDBACK.encode("ascii"))
     assert len(parts) == len(positions) + 1, "one empty dot-mode list per position in the skeleton"
-    out = [parts[0]]
+    out: list[bytes | np.ndarray] = [parts[0]]
     for pos, rest in zip(positions, parts[1:]):
-        out += [_DOT_FEEDBACK[:-2], *(_feedback_parts(rows[pos]) if pos in rows else ["[]"]), rest]
+        out += [_DOT_FEEDBACK[:-2].encode("ascii"), _feedback_text(levels[pos]) if pos in levels else b"[]", rest]
     return out
 
 
-def _columns(track: HapticTrack, device: str) -> np.ndarray:
-    """``(T, M)`` rows of one device: a view when its columns lie side by side in order (they do on every bundled
-    layout), else a copy."""
+def _columns(track: HapticTrack, rows: np.ndarray, device: str) -> np.ndarray:
+    """``(T, M)`` of ``rows`` ``(T, N)`` (the track's, or a table beside them) of one device of ``track``: a view
+    when its columns lie side by side in order (they do on every bundled layout), else a copy."""
     cols = track.device_columns(device)
     if len(cols) and np.array_equal(cols, np.arange(cols[0], cols[0] + len(cols))):
-        return track.intensities[:, cols[0]:cols[0] + len(cols)]
-    return track.intensities[:, cols]
+        return rows[:, cols[0]:cols[0] + len(cols)]
+    return rows[:, cols]
 
 
 def write_tact(track: HapticTrack, path: Path) -> list[Path]:
     """Write the vest file at ``path`` and one file per other device beside it; return the files, ``path`` first."""
     plan = _files(track, path)
-    ticked = track.resample(PLAYER_TICK_FPS)
-    duration_ms = ticked.n_frames * PLAYER_TICK_MS
+    levels = _tick_levels(track)
+    duration_ms = levels.shape[0] * PLAYER_TICK_MS
     with contextlib.ExitStack() as stack:
         # every file is complete before any is renamed into place; one file's text is made at a time
         tmps = {target: stack.enter_context(atomic_path(target)) for target in plan}
         for target, (type_name, devs) in plan.items():
-            parts = _tact_text(path.stem, type_name, {d: _columns(ticked, d) for d in devs}, duration_ms)
-            with open(tmps[target], "w", encoding="utf-8") as f:
-                f.writelines(parts)
+            parts = _tact_text(path.stem, type_name, {d: _columns(track, levels, d) for d in devs}, duration_ms)
+            with open(tmps[target], "wb") as f:
+                for part in parts:
+                    f.write(part)
             del parts
     return sorted(plan, key=lambda target: target != path)
 

@@ -14,13 +14,17 @@ from ..packed import N_RENDER_JOINTS, ST_GOOD, ST_HAVE
 
 
 @njit(cache=True, inline="always")
-def hold_joints(frame, state, jt):
-    """This frame's joints with missing ones held.
+def hold_joints(positions, t, rows, state, jt):
+    """Frame ``t``'s joints with missing ones held.
 
     Parameters
     ----------
-    frame:
-        ``(N_RENDER_JOINTS, 3)`` world metres in ``RENDER_JOINTS`` order; NaN (or inf) where not received.
+    positions, t:
+        ``(T, J, 3)`` world metres, any strides; NaN (or inf) where not received; and the frame to read (read
+        number by number: no view of the frame, whose reference numba would count).
+    rows:
+        ``(N_RENDER_JOINTS,)`` int: the row (second index) of ``positions`` of each joint in ``RENDER_JOINTS``
+        order.
     state:
         Renderer state vector; its last finite positions and seen flags are updated.
     jt:
@@ -32,9 +36,10 @@ def hold_joints(frame, state, jt):
     """
     have_all = True
     for j in range(N_RENDER_JOINTS):
-        x = frame[j, 0]
-        y = frame[j, 1]
-        z = frame[j, 2]
+        r = rows[j]
+        x = positions[t, r, 0]
+        y = positions[t, r, 1]
+        z = positions[t, r, 2]
         if np.isfinite(x) and np.isfinite(y) and np.isfinite(z):
             state[ST_GOOD + 3 * j] = x
             state[ST_GOOD + 3 * j + 1] = y
