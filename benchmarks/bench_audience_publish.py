@@ -49,7 +49,7 @@ import numpy as np
 
 import hapmotion
 from benchmarks.bench_audience import BVH, security, secure_venue
-from hapmotion.audience.publisher import NatsPublisherSink, describe_show
+from hapmotion.audience.publisher import NatsPublisherSink, PublisherSecurity, describe_show
 from hapmotion.audience.server import LocalNatsServer
 from hapmotion.audience.signing import SeatTrust, VenueSigner, domain, load_private_key
 from hapmotion.audience.wire import encode_frame
@@ -76,9 +76,9 @@ async def publish_run(url: str, venue: str, setup: str, seconds: float, position
     """One run of ``setup``: microseconds of this process's CPU per frame published at :data:`FPS`."""
     sec = security(venue if setup in ("tls", "secure") else None, "publisher")
     if setup == "signed":  # plain TCP, the venue's key
-        sec = type(sec)(key=load_private_key(Path(venue) / "venue.key"))
+        sec = PublisherSecurity(key=load_private_key(Path(venue) / "venue.key"))
     elif setup == "tls":  # the venue's server and NKey, no key: a rehearsal over TLS
-        sec = type(sec)(auth=sec.auth, unsigned=True)
+        sec = PublisherSecurity(auth=sec.auth, unsigned=True)
     layout, show = load_layout(), Show()
     stage = OutputStage.for_show(show, "motion", layout=layout, fps=FPS)
     desc = describe_show("bench", show=show, stage=stage, layout=layout, body=BodyModel.default(), stall_ms=250.0,
