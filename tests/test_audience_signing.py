@@ -78,6 +78,9 @@ def test_forged_envelopes_are_refused(rfc_key):
     for data in forged:
         with pytest.raises(BadSignature, match="frame whose signature is not the venue's"):
             trust.open("frame", data)
+    for kind in ("cue", "description", "another kind"):                  # a frame is no other kind of message
+        with pytest.raises(BadSignature, match=f"{kind} whose signature"):
+            trust.open(kind, sealed)
     for data in (frame, sealed[:PREFIX_BYTES - 1], b"", ENVELOPE):
         with pytest.raises(Unsigned, match="frame without the venue's signature"):
             trust.open("frame", data)

@@ -13,8 +13,9 @@ public key (SubjectPublicKeyInfo PEM). ``cryptography`` reads and writes the key
 checked with libsodium (PyNaCl), the same signatures (Ed25519 is deterministic: RFC 8032, section 5.1.6) for less
 CPU than ``cryptography``'s OpenSSL: a 416-byte frame is signed in 17 us against 27 and checked in 44 us against 86
 back to back (``benchmarks.bench_audience_publish``; a signature alone every 1/60 s, its code and tables out of the
-CPU's caches, takes several times longer with either). A show without keys is a rehearsal: :meth:`SeatTrust.unsigned` accepts
-unsigned messages (and signed ones without checking), and every start-up line says so.
+CPU's caches, takes several times longer with either). A show without keys is a rehearsal:
+:meth:`SeatTrust.unsigned` accepts unsigned messages (and signed ones without checking), and every start-up line
+says so.
 """
 
 from __future__ import annotations
@@ -164,8 +165,9 @@ class SeatTrust:
         if not sealed or len(data) < PREFIX_BYTES:
             raise Unsigned(f"{kind} without the venue's signature")
         message = data[PREFIX_BYTES:]
+        signed = self._domains.get(kind) or domain(self.show, kind)
         try:  # libsodium checks the signature followed by the signed bytes (the domain, then the message)
-            crypto_sign_open(b"".join((data[len(ENVELOPE):PREFIX_BYTES], self._domains[kind], message)), self._raw)
+            crypto_sign_open(b"".join((data[len(ENVELOPE):PREFIX_BYTES], signed, message)), self._raw)
         except BadSignatureError:
             raise BadSignature(f"{kind} whose signature is not the venue's") from None
         return message
