@@ -1,0 +1,126 @@
+"""What the venue's security costs the audience publisher: the audience benchmark plain and secure, interleaved.
+
+    python -m benchmarks.bench_audience_secure                # 4 pairs, N = 300, 10 s each, 60 Hz full frames
+    python -m benchmarks.bench_audience_secure --pairs 5      # about 3 minutes
+
+Each pair is two runs of :func:`benchmarks.bench_audience.run` back to back, the same show (the publisher replaying
+dataset-1_byebye_happy_001.bvh at 60 fps, today's full frames, no music: ``bench_audience --light N --k 4
+--servers 1 --rates 60 --frames full --no-music``), the same code, N light subscribers and 4 full seats, once as a
+rehearsal (unsigned, plain TCP, no authentication) and once as a venue deploys it (``--secure``: the server
+configuration of ``hapmotion venue-setup`` with TLS required, NKeys and per-subject permissions, every frame
+signed by the publisher and checked by every full seat). The order alternates from pair to pair (plain first, then
+secure first, ...) so that neither set-up always runs on a warmer machine, and each run has a server of its own
+started for it.
+
+Publisher CPU is the publisher process's CPU time (user + system, every thread: ``time.process_time``) over the
+measured window, as a share of one core. Reported: each set-up's median over the pairs with its spread (lowest to
+highest), the secure one's extra over the plain median, and the median of the pairs' own ratios (each secure run
+against the plain run beside it, which cancels the machine's slower drifts), beside the target: at most 10 % more
+publisher CPU. Also the frame age p50 / p99 (light subscribers and full seats; target p99 < 50 ms), the server's
+CPU per seat-frame and the bytes per frame. The load average is printed before every run: on a shared machine
+the figures are only as steady as that.
+
+Measured with ``--pairs 5`` on a shared 2-core machine (load average 2.0 to 3.6), the signatures by libsodium:
+publisher 2.81 % of a core plain (2.78-2.94) against 3.26 % secure (3.11-3.62), +16.2 % between the medians and
++14.1 % the median of the pairs (+12.1 to +29.2 %) [target <= +10 %: missed]; with ``cryptography``'s signatures
+(before) +20.8 % and +11.1 % (+6.9 to +41.6 %). Frame age p99 secure 13.5 ms at the light subscribers and 28.2 ms at
+the full seats' Players (worst runs 16.8 and 34.9 ms) [target < 50 ms: met]; server 10.6 against 13.4 us a
+seat-frame; 416 against 484 bytes a frame. Where the extra goes (one signature and one TLS record a frame, each
+slower with the caches cold between frames): ``benchmarks.bench_audience_publish``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import statistics
+import tempfile
+from pathlib import Path
+
+from benchmarks.bench_audience import P99_TARGET_MS, run, secure_venue, summary
+
+PUBLISHER_TARGET = 0.10
+"""The secure deployment may cost the publisher at most 10 % more CPU than the rehearsal (same show, same code)."""
+FPS = 60.0
+SETUPS = ("plain", "secure")
+
+
+def one_run(setup: str, n: int, k: int, seconds: float) -> dict:
+    """One measurement of ``setup`` on a server started for it: the publisher's CPU, ages, server cost, bytes."""
+    from hapmotion.audience.server import LocalNatsServer
+
+    with contextlib.ExitStack() as stack:
+        venue = None
+        if setup == "secure":
+            folder = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="hapmotion-venue-")))
+            venue = secure_venue(folder)
+            server = stack.enter_context(LocalNatsServer(extra_args=("-c", str(folder / "nats-server.conf"))))
+        else:
+            server = stack.enter_context(LocalNatsServer())
+        load = os.getloadavg()[0]
+        r = run(n, k, seconds, [server], FPS, 1, venue, "full", music=False)
+    s = summary(r, n, FPS)
+    p, light, seats = r["publisher"], r["subscribers"][0], r["seats"]
+    return {"setup": setup, "load": load, "cpu": p["cpu_per_s"], "us_per_frame": p["cpu_per_s"] / FPS * 1e6,
+            "published": p["published"], "rendered": p["rendered"], "skipped": p["skipped"], "errors": p["errors"],
+            "light_p50": light["age_p50_ms"], "light_p99": light["age_p99_ms"], "loss": light["loss"],
+            "seat_p50": seats["age_p50_ms"], "seat_p99": seats["age_p99_ms"], "stale": seats["stale"],
+            "server_us": s["per_frame_us"], "bytes": s["bytes"], "tls": light["tls_connections"],
+            "connections": light["connections"]}
+
+
+def spread(values: list[float], scale: float = 1.0, fmt: str = ".2f") -> str:
+    """``median (lowest-highest)`` of ``values`` times ``scale``."""
+    return (f"{statistics.median(values) * scale:{fmt}} ({min(values) * scale:{fmt}}-"
+            f"{max(values) * scale:{fmt}})")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--pairs", type=int, default=4, help="plain/secure pairs, run interleaved")
+    ap.add_argument("--light", type=int, default=300, help="light subscribers (one TLS connection each when secure)")
+    ap.add_argument("--k", type=int, default=4, help="full seats")
+    ap.add_argument("--seconds", type=float, default=10.0, help="measured seconds per run")
+    a = ap.parse_args()
+    print(f"publisher CPU, rehearsal (plain) against venue (TLS, NKeys, permissions, signed): {a.pairs} pairs "
+          f"interleaved, {a.seconds:g} s each, N = {a.light} + {a.k} full seats, {FPS:g} Hz full frames without "
+          f"music; {os.cpu_count()} cores shared with other work, load average {os.getloadavg()[0]:.1f} at the start",
+          flush=True)
+    runs: dict[str, list[dict]] = {s: [] for s in SETUPS}
+    for i in range(a.pairs):
+        for setup in (SETUPS if i % 2 == 0 else SETUPS[::-1]):
+            r = one_run(setup, a.light, a.k, a.seconds)
+            runs[setup].append(r)
+            print(f"  pair {i + 1} {setup:6s} (load {r['load']:.1f}): publisher {r['cpu'] * 100:.2f} % of a core "
+                  f"({r['us_per_frame']:.0f} us a frame; {r['published']} of {r['rendered']} frames published, "
+                  f"{r['skipped']} skipped, {r['errors']} errors); frame age p50/p99 light {r['light_p50']:.1f} / "
+                  f"{r['light_p99']:.1f} ms (loss {r['loss'] * 100:.2f} %), seats {r['seat_p50']:.1f} / "
+                  f"{r['seat_p99']:.1f} ms ({r['stale']} stale); server {r['server_us']:.1f} us a seat-frame; "
+                  f"{r['bytes']} bytes a frame; {r['tls']} of {r['connections']} subscriber connections TLS",
+                  flush=True)
+    plain, secure = ([r["cpu"] for r in runs[s]] for s in SETUPS)
+    extra = statistics.median(secure) / statistics.median(plain) - 1
+    pairwise = [s / p - 1 for s, p in zip(secure, plain)]
+    paired = statistics.median(pairwise)
+    met = extra <= PUBLISHER_TARGET and paired <= PUBLISHER_TARGET
+    print(f"\nsummary, median (lowest-highest) of {a.pairs} runs each; load average {os.getloadavg()[0]:.1f} at the "
+          "end")
+    for s in SETUPS:
+        rs = runs[s]
+        print(f"  {s:6s}: publisher {spread([r['cpu'] for r in rs], 100)} % of a core = "
+              f"{spread([r['us_per_frame'] for r in rs], 1, '.0f')} us a frame; frame age p99 light "
+              f"{spread([r['light_p99'] for r in rs], 1, '.1f')} ms, seats "
+              f"{spread([r['seat_p99'] for r in rs], 1, '.1f')} ms [target < {P99_TARGET_MS:g} ms]; p50 light {spread([r['light_p50'] for r in rs], 1, '.1f')} ms, "
+              f"seats {spread([r['seat_p50'] for r in rs], 1, '.1f')} ms; server "
+              f"{spread([r['server_us'] for r in rs], 1, '.1f')} us a seat-frame; {rs[0]['bytes']} bytes a frame")
+    print(f"  publisher CPU secure against plain: {extra * 100:+.1f} % (medians), {paired * 100:+.1f} % (median of the "
+          f"pairs; {min(pairwise) * 100:+.1f} to {max(pairwise) * 100:+.1f} %)  [target <= "
+          f"+{PUBLISHER_TARGET * 100:.0f} %: {'met' if met else 'missed'}]")
+    worst = max(r[key] for r in runs["secure"] for key in ("light_p99", "seat_p99"))
+    print(f"  secure frame age p99, worst run: {worst:.1f} ms  [target < {P99_TARGET_MS:g} ms: "
+          f"{'met' if worst < P99_TARGET_MS else 'missed'}]")
+
+
+if __name__ == "__main__":
+    main()
