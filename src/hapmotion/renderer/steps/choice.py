@@ -147,6 +147,18 @@ def appended_weights(state, above, excess, n, far_left, held, w_excess):
 
 
 @njit(cache=True, inline="always")
+def smooth_hand_speeds(state, slot, alpha):
+    """Each hand's speed relative to J_T (``|v_t|`` of :func:`hand_accelerations`, run first this frame) averaged
+    into ``state[slot:slot + 2]`` (m/s) by a one-pole filter ``s += alpha (|v_t| - s)``."""
+    for h in range(2):
+        v2 = 0.0
+        for k in range(3):
+            v = state[ST_PREV_VEL + 3 * h + k]
+            v2 += v * v
+        state[slot + h] += alpha * (np.sqrt(v2) - state[slot + h])
+
+
+@njit(cache=True, inline="always")
 def update_speeds(state, alpha, start, full, speed_n):
     """Each hand's speed relative to J_T, smoothed, and its normalised speed (beyond the paper).
 
@@ -154,12 +166,8 @@ def update_speeds(state, alpha, start, full, speed_n):
     ``s += alpha (|v_t| - s)`` so that capture noise does not read as motion. ``speed_n`` ``(2,)`` is written:
     ``clip((s - start) / (full - start), 0, 1)`` (m/s in, 0..1 out), 0 for a hand slower than ``start``.
     """
+    smooth_hand_speeds(state, ST_SPEED, alpha)
     for h in range(2):
-        v2 = 0.0
-        for k in range(3):
-            v = state[ST_PREV_VEL + 3 * h + k]
-            v2 += v * v
-        state[ST_SPEED + h] += alpha * (np.sqrt(v2) - state[ST_SPEED + h])
         speed_n[h] = clip((state[ST_SPEED + h] - start) / max(full - start, 1e-9), 0.0, 1.0)
 
 
@@ -282,12 +290,7 @@ def leading_choice(choice, state, ratio, min_speed, alpha):
     ``min_speed``; between two moving hands the lead changes only when the averages swap by ``ratio`` squared, and
     between the two ratios (``ratio`` one way, ``1 / ratio`` the other) the held choice stays, so it does not flip.
     """
-    for h in range(2):
-        v2 = 0.0
-        for k in range(3):
-            v = state[ST_PREV_VEL + 3 * h + k]
-            v2 += v * v
-        state[ST_LEAD_SPEED + h] += alpha * (np.sqrt(v2) - state[ST_LEAD_SPEED + h])
+    smooth_hand_speeds(state, ST_LEAD_SPEED, alpha)
     if ratio <= 0.0:
         return choice
     s_l = state[ST_LEAD_SPEED]
