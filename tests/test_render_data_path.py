@@ -155,3 +155,32 @@ def test_without_debug_values_the_rows_are_the_same(clip):
         assert same(got.intensities, want.intensities) and got.debug == {} and got.meta == want.meta, chunk
     show = Show()
     assert same(render_show(show, motion, debug=False).intensities, render_show(show, motion).intensities)
+
+
+def test_positions_of_any_number_type_or_byte_order_render_as_float64():
+    # the compiled passes take native float64 only: float32, integer and big-endian positions are converted first,
+    # so they render as the same values in float64 do
+    motion = motion_from_frames(waving(90))
+    for positions in (motion.positions.astype(np.float32), np.round(motion.positions * 1000).astype(np.int64),
+                      motion.positions.astype(">f8")):
+        want = hapmotion.render(with_positions(motion, positions.astype(np.float64)), preset="felt")
+        got = hapmotion.render(with_positions(motion, positions), preset="felt")
+        assert same(got.intensities, want.intensities), positions.dtype
+        assert BodyModel.from_motion(with_positions(motion, positions)) == \
+            BodyModel.from_motion(with_positions(motion, positions.astype(np.float64)))
+
+
+def test_positions_without_the_canonical_rows_are_refused_not_read_past():
+    # the kernel and the body sizing read rows 0..31 and 3 coordinates without bounds checks: a motion of another
+    # shape must be refused before them, never read past its end
+    motion = motion_from_frames(waving(30))
+    for positions in (motion.positions[:, :5], motion.positions[:, :, :2], motion.positions[:, :, 0]):
+        with pytest.raises(ValueError, match=r"must be \(T, 32, 3\)"):
+            hapmotion.render(with_positions(motion, positions))
+    with pytest.raises(ValueError, match="joints: no row"):
+        BodyModel.from_positions(motion.positions[:, :5], JOINT_INDEX)
+    with pytest.raises(ValueError, match=r"must be \(T, J, 3\)"):
+        BodyModel.from_positions(motion.positions[:, :, :2], JOINT_INDEX)
+    for chunk in (0, -5):  # a negative chunk rendered no frame at all: a silent track
+        with pytest.raises(ValueError, match="chunk must be at least 1"):
+            hapmotion.render(motion, chunk=chunk)

@@ -243,6 +243,12 @@ def render(
     ``debug=False`` leaves the track's ``debug`` empty (a caller that only writes the rows, such as ``hapmotion
     render`` to ``.tact``: an hour at 120 fps keeps 58 MB less); the rows are the same.
     """
+    # the kernel reads the canonical rows of the positions without bounds checks: their shape is checked here
+    positions = np.asarray(motion.positions, dtype=np.float64)
+    if positions.ndim != 3 or positions.shape[1:] != (32, 3):
+        raise ValueError(f"motion positions must be (T, 32, 3), got {positions.shape}")
+    if chunk < 1:
+        raise ValueError(f"chunk must be at least 1 frame, got {chunk}")
     body = body or BodyModel.from_motion(motion)
     r = Renderer(method, preset, mirror=mirror, fps=motion.fps, body=body, layout=layout, params=params)
     # The kernel writes each chunk straight into the whole track's arrays (row slices of C-ordered arrays are
@@ -253,7 +259,6 @@ def render(
     n_dbg = n if debug else 1  # without debug, one row that every frame overwrites
     dbg_f = np.zeros((n_dbg, packed.N_DEBUG_F))
     dbg_i = np.zeros((n_dbg, packed.N_DEBUG_I), dtype=np.int8)
-    positions = np.asarray(motion.positions, dtype=np.float64)
     in_range = True
     for start in range(0, n, chunk):
         stop = min(n, start + chunk)
