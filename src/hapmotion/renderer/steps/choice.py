@@ -267,12 +267,19 @@ def held_choice(choice, idle, state, hold_frames):
     return current
 
 
+MAX_LEAD_SAMPLE_MPS = 20.0
+"""Largest hand speed (m/s, relative to J_T) one frame gives :func:`leading_choice`'s average: more than twice the
+fastest hand of the bundled recordings (7.5 m/s, the dance-short recording at 30 fps). A hand that jumps farther
+between two frames is a tracking glitch: uncapped, one jump of 1 km kept that hand leading for seconds, and of
+1e200 m made the average infinite, then NaN, for good."""
+
+
 @njit(cache=True, inline="always")
 def leading_choice(choice, state, ratio, min_speed, alpha):
     """Beyond the paper: a hand that clearly leads is the one active joint, at once.
 
     Each hand's speed relative to J_T (``|v_t|`` of :func:`hand_accelerations`, run first this frame) is averaged
-    by a one-pole filter ``s += alpha (|v_t| - s)`` (``alpha`` from the choice hold's time constant; ``state
+    by a one-pole filter ``s += alpha (min(|v_t|, MAX_LEAD_SAMPLE_MPS) - s)`` (``alpha`` from the choice hold's time constant; ``state
     [ST_LEAD_SPEED]``, m/s). A hand leads when its average is at least ``min_speed`` (m/s) and ``ratio`` times the
     other's. Its choice (``CHOICE_LEFT`` / ``CHOICE_RIGHT``) replaces ``choice`` (the held acceleration choice) and
     any pending change is dropped; with no hand leading (or ``ratio`` 0) ``choice`` is returned as it is.
@@ -287,7 +294,10 @@ def leading_choice(choice, state, ratio, min_speed, alpha):
         for k in range(3):
             v = state[ST_PREV_VEL + 3 * h + k]
             v2 += v * v
-        state[ST_LEAD_SPEED + h] += alpha * (np.sqrt(v2) - state[ST_LEAD_SPEED + h])
+        speed = np.sqrt(v2)
+        if not (speed <= MAX_LEAD_SAMPLE_MPS):  # a joint jumping between frames (inf included), not a gesture
+            speed = MAX_LEAD_SAMPLE_MPS
+        state[ST_LEAD_SPEED + h] += alpha * (speed - state[ST_LEAD_SPEED + h])
     if ratio <= 0.0:
         return choice
     s_l = state[ST_LEAD_SPEED]
