@@ -184,3 +184,22 @@ def test_positions_without_the_canonical_rows_are_refused_not_read_past():
     for chunk in (0, -5):  # a negative chunk rendered no frame at all: a silent track
         with pytest.raises(ValueError, match="chunk must be at least 1"):
             hapmotion.render(motion, chunk=chunk)
+
+
+@pytest.mark.parametrize("preset", ["felt", "paper"])
+def test_one_frame_of_an_absurd_joint_is_held_over_not_felt_to_the_end(preset):
+    """A joint 1e155 m away (or more) for one frame is taken as not received: the renderer's squared speeds stay
+    finite, and two seconds later the rows are those of the motion without the glitch to 0.01 % (the joint held for
+    a frame, then back, passes through the filters and fades); they went silent for good."""
+    frames = waving(n=600)
+    want = hapmotion.render(motion_from_frames(frames), preset=preset).intensities
+    for joint in ("HAND_LEFT", "HAND_RIGHT", "PELVIS"):
+        for value in (1e155, -1e300, 2e4):
+            glitched = frames.copy()
+            glitched[120, JOINT_INDEX[joint]] = value
+            track = hapmotion.render(with_positions(motion_from_frames(frames), glitched), preset=preset)
+            assert np.abs(track.intensities[240:] - want[240:]).max() < 0.01, (joint, value)
+    r = renderer_module.Renderer("mst", preset, fps=60.0)
+    for t, frame in enumerate(frames[:200]):
+        r.step(frame if t != 120 else np.full((32, 3), 1e300))
+    assert np.isfinite(r._state).all()
