@@ -361,3 +361,17 @@ def test_tact_writer_refuses_rows_outside_0_to_100_it_was_told_were_within(tmp_p
         with pytest.raises(ValueError, match="0..100"):
             save_track(HapticTrack.of_rows_in_range(rows, 50.0, ids), tmp_path / "bad.tact")
         assert not list(tmp_path.iterdir())
+
+
+def test_a_track_at_an_absurd_rate_keeps_its_peak_on_the_tick(tmp_path):
+    """At 1e300 fps every row falls in the first 20 ms tick, which takes their maximum: the peak on the last row is
+    in the file and in the resampled track (the rows a tick covers overflowed int64, and it covered one row)."""
+    ids = load_layout().actuators
+    rows = np.zeros((4, len(ids)))
+    rows[3, 5] = 80.0
+    for fps in (1e300, 1e30, 1e12):
+        track = HapticTrack(rows, fps, ids)
+        assert track.resample(50.0).intensities.max(axis=0)[5] == 80.0, fps
+        save_track(track, tmp_path / "fast.tact")
+        back = load_track(tmp_path / "fast.tact")
+        assert back.n_frames == 1 and back.intensities[0, list(back.actuators).index(ids[5])] == 80.0, fps
