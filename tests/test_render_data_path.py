@@ -203,3 +203,39 @@ def test_one_frame_of_an_absurd_joint_is_held_over_not_felt_to_the_end(preset):
     for t, frame in enumerate(frames[:200]):
         r.step(frame if t != 120 else np.full((32, 3), 1e300))
     assert np.isfinite(r._state).all()
+
+
+def test_the_kernel_refuses_arrays_it_would_read_or_write_past():
+    """numba checks no index, and the loop's views are borrowed: the kernel checks every array against the positions
+    once per call, so that a caller's mistake is a ValueError, never a read or write past an array."""
+    motion = motion_from_frames(waving(n=20))
+    layout = hapmotion.load_layout()
+    n, n_act = motion.n_frames, layout.n_actuators
+    prm = pack_params(get_preset("felt"), "mst", motion.fps)
+
+    def call(positions=motion.positions, rows=np.array([JOINT_INDEX[j] for j in RENDER_JOINTS], dtype=np.intp),
+             state=None, out=None, dbg_f=None, dbg_i=None, mirror=None, params=prm):
+        return render_frames(positions, rows, params, BodyModel.from_motion(motion).as_array(), layout.chart_table(),
+                             np.arange(n_act) if mirror is None else mirror,
+                             packed.new_state(n_act) if state is None else state,
+                             np.zeros((n, n_act)) if out is None else out,
+                             np.zeros((n, packed.N_DEBUG_F)) if dbg_f is None else dbg_f,
+                             np.zeros((n, packed.N_DEBUG_I), dtype=np.int8) if dbg_i is None else dbg_i)
+
+    assert call() is True
+    assert call(dbg_f=np.zeros((1, packed.N_DEBUG_F)), dbg_i=np.zeros((1, packed.N_DEBUG_I), dtype=np.int8))
+    wrong = {
+        "rows past the joints": dict(positions=np.ascontiguousarray(motion.positions[:, :5])),
+        "two coordinates": dict(positions=np.ascontiguousarray(motion.positions[:, :, :2])),
+        "a negative row": dict(rows=np.array([-1, 0, 1, 2, 3, 4, 5], dtype=np.intp)),
+        "too few rows": dict(rows=np.arange(3, dtype=np.intp)),
+        "fewer output rows": dict(out=np.zeros((n - 1, n_act))),
+        "no debug row": dict(dbg_f=np.zeros((0, packed.N_DEBUG_F)), dbg_i=np.zeros((0, packed.N_DEBUG_I), np.int8)),
+        "narrow debug": dict(dbg_f=np.zeros((n, 2))),
+        "a short state": dict(state=packed.new_state(n_act)[:-1].copy()),
+        "a mirror map past the motors": dict(mirror=np.r_[np.arange(n_act - 1), n_act]),
+        "short parameters": dict(params=prm[:3].copy()),
+    }
+    for name, kwargs in wrong.items():
+        with pytest.raises(ValueError, match="does not fit"):  # `name` says which, in the failure's locals
+            call(**kwargs)
