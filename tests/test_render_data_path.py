@@ -239,3 +239,19 @@ def test_the_kernel_refuses_arrays_it_would_read_or_write_past():
     for name, kwargs in wrong.items():
         with pytest.raises(ValueError, match="does not fit"):  # `name` says which, in the failure's locals
             call(**kwargs)
+
+
+def test_the_body_sizing_pass_refuses_arrays_it_would_read_or_write_past():
+    from hapmotion.body.frame import DEFAULT_AXES
+    from hapmotion.body.sizing_compiled import SIZING_JOINTS, body_samples
+
+    positions = motion_from_frames(waving(n=20)).positions
+    rows = np.array([JOINT_INDEX[j] for j in SIZING_JOINTS], dtype=np.intp)
+    n = len(positions)
+    body_samples(positions, rows, DEFAULT_AXES, np.empty(n), np.empty(n), np.empty(n))
+    for args in ((positions[:, :5], rows, np.empty(n)), (positions[:, :, :2], rows, np.empty(n)),
+                 (positions, rows[:3].copy(), np.empty(n)), (positions, rows - 1, np.empty(n)),
+                 (positions, rows, np.empty(n - 1))):
+        p, r, width = args
+        with pytest.raises(ValueError, match="does not fit"):
+            body_samples(np.ascontiguousarray(p), r, DEFAULT_AXES, width, np.empty(n), np.empty(n))

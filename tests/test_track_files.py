@@ -375,3 +375,18 @@ def test_a_track_at_an_absurd_rate_keeps_its_peak_on_the_tick(tmp_path):
         save_track(track, tmp_path / "fast.tact")
         back = load_track(tmp_path / "fast.tact")
         assert back.n_frames == 1 and back.intensities[0, list(back.actuators).index(ids[5])] == 80.0, fps
+
+
+def test_the_tick_levels_pass_refuses_ticks_it_would_read_or_write_past():
+    from hapmotion.bhaptics.tact.text_compiled import tick_levels
+    from hapmotion.track import covered_rows
+
+    rows = np.full((10, 4), 50.0)
+    lo, hi = covered_rows(10, 60.0, 50.0)
+    levels = np.empty((len(lo), 4), dtype=np.uint8)
+    assert tick_levels(rows, lo, hi, levels) and (levels == 50).all()
+    for lo2, hi2, levels2 in ((lo, hi + 1, levels), (lo - 1, hi, levels), (lo, hi[:-1].copy(), levels),
+                              (lo, hi, levels[:-1].copy()), (lo, hi, np.empty((len(lo), 3), np.uint8)),
+                              (hi, hi, levels)):
+        with pytest.raises(ValueError, match="do not fit"):
+            tick_levels(rows, lo2, hi2, levels2)
