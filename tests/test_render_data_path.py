@@ -9,12 +9,15 @@ import numpy as np
 import pytest
 
 import hapmotion
+from hapmotion.body.frame import DEFAULT_AXES
 from hapmotion.body.model import BodyModel
+from hapmotion.body.sizing_compiled import SIZING_JOINTS, body_samples
+from hapmotion.errors import UsageError
 from hapmotion.motion import Motion
 from hapmotion.renderer import packed, renderer as renderer_module
 from hapmotion.renderer.kernel import render_frames, row_in_range
 from hapmotion.renderer.params import get_preset
-from hapmotion.renderer.renderer import pack_params
+from hapmotion.renderer.renderer import MAX_RENDER_FPS, pack_params
 from hapmotion.skeleton.joints import JOINT_INDEX, RENDER_JOINTS
 from hapmotion.track import HapticTrack
 from support.data import MOTION
@@ -242,9 +245,6 @@ def test_the_kernel_refuses_arrays_it_would_read_or_write_past():
 
 
 def test_the_body_sizing_pass_refuses_arrays_it_would_read_or_write_past():
-    from hapmotion.body.frame import DEFAULT_AXES
-    from hapmotion.body.sizing_compiled import SIZING_JOINTS, body_samples
-
     positions = motion_from_frames(waving(n=20)).positions
     rows = np.array([JOINT_INDEX[j] for j in SIZING_JOINTS], dtype=np.intp)
     n = len(positions)
@@ -255,3 +255,15 @@ def test_the_body_sizing_pass_refuses_arrays_it_would_read_or_write_past():
         p, r, width = args
         with pytest.raises(ValueError, match="does not fit"):
             body_samples(np.ascontiguousarray(p), r, DEFAULT_AXES, width, np.empty(n), np.empty(n))
+
+
+def test_a_frame_rate_past_the_loops_range_is_refused_not_rendered_as_nan():
+    """At 1e300 fps a frame's motion times the rate, twice, overflowed: the rows were silent and the debug values
+    NaN. Rates up to MAX_RENDER_FPS render finite values; past it, a one-line UsageError."""
+    for fps in (MAX_RENDER_FPS, 2000.0):
+        track = hapmotion.render(motion_from_frames(waving(n=60), fps=fps))
+        assert all(np.isfinite(v).all() for v in track.debug.values()) and np.isfinite(track.intensities).all()
+    for fps in (MAX_RENDER_FPS * 1.01, 1e300):
+        fast = motion_from_frames(waving(n=60), fps=fps)
+        with pytest.raises(UsageError, match="fps must be a positive number up to 1e"):
+            hapmotion.render(fast)

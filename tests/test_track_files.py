@@ -9,9 +9,10 @@ import pytest
 from support.synthetic import motion_from_frames, waving
 
 import hapmotion
+from hapmotion.bhaptics.tact.text_compiled import tick_levels
 from hapmotion.errors import InputError, UsageError
 from hapmotion.layout import load_layout
-from hapmotion.track import HapticTrack
+from hapmotion.track import HapticTrack, covered_rows
 from hapmotion.track_files import load_track, save_track
 
 EXPECTED_HEADER = (
@@ -378,9 +379,6 @@ def test_a_track_at_an_absurd_rate_keeps_its_peak_on_the_tick(tmp_path):
 
 
 def test_the_tick_levels_pass_refuses_ticks_it_would_read_or_write_past():
-    from hapmotion.bhaptics.tact.text_compiled import tick_levels
-    from hapmotion.track import covered_rows
-
     rows = np.full((10, 4), 50.0)
     lo, hi = covered_rows(10, 60.0, 50.0)
     levels = np.empty((len(lo), 4), dtype=np.uint8)

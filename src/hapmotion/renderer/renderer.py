@@ -43,12 +43,18 @@ def resolve_params(preset: str | Params | None, params: Params | None = None, **
     return base.replace(**overrides) if overrides else base
 
 
+MAX_RENDER_FPS = 1e6
+"""Highest frame rate the frame loop takes: far above any capture (the motion readers stop at 2000 fps), and low
+enough that speeds and accelerations (a frame's motion times the rate, twice) stay finite: at 1e300 fps they
+overflowed, and the debug values went NaN."""
+
+
 def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
     """The frame loop's parameter vector ``(N_PARAMS,)`` for a method at a frame rate (``packed.P_*`` slots)."""
     if method not in METHODS:
         raise UsageError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    if not (np.isfinite(fps) and fps > 0):
-        raise UsageError(f"fps must be a positive number, not {fps}")
+    if not (np.isfinite(fps) and 0 < fps <= MAX_RENDER_FPS):
+        raise UsageError(f"fps must be a positive number up to {MAX_RENDER_FPS:g}, not {fps}")
     p = np.zeros(packed.N_PARAMS)
     p[packed.P_METHOD] = 1.0 if method == "baseline" else 0.0
     p[packed.P_WINDOW] = min(packed.MAX_WINDOW, max(1, int(round(params.threshold_window_s * fps))))
