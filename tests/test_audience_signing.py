@@ -6,12 +6,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
+from cryptography.hazmat.primitives import serialization
+from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey, Ed25519PublicKey
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from nacl.bindings import crypto_core_ed25519_is_valid_point
 
 from hapmotion.audience.signing import (ENVELOPE, KINDS, PREFIX_BYTES, BadSignature, SeatTrust, Unsigned,
-                                        VenueSigner, domain)
+                                        VenueSigner, domain, load_public_key, write_key_pair)
+from hapmotion.errors import UsageError
 from hapmotion.audience.wire import encode_frame
 from support.data import MOTION
 
@@ -92,3 +95,30 @@ def test_a_rehearsal_signs_nothing():
     signer = VenueSigner("concert", None)
     assert not signer.signed and signer.seal("frame", b"xyz") == b"xyz"
     assert SeatTrust.unsigned("concert").open("frame", b"xyz") == b"xyz"
+
+
+SMALL_ORDER = [bytes(32), (1).to_bytes(32, "little"),  # the zero key, the identity
+               bytes.fromhex("ecffffffffffffffffffffffffffffffffffffffffffffffffffffffffffff7f"),  # -1, order 2
+               bytes.fromhex("c7176a703d4dd84fba3c0b760d10670f2a2053fa2c39ccc64ec7fd7792ac037a")]  # order 8
+"""Public keys of small order (points listed by libsodium's ge25519_has_small_order, RFC 8032's curve)."""
+
+
+def test_a_public_key_of_small_order_or_off_the_curve_is_refused_when_read(tmp_path):
+    # such a key signs nothing: OpenSSL lets forged signatures pass under it (R of small order, S = 0), libsodium
+    # refuses every message; the key file is refused on its own line instead of a seat refusing the whole show
+    off_curve = next(bytes([i]) + bytes(31) for i in range(2, 256)
+                     if not crypto_core_ed25519_is_valid_point(bytes([i]) + bytes(31)))
+    for i, raw in enumerate(SMALL_ORDER + [off_curve]):
+        path = tmp_path / f"bad{i}.pub"
+        path.write_bytes(Ed25519PublicKey.from_public_bytes(raw).public_bytes(
+            serialization.Encoding.PEM, serialization.PublicFormat.SubjectPublicKeyInfo))
+        with pytest.raises(UsageError, match=f"venue public key {path}: .* off the curve or of small order"):
+            load_public_key(path)
+        # and a seat given one anyway accepts nothing signed "with" it
+        trust = SeatTrust("concert", Ed25519PublicKey.from_public_bytes(raw))
+        for r in SMALL_ORDER:
+            with pytest.raises(BadSignature):
+                trust.open("frame", ENVELOPE + r + bytes(32) + b"a forged frame")
+    venue = tmp_path / "venue.key"
+    public = write_key_pair(venue, tmp_path / "venue.pub")
+    assert load_public_key(tmp_path / "venue.pub") == public

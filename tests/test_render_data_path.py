@@ -9,12 +9,15 @@ import numpy as np
 import pytest
 
 import hapmotion
+from hapmotion.body.frame import DEFAULT_AXES
 from hapmotion.body.model import BodyModel
+from hapmotion.body.sizing_compiled import SIZING_JOINTS, body_samples
+from hapmotion.errors import UsageError
 from hapmotion.motion import Motion
 from hapmotion.renderer import packed, renderer as renderer_module
 from hapmotion.renderer.kernel import render_frames, row_in_range
 from hapmotion.renderer.params import get_preset
-from hapmotion.renderer.renderer import pack_params
+from hapmotion.renderer.renderer import MAX_RENDER_FPS, pack_params
 from hapmotion.skeleton.joints import JOINT_INDEX, RENDER_JOINTS
 from hapmotion.track import HapticTrack
 from support.data import MOTION
@@ -155,3 +158,112 @@ def test_without_debug_values_the_rows_are_the_same(clip):
         assert same(got.intensities, want.intensities) and got.debug == {} and got.meta == want.meta, chunk
     show = Show()
     assert same(render_show(show, motion, debug=False).intensities, render_show(show, motion).intensities)
+
+
+def test_positions_of_any_number_type_or_byte_order_render_as_float64():
+    # the compiled passes take native float64 only: float32, integer and big-endian positions are converted first,
+    # so they render as the same values in float64 do
+    motion = motion_from_frames(waving(90))
+    for positions in (motion.positions.astype(np.float32), np.round(motion.positions * 1000).astype(np.int64),
+                      motion.positions.astype(">f8")):
+        want = hapmotion.render(with_positions(motion, positions.astype(np.float64)), preset="felt")
+        got = hapmotion.render(with_positions(motion, positions), preset="felt")
+        assert same(got.intensities, want.intensities), positions.dtype
+        assert BodyModel.from_motion(with_positions(motion, positions)) == \
+            BodyModel.from_motion(with_positions(motion, positions.astype(np.float64)))
+
+
+def test_positions_without_the_canonical_rows_are_refused_not_read_past():
+    # the kernel and the body sizing read rows 0..31 and 3 coordinates without bounds checks: a motion of another
+    # shape must be refused before them, never read past its end
+    motion = motion_from_frames(waving(30))
+    for positions in (motion.positions[:, :5], motion.positions[:, :, :2], motion.positions[:, :, 0]):
+        with pytest.raises(ValueError, match=r"must be \(T, 32, 3\)"):
+            hapmotion.render(with_positions(motion, positions))
+    with pytest.raises(ValueError, match="joints: no row"):
+        BodyModel.from_positions(motion.positions[:, :5], JOINT_INDEX)
+    with pytest.raises(ValueError, match=r"must be \(T, J, 3\)"):
+        BodyModel.from_positions(motion.positions[:, :, :2], JOINT_INDEX)
+    for chunk in (0, -5):  # a negative chunk rendered no frame at all: a silent track
+        with pytest.raises(ValueError, match="chunk must be at least 1"):
+            hapmotion.render(motion, chunk=chunk)
+
+
+@pytest.mark.parametrize("preset", ["felt", "paper"])
+def test_one_frame_of_an_absurd_joint_is_held_over_not_felt_to_the_end(preset):
+    """A joint 1e155 m away (or more) for one frame is taken as not received: the renderer's squared speeds stay
+    finite, and two seconds later the rows are those of the motion without the glitch to 0.01 % (the joint held for
+    a frame, then back, passes through the filters and fades); they went silent for good."""
+    frames = waving(n=600)
+    want = hapmotion.render(motion_from_frames(frames), preset=preset).intensities
+    for joint in ("HAND_LEFT", "HAND_RIGHT", "PELVIS"):
+        for value in (1e155, -1e300, 2e4):
+            glitched = frames.copy()
+            glitched[120, JOINT_INDEX[joint]] = value
+            track = hapmotion.render(with_positions(motion_from_frames(frames), glitched), preset=preset)
+            assert np.abs(track.intensities[240:] - want[240:]).max() < 0.01, (joint, value)
+    r = renderer_module.Renderer("mst", preset, fps=60.0)
+    for t, frame in enumerate(frames[:200]):
+        r.step(frame if t != 120 else np.full((32, 3), 1e300))
+    assert np.isfinite(r._state).all()
+
+
+def test_the_kernel_refuses_arrays_it_would_read_or_write_past():
+    """numba checks no index, and the loop's views are borrowed: the kernel checks every array against the positions
+    once per call, so that a caller's mistake is a ValueError, never a read or write past an array."""
+    motion = motion_from_frames(waving(n=20))
+    layout = hapmotion.load_layout()
+    n, n_act = motion.n_frames, layout.n_actuators
+    prm = pack_params(get_preset("felt"), "mst", motion.fps)
+
+    def call(positions=motion.positions, rows=np.array([JOINT_INDEX[j] for j in RENDER_JOINTS], dtype=np.intp),
+             state=None, out=None, dbg_f=None, dbg_i=None, mirror=None, params=prm):
+        return render_frames(positions, rows, params, BodyModel.from_motion(motion).as_array(), layout.chart_table(),
+                             np.arange(n_act) if mirror is None else mirror,
+                             packed.new_state(n_act) if state is None else state,
+                             np.zeros((n, n_act)) if out is None else out,
+                             np.zeros((n, packed.N_DEBUG_F)) if dbg_f is None else dbg_f,
+                             np.zeros((n, packed.N_DEBUG_I), dtype=np.int8) if dbg_i is None else dbg_i)
+
+    assert call() is True
+    assert call(dbg_f=np.zeros((1, packed.N_DEBUG_F)), dbg_i=np.zeros((1, packed.N_DEBUG_I), dtype=np.int8))
+    wrong = {
+        "rows past the joints": dict(positions=np.ascontiguousarray(motion.positions[:, :5])),
+        "two coordinates": dict(positions=np.ascontiguousarray(motion.positions[:, :, :2])),
+        "a negative row": dict(rows=np.array([-1, 0, 1, 2, 3, 4, 5], dtype=np.intp)),
+        "too few rows": dict(rows=np.arange(3, dtype=np.intp)),
+        "fewer output rows": dict(out=np.zeros((n - 1, n_act))),
+        "no debug row": dict(dbg_f=np.zeros((0, packed.N_DEBUG_F)), dbg_i=np.zeros((0, packed.N_DEBUG_I), np.int8)),
+        "narrow debug": dict(dbg_f=np.zeros((n, 2))),
+        "a short state": dict(state=packed.new_state(n_act)[:-1].copy()),
+        "a mirror map past the motors": dict(mirror=np.r_[np.arange(n_act - 1), n_act]),
+        "short parameters": dict(params=prm[:3].copy()),
+    }
+    for name, kwargs in wrong.items():
+        with pytest.raises(ValueError, match="does not fit"):  # `name` says which, in the failure's locals
+            call(**kwargs)
+
+
+def test_the_body_sizing_pass_refuses_arrays_it_would_read_or_write_past():
+    positions = motion_from_frames(waving(n=20)).positions
+    rows = np.array([JOINT_INDEX[j] for j in SIZING_JOINTS], dtype=np.intp)
+    n = len(positions)
+    body_samples(positions, rows, DEFAULT_AXES, np.empty(n), np.empty(n), np.empty(n))
+    for args in ((positions[:, :5], rows, np.empty(n)), (positions[:, :, :2], rows, np.empty(n)),
+                 (positions, rows[:3].copy(), np.empty(n)), (positions, rows - 1, np.empty(n)),
+                 (positions, rows, np.empty(n - 1))):
+        p, r, width = args
+        with pytest.raises(ValueError, match="does not fit"):
+            body_samples(np.ascontiguousarray(p), r, DEFAULT_AXES, width, np.empty(n), np.empty(n))
+
+
+def test_a_frame_rate_past_the_loops_range_is_refused_not_rendered_as_nan():
+    """At 1e300 fps a frame's motion times the rate, twice, overflowed: the rows were silent and the debug values
+    NaN. Rates up to MAX_RENDER_FPS render finite values; past it, a one-line UsageError."""
+    for fps in (MAX_RENDER_FPS, 2000.0):
+        track = hapmotion.render(motion_from_frames(waving(n=60), fps=fps))
+        assert all(np.isfinite(v).all() for v in track.debug.values()) and np.isfinite(track.intensities).all()
+    for fps in (MAX_RENDER_FPS * 1.01, 1e300):
+        fast = motion_from_frames(waving(n=60), fps=fps)
+        with pytest.raises(UsageError, match="fps must be a positive number up to 1e"):
+            hapmotion.render(fast)

@@ -7,13 +7,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from support.data import MOTION
-from support.synthetic import motion_from_frames, pose
+from support.synthetic import motion_from_frames, pose, waving
 
 import hapmotion
 from hapmotion.renderer.packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, ST_LEAD_SPEED, ST_PENDING_N,
                                        ST_PREV_VEL, new_state)
 from hapmotion.renderer.params import PRESETS
-from hapmotion.renderer.steps.choice import leading_choice
+from hapmotion.renderer.steps.choice import MAX_LEAD_SAMPLE_MPS, leading_choice
 from hapmotion.renderer.steps.triangle import keep_on_hand_side
 from hapmotion.skeleton.joints import JOINT_INDEX, RENDER_JOINTS
 
@@ -55,6 +55,28 @@ def test_the_average_is_over_the_hold():
     state[ST_PREV_VEL + 3] = 0.5
     assert leading_choice(CHOICE_RIGHT, state, 1.5, 0.2, 0.1) == CHOICE_LEFT  # 0.9 vs 0.05: still the left
     assert state[ST_LEAD_SPEED] == pytest.approx(0.9 * (1.0 - 0.9 ** 50))
+
+
+def test_a_jump_of_the_other_hand_holds_the_lead_for_a_moment_only():
+    """A tracking glitch (the still hand jumping far for one frame, there and back) counts as 20 m/s at most: the
+    lead average stays finite, and the waving hand is the active joint again within 0.3 s, as far as the jump
+    goes. Uncapped, a jump of 1e6 m held the wrong hand for 3 s, one of 1e30 m for 14 s, and one of 1e200 m
+    left the average NaN for good."""
+    state = new_state(52)
+    for v in (1e200, np.inf):
+        state[ST_PREV_VEL + 3] = v
+        leading_choice(CHOICE_LEFT, state, 1.5, 0.2, 1.0)
+        assert state[ST_LEAD_SPEED + 1] == MAX_LEAD_SAMPLE_MPS
+    frames = waving(n=600)  # the left hand waves, the right hangs still
+    want = hapmotion.render(motion_from_frames(frames), preset="felt").debug["active"]
+    jump_at = 120
+    for jump in (2.0, 1e6, 1e30, 1e200):
+        glitched = frames.copy()
+        glitched[jump_at, JOINT_INDEX["HAND_RIGHT"], 0] += jump
+        with np.errstate(over="ignore", invalid="ignore"):  # 1e200 m squared
+            got = hapmotion.render(motion_from_frames(glitched), preset="felt").debug["active"]
+        differs = np.flatnonzero((got != want).reshape(len(got), -1).any(axis=1))
+        assert len(differs) == 0 or differs[-1] < jump_at + 0.3 * 60, (jump, (differs[-1] - jump_at) / 60)
 
 
 def _swap_lead(fps: float) -> tuple[np.ndarray, float]:

@@ -9,9 +9,10 @@ import pytest
 from support.synthetic import motion_from_frames, waving
 
 import hapmotion
+from hapmotion.bhaptics.tact.text_compiled import tick_levels
 from hapmotion.errors import InputError, UsageError
 from hapmotion.layout import load_layout
-from hapmotion.track import HapticTrack
+from hapmotion.track import HapticTrack, covered_rows
 from hapmotion.track_files import load_track, save_track
 
 EXPECTED_HEADER = (
@@ -361,3 +362,29 @@ def test_tact_writer_refuses_rows_outside_0_to_100_it_was_told_were_within(tmp_p
         with pytest.raises(ValueError, match="0..100"):
             save_track(HapticTrack.of_rows_in_range(rows, 50.0, ids), tmp_path / "bad.tact")
         assert not list(tmp_path.iterdir())
+
+
+def test_a_track_at_an_absurd_rate_keeps_its_peak_on_the_tick(tmp_path):
+    """At 1e300 fps every row falls in the first 20 ms tick, which takes their maximum: the peak on the last row is
+    in the file and in the resampled track (the rows a tick covers overflowed int64, and it covered one row)."""
+    ids = load_layout().actuators
+    rows = np.zeros((4, len(ids)))
+    rows[3, 5] = 80.0
+    for fps in (1e300, 1e30, 1e12):
+        track = HapticTrack(rows, fps, ids)
+        assert track.resample(50.0).intensities.max(axis=0)[5] == 80.0, fps
+        save_track(track, tmp_path / "fast.tact")
+        back = load_track(tmp_path / "fast.tact")
+        assert back.n_frames == 1 and back.intensities[0, list(back.actuators).index(ids[5])] == 80.0, fps
+
+
+def test_the_tick_levels_pass_refuses_ticks_it_would_read_or_write_past():
+    rows = np.full((10, 4), 50.0)
+    lo, hi = covered_rows(10, 60.0, 50.0)
+    levels = np.empty((len(lo), 4), dtype=np.uint8)
+    assert tick_levels(rows, lo, hi, levels) and (levels == 50).all()
+    for lo2, hi2, levels2 in ((lo, hi + 1, levels), (lo - 1, hi, levels), (lo, hi[:-1].copy(), levels),
+                              (lo, hi, levels[:-1].copy()), (lo, hi, np.empty((len(lo), 3), np.uint8)),
+                              (hi, hi, levels)):
+        with pytest.raises(ValueError, match="do not fit"):
+            tick_levels(rows, lo2, hi2, levels2)

@@ -28,8 +28,10 @@ def covered_rows(n_in: int, fps_in: float, fps: float) -> tuple[np.ndarray, np.n
     n_out = max(1, int(np.ceil(n_in * fps / fps_in - 1e-9))) if n_in else 0
     ratio = fps_in / fps  # input rows per output row
     j = np.arange(n_out, dtype=np.float64)
-    lo = np.minimum(np.floor(j * ratio + 1e-9).astype(np.int64), max(n_in - 1, 0))
-    hi = np.clip(np.ceil((j + 1) * ratio - 1e-9).astype(np.int64), lo + 1, n_in)  # exclusive
+    # bounded before the cast to int64: at a rate of 1e300 fps one row covers 2e298 rows, past int64's range (the
+    # cast gave the minimum int64, and the tick covered one row instead of all)
+    lo = np.floor(np.minimum(j * ratio, max(n_in - 1, 0)) + 1e-9).astype(np.int64)
+    hi = np.clip(np.ceil(np.minimum((j + 1) * ratio, n_in) - 1e-9).astype(np.int64), lo + 1, n_in)  # exclusive
     return lo, hi
 
 

@@ -28,7 +28,8 @@ from typing import Optional, Union
 
 from cryptography.hazmat.primitives import serialization
 from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey, Ed25519PublicKey
-from nacl.bindings import crypto_sign, crypto_sign_open, crypto_sign_seed_keypair
+from nacl.bindings import (crypto_core_ed25519_is_valid_point, crypto_sign, crypto_sign_open,
+                           crypto_sign_seed_keypair)
 from nacl.exceptions import BadSignatureError
 
 from ..errors import UsageError
@@ -85,6 +86,13 @@ def load_public_key(path: Union[str, "os.PathLike[str]"]) -> Ed25519PublicKey:
         raise UsageError(f"venue public key {path}: expected an Ed25519 public key (PEM)") from None
     if not isinstance(key, Ed25519PublicKey):
         raise UsageError(f"venue public key {path}: expected an Ed25519 key, found {type(key).__name__}")
+    # the file's 32 bytes are taken as they are; no venue key is off the curve or of small order (the zero key, the
+    # identity: a point that lax checks, OpenSSL's among them, let forged signatures pass with), and libsodium
+    # refuses every message under one: said now rather than as a seat that refuses the whole show
+    if not crypto_core_ed25519_is_valid_point(key.public_bytes(serialization.Encoding.Raw,
+                                                               serialization.PublicFormat.Raw)):
+        raise UsageError(f"venue public key {path}: expected a venue's Ed25519 public key, found a point off the "
+                         f"curve or of small order, which signs nothing")
     return key
 
 

@@ -81,10 +81,18 @@ class BodyModel:
         # numba on first use, as the renderer's kernel: see hapmotion.body.sizing_compiled
         from .sizing_compiled import SIZING_JOINTS, body_samples
 
+        # the compiled pass reads through the rows without bounds checks, and takes native float64 only: both
+        # checked here (any other number type or byte order is converted, as numpy converts it)
+        positions = np.asarray(positions, dtype=np.float64)
+        index = np.array([rows[name] for name in SIZING_JOINTS], dtype=np.intp)
+        if positions.ndim != 3 or positions.shape[2] != 3:
+            raise ValueError(f"positions must be (T, J, 3), got {positions.shape}")
+        if ((index < 0) | (index >= positions.shape[1])).any():
+            raise ValueError(f"positions (T, J, 3) have {positions.shape[1]} joints: no row {index.max()} for the "
+                             f"{', '.join(SIZING_JOINTS)} rows {index.tolist()}")
         n = positions.shape[0]
         width, sh, ph = np.empty(n), np.empty(n), np.empty(n)
-        body_samples(positions, np.array([rows[name] for name in SIZING_JOINTS], dtype=np.intp), DEFAULT_AXES,
-                     width, sh, ph)
+        body_samples(positions, index, DEFAULT_AXES, width, sh, ph)
         # the samples are this function's own: partitioned in place instead of copied (the same medians)
         width, sh, ph = (float(np.median(a, overwrite_input=True)) for a in (width, sh, ph))
         if not (width > 0.05):

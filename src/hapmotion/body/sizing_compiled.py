@@ -40,9 +40,18 @@ def body_samples(positions, rows, default_axes, width, shoulder_y, pelvis_y):
 
     The joints of a block of frames are first copied into a small table (a plain copy loop keeps many reads from
     memory in flight; the arithmetic's long chains do not): a fifth faster on a ``(T, 32, 3)`` motion."""
+    n = positions.shape[0]
+    # numba checks no index: the arrays are checked against the positions once, a ValueError instead of a read or
+    # write past one
+    fits = (positions.shape[2] >= 3 and rows.shape[0] == 5 and default_axes.shape[0] >= 3
+            and default_axes.shape[1] >= 3 and width.shape[0] >= n and shoulder_y.shape[0] >= n
+            and pelvis_y.shape[0] >= n)
+    for j in range(rows.shape[0]):
+        fits = fits and 0 <= rows[j] < positions.shape[1]
+    if not fits:
+        raise ValueError("body_samples: an array does not fit the positions (T, J, 3) and the rows they are read by")
     axes = default_axes.copy()
     block = np.empty((_BLOCK, 5, 3))
-    n = positions.shape[0]
     for b0 in range(0, n, _BLOCK):
         m = min(_BLOCK, n - b0)
         for i in range(m):

@@ -25,7 +25,8 @@ from ..body.frame import body_axes_into, to_world_into
 from ..layout import CHART_SHOULDER_LEFT, CHART_SHOULDER_RIGHT
 from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENERGY, D_HIT, D_HIT_BODY, D_LEVEL,
                      D_TP, D_U, D_V, DI_ACTIVE_L, DI_ACTIVE_R, DI_CHART, J_HAND_L, J_HAND_R, J_NECK, J_PELVIS,
-                     J_SHOULDER_L, J_SHOULDER_R, J_TORSO, N_DEBUG_F, N_DEBUG_I, N_RENDER_JOINTS, P_ATTACK,
+                     J_SHOULDER_L, J_SHOULDER_R, J_TORSO, N_DEBUG_F, N_DEBUG_I, N_PARAMS, N_RENDER_JOINTS,
+                     N_STATE_BASE, N_SURFACE, P_ATTACK,
                      P_BETA, P_BOOST, P_BOOST_FULL, P_C, P_DEAD, P_FAR, P_FLOOR, P_FPS, P_IDLE_FARTHER, P_IFAR,
                      P_MAX_LEVEL, P_METHOD, P_NEAR, P_PCT, P_PHANTOM_ENERGY, P_REL_DECAY, P_RELEASE, P_SIDE_BLEND,
                      P_SILENCE, P_TOL, P_W_GAIN, P_W_MAX, P_WINDOW, S_TPX, S_TPY, S_TPZ, ST_AXES, ST_CHOICE,
@@ -118,6 +119,19 @@ def render_frames(positions, rows, prm, surf, charts, mirror_map, state, out, db
     True when every value written to ``out`` is within 0..100 (none NaN).
     """
     n_act = out.shape[1]
+    # numba checks no index: every array is checked against the positions once here, so that no caller can make the
+    # loop read or write past one (a few dozen comparisons a call)
+    n = positions.shape[0]
+    fits = (positions.shape[2] >= 3 and rows.shape[0] == N_RENDER_JOINTS and out.shape[0] >= n
+            and prm.shape[0] >= N_PARAMS and surf.shape[0] >= N_SURFACE and state.shape[0] >= N_STATE_BASE + n_act
+            and mirror_map.shape[0] >= n_act and dbg_f.shape[1] >= N_DEBUG_F and dbg_i.shape[1] >= N_DEBUG_I
+            and (n == 0 or (dbg_f.shape[0] >= 1 and dbg_i.shape[0] >= 1)))  # frame t's debug: row min(t, last)
+    for j in range(rows.shape[0]):
+        fits = fits and 0 <= rows[j] < positions.shape[1]
+    for k in range(n_act):
+        fits = fits and 0 <= mirror_map[k] < n_act
+    if not fits:
+        raise ValueError("render_frames: an array does not fit the positions (T, J, 3) and the rows they are read by")
     baseline = prm[P_METHOD] > 0.5
     window = int(prm[P_WINDOW])
     # scratch, allocated once per call

@@ -43,12 +43,18 @@ def resolve_params(preset: str | Params | None, params: Params | None = None, **
     return base.replace(**overrides) if overrides else base
 
 
+MAX_RENDER_FPS = 1e6
+"""Highest frame rate the frame loop takes: far above any capture (the motion readers stop at 2000 fps), and low
+enough that speeds and accelerations (a frame's motion times the rate, twice) stay finite: at 1e300 fps they
+overflowed, and the debug values went NaN."""
+
+
 def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
     """The frame loop's parameter vector ``(N_PARAMS,)`` for a method at a frame rate (``packed.P_*`` slots)."""
     if method not in METHODS:
         raise UsageError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    if not (np.isfinite(fps) and fps > 0):
-        raise UsageError(f"fps must be a positive number, not {fps}")
+    if not (np.isfinite(fps) and 0 < fps <= MAX_RENDER_FPS):
+        raise UsageError(f"fps must be a positive number up to {MAX_RENDER_FPS:g}, not {fps}")
     p = np.zeros(packed.N_PARAMS)
     p[packed.P_METHOD] = 1.0 if method == "baseline" else 0.0
     p[packed.P_WINDOW] = min(packed.MAX_WINDOW, max(1, int(round(params.threshold_window_s * fps))))
@@ -243,6 +249,12 @@ def render(
     ``debug=False`` leaves the track's ``debug`` empty (a caller that only writes the rows, such as ``hapmotion
     render`` to ``.tact``: an hour at 120 fps keeps 58 MB less); the rows are the same.
     """
+    # the kernel reads the canonical rows of the positions without bounds checks: their shape is checked here
+    positions = np.asarray(motion.positions, dtype=np.float64)
+    if positions.ndim != 3 or positions.shape[1:] != (32, 3):
+        raise ValueError(f"motion positions must be (T, 32, 3), got {positions.shape}")
+    if chunk < 1:
+        raise ValueError(f"chunk must be at least 1 frame, got {chunk}")
     body = body or BodyModel.from_motion(motion)
     r = Renderer(method, preset, mirror=mirror, fps=motion.fps, body=body, layout=layout, params=params)
     # The kernel writes each chunk straight into the whole track's arrays (row slices of C-ordered arrays are
@@ -253,7 +265,6 @@ def render(
     n_dbg = n if debug else 1  # without debug, one row that every frame overwrites
     dbg_f = np.zeros((n_dbg, packed.N_DEBUG_F))
     dbg_i = np.zeros((n_dbg, packed.N_DEBUG_I), dtype=np.int8)
-    positions = np.asarray(motion.positions, dtype=np.float64)
     in_range = True
     for start in range(0, n, chunk):
         stop = min(n, start + chunk)

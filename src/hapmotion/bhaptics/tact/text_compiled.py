@@ -32,7 +32,13 @@ def tick_levels(rows, lo, hi, levels):
     the maximum of ``rows`` ``(T, N)`` float64 (0..100 %; any layout, writable or not) ``lo[j]`` to ``hi[j] - 1``
     for tick ``j``
     (:func:`hapmotion.track.covered_rows`). Returns False (``levels`` incomplete) when a level would be outside
-    0..MAX_LEVEL (a NaN included)."""
+    0..MAX_LEVEL (a NaN included); ValueError when ``lo``, ``hi`` or ``levels`` do not fit ``rows`` (numba checks
+    no index: checked once here rather than read or written past)."""
+    fits = hi.shape[0] == lo.shape[0] and levels.shape[0] >= lo.shape[0] and levels.shape[1] >= rows.shape[1]
+    for j in range(lo.shape[0]):
+        fits = fits and 0 <= lo[j] < hi[j] <= rows.shape[0]
+    if not fits:
+        raise ValueError("tick_levels: the ticks' rows do not fit the track's rows")
     for j in range(lo.shape[0]):
         for k in range(rows.shape[1]):
             v = rows[lo[j], k]

@@ -147,15 +147,19 @@ def appended_weights(state, above, excess, n, far_left, held, w_excess):
 
 
 @njit(cache=True, inline="always")
-def smooth_hand_speeds(state, slot, alpha):
+def smooth_hand_speeds(state, slot, alpha, cap):
     """Each hand's speed relative to J_T (``|v_t|`` of :func:`hand_accelerations`, run first this frame) averaged
-    into ``state[slot:slot + 2]`` (m/s) by a one-pole filter ``s += alpha (|v_t| - s)``."""
+    into ``state[slot:slot + 2]`` (m/s) by a one-pole filter ``s += alpha (|v_t| - s)``; with ``cap`` > 0 (m/s) a
+    sample enters at ``cap`` at most (inf and NaN included)."""
     for h in range(2):
         v2 = 0.0
         for k in range(3):
             v = state[ST_PREV_VEL + 3 * h + k]
             v2 += v * v
-        state[slot + h] += alpha * (np.sqrt(v2) - state[slot + h])
+        speed = np.sqrt(v2)
+        if cap > 0.0 and not (speed <= cap):
+            speed = cap
+        state[slot + h] += alpha * (speed - state[slot + h])
 
 
 @njit(cache=True, inline="always")
@@ -166,7 +170,7 @@ def update_speeds(state, alpha, start, full, speed_n):
     ``s += alpha (|v_t| - s)`` so that capture noise does not read as motion. ``speed_n`` ``(2,)`` is written:
     ``clip((s - start) / (full - start), 0, 1)`` (m/s in, 0..1 out), 0 for a hand slower than ``start``.
     """
-    smooth_hand_speeds(state, ST_SPEED, alpha)
+    smooth_hand_speeds(state, ST_SPEED, alpha, 0.0)  # uncapped; the normalised drive below is clipped to 1
     for h in range(2):
         speed_n[h] = clip((state[ST_SPEED + h] - start) / max(full - start, 1e-9), 0.0, 1.0)
 
@@ -275,12 +279,19 @@ def held_choice(choice, idle, state, hold_frames):
     return current
 
 
+MAX_LEAD_SAMPLE_MPS = 20.0
+"""Largest hand speed (m/s, relative to J_T) one frame gives :func:`leading_choice`'s average: more than twice the
+fastest hand of the bundled recordings (7.5 m/s, the dance-short recording at 30 fps). A hand that jumps farther
+between two frames is a tracking glitch: uncapped, one jump of 1 km kept that hand leading for seconds, and of
+1e200 m made the average infinite, then NaN, for good."""
+
+
 @njit(cache=True, inline="always")
 def leading_choice(choice, state, ratio, min_speed, alpha):
     """Beyond the paper: a hand that clearly leads is the one active joint, at once.
 
     Each hand's speed relative to J_T (``|v_t|`` of :func:`hand_accelerations`, run first this frame) is averaged
-    by a one-pole filter ``s += alpha (|v_t| - s)`` (``alpha`` from the choice hold's time constant; ``state
+    by a one-pole filter ``s += alpha (min(|v_t|, MAX_LEAD_SAMPLE_MPS) - s)`` (``alpha`` from the choice hold's time constant; ``state
     [ST_LEAD_SPEED]``, m/s). A hand leads when its average is at least ``min_speed`` (m/s) and ``ratio`` times the
     other's. Its choice (``CHOICE_LEFT`` / ``CHOICE_RIGHT``) replaces ``choice`` (the held acceleration choice) and
     any pending change is dropped; with no hand leading (or ``ratio`` 0) ``choice`` is returned as it is.
@@ -290,7 +301,7 @@ def leading_choice(choice, state, ratio, min_speed, alpha):
     ``min_speed``; between two moving hands the lead changes only when the averages swap by ``ratio`` squared, and
     between the two ratios (``ratio`` one way, ``1 / ratio`` the other) the held choice stays, so it does not flip.
     """
-    smooth_hand_speeds(state, ST_LEAD_SPEED, alpha)
+    smooth_hand_speeds(state, ST_LEAD_SPEED, alpha, MAX_LEAD_SAMPLE_MPS)
     if ratio <= 0.0:
         return choice
     s_l = state[ST_LEAD_SPEED]
