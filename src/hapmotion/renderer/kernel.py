@@ -34,6 +34,7 @@ from .packed import (CHOICE_BOTH, CHOICE_LEFT, CHOICE_RIGHT, D_DIST, D_DP, D_ENE
                      P_ACTIVE_SPEED, P_OPPOSITE_W, P_SPEED_ALPHA, P_SPEED_W, P_INEAR, P_MAIN_FLAT, P_HOLD, P_DP_ALPHA, P_TORSO_START, P_TORSO_FULL, P_SLEEVE_SHARE, P_SLEEVE_REACH,
                      P_LIFT_FRAME, P_DRIVE_MOTORS, P_W_WINDOW, P_BOTH_HELD, P_LEAD_RATIO, P_LEAD_ALPHA, P_SIDE_MARGIN)
 from .borrowed import borrowed, keep_alive
+from .compiled_cache import forget_if_changed, frame_loop_sources
 from .steps.choice import (active_hand, active_hands, leading_choice, appended_weights, choose_weighted, choose_active, hand_accelerations, held_choice, moving_only,
                            update_speeds, update_thresholds, upper_body_speed)
 from .steps.held_joints import hold_joints
@@ -45,6 +46,9 @@ from .steps.sleeves import carried_hand, carry_on_sleeve
 from .steps.triangle import (dynamic_point, glide, keep_on_hand_side, previous_dynamic_point, salient_triangle,
                              speed_weighted)
 from .steps.warping import locate_on_body
+
+# numba checks only this file for changes, the loop inlines others: forget a cache they outdated (compiled_cache)
+forget_if_changed(__file__, frame_loop_sources())
 
 
 @njit(cache=True, inline="always")
