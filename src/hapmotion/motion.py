@@ -194,20 +194,24 @@ def new_motion(
         raise InputError(source, None, "expected at least one frame, found 0")
     if not np.isfinite(fps) or fps <= 0:
         raise InputError(source, "frame rate", f"expected a positive frame rate, found {fps}")
-    finite = np.empty((n, N_JOINTS), dtype=bool)
+    # which joints are finite in some frame and in every frame, a block of frames at a time
+    somewhere, everywhere = np.zeros(N_JOINTS, dtype=bool), np.ones(N_JOINTS, dtype=bool)
     for start in range(0, n, _FINITE_BLOCK):
-        # x * 0 is 0 for every finite x and NaN for NaN and inf: a joint is finite where the three sum to 0. Five
-        # times faster than isfinite(...).all(axis=2) over the axis of 3, and no (T, 32, 3) temporary
-        block = pos[start:start + _FINITE_BLOCK]
-        with np.errstate(invalid="ignore"):  # inf * 0 is the NaN looked for, not a warning for the reader's notes
-            zero = block[:, :, 0] * 0.0
-            zero += block[:, :, 1] * 0.0
-            zero += block[:, :, 2] * 0.0
-        np.equal(zero, 0.0, out=finite[start:start + _FINITE_BLOCK])
-    ok = finite if valid is None else (np.asarray(valid, dtype=bool) & finite)
-    present = ok.any(axis=0)
+        block = _finite_frames(pos[start:start + _FINITE_BLOCK])
+        somewhere |= block.any(axis=0)
+        everywhere &= block.all(axis=0)
+    if valid is None and confidence is None and (everywhere | ~somewhere).all():
+        # each joint is finite in every frame or in none (a BVH file): the (T, 32) masks below would say nothing
+        # more, and are not made (14 MB for an hour at 120 fps)
+        present, ok = somewhere, None
+    else:
+        finite = np.empty((n, N_JOINTS), dtype=bool)
+        for start in range(0, n, _FINITE_BLOCK):
+            finite[start:start + _FINITE_BLOCK] = _finite_frames(pos[start:start + _FINITE_BLOCK])
+        ok = finite if valid is None else (np.asarray(valid, dtype=bool) & finite)
+        present = ok.any(axis=0)
     der = np.zeros(N_JOINTS, dtype=bool) if derived is None else np.asarray(derived, dtype=bool).copy()
-    if confidence is None and ok[:, present].all():
+    if confidence is None and (ok is None or ok[:, present].all()):
         # every frame has the same confidences (a BVH file): one row, repeated by a read-only view
         row = np.where(present, np.where(der, 0.5, 1.0), 0.0).astype(np.float32)
         conf = np.broadcast_to(row, (n, N_JOINTS))
@@ -218,14 +222,15 @@ def new_motion(
             conf = np.clip(np.asarray(confidence, dtype=np.float32), 0.0, 1.0).copy()
         conf[~ok] = 0.0
         conf[:, ~present] = 0.0
-    filled = fill_gaps(pos, ok, present)
+    filled = fill_gaps(pos, ok, present) if ok is not None else 0
     pos[:, ~present, :] = np.nan
     der &= present
     meta = dict(meta or {})
     meta.setdefault("path", source)
     meta.setdefault("notes", [])
     meta["filled_frames"] = int(filled)
-    meta["filled_by_joint"] = {JOINTS[j]: int((~ok[:, j]).sum()) for j in range(N_JOINTS) if present[j] and (~ok[:, j]).any()}
+    meta["filled_by_joint"] = {} if ok is None else {
+        JOINTS[j]: int((~ok[:, j]).sum()) for j in range(N_JOINTS) if present[j] and (~ok[:, j]).any()}
     motion = Motion(positions=pos, fps=float(fps), present=present, derived=der, confidence=conf, meta=meta)
     missing = motion.missing_render_joints()
     if missing:
@@ -241,8 +246,19 @@ def new_motion(
     return motion
 
 
-_FINITE_BLOCK = 65536
-"""Frames :func:`new_motion` checks for finite values at a time."""
+_FINITE_BLOCK = 8192
+"""Frames :func:`new_motion` checks for finite values at a time (its temporaries: 2 MB)."""
+
+
+def _finite_frames(block: np.ndarray) -> np.ndarray:
+    """``(k, 32)`` bool: which joints of ``block`` (``(k, 32, 3)``) are finite in each frame."""
+    # x * 0 is 0 for every finite x and NaN for NaN and inf: a joint is finite where the three sum to 0. Five
+    # times faster than isfinite(...).all(axis=2) over the axis of 3, and no (k, 32, 3) temporary
+    with np.errstate(invalid="ignore"):  # inf * 0 is the NaN looked for, not a warning for the reader's notes
+        zero = block[:, :, 0] * 0.0
+        zero += block[:, :, 1] * 0.0
+        zero += block[:, :, 2] * 0.0
+    return zero == 0.0
 
 _COPY_BLOCK = 16384
 """Frames :meth:`Motion.render_joints_only` copies at a time: with ``let_go``, the 12 MB of the whole motion's
