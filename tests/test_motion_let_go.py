@@ -11,7 +11,7 @@ import pytest
 
 import hapmotion
 from hapmotion import motion as motion_module
-from hapmotion.motion import _COPY_BLOCK, _FINITE_BLOCK, new_motion, new_positions
+from hapmotion.motion import CAN_RELEASE_PAGES, COPY_BLOCK, FINITE_BLOCK, new_motion, new_positions
 from hapmotion.show import render_show
 from hapmotion.show.offline import render_input
 from hapmotion.show.settings import Show
@@ -19,7 +19,7 @@ from hapmotion.skeleton.joints import JOINT_INDEX, RENDER_JOINTS
 from support.data import MOTION
 from support.synthetic import waving
 
-linux_only = pytest.mark.skipif(not sys.platform.startswith("linux") or not motion_module._CAN_RELEASE,
+linux_only = pytest.mark.skipif(not sys.platform.startswith("linux") or not CAN_RELEASE_PAGES,
                                 reason="pages given back read 0.0 on Linux")
 
 
@@ -58,7 +58,7 @@ def test_a_let_go_bvh_motion_gives_the_plain_copy_and_the_same_show(name):
 
 @linux_only
 def test_the_let_go_motion_gives_its_pages_back_block_by_block():
-    n = 3 * _COPY_BLOCK + 5  # three whole blocks and a short one
+    n = 3 * COPY_BLOCK + 5  # three whole blocks and a short one
     plain = long_motion(n).render_joints_only()
     read = long_motion(n)
     before = read.positions.copy()
@@ -74,12 +74,12 @@ def test_the_let_go_motion_gives_its_pages_back_block_by_block():
 
 
 def test_without_let_go_or_on_another_array_the_motion_is_left_as_it_was(monkeypatch):
-    read = long_motion(2 * _COPY_BLOCK)
+    read = long_motion(2 * COPY_BLOCK)
     before = read.positions.copy()
     read.render_joints_only()
     assert same(read.positions, before)
     # a reader's array where pages cannot be given back (Windows): an ordinary array, and the plain copy
-    monkeypatch.setattr(motion_module, "_CAN_RELEASE", False)
+    monkeypatch.setattr(motion_module, "CAN_RELEASE_PAGES", False)
     ordinary = new_positions(10)
     assert ordinary.base is None and np.isnan(ordinary).all()
     other = new_motion(before.copy(), 120.0, source="synthetic", take=True)
@@ -93,7 +93,7 @@ def test_new_positions_of_no_frames_is_an_empty_array():
 
 
 def test_the_finite_check_without_masks_and_with_a_gap_past_the_first_block():
-    n = 2 * _FINITE_BLOCK + 100
+    n = 2 * FINITE_BLOCK + 100
     frames = np.repeat(waving(n=1)[0][None], n, axis=0)
     frames[:, JOINT_INDEX["HANDTIP_LEFT"]] = np.nan  # absent throughout
     clean = new_motion(frames.copy(), 60.0, source="synthetic")
@@ -103,7 +103,7 @@ def test_the_finite_check_without_masks_and_with_a_gap_past_the_first_block():
     # the left hand climbs by 1 mm a frame and misses frames in the second block: filled by the straight line
     hand = JOINT_INDEX["HAND_LEFT"]
     frames[:, hand, 1] = np.arange(n) * 0.001
-    gap = slice(_FINITE_BLOCK + 10, _FINITE_BLOCK + 13)
+    gap = slice(FINITE_BLOCK + 10, FINITE_BLOCK + 13)
     want = frames[gap, hand].copy()
     frames[gap, hand] = np.nan
     gappy = new_motion(frames, 60.0, source="synthetic")

@@ -132,8 +132,8 @@ class Motion:
         confidence = np.zeros((N_JOINTS, n), dtype=np.float32)
         release = _page_release(self.positions) if let_go else None
         kept = np.flatnonzero(keep)
-        for start in range(0, n, _COPY_BLOCK):
-            part = self.positions[start:start + _COPY_BLOCK]
+        for start in range(0, n, COPY_BLOCK):
+            part = self.positions[start:start + COPY_BLOCK]
             for j in kept:
                 positions[j, start:start + part.shape[0]] = part[:, j, :]
             if release is not None:
@@ -196,8 +196,8 @@ def new_motion(
         raise InputError(source, "frame rate", f"expected a positive frame rate, found {fps}")
     # which joints are finite in some frame and in every frame, a block of frames at a time
     somewhere, everywhere = np.zeros(N_JOINTS, dtype=bool), np.ones(N_JOINTS, dtype=bool)
-    for start in range(0, n, _FINITE_BLOCK):
-        block = _finite_frames(pos[start:start + _FINITE_BLOCK])
+    for start in range(0, n, FINITE_BLOCK):
+        block = _finite_frames(pos[start:start + FINITE_BLOCK])
         somewhere |= block.any(axis=0)
         everywhere &= block.all(axis=0)
     if valid is None and confidence is None and (everywhere | ~somewhere).all():
@@ -206,8 +206,8 @@ def new_motion(
         present, ok = somewhere, None
     else:
         finite = np.empty((n, N_JOINTS), dtype=bool)
-        for start in range(0, n, _FINITE_BLOCK):
-            finite[start:start + _FINITE_BLOCK] = _finite_frames(pos[start:start + _FINITE_BLOCK])
+        for start in range(0, n, FINITE_BLOCK):
+            finite[start:start + FINITE_BLOCK] = _finite_frames(pos[start:start + FINITE_BLOCK])
         ok = finite if valid is None else (np.asarray(valid, dtype=bool) & finite)
         present = ok.any(axis=0)
     der = np.zeros(N_JOINTS, dtype=bool) if derived is None else np.asarray(derived, dtype=bool).copy()
@@ -246,7 +246,7 @@ def new_motion(
     return motion
 
 
-_FINITE_BLOCK = 8192
+FINITE_BLOCK = 8192
 """Frames :func:`new_motion` checks for finite values at a time (its temporaries: 2 MB)."""
 
 
@@ -260,12 +260,12 @@ def _finite_frames(block: np.ndarray) -> np.ndarray:
         zero += block[:, :, 2] * 0.0
     return zero == 0.0
 
-_COPY_BLOCK = 16384
+COPY_BLOCK = 16384
 """Frames :meth:`Motion.render_joints_only` copies at a time: with ``let_go``, the 12 MB of the whole motion's
 frames it gives back after each block bound how far the copy runs ahead of the memory returned."""
 
 
-_CAN_RELEASE = all(hasattr(mmap, name) for name in ("MADV_DONTNEED", "MAP_PRIVATE", "MAP_ANONYMOUS")) \
+CAN_RELEASE_PAGES = all(hasattr(mmap, name) for name in ("MADV_DONTNEED", "MAP_PRIVATE", "MAP_ANONYMOUS")) \
     and hasattr(mmap.mmap, "madvise")
 """Whether memory-map pages can be given back before the map is closed (Linux, macOS; not Windows)."""
 
@@ -277,7 +277,7 @@ def new_positions(n_frames: int, fill: float = np.nan) -> np.ndarray:
     time. A reader that fills a whole recording (the BVH reader) allocates with this. Where pages cannot be given
     back (no ``madvise``: Windows) it is an ordinary array."""
     nbytes = n_frames * N_JOINTS * 3 * 8
-    if nbytes == 0 or not _CAN_RELEASE:
+    if nbytes == 0 or not CAN_RELEASE_PAGES:
         return np.full((n_frames, N_JOINTS, 3), fill)
     # private: a shared map (mmap's default) would be shared memory, which MADV_DONTNEED does not free
     pages = mmap.mmap(-1, nbytes, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
@@ -293,7 +293,7 @@ def _page_release(positions: np.ndarray):
     base = positions
     while isinstance(base, (np.ndarray, memoryview)):
         base = base.base if isinstance(base, np.ndarray) else base.obj
-    if not _CAN_RELEASE or not isinstance(base, mmap.mmap) or not positions.flags.c_contiguous:
+    if not CAN_RELEASE_PAGES or not isinstance(base, mmap.mmap) or not positions.flags.c_contiguous:
         return None
     origin = np.frombuffer(base, dtype=np.uint8).__array_interface__["data"][0]
     offset = positions.__array_interface__["data"][0] - origin
