@@ -59,8 +59,9 @@ def command(motion_file: Optional[str], output: str, show: Show, motion_opts: di
     out_path = Path(output)
     motion = None
     if motion_file is not None:  # in audio mode too: the music then plays on the motion's timeline
-        # only what the render reads is kept: an hour at 120 fps lets 330 MB of positions go before rendering
-        motion = render_input(show, read_motion(motion_file, **(motion_opts or {})))
+        # only what the render reads is kept: an hour at 120 fps lets 330 MB of positions go before rendering,
+        # a block of frames at a time as the render joints are copied (the read motion is used by nothing else)
+        motion = render_input(show, read_motion(motion_file, **(motion_opts or {})), let_go=True)
     total = motion.n_frames if motion is not None else 0
     update, close = progress_bar(total, "rendering")
     try:

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..limits import check_frames
-from ..motion import Motion, new_motion
+from ..motion import Motion, new_motion, new_positions
 from ..skeleton import naming as skeletons
 from ..skeleton.derived import derive_missing, missing_needed
 from ..skeleton.joints import JOINT_INDEX, JOINTS, N_JOINTS, PARENTS
@@ -127,7 +127,7 @@ def read_bvh(path: str | os.PathLike[str], options: ReaderOptions = ReaderOption
 
     canon = list(mapping)
     cols = [JOINT_INDEX[c] for c in canon]
-    positions = np.full((head.n_frames, N_JOINTS, 3), np.nan)
+    positions = new_positions(head.n_frames)  # its pages can go back early (Motion.render_joints_only's let_go)
     plan = fk_plan(head.joints, [head.index(mapping[c]) for c in canon], cols)
     for start, block in channel_blocks(head, options.limits):
         fk_into(plan, block, positions, start)

@@ -232,9 +232,10 @@ _FRAMES = re.compile(r"^\s*Frames\s*:\s*(\S+)\s*$", re.I)
 _FRAME_TIME = re.compile(r"^\s*Frame\s+Time\s*:\s*(\S+)\s*$", re.I)
 
 
-BLOCK_BYTES = 8 << 20
+BLOCK_BYTES = 2 << 20
 """Bytes of MOTION rows read and parsed at a time: the reader holds one block of text and its numbers, never the
-whole file (an hour of 120 fps motion is 320-570 MB of text)."""
+whole file (an hour of 120 fps motion is 320-570 MB of text). 2 MB reads as fast as 8 MB and holds 12 MB less
+beside the positions of an hour at 120 fps."""
 
 
 def read_head(path: str | os.PathLike[str], limits: InputLimits = DEFAULT_LIMITS) -> BvhHead:

@@ -54,15 +54,16 @@ def render_motion(show: Show, motion: Motion, progress: Progress = None, debug: 
     return track
 
 
-def render_input(show: Show, motion: Motion) -> Motion:
+def render_input(show: Show, motion: Motion, let_go: bool = False) -> Motion:
     """``motion`` as :func:`render_motion` renders it with ``show``, and no more: resampled to ``show.fps`` (if
     set) and holding only the joints the renderer reads (:meth:`~hapmotion.motion.Motion.render_joints_only`),
     and the glove layer's (:data:`~hapmotion.show.hands.HAND_JOINTS`) when the show's rig has gloves. A
     caller that reads a motion only to render it keeps this instead of the motion (``hapmotion render``: the 330 MB
-    of an hour at 120 fps are let go before rendering); the track is the same, bit for bit."""
+    of an hour at 120 fps are let go before rendering); the track is the same, bit for bit. ``let_go=True``:
+    ``motion`` is not used again, and its memory goes back as the joints are copied (``render_joints_only``)."""
     if show.fps is not None:
         motion = motion.resample(show.fps)
-    return motion.render_joints_only(HAND_JOINTS if show.load_layout().hand_devices else ())
+    return motion.render_joints_only(HAND_JOINTS if show.load_layout().hand_devices else (), let_go=let_go)
 
 
 def hand_skeleton(motion: Motion) -> np.ndarray:
