@@ -14,7 +14,7 @@ import pytest
 import soundfile as sf
 from support.sync_signals import SR, noisy, played, real_song, song, speech_like
 
-from hapmotion.audience.seat_sync import HeardClock, ReferenceStore, SyncSettings
+from hapmotion.audience.seat_sync import STEP_S, WINDOW_S, HeardClock, ReferenceStore, SyncSettings
 from hapmotion.audience.sync_estimator import estimate
 from hapmotion.audience.sync_reference import ReferencePublisher, SongReference, decode_batch, encode_batch
 from hapmotion.audience.sync_tracker import DelayTracker
@@ -26,10 +26,10 @@ from hapmotion.errors import UsageError
 MAX_DELAY = 5.0
 
 
-def follow(heard: np.ndarray, source: np.ndarray, step_s: float = 0.25, window_s: float = 3.0):
+def follow(heard: np.ndarray, source: np.ndarray, step_s: float = STEP_S, window_s: float = WINDOW_S):
     """Run the seat's matching over ``heard`` (local time = its own sample time) against the reference levels of
     ``source`` (media time = its sample time), as the seat does: levels streamed in 20 ms blocks, a 3 s window every
-    ``step_s``, offsets from -0.25 s to ``MAX_DELAY``. Returns [(local time, Estimate or None, SyncState)]."""
+    ``step_s`` (asking for the score at the held offset), offsets from -0.25 s to ``MAX_DELAY``. Returns [(local time, Estimate or None, SyncState)]."""
     ref = dequantise(quantise(signal_levels(source, SR)))
     stream = LevelStream(SR)
     heard_levels = np.concatenate([stream.push(heard[k:k + 441]) for k in range(0, heard.size, 441)])
@@ -46,8 +46,8 @@ def follow(heard: np.ndarray, source: np.ndarray, step_s: float = 0.25, window_s
         r = np.full((span, N_BANDS), np.nan)
         ok = (idx >= 0) & (idx < ref.shape[0])
         r[ok] = ref[idx[ok]]
-        est = estimate(heard_levels[end - n:end], t_heard, r, first / RATE)
         at = t_heard + (n - 1) / RATE
+        est = estimate(heard_levels[end - n:end], t_heard, r, first / RATE, near=tracker.offset_at(at))
         out.append((at, est, tracker.update(est, at)))
     return out, tracker
 
