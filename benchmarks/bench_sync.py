@@ -283,8 +283,9 @@ def figures(v: Viewer, seconds: float) -> Figures:
     was_locked = False
     for at, est, state in history:
         locked = state.state == "locked" and state.offset_s is not None
-        if os.environ.get("BENCH_SYNC_DEBUG") and v.follows_media and at - music_start < 8:
-            print(f"  {v.name} {at - music_start:6.2f} {state.state:9s} "
+        if os.environ.get("BENCH_SYNC_DEBUG") and v.follows_media and (at - music_start < 8 or 0 <= at - jump_t < 8):
+            print(f"  {v.name} {at - music_start:6.2f} {state.state:9s} {state.jumps} "
+                  f"{'' if state.offset_s is None else f'{(state.offset_s - v.offset_truth(at)) * 1000:7.1f}'} "
                   f"{'' if est is None else f'err {(est.offset_s - v.offset_truth(at)) * 1000:7.1f} ms score {est.score:.2f} margin {est.margin:.2f}'}")
         if not v.follows_media or v.name == "other song":
             false_locks += int(locked and not was_locked)
