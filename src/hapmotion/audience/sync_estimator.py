@@ -47,9 +47,6 @@ ratio above, and two different songs that start together lined up on their first
 
 NEAR_S = 0.045
 """How close to a held offset a peak counts as that offset (the tracker's gate)."""
-LOCAL_S = 3.0
-"""How far from a held offset a stream's jump is looked for first: players re-sync at drifts of 0.1-0.9 s, and a
-re-buffer or a skip moves a few seconds at most."""
 
 
 def _participation(x: np.ndarray) -> np.ndarray:
@@ -74,10 +71,6 @@ class Estimate:
     near_score: Optional[float] = None
     """The best score within :data:`NEAR_S` of the ``near`` offset asked for (the offset a locked seat holds), None
     when not asked or out of the range searched."""
-    local_offset_s: Optional[float] = None
-    local_score: Optional[float] = None
-    """The best peak within :data:`LOCAL_S` of ``near`` but outside :data:`NEAR_S` (where a re-buffering or
-    re-syncing stream most likely went), when asked."""
 
 
 def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
@@ -138,19 +131,14 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
     others = np.concatenate([score[:max(0, best - ex)], score[best + ex + 1:]])
     second = float(others.max()) if others.size else -1.0
     offset = t_heard - t_ref - (best + frac) / RATE
-    near_score = local_offset = local_score = None
+    near_score = None
     if near is not None:
         lags = np.arange(n_lags)
         dist = np.abs(t_heard - t_ref - lags / RATE - near)  # offset of lag l: t_heard - t_ref - l / RATE
         if (dist <= NEAR_S).any():
             near_score = float(score[dist <= NEAR_S].max())
-        ring = (dist > NEAR_S) & (dist <= LOCAL_S)
-        if ring.any():
-            k = int(np.flatnonzero(ring)[np.argmax(score[ring])])
-            local_score = float(score[k])
-            local_offset = float(t_heard - t_ref - (k + _refine(score, k)) / RATE)
     return Estimate(float(offset), peak, peak - second, int(active.sum()), t_heard + (w - 1) / RATE, even,
-                    near_score, local_offset, local_score)
+                    near_score)
 
 
 def _refine(score: np.ndarray, k: int) -> float:

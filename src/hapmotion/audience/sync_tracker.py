@@ -18,9 +18,7 @@ copy with room noise at 10 dB SNR scored 0.48 and more once the window was full 
   re-buffered or re-synced): the filter restarts there; sharp ones again need only :data:`SHARP_VOTES`. A match
   elsewhere votes for a jump only when it beats the held offset's own score (``Estimate.near_score``) by
   :data:`JUMP_LEAD`; music that repeats a section exactly scores the same at both, and one that does not beat the
-  held offset confirms it instead (the seat keeps playing where it was rather than hopping to the repeat); and
-  when a peak within ``LOCAL_S`` of the held offset scores about as well as the best one (within
-  :data:`JUMP_LEAD`), the vote goes to the nearer one: a stream jumps by a little more often than by a lot.
+  held offset confirms it instead (the seat keeps playing where it was rather than hopping to the repeat).
 * **lost**: no good estimate within the gate for :data:`LOST_AFTER_S`: the seat keeps the prediction (the stream
   most likely still plays where it did) and says so; after :data:`HOLD_S` more it is searching again and plays
   the user's fallback (the manual delay, or nothing).
@@ -29,7 +27,7 @@ copy with room noise at 10 dB SNR scored 0.48 and more once the window was full 
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Optional
 
 import numpy as np
@@ -175,11 +173,6 @@ class DelayTracker:
             # the held offset scores as well as the best one (a repeated section): still the music played here
             self._confirmed = at
             return self._report("locked")
-        if good and est.local_score is not None and est.local_offset_s is not None \
-                and est.local_score >= MIN_SCORE and est.score - est.local_score < JUMP_LEAD:
-            # a peak near the held offset scores about as well as the best one further off (music repeating a
-            # bar or two): the stream most likely jumped by the smaller amount
-            est = replace(est, offset_s=est.local_offset_s, score=est.local_score, margin=0.0)
         if good:
             self._jump.append((at, est.offset_s, est.margin if est.even else 0.0))
             size, median, span = _cluster([(a, o) for a, o, _ in self._jump], AGREE_S)
