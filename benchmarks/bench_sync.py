@@ -159,9 +159,8 @@ class Viewer:
 def writer(fd: int, v: Viewer, start: float, rng: np.random.Generator, stop: threading.Event) -> None:
     """Write what ``v`` hears to the pipe in real time from ``start``, each 20 ms block up to 20 ms late
     (jitter). Blocks before the seat opened its input are not written (a pipe would hold them and hand them to the
-    seat late, all at once), nor are blocks while the pipe is full: the writer never falls behind real time (a block
-    is under PIPE_BUF bytes, so it is written whole or not at all)."""
-    os.set_blocking(fd, False)
+    seat late, all at once); from then on every block is written, waiting for the seat if it must (a dropped block
+    would shift every later sample's time)."""
     with os.fdopen(fd, "wb", buffering=0) as f:
         k = 0
         while not stop.is_set():
@@ -172,8 +171,6 @@ def writer(fd: int, v: Viewer, start: float, rng: np.random.Generator, stop: thr
             try:
                 if v.listening:
                     f.write(v.block(k, start + (k + np.arange(BLOCK)) / SR).tobytes())
-            except BlockingIOError:
-                pass
             except BrokenPipeError:
                 return
             k += BLOCK
