@@ -14,7 +14,7 @@ import pytest
 import soundfile as sf
 from support.sync_signals import SR, noisy, played, real_song, song, speech_like
 
-from hapmotion.audience.seat_sync import HeardClock, ReferenceStore, SyncSettings
+from hapmotion.audience.seat_sync import STEP_S, WINDOW_S, HeardClock, ReferenceStore, SyncSettings
 from hapmotion.audience.sync_estimator import estimate
 from hapmotion.audience.sync_reference import ReferencePublisher, SongReference, decode_batch, encode_batch
 from hapmotion.audience.sync_tracker import DelayTracker
@@ -26,10 +26,10 @@ from hapmotion.errors import UsageError
 MAX_DELAY = 5.0
 
 
-def follow(heard: np.ndarray, source: np.ndarray, step_s: float = 0.25, window_s: float = 3.0):
+def follow(heard: np.ndarray, source: np.ndarray, step_s: float = STEP_S, window_s: float = WINDOW_S):
     """Run the seat's matching over ``heard`` (local time = its own sample time) against the reference levels of
     ``source`` (media time = its sample time), as the seat does: levels streamed in 20 ms blocks, a 3 s window every
-    ``step_s``, offsets from -0.25 s to ``MAX_DELAY``. Returns [(local time, Estimate or None, SyncState)]."""
+    ``step_s`` (asking for the score at the held offset), offsets from -0.25 s to ``MAX_DELAY``. Returns [(local time, Estimate or None, SyncState)]."""
     ref = dequantise(quantise(signal_levels(source, SR)))
     stream = LevelStream(SR)
     heard_levels = np.concatenate([stream.push(heard[k:k + 441]) for k in range(0, heard.size, 441)])
@@ -46,8 +46,8 @@ def follow(heard: np.ndarray, source: np.ndarray, step_s: float = 0.25, window_s
         r = np.full((span, N_BANDS), np.nan)
         ok = (idx >= 0) & (idx < ref.shape[0])
         r[ok] = ref[idx[ok]]
-        est = estimate(heard_levels[end - n:end], t_heard, r, first / RATE)
         at = t_heard + (n - 1) / RATE
+        est = estimate(heard_levels[end - n:end], t_heard, r, first / RATE, near=tracker.offset_at(at))
         out.append((at, est, tracker.update(est, at)))
     return out, tracker
 
@@ -142,6 +142,34 @@ def test_what_is_not_the_venues_music_never_locks(heard):
     history, tracker = follow(signal, src)
     assert tracker.locks == 0, [(round(at, 2), round(e.score, 2)) for at, e, s in history if e and e.score > 0.3]
     assert all(s.state == "searching" for _, _, s in history)
+
+
+@pytest.mark.parametrize("seed", [4, 5])
+def test_speech_as_loud_as_the_right_music_locks_at_the_right_delay_or_not_at_all(seed):
+    src = real_song(seconds=40.0)
+    music = delayed(src, 1.7, 35.0)
+    speech = speech_like(seed, 35.0)
+    rms = lambda x: float(np.sqrt(np.mean(x[x != 0] ** 2)))  # noqa: E731
+    history, tracker = follow(music + speech * rms(music) / rms(speech), src)   # 0 dB speech-to-music
+    wrong = [(round(at, 2), round(s.offset_s, 3)) for at, _, s in history
+             if s.state != "searching" and abs(s.offset_s - 1.7) > 0.02]
+    assert not wrong
+
+
+def test_a_different_song_starting_with_the_right_one_after_silence_never_locks():
+    # both songs start at media time 0 after silence: their first onsets once lined up at a wrong delay (0.77)
+    src = real_song(seconds=30.0)
+    history, tracker = follow(delayed(real_song("lets_go_fishin.ogg", 30.0), 2.0, 25.0), src)
+    assert tracker.locks == 0, [(round(at, 2), round(e.score, 2)) for at, e, s in history if e and e.score > 0.3]
+
+
+@pytest.mark.parametrize("delay_s", [0.6, 2.4])
+def test_the_right_song_starting_after_silence_locks_within_5_s_through_a_noisy_copy(delay_s):
+    src = real_song(seconds=30.0)
+    history, tracker = follow(noisy(delayed(src, delay_s, 20.0), 10.0, seed=2), src)
+    locked = [at for at, _, s in history if s.state == "locked" and abs(s.offset_s - delay_s) < 0.02]
+    assert locked and locked[0] - delay_s <= 5.0
+    assert all(abs(s.offset_s - delay_s) < 0.02 for _, _, s in history if s.state == "locked")
 
 
 def test_the_tracker_loses_a_song_that_stops_and_holds_then_searches():

@@ -46,8 +46,9 @@ log = logging.getLogger("hapmotion.live")
 WINDOW_S = 3.0
 """Heard audio matched at once: long enough for a few bars' onsets, short enough to see a jump within 3 s."""
 MIN_WINDOW_S = 1.5
-STEP_S = 0.25
-"""How often the heard window is matched (0.5-1 ms of CPU each)."""
+STEP_S = 0.1
+"""How often the heard window is matched (0.5-1 ms of CPU each): often, so that the votes a lock or a jump needs
+come within a few tenths of a second of the music allowing it."""
 EDGE_WINDOW_S = 10.0
 """The live edge is the earliest reference arrival over this long."""
 EARLY_S = 0.25
@@ -148,7 +149,8 @@ class SeatSync:
         self._sub: Optional[Subscription] = None
         self.trust: Optional[SeatTrust] = None
         self._said: set[str] = set()
-        self.cpu_s = 0.0
+        self.cpu_s = 0.0        # the worker thread's CPU, seconds
+        self.loop_cpu_s = 0.0   # the event loop's CPU in :meth:`receive` (checking and storing the reference)
 
     # ------------------------------------------------------------------ life cycle
     async def start(self, nc: NatsClient, show: str, trust: SeatTrust) -> None:
@@ -184,7 +186,9 @@ class SeatSync:
             log.warning("seat sync: %s (counted; logged once)", text)
 
     async def _on_batch(self, msg: Msg) -> None:
+        cpu0 = time.thread_time()
         self.receive(msg.data, time.perf_counter())
+        self.loop_cpu_s += time.thread_time() - cpu0
 
     def receive(self, raw: bytes, arrival: float) -> None:
         """One message of the reference subject as received (its bytes, its local arrival time): checked against
@@ -274,7 +278,7 @@ class SeatSync:
             first = int(math.floor((t_heard - hi) * RATE))
             n = heard_db.shape[0] + int(math.ceil((hi - lo) * RATE))
             ref = self.store.span(first, n)
-            est = estimate(heard_db, t_heard, ref, first / RATE)
+            est = estimate(heard_db, t_heard, ref, first / RATE, near=self.tracker.offset_at(at))
             media = (first + np.arange(n)) / RATE
             if est is not None and self.tracker.state.state == "searching" \
                     and not np.isfinite(ref[media >= 0.0]).all():

@@ -8,11 +8,17 @@ copy with room noise at 10 dB SNR scored 0.48 and more once the window was full 
 
 * **searching**: good estimates of the last :data:`VOTE_S` seconds vote; when :data:`LOCK_VOTES` of them agree
   within :data:`AGREE_S` and span at least :data:`LOCK_SPAN_S` (so they do not all come from one stretch of
-  audio), the seat locks on their median.
+  audio), the seat locks on their median. *Sharp* estimates (margin at least :data:`SHARP_MARGIN`: the peak stands
+  well clear of every other delay, which unrelated signals did not reach with a full window, over a window whose
+  both halves hold onsets: two songs starting together after silence line up on their first onsets) need fewer:
+  :data:`SHARP_VOTES` agreeing within :data:`SHARP_AGREE_S` over :data:`SHARP_SPAN_S`.
 * **locked**: a Kalman filter on (offset, drift) follows the good estimates that fall within :data:`GATE_S` of its
   prediction; a drift of 0.1 % is 1 ms a second, which the drift state follows. Good estimates outside the gate
   that agree among themselves (:data:`JUMP_VOTES`, spanning :data:`JUMP_SPAN_S`) are a jump (the viewer's player
-  re-buffered or re-synced): the filter restarts there.
+  re-buffered or re-synced): the filter restarts there; sharp ones again need only :data:`SHARP_VOTES`. A match
+  elsewhere votes for a jump only when it beats the held offset's own score (``Estimate.near_score``) by
+  :data:`JUMP_LEAD`; music that repeats a section exactly scores the same at both, and one that does not beat the
+  held offset confirms it instead (the seat keeps playing where it was rather than hopping to the repeat).
 * **lost**: no good estimate within the gate for :data:`LOST_AFTER_S`: the seat keeps the prediction (the stream
   most likely still plays where it did) and says so; after :data:`HOLD_S` more it is searching again and plays
   the user's fallback (the manual delay, or nothing).
@@ -37,6 +43,14 @@ LOCK_SPAN_S = 0.75
 GATE_S = 0.045
 JUMP_VOTES = 4
 JUMP_SPAN_S = 0.5
+SHARP_MARGIN = 0.15
+"""Margin of a sharp estimate: over 3 s windows a different song (real and synthetic) or a speech-like signal
+reached 0.11 at most, the right song through a low-quality codec with room noise 0.2-0.3 once above
+:data:`MIN_SCORE` (benchmarks/bench_sync.py's signals)."""
+JUMP_LEAD = 0.05
+SHARP_VOTES = 3
+SHARP_AGREE_S = 0.010
+SHARP_SPAN_S = 0.2
 LOST_AFTER_S = 5.0
 HOLD_S = 20.0
 MEASUREMENT_S = 0.008
@@ -61,6 +75,17 @@ class SyncState:
     locks: int = 0
 
 
+def _agreed(points: list[tuple[float, float, float]]) -> Optional[float]:
+    """The offset that ``(at, offset, margin)`` votes agree on by the ordinary or the sharp rule, or None."""
+    size, median, span = _cluster([(a, o) for a, o, _ in points], AGREE_S)
+    if size >= LOCK_VOTES and span >= LOCK_SPAN_S:
+        return median
+    size, median, span = _cluster([(a, o) for a, o, m in points if m >= SHARP_MARGIN], SHARP_AGREE_S)
+    if size >= SHARP_VOTES and span >= SHARP_SPAN_S:
+        return median
+    return None
+
+
 def _cluster(points: list[tuple[float, float]], agree: float) -> tuple[int, float, float]:
     """The largest group of ``(at, offset)`` within ``agree`` of one member's offset: (size, median offset, span of
     their times)."""
@@ -83,8 +108,8 @@ class DelayTracker:
 
     def __init__(self) -> None:
         self.state = SyncState("searching", None, 0.0)
-        self._votes: deque[tuple[float, float, float]] = deque()  # (at, offset, score) of good estimates
-        self._jump: deque[tuple[float, float]] = deque()
+        self._votes: deque[tuple[float, float, float, float]] = deque()  # (at, offset, score, margin), good ones
+        self._jump: deque[tuple[float, float, float]] = deque()   # (at, offset, margin)
         self._x = np.zeros(2)     # offset at _t, drift
         self._p = np.eye(2)
         self._t = 0.0
@@ -121,13 +146,13 @@ class DelayTracker:
         while self._jump and self._jump[0][0] < at - VOTE_S:
             self._jump.popleft()
         if good:
-            self._votes.append((at, est.offset_s, est.score))
+            self._votes.append((at, est.offset_s, est.score, est.margin if est.even else 0.0))
         mode = self.state.state
         if mode == "searching":
-            size, median, span = _cluster([(a, o) for a, o, _ in self._votes], AGREE_S)
-            if size >= LOCK_VOTES and span >= LOCK_SPAN_S:
+            median = _agreed([(a, o, m) for a, o, _, m in self._votes])
+            if median is not None:
                 self._start(at, median)
-                self._scores.extend(s for _, o, s in self._votes if abs(o - median) <= AGREE_S)
+                self._scores.extend(s for _, o, s, _ in self._votes if abs(o - median) <= AGREE_S)
                 self.locks += 1
                 self._votes.clear()
                 return self._report("locked")
@@ -143,9 +168,17 @@ class DelayTracker:
             self._jump.clear()
             self._scores.append(est.score)
             return self._report("locked")
+        if est is not None and est.near_score is not None and est.near_score >= MIN_SCORE \
+                and est.score - est.near_score < JUMP_LEAD:
+            # the held offset scores as well as the best one (a repeated section): still the music played here
+            self._confirmed = at
+            return self._report("locked")
         if good:
-            self._jump.append((at, est.offset_s))
-            size, median, span = _cluster(list(self._jump), AGREE_S)
+            self._jump.append((at, est.offset_s, est.margin if est.even else 0.0))
+            size, median, span = _cluster([(a, o) for a, o, _ in self._jump], AGREE_S)
+            sharp = _cluster([(a, o) for a, o, m in self._jump if m >= SHARP_MARGIN], SHARP_AGREE_S)
+            if sharp[0] >= SHARP_VOTES and sharp[2] >= SHARP_SPAN_S:
+                size, median, span = JUMP_VOTES, sharp[1], JUMP_SPAN_S
             if size >= JUMP_VOTES and span >= JUMP_SPAN_S:
                 self.jumps += 1
                 self._start(at, median)
