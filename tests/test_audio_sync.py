@@ -14,7 +14,8 @@ import pytest
 import soundfile as sf
 from support.sync_signals import SR, noisy, played, real_song, song, speech_like
 
-from hapmotion.audience.seat_sync import STEP_S, WINDOW_S, HeardClock, ReferenceStore, SyncSettings
+from hapmotion.audience.seat_sync import (STEP_S, UNSTEADY_S, WINDOW_S, HeardClock, ReferenceStore, SeatSync,
+                                          SyncSettings)
 from hapmotion.audience.sync_estimator import estimate
 from hapmotion.audience.sync_reference import ReferencePublisher, SongReference, decode_batch, encode_batch
 from hapmotion.audience.sync_tracker import DelayTracker
@@ -274,6 +275,25 @@ def test_heard_clock_takes_the_earliest_arrival():
     assert clock.push(100, 10.29) == pytest.approx(9.99)    # arrived earlier than ever: a new anchor
 
 
+def test_heard_clock_is_steady_for_real_time_audio_however_late_single_blocks_come():
+    rng = np.random.default_rng(1)
+    clock = HeardClock(1000.0)
+    worst = 0.0
+    for k in range(1, 501):                      # 10 s of 20 ms blocks, each up to 20 ms late, one 150 ms stall
+        late = rng.uniform(0.0, 0.020) + (0.15 if k == 200 else 0.0)
+        assert clock.push(20, 10.0 + k * 0.02 + late) == pytest.approx(10.0, abs=0.021)
+        worst = max(worst, clock.unsteady)
+    assert worst <= UNSTEADY_S
+
+
+def test_heard_clock_is_unsteady_for_audio_delivered_slower_than_real_time():
+    clock = HeardClock(1000.0)
+    for k in range(1, 101):                      # 2 s of audio at 95 % of real time
+        clock.push(20, 10.0 + k * 0.02 / 0.95)
+    assert clock.unsteady == pytest.approx(0.075, abs=0.005)   # 1.5 s between the windows' minima, 5 % late
+    assert clock.unsteady > UNSTEADY_S
+
+
 def test_sync_settings_are_checked():
     with pytest.raises(UsageError):
         SyncSettings(unsynced="maybe")
@@ -305,3 +325,45 @@ def test_a_wav_stream_from_a_pipe_is_read_with_its_own_rate():
     os.close(r)
     x = np.concatenate(got)
     assert x.size == 8000 and np.allclose(x, 0.5, atol=1e-4)
+
+
+class StampedBlocks:
+    """An audio input handing over ``signal`` in 20 ms blocks, each stamped ``t0`` + its end's sample time /
+    ``speed`` (1: real time; below 1: a writer falling behind), without waiting: the seat's worker runs on it at
+    once."""
+
+    sample_rate = float(SR)
+
+    def __init__(self, signal: np.ndarray, t0: float, speed: float):
+        self.signal, self.t0, self.speed, self.k = signal, t0, speed, 0
+        self.faults: dict = {}
+
+    def read(self):
+        if self.k >= self.signal.size:
+            return None, 0.0
+        block = self.signal[self.k:self.k + 441]
+        self.k += block.size
+        return block, self.t0 + self.k / SR / self.speed
+
+    def describe(self) -> str:
+        return "stamped blocks"
+
+    def close(self) -> None:
+        pass
+
+
+@pytest.mark.parametrize("speed", [1.0, 0.8])
+def test_audio_delivered_slower_than_real_time_is_not_matched(speed):
+    music = song(4, 12.0)
+    sync = SeatSync(SyncSettings(input="none", max_delay_s=5.0), audio=StampedBlocks(music, 1001.0, speed))
+    sync.store.put(0, quantise(signal_levels(music, SR)))
+    sync._edge = 1000.0                       # media time m reaches the seat at local 1000 + m: heard 1 s later
+    sync._listen()                            # the worker, on the whole signal (returns at its end)
+    made = [e for _, e, _ in sync.estimates if e is not None]
+    if speed == 1.0:
+        assert sync.tracker.locks == 1 and abs(sync.state.offset_s - 1001.0) < 0.005
+        assert "slow_input" not in sync.faults
+    else:                                     # its stamps slide 0.25 s a second: never matched, never locked
+        assert sync.faults["slow_input"] > 0
+        assert sync.tracker.locks == 0
+        assert made == []
