@@ -28,8 +28,10 @@ time to re-lock after the jump (locked again within 40 ms of the truth); false l
 more than 60 ms from the truth outside the 3 s after the jump, or any lock on the no-music seats); the median and
 the worst lock and re-lock over all runs (``--seed`` draws other delays and synthetic songs); the sync worker's CPU
 (the thread that reads, analyses and matches the audio) and the event loop's CPU checking and storing the reference
-messages. All seats and the publisher share this process and this machine's cores with other work (a loaded
-machine), as the load average printed says.
+messages; how far behind real time the pipe writers ran at worst, and how many seats found their audio delivered
+slower than real time (a writer that cannot keep up hands the seat audio later than its viewer "heard" it, which
+the seat would rightly place later: the harness's error, not the seat's). All seats and the publisher share this
+process and this machine's cores with other work (a loaded machine), as the load average printed says.
 """
 
 from __future__ import annotations
@@ -108,6 +110,7 @@ class Viewer:
     listening: bool = False     # the seat has opened its audio input (the writer writes from then on)
     music_rms: float = 0.1
     noise: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    late: float = 0.0           # how far behind its real-time schedule the writer wrote a block at worst, seconds
 
     @property
     def music_start(self) -> float:
@@ -160,7 +163,8 @@ def writer(fd: int, v: Viewer, start: float, rng: np.random.Generator, stop: thr
     """Write what ``v`` hears to the pipe in real time from ``start``, each 20 ms block up to 20 ms late
     (jitter). Blocks before the seat opened its input are not written (a pipe would hold them and hand them to the
     seat late, all at once); from then on every block is written, waiting for the seat if it must (a dropped block
-    would shift every later sample's time)."""
+    would shift every later sample's time). A writer behind its schedule hands the seat audio later than the viewer
+    heard it (the harness, not the seat, would then be wrong): the worst lateness is reported."""
     with os.fdopen(fd, "wb", buffering=0) as f:
         k = 0
         while not stop.is_set():
@@ -171,6 +175,8 @@ def writer(fd: int, v: Viewer, start: float, rng: np.random.Generator, stop: thr
             try:
                 if v.listening:
                     f.write(v.block(k, start + (k + np.arange(BLOCK)) / SR).tobytes())
+                    if v.t0 is not None:
+                        v.late = max(v.late, time.perf_counter() - max(due, v.t0))
             except BrokenPipeError:
                 return
             k += BLOCK
@@ -284,9 +290,13 @@ def figures(v: Viewer, seconds: float) -> Figures:
     lock_s = relock_s = np.inf
     false_locks = jumps = 0
     was_locked = False
+    last_state = None
     for at, est, state in history:
         locked = state.state == "locked" and state.offset_s is not None
-        if os.environ.get("BENCH_SYNC_DEBUG") and v.follows_media and (at - music_start < 8 or 0 <= at - jump_t < 8):
+        changed = (state.state, state.jumps, state.locks) != last_state
+        last_state = (state.state, state.jumps, state.locks)
+        if os.environ.get("BENCH_SYNC_DEBUG") and v.follows_media and (at - music_start < 8 or 0 <= at - jump_t < 8
+                                                                       or changed):
             print(f"  {v.name} {at - music_start:6.2f} {state.state:9s} {state.jumps} "
                   f"{'' if state.offset_s is None else f'{(state.offset_s - v.offset_truth(at)) * 1000:7.1f}'} "
                   f"{'' if est is None else f'err {(est.offset_s - v.offset_truth(at)) * 1000:7.1f} ms score {est.score:.2f} margin {est.margin:.2f}'}")
@@ -322,7 +332,7 @@ def fmt_ms(x: float) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--songs", type=int, default=4, help="songs: the 2 real ones, then synthetic (default 4)")
-    ap.add_argument("--seconds", type=float, default=60.0, help="seconds of show per song (default 60)")
+    ap.add_argument("--seconds", type=float, default=40.0, help="seconds of show per song (default 40)")
     ap.add_argument("--seed", type=int, default=2026, help="seed of the delays, drifts and synthetic songs")
     args = ap.parse_args(argv)
     print(f"bench_sync: load average {os.getloadavg()[0]:.1f} at the start, {os.cpu_count()} cores")
@@ -372,6 +382,10 @@ def main(argv: list[str] | None = None) -> int:
           f"seat; lock within {TARGETS['lock']:g} s of that; re-lock within {TARGETS['relock']:g} s of a 1 s jump; "
           f"no false lock; sync CPU (the worker thread) + loop CPU (checking and storing the reference on the event "
           f"loop) <= {TARGETS['cpu'] * 100:g} % of a core per seat")
+    late = max(v.late for _, v, _ in rows)
+    slow = sum(bool(v.sync is not None and v.sync.faults.get("slow_input")) for _, v, _ in rows)
+    print(f"harness: the pipe writers ran at most {late * 1000:.0f} ms behind real time; seats that found their "
+          f"audio slower than real time: {slow}")
     print(f"load average {os.getloadavg()[0]:.1f} at the end; all seats and the publisher in this one process")
     print("all targets met" if ok else "SOME TARGETS MISSED")
     return 0 if ok else 1

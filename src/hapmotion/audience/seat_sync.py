@@ -36,7 +36,7 @@ from ..audio.inputs import AudioInput, open_input
 from ..audio.sync_features import N_BANDS, RATE, LevelStream, dequantise
 from ..errors import UsageError
 from .signing import BadSignature, SeatTrust, Unsigned
-from .sync_estimator import estimate
+from .sync_estimator import match
 from .sync_reference import BATCH_S, decode_batch
 from .sync_tracker import DelayTracker, SyncState
 from .wire import subject
@@ -339,7 +339,7 @@ class SeatSync:
             first = int(math.floor((t_heard - hi) * RATE))
             n = heard_db.shape[0] + int(math.ceil((hi - lo) * RATE))
             ref = self.store.span(first, n)
-            est = estimate(heard_db, t_heard, ref, first / RATE, near=self.tracker.offset_at(at))
+            est = match(heard_db, t_heard, ref, first / RATE, held=self.tracker.offset_at(at))
             media = (first + np.arange(n)) / RATE
             if est is not None and self.tracker.state.state == "searching" \
                     and not np.isfinite(ref[media >= 0.0]).all():

@@ -141,6 +141,35 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
                     near_score)
 
 
+SHARP_MARGIN = 0.15
+"""Margin of a *sharp* estimate, one whose peak stands well clear of every other offset searched: over 3 s windows a
+different song (real and synthetic) or a speech-like signal reached 0.11-0.16 at most, the right song through a
+low-quality codec with room noise 0.2-0.3 once above the tracker's minimum score (benchmarks/bench_sync.py's
+signals). The tracker locks and follows jumps on fewer sharp estimates; a recent part of the window (below) is
+believed only when sharp."""
+
+RECENT_S = 1.5
+"""A locked seat whose full window does not confirm the offset it holds matches the last this-many seconds of it as
+well (the shortest window a seat matches at all): after a jump, the full window holds audio of both offsets and their
+two peaks share its score for as long as both halves last, while the recent part holds the new one alone."""
+
+
+def match(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
+          held: Optional[float] = None) -> Optional[Estimate]:
+    """The estimate a seat acts on: :func:`estimate` of the whole heard window ``(W, B)`` (``held``: the offset a
+    locked seat holds, its score asked for), or, when that does not land within :data:`NEAR_S` of ``held``, of the
+    window's last :data:`RECENT_S` seconds (the same offsets searched), which says where the music is now, if that
+    is sharp (:data:`SHARP_MARGIN`): a shorter window fits inside a repeated bar more easily, and music that repeats
+    within the offsets searched leaves its peak no margin, so then the whole window's estimate stands."""
+    est = estimate(heard_db, t_heard, ref_db, t_ref, near=held)
+    k = heard_db.shape[0] - int(round(RECENT_S * RATE))
+    if held is None or k <= 0 or (est is not None and abs(est.offset_s - held) <= NEAR_S):
+        return est
+    # hop k of the window against reference hop k + l: the same offsets t_heard - t_ref - l / RATE as above
+    recent = estimate(heard_db[k:], t_heard + k / RATE, ref_db[k:], t_ref + k / RATE, near=held)
+    return recent if recent is not None and recent.margin >= SHARP_MARGIN else est
+
+
 def _refine(score: np.ndarray, k: int) -> float:
     """Fraction of a lag (-0.5..0.5) of the parabola's vertex through ``score[k - 1 .. k + 1]`` (0 at the ends or
     where ``k`` is no peak)."""

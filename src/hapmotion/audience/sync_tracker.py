@@ -8,7 +8,8 @@ copy with room noise at 10 dB SNR scored 0.48 and more once the window was full 
 
 * **searching**: good estimates of the last :data:`VOTE_S` seconds vote; when :data:`LOCK_VOTES` of them agree
   within :data:`AGREE_S` and span at least :data:`LOCK_SPAN_S` (so they do not all come from one stretch of
-  audio), the seat locks on their median. *Sharp* estimates (margin at least :data:`SHARP_MARGIN`: the peak stands
+  audio), the seat locks on their median. *Sharp* estimates (margin at least
+  :data:`~hapmotion.audience.sync_estimator.SHARP_MARGIN`: the peak stands
   well clear of every other delay, which unrelated signals did not reach with a full window, over a window whose
   both halves hold onsets: two songs starting together after silence line up on their first onsets) need fewer:
   :data:`SHARP_VOTES` agreeing within :data:`SHARP_AGREE_S` over :data:`SHARP_SPAN_S`.
@@ -32,7 +33,7 @@ from typing import Optional
 
 import numpy as np
 
-from .sync_estimator import Estimate
+from .sync_estimator import SHARP_MARGIN, Estimate
 
 MIN_SCORE = 0.40
 MIN_MARGIN = 0.02
@@ -43,10 +44,6 @@ LOCK_SPAN_S = 0.75
 GATE_S = 0.045
 JUMP_VOTES = 4
 JUMP_SPAN_S = 0.5
-SHARP_MARGIN = 0.15
-"""Margin of a sharp estimate: over 3 s windows a different song (real and synthetic) or a speech-like signal
-reached 0.11 at most, the right song through a low-quality codec with room noise 0.2-0.3 once above
-:data:`MIN_SCORE` (benchmarks/bench_sync.py's signals)."""
 JUMP_LEAD = 0.05
 SHARP_VOTES = 3
 SHARP_AGREE_S = 0.010
