@@ -45,6 +45,11 @@ GATE_S = 0.045
 JUMP_VOTES = 4
 JUMP_SPAN_S = 0.5
 JUMP_LEAD = 0.05
+"""How far a match elsewhere must beat the held offset's own score to vote for a jump. Known limit: through a noisy
+copy (room noise at 10 dB SNR) a bar that repeats the rhythm of the true one can score up to 0.06 above it over a
+3 s window (one of six songs, benchmarks/sync_margins.py), and four such votes in a row make a jump to the repeat
+until the music tells them apart; a lead of 0.10 kept that one away but in the harness slowed re-locks past 3 s and
+let other repeats through, so it stays at 0.05."""
 SHARP_VOTES = 3
 SHARP_AGREE_S = 0.010
 SHARP_SPAN_S = 0.2
