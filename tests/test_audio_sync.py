@@ -302,6 +302,17 @@ def test_heard_clock_is_steady_for_real_time_audio_however_late_single_blocks_co
     assert worst <= UNSTEADY_S
 
 
+def test_heard_clock_places_a_pipes_backlog_when_it_was_heard():
+    clock = HeardClock(1000.0)
+    # the writer started 0.34 s before the seat read: 17 blocks read at once at 10.0, then one every 20 ms
+    stamps = [clock.push(20, 10.0 + k * 1e-4) for k in range(17)]
+    stamps += [clock.push(20, 10.0 + k * 0.02) for k in range(1, 200)]
+    assert stamps[0] == pytest.approx(9.98)                   # the first block alone: the latest it can have been
+    assert stamps[16] == pytest.approx(9.66, abs=0.002)       # the backlog read: sample 0 was heard 0.34 s before
+    assert all(t == pytest.approx(9.66, abs=0.002) for t in stamps[16:])
+    assert clock.unsteady <= UNSTEADY_S
+
+
 def test_heard_clock_is_unsteady_for_audio_delivered_slower_than_real_time():
     clock = HeardClock(1000.0)
     for k in range(1, 101):                      # 2 s of audio at 95 % of real time
