@@ -8,9 +8,12 @@ The songs: the two shared songs and six synthetic ones (:func:`benchmarks.sync_s
 For each as the venue's reference, a seat's matching (levels in 20 ms blocks, a 3 s window every 0.1 s, offsets
 from -0.25 to 5 s, the tracker fed as a seat feeds it) runs over what a viewer hears: *wrong*, two other songs
 through the low-quality codec (1 s of silence first), each clean and with room noise at 10 dB SNR, and a speech-like
-signal with room noise; *right*, the song itself through the codec with room noise at 10 dB SNR, 0.3-3 s late.
+signal with room noise; *right*, the song itself (and the harness's synthetic songs, seeds 2026, 2027, 7, 8) 0.3-3 s
+late through the codec, alone, with room noise at 10 dB SNR, and with speech as loud as the music over it.
 Printed: for the wrong signals, the highest score and margin, the windows whose margin (both halves holding onsets)
-reaches the sharp margin, the locks; for the right one, the share of correct estimates that are sharp; and, for the
+reaches the sharp margin, the locks; for the right one, the share of correct estimates that stand clear enough to
+vote for a lock or a jump and that are sharp, and the highest margin an estimate at a wrong delay (a bar away in
+music that repeats its rhythm) reached, which the voting margin must exceed; and, for the
 shared songs and the harness's synthetic ones (seeds 2026, 2027, 7, 8) heard 1.3 s late through the codec with room
 noise, how far a peak elsewhere (a bar that repeats the rhythm) ever scored above the true offset (what the jump
 lead must exceed).
@@ -25,7 +28,7 @@ import numpy as np
 import soundfile as sf
 
 from hapmotion.audience.sync_estimator import NEAR_S, SHARP_MARGIN, estimate, match
-from hapmotion.audience.sync_tracker import JUMP_LEAD, MIN_SCORE, DelayTracker
+from hapmotion.audience.sync_tracker import JUMP_LEAD, MIN_SCORE, UNIQUE_MARGIN, DelayTracker
 from hapmotion.audio.sync_features import N_BANDS, RATE, LevelStream, dequantise, quantise, signal_levels
 
 from tests.support.data import AUDIO
@@ -90,6 +93,8 @@ def main(argv: list[str] | None = None) -> int:
     real = [sf.read(AUDIO / name, dtype="float64")[0] for name in ("vibe_ace.ogg", "lets_go_fishin.ogg")]
     songs = [x if x.ndim == 1 else x.mean(axis=1) for x in real] + [scenes.synth_song(100 + k, secs)
                                                                    for k in range(6)]
+    # the harness's synthetic songs (seeds 2026, 2027, 7, 8) as the right music only
+    extra = [scenes.synth_song(k, secs + 16.0) for k in (2026, 2027, 7, 8)]
     rng = np.random.default_rng(5)
 
     def lead(x: np.ndarray) -> np.ndarray:
@@ -107,11 +112,19 @@ def main(argv: list[str] | None = None) -> int:
             ests, tracker = follow(h, ref)
             wrong += ests
             wrong_locks += tracker.locks
-        delay = float(rng.uniform(0.3, 3.0))
-        tau = np.arange(n) / SR
-        h = scenes.add_noise(scenes.codec_copy(scenes.heard(ref, tau - delay)), 10.0, i)
-        ests, _ = follow(h, ref)
-        right += [(e, abs(e.offset_s - delay) < 0.04) for e in ests]
+    for i, song in enumerate(songs + extra):
+        ref = song[:int((secs + 15.0) * SR)]
+        for kind in ("codec", "noisy", "speech over"):
+            delay = float(rng.uniform(0.3, 3.0))
+            tau = np.arange(n) / SR
+            h = scenes.codec_copy(scenes.heard(ref, tau - delay))
+            if kind == "noisy":
+                h = scenes.add_noise(h, 10.0, i)
+            elif kind == "speech over":  # as loud as the music (0 dB)
+                o = np.resize(scenes.speech_like(i + 1, secs), n)
+                h = h + o * float(np.sqrt(np.mean(h * h))) / max(1e-9, float(np.sqrt(np.mean(o * o))))
+            ests, _ = follow(h, ref)
+            right += [(e, abs(e.offset_s - delay) < 0.04, kind) for e in ests]
     w = np.array([(e.score, e.margin, e.even) for e in wrong])
     even = w[:, 2] > 0
     sharp = even & (w[:, 1] >= SHARP_MARGIN)
@@ -120,12 +133,21 @@ def main(argv: list[str] | None = None) -> int:
           f"above it {int((w[:, 0] >= MIN_SCORE).sum())}")
     print(f"  highest margin with onsets in both halves {w[even, 1].max():.2f} (sharp: {SHARP_MARGIN:.2f}); "
           f"99.9th percentile {np.percentile(w[even, 1], 99.9):.2f}; sharp windows {int(sharp.sum())}")
-    ok = np.array([good for _, good in right])
-    r = np.array([(e.score, e.margin, e.even) for e, _ in right])
-    r_sharp = (r[:, 2] > 0) & (r[:, 1] >= SHARP_MARGIN)
-    print(f"right music (codec, room noise 10 dB SNR): {len(r)} windows, {ok.mean() * 100:.0f} % at the right delay; "
-          f"of those {(r[ok, 0] >= MIN_SCORE).mean() * 100:.0f} % reach the score, "
-          f"{r_sharp[ok].mean() * 100:.0f} % are sharp")
+    kinds = np.array([k for _, _, k in right])
+    for kind in ("codec", "noisy", "speech over"):
+        sel = kinds == kind
+        ok = np.array([good for _, good, _ in right])[sel]
+        r = np.array([(e.score, e.margin, e.even) for e, _, _ in right])[sel]
+        r_sharp = (r[:, 2] > 0) & (r[:, 1] >= SHARP_MARGIN)
+        vote = r[:, 0] >= MIN_SCORE
+        wrong = vote & ~ok
+        top = f"{r[wrong, 1].max():.3f}" if wrong.any() else "-"
+        print(f"right music ({kind}; {len(songs) + len(extra)} songs): {len(r)} windows, {ok.mean() * 100:.0f} % at "
+              f"the right delay; of those {vote[ok].mean() * 100:.0f} % reach the score, "
+              f"{(vote[ok] & (r[ok, 1] >= UNIQUE_MARGIN)).mean() * 100:.0f} % stand {UNIQUE_MARGIN:.2f} clear (a "
+              f"lock or jump vote), {r_sharp[ok].mean() * 100:.0f} % are sharp; at a wrong delay {int(wrong.sum())} "
+              f"reach the score, their margin at most {top} (a vote needs {UNIQUE_MARGIN:.2f}), "
+              f"{int((wrong & (r[:, 1] >= UNIQUE_MARGIN)).sum())} reach it")
     # the lead of a repeated bar: the shared songs and the harness's synthetic songs (seeds 2026, 2027, 7, 8), 44 s
     # each at 1.3 s, two noise draws each
     tau = np.arange(int(44.0 * SR)) / SR

@@ -16,9 +16,9 @@ from support.sync_signals import SR, noisy, played, real_song, song, speech_like
 
 from hapmotion.audience.seat_sync import (STEP_S, UNSTEADY_S, WINDOW_S, HeardClock, ReferenceStore, SeatSync,
                                           SyncSettings)
-from hapmotion.audience.sync_estimator import match
+from hapmotion.audience.sync_estimator import Estimate, match
 from hapmotion.audience.sync_reference import ReferencePublisher, SongReference, decode_batch, encode_batch
-from hapmotion.audience.sync_tracker import DelayTracker
+from hapmotion.audience.sync_tracker import STREAK_S, DelayTracker
 from hapmotion.audio.inputs import FileInput, PipeInput, open_input
 from hapmotion.audio.sync_features import (BANDS, N_BANDS, RATE, LevelStream, dequantise, quantise,
                                            signal_levels)
@@ -27,10 +27,12 @@ from hapmotion.errors import UsageError
 MAX_DELAY = 5.0
 
 
-def follow(heard: np.ndarray, source: np.ndarray, step_s: float = STEP_S, window_s: float = WINDOW_S):
-    """Run the seat's matching over ``heard`` (local time = its own sample time) against the reference levels of
-    ``source`` (media time = its sample time), as the seat does: levels streamed in 20 ms blocks, a 3 s window every
-    ``step_s`` (asking for the score at the held offset), offsets from -0.25 s to ``MAX_DELAY``. Returns [(local time, Estimate or None, SyncState)]."""
+def follow(heard: np.ndarray, source: np.ndarray, step_s: float = STEP_S, window_s: float = WINDOW_S,
+           start_s: float = 0.0):
+    """Run the seat's matching over ``heard`` (local time = its own sample time + ``start_s``: a seat that starts
+    listening then) against the reference levels of ``source`` (media time = its sample time), as the seat does:
+    levels streamed in 20 ms blocks, a 3 s window every ``step_s`` (asking for the score at the held offset), offsets
+    from -0.25 s to ``MAX_DELAY``. Returns [(local time, Estimate or None, SyncState)]."""
     ref = dequantise(quantise(signal_levels(source, SR)))
     stream = LevelStream(SR)
     heard_levels = np.concatenate([stream.push(heard[k:k + 441]) for k in range(0, heard.size, 441)])
@@ -40,7 +42,7 @@ def follow(heard: np.ndarray, source: np.ndarray, step_s: float = STEP_S, window
     w, step = int(window_s * RATE), int(step_s * RATE)
     for end in range(int(1.5 * RATE), heard_levels.shape[0], step):
         n = min(end, w)
-        t_heard = (end - n) / RATE
+        t_heard = start_s + (end - n) / RATE
         first = int(math.floor((t_heard - MAX_DELAY) * RATE))
         span = n + int((MAX_DELAY + 0.25) * RATE)
         idx = np.arange(first, first + span)
@@ -140,6 +142,87 @@ def test_after_a_jump_the_recent_part_of_the_window_finds_the_new_offset_the_who
     whole, held = match(*args), match(*args, held=2.0)
     assert whole.score < 0.6                      # the whole window's score split over both offsets
     assert abs(held.offset_s - 1.0) < 0.005 and held.score > 0.85 and held.margin > 0.4 and held.near_score < 0.3
+
+
+def bars(seed: int, count: int, fill: float, bar_s: float = 2.0) -> np.ndarray:
+    """Music whose every bar repeats the same 2 s of notes, with ``fill`` times as loud a part of its own in each bar
+    (0: the bars are identical, nothing tells one from the next)."""
+    bar = song(seed, bar_s)
+    out = np.concatenate([bar + fill * song(1000 * seed + i, bar_s) for i in range(count)])
+    return 0.8 * out / np.abs(out).max()
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3, 4])
+def test_a_seat_joining_music_that_repeats_its_bar_never_locks_on_the_wrong_bar(seed):
+    # the seat starts listening 12 s into the song, 1.7 s behind: the offsets 1.7 - 2, 1.7 and 1.7 + 2 s (a bar away)
+    # are all searched and their scores differ only by the faint part of each bar; through room noise a wrong bar
+    # led often enough that the seat once locked on it (3.7 s, seed 3)
+    src = bars(seed, 20, fill=0.1)
+    tau = 12.0 + np.arange(int(20 * SR)) / SR
+    history, tracker = follow(noisy(played(src, tau - 1.7), 10.0, seed), src, start_s=12.0)
+    wrong = [(round(at, 1), round(s.offset_s, 2)) for at, _, s in history
+             if s.state != "searching" and abs(s.offset_s - 1.7) > 0.02]
+    assert not wrong
+    # without the noise the bars' own parts tell them apart, and the seat locks at the right one
+    history, tracker = follow(played(src, tau - 1.7), src, start_s=12.0)
+    locked = [at for at, _, s in history if s.state == "locked"]
+    assert locked and locked[0] - 12.0 <= 3.0
+    assert all(abs(s.offset_s - 1.7) <= 0.02 for _, _, s in history if s.state != "searching")
+
+
+def test_identical_bars_never_lock():
+    src = bars(2, 20, fill=0.0)
+    tau = 12.0 + np.arange(int(20 * SR)) / SR
+    history, tracker = follow(played(src, tau - 1.7), src, start_s=12.0)
+    assert tracker.locks == 0 and all(s.state == "searching" for _, _, s in history)
+
+
+def test_a_peak_a_bar_away_that_leads_by_little_is_neither_locked_on_nor_jumped_to():
+    # estimates as a seat 2.5 s behind sees music that repeats its bar every 2 s: for 0.8 s at a time the bar before
+    # (offset 0.5) scores 0.06 above every other offset, the true one included, then the true one leads by as
+    # little for 0.3 s (the runs a noisy copy gave: a wrong offset stayed best for 0.9 s at most)
+    def est(at, offset, score, margin, near=None):
+        return Estimate(offset, score, margin, 5, at, True, near)
+
+    def close_pair(t, held=None):
+        for k in range(33):
+            t += 0.1
+            wrong = k % 11 < 8
+            near = None if held is None else (0.49 if wrong else 0.55)
+            state = tracker.update(est(t, 0.5 if wrong else 2.5, 0.55, 0.06 if wrong else 0.05, near), t)
+            assert state.state == ("searching" if held is None else "locked")
+            assert held is None or state.offset_s == pytest.approx(held, abs=1e-3)
+        return t
+
+    tracker = DelayTracker()
+    t = close_pair(0.0)                                   # 3.3 s of the two close candidates: no lock
+    for _ in range(10):                                   # 1 s where the true offset stands clear: locked there
+        t += 0.1
+        state = tracker.update(est(t, 2.5, 0.60, 0.12), t)
+    assert state.state == "locked" and state.offset_s == pytest.approx(2.5, abs=1e-6) and tracker.locks == 1
+    t = close_pair(t, held=2.5)                           # locked: the wrong bar's runs lead the held offset
+    assert tracker.jumps == 0
+    for _ in range(5):                                    # a real jump: a clear peak 1 s later, the held one gone
+        t += 0.1
+        state = tracker.update(est(t, 3.5, 0.60, 0.30, near=0.1), t)
+    assert tracker.jumps == 1 and state.offset_s == pytest.approx(3.5, abs=1e-6)
+
+
+def test_one_offset_best_in_every_window_for_long_enough_locks_though_close_to_another():
+    # music close to a repeat of itself: the true offset's margin stays under the voting margin, but it is the best in
+    # every window; after STREAK_S of that (more audio than one window held) the seat locks on it, and follows it
+    # the same way after a jump
+    tracker, t, states = DelayTracker(), 0.0, []
+    while t < STREAK_S + 0.55:
+        t += 0.1
+        states.append((t, tracker.update(Estimate(1.2, 0.7, 0.03, 5, t, True), t)))
+    locked = [at for at, s in states if s.state == "locked"]
+    assert locked and STREAK_S <= locked[0] <= STREAK_S + 0.15 and tracker.state.offset_s == pytest.approx(1.2)
+    start = t
+    while t < start + STREAK_S + 0.55:
+        t += 0.1
+        tracker.update(Estimate(2.2, 0.7, 0.03, 5, t, True, 0.1), t)
+    assert tracker.jumps == 1 and tracker.state.offset_s == pytest.approx(2.2, abs=1e-3)
 
 
 def test_silence_gives_no_estimate_and_never_locks():
