@@ -6,17 +6,17 @@ thresholds of :mod:`hapmotion.audience.sync_tracker` and :mod:`hapmotion.audienc
 
 The songs: the two shared songs and six synthetic ones (:func:`benchmarks.sync_scenes.synth_song`, seeds 100-105).
 For each as the venue's reference, a seat's matching (levels in 20 ms blocks, a 3 s window every 0.1 s, offsets
-from -0.25 to 5 s, the tracker fed as a seat feeds it) runs over what a viewer hears: *wrong*, two other songs
-through the low-quality codec (1 s of silence first), each clean and with room noise at 10 dB SNR, and a speech-like
-signal with room noise; *right*, the song itself (and the harness's synthetic songs, seeds 2026, 2027, 7, 8) 0.3-3 s
-late through the codec, alone, with room noise at 10 dB SNR, and with speech as loud as the music over it.
-Printed: for the wrong signals, the highest score and margin, the windows whose margin (both halves holding onsets)
-reaches the sharp margin, the locks; for the right one, the share of correct estimates that stand clear enough to
-vote for a lock or a jump and that are sharp, and the highest margin an estimate at a wrong delay (a bar away in
-music that repeats its rhythm) reached, which the voting margin must exceed; and, for the
-shared songs and the harness's synthetic ones (seeds 2026, 2027, 7, 8) heard 1.3 s late through the codec with room
-noise, how far a peak elsewhere (a bar that repeats the rhythm) ever scored above the true offset (what the jump
-lead must exceed).
+from -0.25 to 10 s, the seat's default, the tracker fed as a seat feeds it) runs over what a viewer hears: *wrong*,
+two other songs through the low-quality codec (1 s of silence first), each clean and with room noise at 10 dB SNR,
+and a speech-like signal with room noise; *right*, the song itself (and the harness's synthetic songs, seeds 2026,
+2027, 7, 8) 0.3-3 s late through the codec, alone, with room noise at 10 dB SNR, and with speech as loud as the music
+over it. Printed: for the wrong signals, the highest score and margin, the windows whose margin (both halves holding
+onsets) reaches the sharp margin, the locks; for the right one, the share of correct estimates that stand clear
+enough to vote for a lock or a jump and that are sharp, the highest margin an estimate at a wrong delay (a bar away
+in music that repeats its rhythm) reached, which the voting margin must exceed, and the longest unbroken run of
+windows whose best offset is one wrong delay, which the streak a lock may rest on must exceed; and, for the shared
+songs and the harness's synthetic ones (seeds 2026, 2027, 7, 8) heard 1.3 s late through the codec with room noise,
+how far a peak elsewhere (a bar that repeats the rhythm) ever scored above the true offset.
 """
 
 from __future__ import annotations
@@ -28,7 +28,9 @@ import numpy as np
 import soundfile as sf
 
 from hapmotion.audience.sync_estimator import NEAR_S, SHARP_MARGIN, estimate, match
-from hapmotion.audience.sync_tracker import JUMP_LEAD, MIN_SCORE, UNIQUE_MARGIN, DelayTracker
+from hapmotion.audience.seat_sync import SyncSettings
+from hapmotion.audience.sync_tracker import (AGREE_S, JUMP_LEAD, MIN_MARGIN, MIN_SCORE, STREAK_S, UNIQUE_MARGIN,
+                                             DelayTracker)
 from hapmotion.audio.sync_features import N_BANDS, RATE, LevelStream, dequantise, quantise, signal_levels
 
 from tests.support.data import AUDIO
@@ -36,12 +38,12 @@ from tests.support.data import AUDIO
 from . import sync_scenes as scenes
 
 SR = scenes.SR
-MAX_DELAY_S = 5.0
+MAX_DELAY_S = SyncSettings().max_delay_s  # the seat's default range (--sync-max-delay)
 
 
 def follow(heard: np.ndarray, source: np.ndarray) -> tuple[list, DelayTracker]:
     """The seat's matching of ``heard`` (local time: its sample time) against ``source`` (media time: its sample
-    time): [Estimate] and the tracker after it all."""
+    time): [Estimate or None] per window and the tracker after it all."""
     ref = dequantise(quantise(signal_levels(source, SR)))
     stream = LevelStream(SR)
     levels = dequantise(quantise(np.concatenate([stream.push(heard[k:k + 441])
@@ -60,7 +62,26 @@ def follow(heard: np.ndarray, source: np.ndarray) -> tuple[list, DelayTracker]:
         est = match(levels[end - n:end], t_heard, r, first / RATE, held=tracker.offset_at(at))
         tracker.update(est, at)
         out.append(est)
-    return [e for e in out if e is not None], tracker
+    return out, tracker
+
+
+def longest_runs(ests: list, delay_s: float) -> tuple[float, float]:
+    """The longest unbroken runs (seconds from the first window to the last) of consecutive windows whose estimate
+    reaches the score and the ordinary margin at one offset (within the tracker's agreement), at a wrong offset and at
+    the true one ``delay_s``: what :data:`~hapmotion.audience.sync_tracker.STREAK_S` must tell apart."""
+    wrong = right = 0.0
+    run: list = []
+    for e in ests:
+        if e is None or e.score < MIN_SCORE or e.margin < MIN_MARGIN:
+            run = []
+            continue
+        run = run + [e] if run and abs(e.offset_s - run[-1].offset_s) <= AGREE_S else [e]
+        span = run[-1].at - run[0].at
+        if abs(run[-1].offset_s - delay_s) > 0.04:
+            wrong = max(wrong, span)
+        else:
+            right = max(right, span)
+    return wrong, right
 
 
 def leads(heard: np.ndarray, source: np.ndarray, delay_s: float) -> np.ndarray:
@@ -100,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
     def lead(x: np.ndarray) -> np.ndarray:
         return np.concatenate([np.zeros(SR), x])[:n]
 
-    wrong, right, wrong_locks, lead_rows = [], [], 0, []
+    wrong, right, wrong_locks, lead_rows, runs = [], [], 0, [], []
     for i, song in enumerate(songs):
         ref = song[:int((secs + 15.0) * SR)]
         heard = []
@@ -110,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
         heard.append(scenes.add_noise(lead(scenes.speech_like(i, secs)), 10.0, i + 7))
         for h in heard:
             ests, tracker = follow(h, ref)
-            wrong += ests
+            wrong += [e for e in ests if e is not None]
             wrong_locks += tracker.locks
     for i, song in enumerate(songs + extra):
         ref = song[:int((secs + 15.0) * SR)]
@@ -124,7 +145,8 @@ def main(argv: list[str] | None = None) -> int:
                 o = np.resize(scenes.speech_like(i + 1, secs), n)
                 h = h + o * float(np.sqrt(np.mean(h * h))) / max(1e-9, float(np.sqrt(np.mean(o * o))))
             ests, _ = follow(h, ref)
-            right += [(e, abs(e.offset_s - delay) < 0.04, kind) for e in ests]
+            runs.append((kind, *longest_runs(ests, delay)))
+            right += [(e, abs(e.offset_s - delay) < 0.04, kind) for e in ests if e is not None]
     w = np.array([(e.score, e.margin, e.even) for e in wrong])
     even = w[:, 2] > 0
     sharp = even & (w[:, 1] >= SHARP_MARGIN)
@@ -148,6 +170,10 @@ def main(argv: list[str] | None = None) -> int:
               f"lock or jump vote), {r_sharp[ok].mean() * 100:.0f} % are sharp; at a wrong delay {int(wrong.sum())} "
               f"reach the score, their margin at most {top} (a vote needs {UNIQUE_MARGIN:.2f}), "
               f"{int((wrong & (r[:, 1] >= UNIQUE_MARGIN)).sum())} reach it")
+        rr = np.array([(w, g) for k, w, g in runs if k == kind])
+        print(f"  one offset best in every window, unbroken, at most: {rr[:, 0].max():.1f} s at a wrong delay, "
+              f"{rr[:, 1].min():.1f}-{rr[:, 1].max():.1f} s at the right one per song (a lock or jump on that "
+              f"alone needs {STREAK_S:.1f} s)")
     # the lead of a repeated bar: the shared songs and the harness's synthetic songs (seeds 2026, 2027, 7, 8), 44 s
     # each at 1.3 s, two noise draws each
     tau = np.arange(int(44.0 * SR)) / SR
