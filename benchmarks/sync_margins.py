@@ -1,5 +1,5 @@
 """What the sync thresholds rest on: the scores and margins a seat's matching gives the right music and music that is
-not the venue's (offline, no network; about 30 s of CPU). Not a timed test: figures are printed beside the
+not the venue's (offline, no network; about 35 s of CPU). Not a timed test: figures are printed beside the
 thresholds of :mod:`hapmotion.audience.sync_tracker` and :mod:`hapmotion.audience.sync_estimator`.
 
 ``python -m benchmarks.sync_margins [--seconds S]``
