@@ -137,7 +137,10 @@ class DelayTracker:
         self._t = 0.0
         self._confirmed = 0.0
         self._scores: deque[float] = deque(maxlen=8)
-        self._streak: list[tuple[float, float, float]] = []   # (at, offset, score): the same best offset, unbroken
+        # the same best offset, unbroken: when it began, and its latest (at, offset, score) (bounded: a locked seat's
+        # streak lasts as long as the show)
+        self._streak_from = 0.0
+        self._streak: deque[tuple[float, float, float]] = deque(maxlen=16)
         self.jumps = 0
         self.locks = 0
 
@@ -148,7 +151,7 @@ class DelayTracker:
         self._t = at
         self._confirmed = at
         self._jump.clear()
-        self._streak = []
+        self._streak.clear()
 
     def _predict(self, at: float) -> tuple[np.ndarray, np.ndarray]:
         dt = max(0.0, at - self._t)
@@ -176,18 +179,19 @@ class DelayTracker:
             self._votes.append((at, est.offset_s, est.score, est.margin if est.even else 0.0))
         # a close pair of candidates is told apart by more audio: the same offset best in every window for
         # STREAK_S, each window holding audio the first did not, is a vote of its own
-        if good and self._streak and abs(est.offset_s - self._streak[-1][1]) <= AGREE_S:
+        if not (good and self._streak and abs(est.offset_s - self._streak[-1][1]) <= AGREE_S):
+            self._streak.clear()
+            self._streak_from = at
+        if good:
             self._streak.append((at, est.offset_s, est.score))
-        else:
-            self._streak = [(at, est.offset_s, est.score)] if good else []
         streak = (float(np.median([o for _, o, _ in self._streak]))
-                  if self._streak and self._streak[-1][0] - self._streak[0][0] >= STREAK_S else None)
+                  if self._streak and at - self._streak_from >= STREAK_S else None)
         mode = self.state.state
         if mode == "searching":
             median = _agreed([(a, o, m) for a, o, _, m in self._votes])
             if median is None and streak is not None:
                 median = streak
-                self._votes.extend((a, o, s, 0.0) for a, o, s in self._streak[-8:])  # (their scores: confidence)
+                self._votes.extend((a, o, s, 0.0) for a, o, s in self._streak)  # (their scores: confidence)
             if median is not None:
                 self._start(at, median)
                 self._scores.extend(s for _, o, s, _ in self._votes if abs(o - median) <= AGREE_S)
