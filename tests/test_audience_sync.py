@@ -5,6 +5,7 @@ there; a seat hearing another song never locks and plays at the manual delay or 
 from __future__ import annotations
 
 import asyncio
+import math
 import os
 import subprocess
 import sys
@@ -22,7 +23,7 @@ from support.sync_signals import SR, real_song
 
 import hapmotion
 from hapmotion.audience import PublisherSecurity, Seat, listen, publishing
-from hapmotion.audience.seat_sync import SeatSync, SyncSettings
+from hapmotion.audience.seat_sync import MAX_EDGES, SeatSync, SyncSettings
 from hapmotion.audience.signing import SeatTrust, VenueSigner
 from hapmotion.audience.sync_reference import encode_batch
 from hapmotion.cli.listen import command
@@ -167,3 +168,63 @@ def test_a_device_that_is_not_there_is_one_line_from_the_real_command():
     lines = [ln for ln in done.stderr.splitlines() if ln.strip()]
     assert done.returncode != 0
     assert len(lines) == 1 and "audio" in lines[0] and "Traceback" not in done.stderr, done.stderr
+
+
+def _rehearsal_sync(tmp_path) -> SeatSync:
+    """A seat's sync on an unsigned show, fed through :meth:`SeatSync.receive` (the parse path of every message)."""
+    sync = SeatSync(SyncSettings(input=f"file:{heard_file(tmp_path, np.zeros(SR))}"))
+    sync.trust = SeatTrust.unsigned("s")
+    sync.follow(1)
+    return sync
+
+
+def _real_batches(sync: SeatSync, first: int, count: int, t0: float, edge: float) -> None:
+    """The publisher's batches ``first ..``: batch k sent at media time k / 2, arriving ``edge`` s later, 0.5 s
+    apart (local time ``t0 + k / 2 + edge``)."""
+    for k in range(first, first + count):
+        sync.receive(encode_batch(1, k, k * 0.5, k * 50, np.full((50, 5), 100, dtype=np.uint8)),
+                     t0 + k * 0.5 + edge)
+
+
+def test_a_forged_far_future_seq_on_an_unsigned_show_does_not_silence_the_reference(tmp_path):
+    sync = _rehearsal_sync(tmp_path)
+    _real_batches(sync, 1, 4, 100.0, 0.2)
+    sync.receive(encode_batch(1, 0xFFFFFFFF, 2.5, 250, np.zeros((50, 5), dtype=np.uint8)), 102.3)
+    assert sync.faults == {"seq_jump": 1}                       # refused at once: the time since allows a few
+    _real_batches(sync, 5, 4, 100.0, 0.2)
+    assert sync._last[0] == 8 and sync.faults == {"seq_jump": 1}  # every real batch after it accepted
+    assert np.isfinite(sync.store.span(350, 50)).all()
+    # the forgery as the very first batch a seat sees: the real ones count as replayed until RESYNC_S has passed,
+    # then the seat starts afresh on them
+    sync = _rehearsal_sync(tmp_path)
+    sync.receive(encode_batch(1, 0xFFFFFFFF, 0.0, 0, np.zeros((50, 5), dtype=np.uint8)), 100.0)
+    _real_batches(sync, 1, 10, 100.0, 0.2)
+    assert sync.faults["replayed"] == 4 and sync.faults["resync"] == 1
+    assert sync._last[0] == 10 and np.isfinite(sync.store.span(500, 50)).all()
+    assert sync._edge == pytest.approx(100.2)
+
+
+def test_a_forged_far_future_sent_t_does_not_pin_the_live_edge(tmp_path):
+    sync = _rehearsal_sync(tmp_path)
+    _real_batches(sync, 1, 4, 100.0, 0.2)
+    assert sync._edge == pytest.approx(100.2)                    # arrival minus media time
+    sync.receive(encode_batch(1, 5, 1e6, 250, np.zeros((50, 5), dtype=np.uint8)), 102.3)
+    assert sync.faults == {"time_jump": 1} and sync._edge == pytest.approx(100.2)
+    _real_batches(sync, 5, 4, 100.0, 0.2)
+    assert sync.faults == {"time_jump": 1} and sync._last[0] == 8
+    # as the first batch: the next real one goes back in media time, and the edge is measured afresh from it
+    sync = _rehearsal_sync(tmp_path)
+    sync.receive(encode_batch(1, 1, 1e6, 0, np.zeros((50, 5), dtype=np.uint8)), 100.0)
+    assert sync._edge == pytest.approx(100.0 - 1e6)
+    _real_batches(sync, 2, 3, 100.0, 0.2)
+    assert sync._edge == pytest.approx(100.2) and sync.faults == {}
+
+
+def test_the_live_edge_keeps_a_bounded_number_of_arrivals(tmp_path):
+    sync = _rehearsal_sync(tmp_path)
+    # a flood within the edge's time window, each arriving later than the last against its media time (the case
+    # a time window alone keeps every one of), as fast as the seq bound lets through
+    for k in range(1, 2001):
+        sync.receive(encode_batch(1, k, k * 0.001, k, np.zeros((1, 5), dtype=np.uint8)), 100.0 + k * 0.002)
+    assert len(sync._edges) <= MAX_EDGES
+    assert sync._edge is not None and math.isfinite(sync._edge)

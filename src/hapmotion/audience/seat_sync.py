@@ -36,8 +36,8 @@ from ..audio.inputs import AudioInput, open_input
 from ..audio.sync_features import N_BANDS, RATE, LevelStream, dequantise
 from ..errors import UsageError
 from .signing import BadSignature, SeatTrust, Unsigned
-from .sync_estimator import estimate
-from .sync_reference import decode_batch
+from .sync_estimator import match
+from .sync_reference import BATCH_S, decode_batch
 from .sync_tracker import DelayTracker, SyncState
 from .wire import subject
 
@@ -46,13 +46,33 @@ log = logging.getLogger("hapmotion.live")
 WINDOW_S = 3.0
 """Heard audio matched at once: long enough for a few bars' onsets, short enough to see a jump within 3 s."""
 MIN_WINDOW_S = 1.5
-STEP_S = 0.25
-"""How often the heard window is matched (0.5-1 ms of CPU each)."""
+STEP_S = 0.1
+"""How often the heard window is matched (0.5-1 ms of CPU each): often, so that the votes a lock or a jump needs
+come within a few tenths of a second of the music allowing it."""
 EDGE_WINDOW_S = 10.0
 """The live edge is the earliest reference arrival over this long."""
 EARLY_S = 0.25
 """Offsets searched start this far before the live edge (the venue's own stream may run a little ahead of the
 frames' arrival)."""
+MAX_EDGES = 64
+"""Most arrivals the live edge keeps (its window holds 20 batches at two a second; the seq bound below lets through
+at most a few more a second): a flood of batches cannot grow it."""
+SEQ_SLACK_S = 2.0
+"""A batch's seq may run ahead of the last accepted one by the batches of the time since it arrived plus this much,
+twice over (the publisher sends two a second, a few at once when it starts or restarts after a seek), and its
+``sent_t`` ahead of the last one's by that time plus this much, twice over: a forged far-future seq (0xFFFFFFFF)
+would make every real batch count as replayed, and a far-future ``sent_t`` would pin the live edge, on a show whose
+batches are not signed (rehearsal)."""
+RESYNC_S = 2.0
+"""No batch accepted for this long while batches keep coming (each refused as replayed or running ahead): the last
+accepted one was not the publisher's (a forged first batch), or the publisher restarted its numbering in the same run
+(a seek far ahead): the next batch is taken as the new start and the live edge is measured afresh. Real batches come
+every 0.5 s, so a running publisher is never refused this long."""
+UNSTEADY_S = 0.04
+"""The heard audio's stamps are trusted while its recent arrivals (the last 0.5 s) are no later, against the sample
+clock, than the earliest of the last 2 s by more than this (the skew target): an input that delivers audio slower
+than real time (a writer that falls behind, a stalled capture) has stamps that slide later and later, and a match
+of that audio would lock on a delay that is not the viewer's. Such audio is not matched (counted, logged once)."""
 FALLBACKS = ("delay", "silent")
 
 
@@ -105,12 +125,18 @@ class ReferenceStore:
 
 class HeardClock:
     """Local time of a stream's samples: the earliest arrival (smallest arrival minus sample time) over the last
-    2 s is taken as when the samples were heard (a late block only ever arrives later than it was heard)."""
+    2 s is taken as when the samples were heard (a late block only ever arrives later than it was heard).
 
-    def __init__(self, sample_rate: float, window_s: float = 2.0):
+    :attr:`unsteady` says how much later than that the stream's arrivals of the last :attr:`recent_s` were at the
+    least (seconds): about 0 for audio delivered in real time, however late single blocks come (a busy machine, a
+    pipe's bursts), and growing for a stream delivered slower than real time, whose stamps then slide."""
+
+    def __init__(self, sample_rate: float, window_s: float = 2.0, recent_s: float = 0.5):
         self.sr = sample_rate
         self.window_s = window_s
+        self.recent_s = recent_s
         self.samples = 0
+        self.unsteady = 0.0
         self._lags: deque[tuple[float, float]] = deque()
 
     def push(self, n: int, arrival: float) -> float:
@@ -122,6 +148,10 @@ class HeardClock:
         self._lags.append((arrival, lag))
         while self._lags[0][0] < arrival - self.window_s:
             self._lags.popleft()
+        # the deque's lags rise from its first to its last: the earliest lag of the recent arrivals is the first
+        # entry that arrived within recent_s (the minimum over that stretch)
+        recent = next(lg for at, lg in self._lags if at >= arrival - self.recent_s)
+        self.unsteady = recent - self._lags[0][1]
         return self._lags[0][1]
 
 
@@ -140,15 +170,16 @@ class SeatSync:
         self.estimates: deque = deque(maxlen=4096)   # (local time, Estimate or None, SyncState): the harness reads it
         self.faults: dict[str, int] = {}
         self._snapshot: tuple = (None, 0.0, 0.0)      # (offset at _t, drift, _t): read by the event loop
-        self._edges: deque[tuple[float, float]] = deque()
+        self._edges: deque[tuple[float, float]] = deque(maxlen=MAX_EDGES)
         self._edge: Optional[float] = None
-        self._last_seq: Optional[int] = None
+        self._last: Optional[tuple[int, float, float]] = None   # the last accepted batch: (seq, sent_t, arrival)
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
         self._sub: Optional[Subscription] = None
         self.trust: Optional[SeatTrust] = None
         self._said: set[str] = set()
-        self.cpu_s = 0.0
+        self.cpu_s = 0.0        # the worker thread's CPU, seconds
+        self.loop_cpu_s = 0.0   # the event loop's CPU in :meth:`receive` (checking and storing the reference)
 
     # ------------------------------------------------------------------ life cycle
     async def start(self, nc: NatsClient, show: str, trust: SeatTrust) -> None:
@@ -162,7 +193,7 @@ class SeatSync:
         """The run the seat plays: reference batches of other runs are ignored; a new run clears the reference."""
         if epoch != self.epoch:
             self.epoch = epoch
-            self._last_seq = None
+            self._last = None
             self.store.clear()
 
     async def close(self) -> None:
@@ -184,7 +215,9 @@ class SeatSync:
             log.warning("seat sync: %s (counted; logged once)", text)
 
     async def _on_batch(self, msg: Msg) -> None:
+        cpu0 = time.thread_time()
         self.receive(msg.data, time.perf_counter())
+        self.loop_cpu_s += time.thread_time() - cpu0
 
     def receive(self, raw: bytes, arrival: float) -> None:
         """One message of the reference subject as received (its bytes, its local arrival time): checked against
@@ -203,10 +236,18 @@ class SeatSync:
             self.epoch = batch.epoch  # the run's first batches may come before its description is read
         elif batch.epoch != self.epoch:
             return
-        if self._last_seq is not None and batch.seq <= self._last_seq:
-            self._fault("replayed", f"reference batch seq={batch.seq} after seq={self._last_seq}")
-            return
-        self._last_seq = batch.seq
+        if self._last is not None and not self._in_step(batch, arrival):
+            if arrival - self._last[2] <= RESYNC_S:
+                return
+            # nothing accepted for RESYNC_S while batches come: the last one accepted was not the publisher's
+            self._fault("resync", f"reference batches refused for {RESYNC_S:g} s; starting afresh at "
+                                  f"seq={batch.seq}")
+            self._edges.clear()
+        elif self._last is not None and batch.sent_t < self._last[1]:
+            # media time went back (the show looped or seeked back, or the last batch's time was forged ahead):
+            # the arrivals measured on the old timeline say nothing of the new one
+            self._edges.clear()
+        self._last = (batch.seq, batch.sent_t, arrival)
         self.store.put(batch.first_hop, batch.levels)
         lag = arrival - batch.sent_t
         while self._edges and self._edges[-1][1] >= lag:
@@ -215,6 +256,24 @@ class SeatSync:
         while self._edges[0][0] < arrival - EDGE_WINDOW_S:
             self._edges.popleft()
         self._edge = self._edges[0][1]
+
+    def _in_step(self, batch, arrival: float) -> bool:
+        """Whether ``batch`` follows the last accepted one: a higher seq, and seq and ``sent_t`` no further ahead
+        than the time since allows (:data:`SEQ_SLACK_S`); counted and logged once per kind when not."""
+        seq, sent_t, at = self._last
+        allowed_s = 2.0 * (max(0.0, arrival - at) + SEQ_SLACK_S)
+        if batch.seq <= seq:
+            self._fault("replayed", f"reference batch seq={batch.seq} after seq={seq}")
+        elif batch.seq - seq > allowed_s / BATCH_S:
+            self._fault("seq_jump", f"reference batch seq={batch.seq} runs {batch.seq - seq} batches ahead of "
+                                    f"seq={seq}, more than the time since allows")
+        elif batch.sent_t - sent_t > allowed_s:
+            self._fault("time_jump", f"reference batch sent at media time {batch.sent_t:.3f} s runs "
+                                     f"{batch.sent_t - sent_t:.1f} s ahead of the last, more than the time since "
+                                     f"allows")
+        else:
+            return True
+        return False
 
     # ------------------------------------------------------------------ when a frame plays (event loop)
     def play_time(self, media_t: float, fallback_due: float) -> Optional[float]:
@@ -248,6 +307,10 @@ class SeatSync:
                     return
                 cpu0 = time.thread_time()
                 t_zero = clock.push(block.size, arrival)
+                if clock.unsteady > UNSTEADY_S:
+                    self._fault("slow_input", f"{self.audio.describe()} delivers audio slower than real time (its "
+                                              f"arrivals slid {clock.unsteady * 1000:.0f} ms late); not matched "
+                                              f"while it does")
                 rows = levels.push(block)
                 if rows.shape[0]:
                     keep = min(rows.shape[0], heard.shape[0])
@@ -258,7 +321,7 @@ class SeatSync:
                         next_step = filled + int(STEP_S * RATE)
                         n = min(filled, size)
                         first = levels.next_hop - n          # hop index (stream) of the window's first row
-                        self._step(heard[-n:], t_zero + first / RATE)
+                        self._step(heard[-n:], t_zero + first / RATE, clock.unsteady <= UNSTEADY_S)
                 self.cpu_s += time.thread_time() - cpu0
         except Exception as exc:  # a device that went away, a pipe that broke: the seat plays on unsynced
             if self._stop.is_set():
@@ -266,15 +329,17 @@ class SeatSync:
             log.warning("seat sync: the audio input failed (%s: %s); playing unsynced", exc.__class__.__name__, exc)
             self._snapshot = (None, 0.0, 0.0)
 
-    def _step(self, heard_db: np.ndarray, t_heard: float) -> None:
+    def _step(self, heard_db: np.ndarray, t_heard: float, steady: bool = True) -> None:
+        """Match the heard window ``(W, B)`` dB whose first hop was heard at local time ``t_heard`` (not when its
+        stamps are not ``steady``: the tracker then sees no estimate) and update the tracker."""
         at = t_heard + (heard_db.shape[0] - 1) / RATE
         est = None
-        if self._edge is not None:
+        if self._edge is not None and steady:
             lo, hi = self._edge - EARLY_S, self._edge + self.settings.max_delay_s
             first = int(math.floor((t_heard - hi) * RATE))
             n = heard_db.shape[0] + int(math.ceil((hi - lo) * RATE))
             ref = self.store.span(first, n)
-            est = estimate(heard_db, t_heard, ref, first / RATE)
+            est = match(heard_db, t_heard, ref, first / RATE, held=self.tracker.offset_at(at))
             media = (first + np.arange(n)) / RATE
             if est is not None and self.tracker.state.state == "searching" \
                     and not np.isfinite(ref[media >= 0.0]).all():

@@ -40,6 +40,19 @@ MIN_EVENTS = 40.0
 ``(sum |h|)^2 / sum h^2``: 1 for a single click, about 100 for 3 s of music): a window holding one or two onsets
 (the music just starting, a door slam) lines up with almost anything, so it is no evidence."""
 
+MIN_ONSET_HOPS = 20.0
+"""The same participation ratio of the novelty *before* the local mean is taken out must reach this: the mean's
+removal spreads each onset over :data:`LOCAL_MEAN_S`, so the first 0.2 s of a song after silence passed the
+ratio above, and two different songs that start together lined up on their first onsets (score 0.77)."""
+
+NEAR_S = 0.045
+"""How close to a held offset a peak counts as that offset (the tracker's gate)."""
+
+
+def _participation(x: np.ndarray) -> np.ndarray:
+    """``(n, B)`` -> ``(B,)``: ``(sum x)^2 / sum x^2``, how many hops' worth of non-negative values each band holds."""
+    return x.sum(axis=0) ** 2 / np.maximum((x * x).sum(axis=0), 1e-12)
+
 
 @dataclass(frozen=True)
 class Estimate:
@@ -52,17 +65,31 @@ class Estimate:
     margin: float
     bands: int
     at: float
+    even: bool = False
+    """Both halves of the heard window hold onsets (:data:`MIN_ONSET_HOPS` / 2 in at least :data:`MIN_ACTIVE_BANDS`
+    bands each): the match does not rest on the music starting (or stopping) inside the window."""
+    near_score: Optional[float] = None
+    """The best score within :data:`NEAR_S` of the ``near`` offset asked for (the offset a locked seat holds), None
+    when not asked or out of the range searched."""
 
 
-def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float) -> Optional[Estimate]:
+def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
+             near: Optional[float] = None) -> Optional[Estimate]:
     """The best offset of ``heard_db`` ``(W, B)`` within ``ref_db`` ``(N, B)`` (N > W; NaN rows: reference hops not
-    received, they match nothing). Offsets searched: ``t_heard - t_ref - l / RATE`` for lags ``l = 0 .. N - W``.
+    received, they match nothing). Offsets searched: ``t_heard - t_ref - l / RATE`` for lags ``l = 0 .. N - W``;
+    ``near`` (an offset, seconds) asks for the best score around it as well (:attr:`Estimate.near_score`).
     None when the heard window is silent or stationary, or the reference holds no music over the range."""
     w, n = heard_db.shape[0], ref_db.shape[0]
     if w < 8 or n <= w:
         return None
     size = max(3, int(round(LOCAL_MEAN_S * RATE)) | 1)
     h = novelty(heard_db)
+    # onsets counted before the local mean is taken out: the mean's removal spreads one onset over LOCAL_MEAN_S of
+    # hops, and 0.2 s of music after silence would then pass for a window full of onsets
+    raw_events = _participation(h)
+    half = w // 2
+    even = bool(((_participation(h[:half]) >= MIN_ONSET_HOPS / 2).sum() >= MIN_ACTIVE_BANDS)
+                and ((_participation(h[half:]) >= MIN_ONSET_HOPS / 2).sum() >= MIN_ACTIVE_BANDS))
     h -= uniform_filter1d(h, size, axis=0, mode="nearest")
     missing = ~np.isfinite(ref_db).all(axis=1)
     r = novelty(np.where(missing[:, None], np.nan, ref_db))
@@ -71,7 +98,7 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
     h = h - h.mean(axis=0, keepdims=True)
     h_norm = np.sqrt((h * h).sum(axis=0))
     events = np.abs(h).sum(axis=0) ** 2 / np.maximum(h_norm ** 2, 1e-12)
-    active = (h_norm / np.sqrt(w) > MIN_NOVELTY_DB) & (events >= MIN_EVENTS)
+    active = (h_norm / np.sqrt(w) > MIN_NOVELTY_DB) & (events >= MIN_EVENTS) & (raw_events >= MIN_ONSET_HOPS)
     if active.sum() < MIN_ACTIVE_BANDS:
         return None
     h, h_norm, r = h[:, active], h_norm[active], r[:, active]
@@ -99,15 +126,59 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
         return None
     best = int(np.argmax(score))
     peak = float(score[best])
-    frac = 0.0
-    if 0 < best < n_lags - 1:
-        a, b, cc = score[best - 1], score[best], score[best + 1]
-        den = a - 2.0 * b + cc
-        if den < 0:
-            frac = float(np.clip(0.5 * (a - cc) / den, -0.5, 0.5))
+    frac = _refine(score, best)
     ex = max(1, int(round(EXCLUSION_S * RATE)))
     others = np.concatenate([score[:max(0, best - ex)], score[best + ex + 1:]])
     second = float(others.max()) if others.size else -1.0
     offset = t_heard - t_ref - (best + frac) / RATE
-    return Estimate(float(offset), peak, peak - second, int(active.sum()), t_heard + (w - 1) / RATE)
+    near_score = None
+    if near is not None:
+        lags = np.arange(n_lags)
+        dist = np.abs(t_heard - t_ref - lags / RATE - near)  # offset of lag l: t_heard - t_ref - l / RATE
+        if (dist <= NEAR_S).any():
+            near_score = float(score[dist <= NEAR_S].max())
+    return Estimate(float(offset), peak, peak - second, int(active.sum()), t_heard + (w - 1) / RATE, even,
+                    near_score)
+
+
+SHARP_MARGIN = 0.15
+"""Margin of a *sharp* estimate, one whose peak stands well clear of every other offset searched. Over 3 s windows
+whose both halves hold onsets, a different song (the shared songs and synthetic ones from benchmarks/sync_scenes.py
+against each other, through the low-quality codec, with and without room noise) or a speech-like signal stood
+0.16 at most above its next peak, 0.15 or more in 5 of 9252 windows (never three agreeing, which a lock needs); the
+right song through the codec with room noise at 10 dB SNR was sharp in 63 % of its windows at the right delay, 85 %
+without the noise (benchmarks/sync_margins.py, 10 s of delays searched). The tracker locks and follows jumps on fewer sharp estimates; a recent part of the
+window (below) is believed only when sharp."""
+
+RECENT_S = 1.5
+"""A locked seat whose full window does not confirm the offset it holds matches the last this-many seconds of it as
+well (the shortest window a seat matches at all): after a jump, the full window holds audio of both offsets and their
+two peaks share its score for as long as both halves last, while the recent part holds the new one alone."""
+
+
+def match(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
+          held: Optional[float] = None) -> Optional[Estimate]:
+    """The estimate a seat acts on: :func:`estimate` of the whole heard window ``(W, B)`` (``held``: the offset a
+    locked seat holds, its score asked for), or, when that does not land within :data:`NEAR_S` of ``held``, of the
+    window's last :data:`RECENT_S` seconds (the same offsets searched), which says where the music is now, if that
+    is sharp (:data:`SHARP_MARGIN`): a shorter window fits inside a repeated bar more easily, and music that repeats
+    within the offsets searched leaves its peak no margin, so then the whole window's estimate stands."""
+    est = estimate(heard_db, t_heard, ref_db, t_ref, near=held)
+    k = heard_db.shape[0] - int(round(RECENT_S * RATE))
+    if held is None or k <= 0 or (est is not None and abs(est.offset_s - held) <= NEAR_S):
+        return est
+    # hop k of the window against reference hop k + l: the same offsets t_heard - t_ref - l / RATE as above
+    recent = estimate(heard_db[k:], t_heard + k / RATE, ref_db[k:], t_ref + k / RATE, near=held)
+    return recent if recent is not None and recent.margin >= SHARP_MARGIN else est
+
+
+def _refine(score: np.ndarray, k: int) -> float:
+    """Fraction of a lag (-0.5..0.5) of the parabola's vertex through ``score[k - 1 .. k + 1]`` (0 at the ends or
+    where ``k`` is no peak)."""
+    if 0 < k < score.size - 1:
+        a, b, c = score[k - 1], score[k], score[k + 1]
+        den = a - 2.0 * b + c
+        if den < 0:
+            return float(np.clip(0.5 * (a - c) / den, -0.5, 0.5))
+    return 0.0
 

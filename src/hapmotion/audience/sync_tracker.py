@@ -6,13 +6,27 @@ lags and five bands, a different song (the two shared songs against each other a
 scored about 0.3 at most, a speech-like signal too, room noise 0.15, while the right song through a low-quality Vorbis
 copy with room noise at 10 dB SNR scored 0.48 and more once the window was full of music.
 
-* **searching**: good estimates of the last :data:`VOTE_S` seconds vote; when :data:`LOCK_VOTES` of them agree
+A false lock is worse than a slow one, so only an estimate whose peak is the only candidate votes for a lock or a
+jump: its margin (the score minus the best score at any other offset searched) reaches :data:`UNIQUE_MARGIN`. Music
+that repeats its rhythm bar to bar puts a second peak a bar away, close to the true one and through noise sometimes
+above it; such a close pair waits for audio that tells them apart: either a window where one stands clear, or one
+offset that is the best in every window for :data:`STREAK_S` (the later windows hold audio the first did not).
+
+* **searching**: voting estimates of the last :data:`VOTE_S` seconds; when :data:`LOCK_VOTES` of them agree
   within :data:`AGREE_S` and span at least :data:`LOCK_SPAN_S` (so they do not all come from one stretch of
-  audio), the seat locks on their median.
+  audio), the seat locks on their median. *Sharp* estimates (margin at least
+  :data:`~hapmotion.audience.sync_estimator.SHARP_MARGIN`: the peak stands
+  well clear of every other delay, which unrelated signals did not reach with a full window, over a window whose
+  both halves hold onsets: two songs starting together after silence line up on their first onsets) need fewer:
+  :data:`SHARP_VOTES` agreeing within :data:`SHARP_AGREE_S` over :data:`SHARP_SPAN_S`.
 * **locked**: a Kalman filter on (offset, drift) follows the good estimates that fall within :data:`GATE_S` of its
-  prediction; a drift of 0.1 % is 1 ms a second, which the drift state follows. Good estimates outside the gate
+  prediction; a drift of 0.1 % is 1 ms a second, which the drift state follows. Voting estimates outside the gate
   that agree among themselves (:data:`JUMP_VOTES`, spanning :data:`JUMP_SPAN_S`) are a jump (the viewer's player
-  re-buffered or re-synced): the filter restarts there.
+  re-buffered or re-synced): the filter restarts there; sharp ones again need only :data:`SHARP_VOTES`, and an
+  unbroken :data:`STREAK_S` of one offset outside the gate is one too. A match
+  elsewhere votes for a jump only when it beats the held offset's own score (``Estimate.near_score``) by
+  :data:`JUMP_LEAD`; music that repeats a section exactly scores the same at both, and one that does not beat the
+  held offset confirms it instead (the seat keeps playing where it was rather than hopping to the repeat).
 * **lost**: no good estimate within the gate for :data:`LOST_AFTER_S`: the seat keeps the prediction (the stream
   most likely still plays where it did) and says so; after :data:`HOLD_S` more it is searching again and plays
   the user's fallback (the manual delay, or nothing).
@@ -26,10 +40,23 @@ from typing import Optional
 
 import numpy as np
 
-from .sync_estimator import Estimate
+from .sync_estimator import SHARP_MARGIN, Estimate
 
 MIN_SCORE = 0.40
 MIN_MARGIN = 0.02
+"""Margin (score minus the best score elsewhere) of an estimate that confirms the offset a locked seat holds."""
+UNIQUE_MARGIN = 0.10
+"""Margin of an estimate that votes for a lock or a jump: its peak must be the only candidate. Over the right song
+0.3-3 s late through the low-quality codec (twelve songs, 10 s of delays searched, benchmarks/sync_margins.py),
+windows whose best offset was a wrong one (a bar that repeats the rhythm) stood at most 0.05 clear through room noise
+at 10 dB SNR (0.08 in other draws of the delays) and none through the codec alone; with speech as loud as the music
+over it one window of 2817 stood 0.19 clear, alone. Of the windows at the right delay 96 % (codec), 85 % (room noise)
+and 46 % (speech over) stood 0.10 clear."""
+STREAK_S = 1.5
+"""How long one offset must be the best (score and the ordinary margin reached) in every window, unbroken, to lock or
+jump on it when no window stands :data:`UNIQUE_MARGIN` clear (the later windows hold audio the first did not): a
+wrong offset of the right song stayed best for 0.6 s at most through room noise and 0.1 s with speech over it (0.9 s
+in other draws of the delays), the right one for 3.8 s and more in every song (benchmarks/sync_margins.py)."""
 VOTE_S = 3.0
 LOCK_VOTES = 4
 AGREE_S = 0.025
@@ -37,6 +64,15 @@ LOCK_SPAN_S = 0.75
 GATE_S = 0.045
 JUMP_VOTES = 4
 JUMP_SPAN_S = 0.5
+JUMP_LEAD = 0.05
+"""How far a match elsewhere must beat the held offset's own score to count towards a jump; below it the held offset
+is confirmed. Through a noisy copy (room noise at 10 dB SNR) a bar that repeats the rhythm of the true one scored up
+to 0.06 above it over a 3 s window (benchmarks/sync_margins.py): such a lead passes this test but not
+:data:`UNIQUE_MARGIN` (the held offset is among the offsets it must stand clear of), nor, lasting 0.9 s at most,
+:data:`STREAK_S`."""
+SHARP_VOTES = 3
+SHARP_AGREE_S = 0.010
+SHARP_SPAN_S = 0.2
 LOST_AFTER_S = 5.0
 HOLD_S = 20.0
 MEASUREMENT_S = 0.008
@@ -61,6 +97,17 @@ class SyncState:
     locks: int = 0
 
 
+def _agreed(points: list[tuple[float, float, float]]) -> Optional[float]:
+    """The offset that ``(at, offset, margin)`` votes agree on by the ordinary or the sharp rule, or None."""
+    size, median, span = _cluster([(a, o) for a, o, _ in points], AGREE_S)
+    if size >= LOCK_VOTES and span >= LOCK_SPAN_S:
+        return median
+    size, median, span = _cluster([(a, o) for a, o, m in points if m >= SHARP_MARGIN], SHARP_AGREE_S)
+    if size >= SHARP_VOTES and span >= SHARP_SPAN_S:
+        return median
+    return None
+
+
 def _cluster(points: list[tuple[float, float]], agree: float) -> tuple[int, float, float]:
     """The largest group of ``(at, offset)`` within ``agree`` of one member's offset: (size, median offset, span of
     their times)."""
@@ -83,13 +130,17 @@ class DelayTracker:
 
     def __init__(self) -> None:
         self.state = SyncState("searching", None, 0.0)
-        self._votes: deque[tuple[float, float, float]] = deque()  # (at, offset, score) of good estimates
-        self._jump: deque[tuple[float, float]] = deque()
+        self._votes: deque[tuple[float, float, float, float]] = deque()  # (at, offset, score, margin), good ones
+        self._jump: deque[tuple[float, float, float]] = deque()   # (at, offset, margin)
         self._x = np.zeros(2)     # offset at _t, drift
         self._p = np.eye(2)
         self._t = 0.0
         self._confirmed = 0.0
         self._scores: deque[float] = deque(maxlen=8)
+        # the same best offset, unbroken: when it began, and its latest (at, offset, score) (bounded: a locked seat's
+        # streak lasts as long as the show)
+        self._streak_from = 0.0
+        self._streak: deque[tuple[float, float, float]] = deque(maxlen=16)
         self.jumps = 0
         self.locks = 0
 
@@ -100,6 +151,7 @@ class DelayTracker:
         self._t = at
         self._confirmed = at
         self._jump.clear()
+        self._streak.clear()
 
     def _predict(self, at: float) -> tuple[np.ndarray, np.ndarray]:
         dt = max(0.0, at - self._t)
@@ -120,14 +172,29 @@ class DelayTracker:
             self._votes.popleft()
         while self._jump and self._jump[0][0] < at - VOTE_S:
             self._jump.popleft()
+        # only a peak that stands clear of every other offset votes: a bar that repeats the rhythm of the true one
+        # scores close to it (or above it), and such a pair of candidates waits for audio that tells them apart
+        unique = good and est.margin >= UNIQUE_MARGIN
+        if unique:
+            self._votes.append((at, est.offset_s, est.score, est.margin if est.even else 0.0))
+        # a close pair of candidates is told apart by more audio: the same offset best in every window for
+        # STREAK_S, each window holding audio the first did not, is a vote of its own
+        if not (good and self._streak and abs(est.offset_s - self._streak[-1][1]) <= AGREE_S):
+            self._streak.clear()
+            self._streak_from = at
         if good:
-            self._votes.append((at, est.offset_s, est.score))
+            self._streak.append((at, est.offset_s, est.score))
+        streak = (float(np.median([o for _, o, _ in self._streak]))
+                  if self._streak and at - self._streak_from >= STREAK_S else None)
         mode = self.state.state
         if mode == "searching":
-            size, median, span = _cluster([(a, o) for a, o, _ in self._votes], AGREE_S)
-            if size >= LOCK_VOTES and span >= LOCK_SPAN_S:
+            median = _agreed([(a, o, m) for a, o, _, m in self._votes])
+            if median is None and streak is not None:
+                median = streak
+                self._votes.extend((a, o, s, 0.0) for a, o, s in self._streak)  # (their scores: confidence)
+            if median is not None:
                 self._start(at, median)
-                self._scores.extend(s for _, o, s in self._votes if abs(o - median) <= AGREE_S)
+                self._scores.extend(s for _, o, s, _ in self._votes if abs(o - median) <= AGREE_S)
                 self.locks += 1
                 self._votes.clear()
                 return self._report("locked")
@@ -143,9 +210,20 @@ class DelayTracker:
             self._jump.clear()
             self._scores.append(est.score)
             return self._report("locked")
-        if good:
-            self._jump.append((at, est.offset_s))
-            size, median, span = _cluster(list(self._jump), AGREE_S)
+        if est is not None and est.near_score is not None and est.near_score >= MIN_SCORE \
+                and est.score - est.near_score < JUMP_LEAD:
+            # the held offset scores as well as the best one (a repeated section): still the music played here
+            self._confirmed = at
+            return self._report("locked")
+        if unique or streak is not None:
+            if unique:
+                self._jump.append((at, est.offset_s, est.margin if est.even else 0.0))
+            size, median, span = _cluster([(a, o) for a, o, _ in self._jump], AGREE_S)
+            sharp = _cluster([(a, o) for a, o, m in self._jump if m >= SHARP_MARGIN], SHARP_AGREE_S)
+            if sharp[0] >= SHARP_VOTES and sharp[2] >= SHARP_SPAN_S:
+                size, median, span = JUMP_VOTES, sharp[1], JUMP_SPAN_S
+            if streak is not None and abs(streak - x[0]) > GATE_S:
+                size, median, span = JUMP_VOTES, streak, JUMP_SPAN_S
             if size >= JUMP_VOTES and span >= JUMP_SPAN_S:
                 self.jumps += 1
                 self._start(at, median)
