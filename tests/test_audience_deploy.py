@@ -4,6 +4,7 @@ credential says so in one line."""
 
 from __future__ import annotations
 
+import asyncio
 import socket
 import subprocess
 import time
@@ -11,8 +12,11 @@ import time
 from support.certificates import make_tls
 from support.live_fakes import free_port
 
-from hapmotion.audience.server import nats_server_binary
+from hapmotion.audience import NatsAuth
+from hapmotion.audience.connection import _is_tls, connect
+from hapmotion.audience.server import LocalNatsServer, nats_server_binary
 from hapmotion.audience.venue_config import write_venue
+from hapmotion.cli import main
 
 
 def start_configured(config, cwd, port: int) -> subprocess.Popen:
@@ -58,3 +62,44 @@ def test_the_venue_configuration_runs_from_any_directory(tmp_path, monkeypatch):
         assert (certs / "venue" / "jetstream").is_dir()
     finally:
         stop_server(proc)
+
+
+class NamedVenue:
+    """A venue from `venue-setup` whose server certificate (of the venue's own CA) names nats.example and
+    192.0.2.10, as in docs/audience.md, its nats-server run here on loopback: a rehearsal on one machine."""
+
+    def __init__(self, folder):
+        (folder / "tls").mkdir()
+        self.tls = make_tls(folder / "tls", names=("nats.example", "192.0.2.10"))
+        self.paths = write_venue(folder / "venue", show="concert", tls_cert=self.tls["cert"],
+                                 tls_key=self.tls["key"])
+        self.server = LocalNatsServer(extra_args=("-c", str(self.paths["config"])))
+        self.url = f"tls://127.0.0.1:{self.server.port}"
+
+    def __enter__(self) -> "NamedVenue":
+        self.server.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.server.close()
+
+
+def test_a_certificate_for_another_name_suggests_nats_tls_name_not_the_ca(tmp_path, capsys):
+    with NamedVenue(tmp_path) as venue:
+        code = main(["listen", f"{venue.url}/concert", "--sink", "player", "--venue-pubkey",
+                     str(venue.paths["venue_pub"]), "--nats-nkey", str(venue.paths["seat_nkey"]),
+                     "--nats-ca", venue.tls["ca"]])
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1, err
+        assert "mismatch" in err and "--nats-tls-name NAME" in err and "--nats-ca" not in err, err
+        # what the hint says works: the certificate's name given, the same CA
+        auth = NatsAuth(nkey=str(venue.paths["seat_nkey"]), ca=venue.tls["ca"], tls_name="nats.example")
+        assert asyncio.run(asyncio.wait_for(connected_over_tls(venue.url, auth), 15))
+
+
+async def connected_over_tls(url: str, auth) -> bool:
+    nc = await connect(url, name="seat", auth=auth)
+    try:
+        return nc.is_connected and _is_tls(nc)
+    finally:
+        await nc.close()
