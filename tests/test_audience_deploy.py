@@ -9,14 +9,20 @@ import socket
 import subprocess
 import time
 
+import pytest
+from support.audience import Venue
 from support.certificates import make_tls
-from support.live_fakes import free_port
+from support.live_fakes import BVH, free_port
 
-from hapmotion.audience import NatsAuth
+from hapmotion.audience import NatsAuth, PublisherSecurity
 from hapmotion.audience.connection import _is_tls, connect
+from hapmotion.audience.publisher import NatsPublisherSink, describe_show
 from hapmotion.audience.server import LocalNatsServer, nats_server_binary
 from hapmotion.audience.venue_config import write_venue
 from hapmotion.cli import main
+from hapmotion.errors import UsageError
+from hapmotion.layout import load_layout
+from hapmotion.show import OutputStage, Show
 
 
 def start_configured(config, cwd, port: int) -> subprocess.Popen:
@@ -103,3 +109,38 @@ async def connected_over_tls(url: str, auth) -> bool:
         return nc.is_connected and _is_tls(nc)
     finally:
         await nc.close()
+
+
+def _sink(url: str, auth, key) -> NatsPublisherSink:
+    layout = load_layout()
+    desc = describe_show("concert", show=Show(), stage=OutputStage.for_show(Show(), "motion", layout=layout,
+                                                                            fps=30.0),
+                         layout=layout, body=None, stall_ms=250.0, mirror=True)
+    return NatsPublisherSink(url, desc, security=PublisherSecurity(auth=auth, key=key))
+
+
+def test_a_publisher_with_the_seats_credential_is_one_permission_error(tmp_path, capsys):
+    async def with_bucket(venue) -> str:
+        venue_sink = _sink(venue.url, venue.venue_auth, venue.key)  # the venue's own publisher made the bucket
+        await venue_sink.start()
+        await venue_sink.shutdown()
+        seat_sink = _sink(venue.url, venue.seat_auth, venue.key)
+        with pytest.raises(UsageError) as err:
+            await seat_sink.start()
+        return str(err.value)
+
+    with Venue(tmp_path, show="concert") as venue:
+        # a fresh server: the bucket cannot be created with the seat's key
+        code = main(["live", "--source", f"replay:{BVH}", "--sink", f"nats://127.0.0.1:{venue.server.port}/concert",
+                     "--venue-key", str(venue.paths["venue_key"]), "--nats-nkey", str(venue.paths["seat_nkey"]),
+                     "--nats-ca", venue.tls["ca"]])
+        err = capsys.readouterr().err
+        assert code == 2, err
+        lines = [line for line in err.splitlines() if line.startswith("error")]
+        assert len(lines) == 1 and "may not publish the show" in lines[0] and "seat.nk" in lines[0], err
+        assert "the seat's key instead of the venue's" in lines[0] and "TimeoutError" not in err, err
+        assert "lost the NATS server" not in err, err
+        # a bucket the venue made: the put of the description is refused
+        text = asyncio.run(asyncio.wait_for(with_bucket(venue), 30))
+    assert "may not publish the show" in text and "hapmotion_shows.concert" in text.lower(), text
+    assert "\n" not in text and "TimeoutError" not in text, text
