@@ -49,7 +49,7 @@ from ..show.settings import Show
 from ..show.stage import OutputStage
 from ..show.timeline import RowTimeline
 from .clock import MediaClock
-from .compact import message_decoder, missing_joints
+from .compact import COMPACT, PACKED, message_decoder, missing_joints
 from .connection import NatsAuth, connect, connect_error, parse_server_url
 from .cue_gate import CueGate
 from .descriptions import DescriptionWatch
@@ -57,7 +57,7 @@ from .interpolation import Upsampler
 from .seat_sync import SeatSync, SyncSettings
 from .seat import Seat, SeatSink, SeatStage
 from .signing import BadSignature, SeatTrust, Unsigned
-from .wire import ShowDescription, WireFrame, check_show_name, decode_event, subject
+from .wire import KIND_FRAME, MAGIC, VERSION, ShowDescription, WireFrame, check_show_name, decode_event, subject
 
 log = logging.getLogger("hapmotion.live")
 
@@ -69,6 +69,7 @@ SEQ_SLACK_S = 2.0
 over, for a replay at double speed): a forged far-future seq cannot make every real frame count as replayed."""
 
 
+KNOWN_FRAME_VERSIONS = frozenset({VERSION, COMPACT, PACKED})  # one not the description's: a format change
 MAX_EVENT_SEQ_JUMP = 10_000
 """An event's seq may run at most this far ahead of the last one (events are a few a second; a seat that missed
 ten thousand has reconnected to another run anyway): a forged far-future seq cannot silence the cues."""
@@ -255,11 +256,29 @@ class AudienceSource(Source):
     async def _on_frame(self, msg: Msg) -> None:
         self._frame(msg.data, time.perf_counter())
 
+    def _other_format(self, data: bytes) -> bool:
+        """Whether ``data`` is a frame of a known version not this description's (a publisher restarted with another
+        ``frames=``/``pack=``, its description not read yet): counted as ``format_changing``, logged once at info,
+        never decoded with this show's decoder; the stored description is read again (as for another run)."""
+        version = data[2] if len(data) >= 4 and data[:2] == MAGIC and data[3] == KIND_FRAME else None
+        if version == self.desc.frame_version or version not in KNOWN_FRAME_VERSIONS:
+            return False
+        counts = self.engine.faults.counts
+        counts["format_changing"] += 1
+        if counts["format_changing"] == 1:
+            log.info("%s: frames in format version %d, not the description's %d: the show's format is changing; "
+                     "waiting for its new description", self.name, version, self.desc.frame_version)
+        if self.on_other_run is not None:
+            self.on_other_run()
+        return True
+
     def _frame(self, raw: bytes, arrival: float) -> None:
         """One received frame (its bytes as sent, its local arrival time): checked, then queued for its time."""
         faults = self.engine.faults
         data = self._open("frame", raw)
         if data is None:
+            return
+        if self._other_format(data):
             return
         try:
             carried = self._decode(data)  # one frame, or a packed message's consecutive frames
