@@ -125,7 +125,8 @@ folder under the system's temporary directory, shared by every server of the mac
 
 
 def _absolute(path: Optional[str]) -> Optional[str]:
-    return None if path is None else str(Path(path).resolve())
+    # forward slashes on Windows too: the configuration's quoted strings would read a backslash as an escape
+    return None if path is None else Path(path).resolve().as_posix()
 
 
 def write_venue(folder: "str | os.PathLike[str]", *, show: str = "*", host: str = "0.0.0.0", port: int = 4222,
@@ -155,7 +156,7 @@ def write_venue(folder: "str | os.PathLike[str]", *, show: str = "*", host: str 
     # the configuration's folder, so "nats-server -c FOLDER/nats-server.conf" would otherwise work from one folder
     config = server_config(venue_pub, seat_pub, show=show, host=host, port=port, tls_cert=_absolute(tls_cert),
                            tls_key=_absolute(tls_key), tls_ca=_absolute(tls_ca),
-                           store_dir=_absolute(store_dir) or str((out / STORE_DIR).resolve()))
+                           store_dir=_absolute(store_dir or str(out / STORE_DIR)))
     write_key_pair(paths["venue_key"], paths["venue_pub"])
     _write_secret(paths["venue_nkey"], venue_seed)
     _write_secret(paths["seat_nkey"], seat_seed)
