@@ -23,7 +23,6 @@ import os
 import time
 from collections import OrderedDict, deque
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, Union
 
 import numpy as np
@@ -55,7 +54,7 @@ from .cue_gate import CueGate
 from .descriptions import DescriptionWatch
 from .interpolation import Upsampler
 from .seat_sync import SeatSync, SyncSettings
-from .seat import Seat, SeatSink, SeatStage
+from .seat import Seat, SeatSink, SeatStage, numbered_sinks
 from .signing import BadSignature, SeatTrust, Unsigned
 from .wire import KIND_FRAME, MAGIC, VERSION, ShowDescription, WireFrame, check_show_name, decode_event, subject
 
@@ -68,6 +67,9 @@ SEQ_SLACK_S = 2.0
 """A frame's seq may run ahead of the last one by the frames of the time since it arrived plus this much (twice
 over, for a replay at double speed): a forged far-future seq cannot make every real frame count as replayed."""
 
+
+OVER_MARGIN_S = 0.1
+"""After an end event, the seat's session ends this long after its last frame's play time plus the stall fade."""
 
 KNOWN_FRAME_VERSIONS = frozenset({VERSION, COMPACT, PACKED})  # one not the description's: a format change
 MAX_EVENT_SEQ_JUMP = 10_000
@@ -174,6 +176,7 @@ class AudienceSource(Source):
         self.gate = CueGate(cues.cue_list if cues is not None else None)
         self.on_cue = on_cue
         self.changed: Optional[ShowDescription] = None
+        self.over = False  # the publisher ended the show and its last frames have played
         self.ended = asyncio.Event()
         self.max_pending = max_pending or int(desc.fps * (wait_s + 2.0)) + 64
         self._wait_s = wait_s
@@ -396,6 +399,17 @@ class AudienceSource(Source):
             if due is not None:
                 self._queue(held, held[-1].media_t, due + self.interpolation_extra_s)
                 self._arrived.set()
+            # once the last frame has played and the vest has faded, the session ends (its recordings are
+            # finished: no rows of silence while no show plays); the seat then waits for the next show
+            last = max((entry[3] for entry in self._heap), default=time.perf_counter())
+            wait = max(0.0, last - time.perf_counter()) + self.desc.stall_ms / 1000.0 + OVER_MARGIN_S
+            self._timers.add(asyncio.get_running_loop().call_later(wait, self._show_over, self.desc.epoch))
+
+    def _show_over(self, epoch: int) -> None:
+        if epoch == self.desc.epoch and not self._heap and not self.ended.is_set():  # no next run played on
+            self.over = True
+            self.ended.set()
+            self._arrived.set()
 
     # ------------------------------------------------------------------ another run
     def offer_description(self, desc: ShowDescription) -> None:
@@ -472,24 +486,6 @@ def seat_show(desc: ShowDescription, seat: Seat, cues: Optional[CueList] = None)
     stage = OutputStage.from_dict(desc.music or {}, mode, layout=layout, fps=desc.fps, comfort=seat.comfort,
                                   cues=cues, music=music, mirror=show.params().mirror)
     return SeatShow(layout, mode, renderer, stage, music)
-
-
-def numbered_sinks(sinks: Sequence[SinkSpec], session: int) -> list[SinkSpec]:
-    """The seat's sinks for its ``session``-th session (from 1): a recorder of a later session writes
-    ``NAME-2.EXT``, ``NAME-3.EXT``, ... (the next free number), never over an earlier session's recording."""
-    if session <= 1:
-        return list(sinks)
-    out: list[SinkSpec] = []
-    for spec in sinks:
-        if isinstance(spec, str) and parse_sink(spec).kind == "record":
-            path = Path(parse_sink(spec).path)
-            n = session
-            while (candidate := path.with_name(f"{path.stem}-{n}{path.suffix}")).exists():
-                n += 1
-            log.info("seat: the show changed; this session records to %s", candidate)
-            spec = f"record:{candidate}"
-        out.append(spec)
-    return out
 
 
 async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
@@ -578,6 +574,10 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
             finally:
                 follower.cancel()
                 await asyncio.gather(follower, return_exceptions=True)
+            if source.over:
+                log.info("seat: the show ended; its recordings are finished; waiting for the next show")
+                desc = await watch.next_description()
+                continue
             if source.changed is None:
                 return stats
             desc = source.changed
