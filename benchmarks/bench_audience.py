@@ -440,7 +440,7 @@ def secure_venue(folder: Path) -> str:
     certificate for 127.0.0.1 from a CA made for the run (``ca.pem``, which every role checks); returns the
     folder. The load generator connects as a seat does: TLS, the seat's NKey."""
     from hapmotion.audience.venue_config import write_venue
-    from tests.support.audience import make_tls
+    from tests.support.certificates import make_tls
 
     tls = make_tls(folder)
     write_venue(folder / "v", show=SHOW, host="127.0.0.1", tls_cert=tls["cert"], tls_key=tls["key"])

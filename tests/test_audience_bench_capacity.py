@@ -147,3 +147,21 @@ def test_summary_counts_seats_with_every_message_written_on_its_own(capsys):
     assert "(every message written on its own): 2.00x" in out and "met]" in out
     fitted = float(out.split("(the lines through N): ")[1].split("x")[0])
     assert fitted < 2.0  # the late 60 Hz writes make today's frames look cheaper per message
+
+
+def test_the_help_is_whole_shows_defaults_and_a_short_run(capsys):
+    with pytest.raises(SystemExit):
+        cap.main(["--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    assert "swept over the number of seats, per stream, fitted as a fixed part plus a part per seat." in out, out
+    assert "(default: 0,200,500,900)" in out and "(default: full@60,compact@30,packed@30)" in out, out
+    assert f"A short run: python -m benchmarks.bench_audience_capacity {cap.SHORT_RUN}" in out, out
+    with pytest.raises(SystemExit):
+        cap.main(["--steps", "0,200"])
+    assert cap.SHORT_RUN in capsys.readouterr().err
+
+
+def test_a_step_without_seats_prints_a_dash_not_nan():
+    assert cap.ratio(0.05, 0, 1e6) == "    -" and cap.ratio(0.05, 1000, 1e6) == " 50.0"
+    assert cap.ratio(3.0, 0, fmt=".2f") == "-" and cap.ratio(3.0, 2, fmt=".2f") == "1.50"
+    assert "nan" not in cap.ratio(float("nan"), 0, 1, ".1f")

@@ -15,6 +15,7 @@ from hapmotion.live import ReplaySource
 from hapmotion.live.sinks import Sink
 from hapmotion.show import Show
 
+from .certificates import make_tls  # noqa: F401  (the tests import it from here too)
 from .data import AUDIO
 from .live_fakes import wait_for
 
@@ -129,48 +130,6 @@ async def start_seat(url: str, sinks: list, seat: Seat, security: SeatSecurity =
 async def stop(task) -> None:
     task.cancel()
     await asyncio.gather(task, return_exceptions=True)
-
-
-def make_tls(folder) -> dict:
-    """A throw-away CA and a server certificate for 127.0.0.1 / localhost signed by it (PEM files in ``folder``):
-    ``{"ca": ..., "cert": ..., "key": ...}``."""
-    import datetime
-    import ipaddress
-    from pathlib import Path
-
-    from cryptography import x509
-    from cryptography.hazmat.primitives import hashes, serialization
-    from cryptography.hazmat.primitives.asymmetric import ec
-    from cryptography.x509.oid import NameOID
-
-    folder = Path(folder)
-    now = datetime.datetime.now(datetime.timezone.utc)
-
-    def pem_key(key) -> bytes:
-        return key.private_bytes(serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8,
-                                 serialization.NoEncryption())
-
-    ca_key = ec.generate_private_key(ec.SECP256R1())
-    ca_name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "hapmotion test CA")])
-    ca = (x509.CertificateBuilder().subject_name(ca_name).issuer_name(ca_name).public_key(ca_key.public_key())
-          .serial_number(x509.random_serial_number()).not_valid_before(now - datetime.timedelta(minutes=5))
-          .not_valid_after(now + datetime.timedelta(days=1))
-          .add_extension(x509.BasicConstraints(ca=True, path_length=None), critical=True)
-          .sign(ca_key, hashes.SHA256()))
-    key = ec.generate_private_key(ec.SECP256R1())
-    cert = (x509.CertificateBuilder()
-            .subject_name(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "localhost")]))
-            .issuer_name(ca_name).public_key(key.public_key()).serial_number(x509.random_serial_number())
-            .not_valid_before(now - datetime.timedelta(minutes=5)).not_valid_after(now + datetime.timedelta(days=1))
-            .add_extension(x509.SubjectAlternativeName([x509.DNSName("localhost"),
-                                                        x509.IPAddress(ipaddress.ip_address("127.0.0.1"))]),
-                           critical=False)
-            .sign(ca_key, hashes.SHA256()))
-    paths = {"ca": folder / "ca.pem", "cert": folder / "server.pem", "key": folder / "server-key.pem"}
-    paths["ca"].write_bytes(ca.public_bytes(serialization.Encoding.PEM))
-    paths["cert"].write_bytes(cert.public_bytes(serialization.Encoding.PEM))
-    paths["key"].write_bytes(pem_key(key))
-    return {k: str(v) for k, v in paths.items()}
 
 
 class Venue:

@@ -6,7 +6,7 @@ from hapmotion's own encoders, plus the tests that show the fakes catch bad mess
   state, answers each request with a status object; optionally closes connections (a restart) or hangs (stops
   reading, keeping its connections open);
 * :class:`FakePlayerSdk2` - the SDK2 ``/v3/feedback`` endpoint over TLS with a self-signed certificate made here;
-* :func:`self_signed_cert` - with the ``cryptography`` package when importable, else the ``openssl`` CLI;
+* :func:`self_signed_cert` - (from certificates.py) a throw-away certificate for 127.0.0.1;
 * :class:`OscReceiver` - a UDP socket collecting OSC packets (parsed with python-osc);
 * :func:`send_osc` - sends frames as ``/hapmotion/skeleton`` OSC messages, paced;
 * :func:`start_session` - runs ``hapmotion.live.live`` in the test's loop and waits until it listens.
@@ -15,18 +15,14 @@ from hapmotion's own encoders, plus the tests that show the fakes catch bad mess
 from __future__ import annotations
 
 import asyncio
-import datetime
 import json
-import shutil
 import socket
 import ssl
-import subprocess
 import time
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
 import numpy as np
-import pytest
 from pythonosc.osc_packet import OscPacket
 from pythonosc.udp_client import SimpleUDPClient
 from websockets.asyncio.server import serve
@@ -34,6 +30,7 @@ from websockets.asyncio.server import serve
 from hapmotion.live.frames import SkeletonFrame
 from hapmotion.live.sources import Source
 from websockets.exceptions import ConnectionClosed
+from .certificates import self_signed_cert  # noqa: F401  (the tests import it from here too)
 from .data import MOTION
 
 BVH = MOTION / "dataset-1_byebye_happy_001.bvh"
@@ -231,34 +228,6 @@ class FakePlayerSdk1(_Server):
             if pos == position:
                 return values
         raise AssertionError(f"no {position} frame")
-
-
-def self_signed_cert(folder: Path) -> tuple[Path, Path]:
-    """A throw-away certificate for 127.0.0.1 (cryptography if importable, else openssl)."""
-    cert, key = folder / "player.crt", folder / "player.key"
-    try:
-        from cryptography import x509
-        from cryptography.hazmat.primitives import hashes, serialization
-        from cryptography.hazmat.primitives.asymmetric import ec
-        from cryptography.x509.oid import NameOID
-    except ImportError:
-        openssl = shutil.which("openssl")
-        if openssl is None:
-            pytest.fail("needs the cryptography package or the openssl command to make a test certificate")
-        subprocess.run([openssl, "req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1",
-                        "-nodes", "-keyout", str(key), "-out", str(cert), "-days", "1", "-subj", "/CN=127.0.0.1"],
-                       check=True, capture_output=True, timeout=30)
-        return cert, key
-    pkey = ec.generate_private_key(ec.SECP256R1())
-    name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "127.0.0.1")])
-    now = datetime.datetime.now(datetime.timezone.utc)
-    crt = (x509.CertificateBuilder().subject_name(name).issuer_name(name).public_key(pkey.public_key())
-           .serial_number(x509.random_serial_number()).not_valid_before(now - datetime.timedelta(minutes=5))
-           .not_valid_after(now + datetime.timedelta(days=1)).sign(pkey, hashes.SHA256()))
-    cert.write_bytes(crt.public_bytes(serialization.Encoding.PEM))
-    key.write_bytes(pkey.private_bytes(serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8,
-                                       serialization.NoEncryption()))
-    return cert, key
 
 
 class FakePlayerSdk2(_Server):

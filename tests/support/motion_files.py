@@ -4,7 +4,6 @@ from __future__ import annotations
 
 
 import numpy as np
-import pytest
 
 import hapmotion
 from hapmotion.errors import InputError
@@ -14,6 +13,8 @@ from hapmotion.skeleton.joints import JOINTS, PARENTS
 
 def assert_input_error(path, place: str, problem: str, loader=hapmotion.load_motion, **options) -> str:
     """``loader(path, **options)`` raises one-line ``InputError`` "<path>: <place>: ... <problem> ..."."""
+    import pytest  # here: benchmarks/fuzz_inputs.py uses this module's file generators with no pytest installed
+
     with pytest.raises(InputError) as err:
         loader(path, **options)
     msg = str(err.value)

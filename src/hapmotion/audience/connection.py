@@ -245,19 +245,42 @@ def connect_error(what: str, exc: BaseException) -> UsageError:
     """The one-line error for a failed first connection: a refusal or an absent server."""
     if isinstance(exc, AuthRefused):
         return UsageError(f"{what}: {exc}")
-    hint = " (give the venue's CA with --nats-ca FILE)" if _unverified(exc) else ""
+    if _name_mismatch(exc):
+        hint = (" (the server's certificate names another host or address: give one of its names with "
+                "--nats-tls-name NAME)")
+    elif _unverified(exc):
+        hint = " (give the venue's CA with --nats-ca FILE)"
+    else:
+        hint = ""
     return UsageError(f"{what}: cannot reach the NATS server ({exc.__class__.__name__}: {exc}){hint}")
+
+
+def _chain(exc: Optional[BaseException]):
+    """``exc`` and what it was raised from (the NATS client may wrap the ssl error), at most 8 deep."""
+    seen = 0
+    while exc is not None and seen < 8:
+        yield exc
+        exc, seen = exc.__cause__ or exc.__context__, seen + 1
+
+
+def _name_mismatch(exc: Optional[BaseException]) -> bool:
+    """Whether ``exc`` is a certificate that verified against the CA but names another host or IP address than the
+    one connected to (OpenSSL's X509_V_ERR_HOSTNAME_MISMATCH 62 / X509_V_ERR_IP_ADDRESS_MISMATCH 64): the CA was
+    right, the name is not. The connection error may carry only the ssl error's text, hence the text test."""
+    for e in _chain(exc):
+        if isinstance(e, ssl.SSLCertVerificationError) and e.verify_code in (62, 64):
+            return True
+        text = str(e)
+        if "CERTIFICATE_VERIFY_FAILED" in text and ("Hostname mismatch" in text or "IP address mismatch" in text):
+            return True
+    return False
 
 
 def _unverified(exc: Optional[BaseException]) -> bool:
     """Whether ``exc`` (or what it was raised from) is a server certificate this client could not verify: a
     self-signed one, or one of a CA the client was not given."""
-    seen = 0
-    while exc is not None and seen < 8:  # the NATS client may wrap the ssl error
-        if isinstance(exc, ssl.SSLCertVerificationError) or "CERTIFICATE_VERIFY_FAILED" in str(exc):
-            return True
-        exc, seen = exc.__cause__ or exc.__context__, seen + 1
-    return False
+    return any(isinstance(e, ssl.SSLCertVerificationError) or "CERTIFICATE_VERIFY_FAILED" in str(e)
+               for e in _chain(exc))
 
 
 def _no_jetstream(exc: Exception) -> bool:

@@ -23,7 +23,6 @@ import os
 import time
 from collections import OrderedDict, deque
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, Union
 
 import numpy as np
@@ -49,15 +48,15 @@ from ..show.settings import Show
 from ..show.stage import OutputStage
 from ..show.timeline import RowTimeline
 from .clock import MediaClock
-from .compact import message_decoder, missing_joints
+from .compact import COMPACT, PACKED, message_decoder, missing_joints
 from .connection import NatsAuth, connect, connect_error, parse_server_url
 from .cue_gate import CueGate
 from .descriptions import DescriptionWatch
 from .interpolation import Upsampler
 from .seat_sync import SeatSync, SyncSettings
-from .seat import Seat, SeatSink, SeatStage
+from .seat import Seat, SeatSink, SeatStage, numbered_sinks
 from .signing import BadSignature, SeatTrust, Unsigned
-from .wire import ShowDescription, WireFrame, check_show_name, decode_event, subject
+from .wire import KIND_FRAME, MAGIC, VERSION, ShowDescription, WireFrame, check_show_name, decode_event, subject
 
 log = logging.getLogger("hapmotion.live")
 
@@ -69,6 +68,10 @@ SEQ_SLACK_S = 2.0
 over, for a replay at double speed): a forged far-future seq cannot make every real frame count as replayed."""
 
 
+OVER_MARGIN_S = 0.1
+"""After an end event, the seat's session ends this long after its last frame's play time plus the stall fade."""
+
+KNOWN_FRAME_VERSIONS = frozenset({VERSION, COMPACT, PACKED})  # one not the description's: a format change
 MAX_EVENT_SEQ_JUMP = 10_000
 """An event's seq may run at most this far ahead of the last one (events are a few a second; a seat that missed
 ten thousand has reconnected to another run anyway): a forged far-future seq cannot silence the cues."""
@@ -173,6 +176,7 @@ class AudienceSource(Source):
         self.gate = CueGate(cues.cue_list if cues is not None else None)
         self.on_cue = on_cue
         self.changed: Optional[ShowDescription] = None
+        self.over = False  # the publisher ended the show and its last frames have played
         self.ended = asyncio.Event()
         self.max_pending = max_pending or int(desc.fps * (wait_s + 2.0)) + 64
         self._wait_s = wait_s
@@ -255,11 +259,29 @@ class AudienceSource(Source):
     async def _on_frame(self, msg: Msg) -> None:
         self._frame(msg.data, time.perf_counter())
 
+    def _other_format(self, data: bytes) -> bool:
+        """Whether ``data`` is a frame of a known version not this description's (a publisher restarted with another
+        ``frames=``/``pack=``, its description not read yet): counted as ``format_changing``, logged once at info,
+        never decoded with this show's decoder; the stored description is read again (as for another run)."""
+        version = data[2] if len(data) >= 4 and data[:2] == MAGIC and data[3] == KIND_FRAME else None
+        if version == self.desc.frame_version or version not in KNOWN_FRAME_VERSIONS:
+            return False
+        counts = self.engine.faults.counts
+        counts["format_changing"] += 1
+        if counts["format_changing"] == 1:
+            log.info("%s: frames in format version %d, not the description's %d: the show's format is changing; "
+                     "waiting for its new description", self.name, version, self.desc.frame_version)
+        if self.on_other_run is not None:
+            self.on_other_run()
+        return True
+
     def _frame(self, raw: bytes, arrival: float) -> None:
         """One received frame (its bytes as sent, its local arrival time): checked, then queued for its time."""
         faults = self.engine.faults
         data = self._open("frame", raw)
         if data is None:
+            return
+        if self._other_format(data):
             return
         try:
             carried = self._decode(data)  # one frame, or a packed message's consecutive frames
@@ -377,6 +399,17 @@ class AudienceSource(Source):
             if due is not None:
                 self._queue(held, held[-1].media_t, due + self.interpolation_extra_s)
                 self._arrived.set()
+            # once the last frame has played and the vest has faded, the session ends (its recordings are
+            # finished: no rows of silence while no show plays); the seat then waits for the next show
+            last = max((entry[3] for entry in self._heap), default=time.perf_counter())
+            wait = max(0.0, last - time.perf_counter()) + self.desc.stall_ms / 1000.0 + OVER_MARGIN_S
+            self._timers.add(asyncio.get_running_loop().call_later(wait, self._show_over, self.desc.epoch))
+
+    def _show_over(self, epoch: int) -> None:
+        if epoch == self.desc.epoch and not self._heap and not self.ended.is_set():  # no next run played on
+            self.over = True
+            self.ended.set()
+            self._arrived.set()
 
     # ------------------------------------------------------------------ another run
     def offer_description(self, desc: ShowDescription) -> None:
@@ -453,24 +486,6 @@ def seat_show(desc: ShowDescription, seat: Seat, cues: Optional[CueList] = None)
     stage = OutputStage.from_dict(desc.music or {}, mode, layout=layout, fps=desc.fps, comfort=seat.comfort,
                                   cues=cues, music=music, mirror=show.params().mirror)
     return SeatShow(layout, mode, renderer, stage, music)
-
-
-def numbered_sinks(sinks: Sequence[SinkSpec], session: int) -> list[SinkSpec]:
-    """The seat's sinks for its ``session``-th session (from 1): a recorder of a later session writes
-    ``NAME-2.EXT``, ``NAME-3.EXT``, ... (the next free number), never over an earlier session's recording."""
-    if session <= 1:
-        return list(sinks)
-    out: list[SinkSpec] = []
-    for spec in sinks:
-        if isinstance(spec, str) and parse_sink(spec).kind == "record":
-            path = Path(parse_sink(spec).path)
-            n = session
-            while (candidate := path.with_name(f"{path.stem}-{n}{path.suffix}")).exists():
-                n += 1
-            log.info("seat: the show changed; this session records to %s", candidate)
-            spec = f"record:{candidate}"
-        out.append(spec)
-    return out
 
 
 async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
@@ -559,6 +574,10 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
             finally:
                 follower.cancel()
                 await asyncio.gather(follower, return_exceptions=True)
+            if source.over:
+                log.info("seat: the show ended; its recordings are finished; waiting for the next show")
+                desc = await watch.next_description()
+                continue
             if source.changed is None:
                 return stats
             desc = source.changed

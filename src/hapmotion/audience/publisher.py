@@ -171,6 +171,8 @@ class NatsPublisherSink(Sink):
         self._republish: Optional[asyncio.Task] = None
         self._guard: Optional[asyncio.Task] = None
         self._closing = False
+        self._denied: Optional[str] = None
+        """The server's last "Permissions Violation for Publish to ..." for this connection, if any."""
         self._stored = self.signer.seal("description", description.to_json())
         self._encode = frame_encoder(description.frame_version, description.frame_joints)
         self._encode_packed = packed_encoder(description.frame_joints)
@@ -191,11 +193,15 @@ class NatsPublisherSink(Sink):
         try:
             self.kv = await description_bucket(self.nc)
             await self._put()
-        except UsageError:
+        except (Exception, asyncio.CancelledError) as exc:
+            self._closing = True  # closing here is not a lost server
             await self.nc.close()
-            raise
-        except Exception as exc:
-            await self.nc.close()
+            if isinstance(exc, asyncio.CancelledError):
+                raise
+            if self._denied is not None:  # the server said why the put went unanswered
+                raise UsageError(f"--sink {self.name}: {self._denied_text()}") from None
+            if isinstance(exc, UsageError):
+                raise
             raise UsageError(f"--sink {self.name}: cannot store the show description ({exc.__class__.__name__}: "
                              f"{exc})") from None
         self._guard = asyncio.ensure_future(self._keep_description())
@@ -235,7 +241,18 @@ class NatsPublisherSink(Sink):
         return (f"{self.name} ({self.signer.describe()}; frames={frames}, published at "
                 f"{self.description.frame_rate:g}/s of {self.description.fps:g})")
 
+    def _denied_text(self) -> str:
+        return (f"the NATS server refused these credentials' messages ({self._denied}): they may not publish the "
+                f"show ({self.security.auth.describe()}: the seat's key instead of the venue's venue.nk?)")
+
     def _on_state(self, state: str) -> None:
+        if PERMISSIONS_VIOLATION in state.lower():
+            # nats-py reports a publish the server's permissions refuse as an error on the connection (the publish
+            # itself never fails: the server drops it), so this is where a seat's credential shows
+            self._denied = state.split(": ", 2)[-1].removeprefix("nats: ").strip()[:160]
+            if not self._closing and self._guard is not None:  # during the show; at the start, start() says it
+                self.warn_once("denied", "%s", self._denied_text())
+            return
         if self._closing:
             return
         if state == "reconnected" and self.kv is not None:
@@ -358,6 +375,11 @@ class NatsPublisherSink(Sink):
             self._guard.cancel()
         if self.nc is not None:
             await self.nc.close()
+
+
+PERMISSIONS_VIOLATION = "permissions violation"
+"""How nats-server's refusal of a publish starts (``-ERR 'Permissions Violation for Publish to "SUBJECT"'``),
+lower-cased."""
 
 
 def publisher_sink(ep: Endpoint, *, fps: float, show: Show, stage: OutputStage, layout: Layout,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import os
+from pathlib import Path
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Optional, Sequence, Union
 
@@ -18,7 +19,9 @@ import numpy as np
 from ..errors import UsageError
 from ..layout import Layout
 from ..live.frames import OutFrame
-from ..live.sinks.base import Sink
+from ..live.sinks.base import Sink, log
+from ..live.urls import parse_sink
+from ..live.session import SinkSpec
 from ..show.comfort import Comfort
 from ..show.settings import MODES, check_choice
 
@@ -129,3 +132,21 @@ class SeatSink(Sink):
 
     def describe(self) -> str:
         return self.inner.describe()
+
+
+def numbered_sinks(sinks: Sequence[SinkSpec], session: int) -> list[SinkSpec]:
+    """The seat's sinks for its ``session``-th session (from 1): a recorder of a later session writes
+    ``NAME-2.EXT``, ``NAME-3.EXT``, ... (the next free number), never over an earlier session's recording."""
+    if session <= 1:
+        return list(sinks)
+    out: list[SinkSpec] = []
+    for spec in sinks:
+        if isinstance(spec, str) and parse_sink(spec).kind == "record":
+            path = Path(parse_sink(spec).path)
+            n = session
+            while (candidate := path.with_name(f"{path.stem}-{n}{path.suffix}")).exists():
+                n += 1
+            log.info("seat: the show changed; this session records to %s", candidate)
+            spec = f"record:{candidate}"
+        out.append(spec)
+    return out

@@ -52,9 +52,12 @@ class LocalNatsServer:
         return f"nats://127.0.0.1:{self.port}"
 
     def start(self, timeout: float = 10.0) -> "LocalNatsServer":
+        # a configuration file (-c) names its own store folder (venue-setup writes one), and nats-server refuses a
+        # store_dir given twice
+        store = () if "-c" in self.extra_args else ("-sd", self._store.name)
         self.proc = subprocess.Popen(
-            [nats_server_binary(), "-a", "127.0.0.1", "-p", str(self.port), "-js", "-sd", self._store.name,
-             *self.extra_args], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            [nats_server_binary(), "-a", "127.0.0.1", "-p", str(self.port), "-js", *store, *self.extra_args],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             if self.proc.poll() is not None:

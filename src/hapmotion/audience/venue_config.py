@@ -10,6 +10,9 @@
 ``nats-server.conf`` the server: JetStream, TLS if given, and the two users with per-subject permissions
 ===================  ==========================================================================================
 
+The configuration names every file by its absolute path (the certificate, its key, the CA, JetStream's folder,
+``FOLDER/jetstream`` by default), so ``nats-server -c FOLDER/nats-server.conf`` runs from any directory.
+
 The permissions (NATS authorisation: ``authorization { users = [...] }``, each user's ``publish``/``subscribe``
 ``allow`` lists, everything else denied) give the publisher the show's subjects, the put of its description and the
 creation of the bucket; a seat may only subscribe to the show's subjects and its description's key, and read that
@@ -116,6 +119,16 @@ def check_tls_file(path: Optional[str], option: str) -> None:
         raise UsageError(f"{option} {path}: expected {what} ({mark}), found none")
 
 
+STORE_DIR = "jetstream"
+"""JetStream's folder inside the venue folder when ``--store-dir`` is not given (nats-server's own default is a
+folder under the system's temporary directory, shared by every server of the machine)."""
+
+
+def _absolute(path: Optional[str]) -> Optional[str]:
+    # forward slashes on Windows too: the configuration's quoted strings would read a backslash as an escape
+    return None if path is None else Path(path).resolve().as_posix()
+
+
 def write_venue(folder: "str | os.PathLike[str]", *, show: str = "*", host: str = "0.0.0.0", port: int = 4222,
                 tls_cert: Optional[str] = None, tls_key: Optional[str] = None, tls_ca: Optional[str] = None,
                 store_dir: Optional[str] = None) -> dict[str, Path]:
@@ -139,8 +152,11 @@ def write_venue(folder: "str | os.PathLike[str]", *, show: str = "*", host: str 
     out.mkdir(parents=True, exist_ok=True)
     venue_seed, venue_pub = new_user_seed()
     seat_seed, seat_pub = new_user_seed()
-    config = server_config(venue_pub, seat_pub, show=show, host=host, port=port, tls_cert=tls_cert,
-                           tls_key=tls_key, tls_ca=tls_ca, store_dir=store_dir)
+    # absolute paths: nats-server resolves a configuration's relative paths against its own working directory, not
+    # the configuration's folder, so "nats-server -c FOLDER/nats-server.conf" would otherwise work from one folder
+    config = server_config(venue_pub, seat_pub, show=show, host=host, port=port, tls_cert=_absolute(tls_cert),
+                           tls_key=_absolute(tls_key), tls_ca=_absolute(tls_ca),
+                           store_dir=_absolute(store_dir or str(out / STORE_DIR)))
     write_key_pair(paths["venue_key"], paths["venue_pub"])
     _write_secret(paths["venue_nkey"], venue_seed)
     _write_secret(paths["seat_nkey"], seat_seed)
