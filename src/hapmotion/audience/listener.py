@@ -519,6 +519,7 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
     cue_list = Show(cues=cues).load_cues()
     # a zone this seat's vest does not have, or a layout that cannot be read, is a usage error before connecting
     SeatStage(seat, Show(layout=seat.layout).load_layout())
+    Renderer().step(np.full((32, 3), np.nan))  # the compiled loop loaded before a show: its session starts sooner
     seat_sync = SeatSync(sync, seat.delay_s) if sync is not None else None  # a missing device fails here, first
     watch: Optional[DescriptionWatch] = None
 
@@ -529,13 +530,11 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
 
     try:
         nc = await connect(server, name=f"hapmotion seat {show}", auth=security.auth, on_state=on_state)
-    except UsageError:
-        if seat_sync is not None:
-            seat_sync.audio.close()
-        raise
     except Exception as exc:
         if seat_sync is not None:
             seat_sync.audio.close()
+        if isinstance(exc, UsageError):
+            raise
         raise connect_error(url, exc) from None
     log.log(logging.INFO if trust.signed else logging.WARNING, "seat: %s", trust.describe())
     watch = DescriptionWatch(nc, show, trust)
