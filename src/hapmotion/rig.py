@@ -34,6 +34,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from .bhaptics.devices import bhaptics_devices
 from .bhaptics.wearables import Motor, Wearable, bundled_wearables, find_wearable, shown
 from .errors import InputError, UsageError
 from .layout import Device, Layout, default_layout
@@ -364,6 +365,8 @@ def _track_rig(name: str, ids: Sequence[str]) -> Optional[Rig]:
     """The rig a track's layout name names when the track's columns are its motors (not the body chart's own)."""
     if not name or name == DEFAULT_RIG or "+" not in name and name not in bundled_wearables():
         return None
+    if all(part in bhaptics_devices() for part in name.split("+")):
+        return None  # a .tact file's device types (Tactot+TactGlove): SDK1 slots of positions, not a rig's motors
     try:
         rig = parse_rig(name)
     except (UsageError, InputError):
