@@ -204,6 +204,20 @@ class Rig:
         weights = transfer(layout.played_places(), [(m.chart, m.across, m.height) for m in self.motors])
         return Projection(self.actuators, weights, self.energy, _identity(weights))
 
+    def undriven(self, layout: Optional[Layout] = None) -> tuple[tuple[str, tuple[str, ...]], ...]:
+        """``(wearable name, its limbs)`` of each wearable none of whose motors a place of ``layout``'s body chart
+        reaches (default: the default layout with this rig's hand places): a show rendered on the body chart leaves
+        them at 0 (a visor: ``("tactvisor", ("head",))``; feet). Data only: the projection's weights decide."""
+        layout = layout or default_layout().with_rig(self)
+        reached = self.projection(layout).weights.any(axis=0)  # (K,) motors some place reaches
+        out, k = [], 0
+        for w in self.wearables:
+            n = sum(len(w.device_motors(d)) for d in w.devices)
+            if not reached[k:k + n].any():
+                out.append((w.name, tuple(dict.fromkeys(m.limb for m in w.motors))))
+            k += n
+        return tuple(out)
+
     def sdk2_groups(self) -> tuple:
         """Per SDK2 position ``(position, array length, ((array slot, motor column), ...))``."""
         groups: dict[int, tuple[int, list]] = {}
