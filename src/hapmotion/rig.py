@@ -396,6 +396,34 @@ def own_rig(track: HapticTrack) -> Optional[Rig]:
     return _track_rig(track.layout, track.actuators)
 
 
+def motors_of_slots(track: HapticTrack, rig: Optional[Rig]) -> Optional[HapticTrack]:
+    """``track`` (SDK1 slots per position, as a ``.tact`` file holds them: ``VestFront_0..19``, ``GloveL_0..5``) as
+    ``rig``'s own motors, when it holds exactly what a track rendered for ``rig`` writes there: every column one of
+    the rig's slots, and every motor's slots equal in every row (an X16 motor on each of the X40 dots it groups).
+    Motors of devices the track lacks are 0. None otherwise (a pattern authored for another wearable, whose grouped
+    dots differ, goes through the body chart). So a ``.tact`` rendered with ``--rig pro`` plays on a Pro with the
+    numbers it was rendered with (``(T, K)`` rows, layout name the rig's)."""
+    if rig is None or own_rig(track) is not None:
+        return None
+    slot_col = {sid: j for j, sid in enumerate(rig.slot_ids)}
+    if not track.actuators or any(a not in slot_col for a in track.actuators):
+        return None
+    devices = {a.rpartition("_")[0] for a in track.actuators}
+    rows = np.zeros((track.n_frames, len(rig.actuators)))
+    index = {a: i for i, a in enumerate(track.actuators)}
+    for k, m in enumerate(rig.motors):
+        if m.sdk1_position not in devices:
+            continue
+        cols = [index.get(f"{m.sdk1_position}_{s}") for s in m.sdk1_slots]
+        if any(c is None for c in cols):
+            return None
+        values = track.intensities[:, cols]
+        if not np.array_equal(values, np.repeat(values[:, :1], len(cols), axis=1)):
+            return None
+        rows[:, k] = values[:, 0]
+    return HapticTrack(rows, track.fps, rig.actuators, layout=rig.name, meta=dict(track.meta, rig=rig.name))
+
+
 def motor_columns(rig: Rig, ids: Sequence[str], places: Sequence[tuple[str, float, float]], *,
                   other_devices: bool = False) -> Optional[np.ndarray]:
     """``(K,)``: the column of ``ids`` each of ``rig``'s motors is, when every motor has a column of its id at its
@@ -501,6 +529,7 @@ def rig_track(track: HapticTrack, layout: Layout, *, slots: bool = False) -> Hap
     rig = layout.rig
     if rig is None:
         return track
+    track = motors_of_slots(track, rig) or track  # a .tact rendered for this rig: its motors, as rendered
     own = own_rig(track)
     if own is None and tuple(track.actuators) == rig.actuators \
             and motor_columns(rig, layout.played_actuators, layout.played_places()) is None:
@@ -534,5 +563,5 @@ def rig_track(track: HapticTrack, layout: Layout, *, slots: bool = False) -> Hap
 
 
 __all__ = ["DEFAULT_RIG", "FOLDS", "Projection", "Rig", "SDK1_POSITION_WEARABLES", "default_rig", "lift", "lift_track",
-           "motor_columns", "own_rig", "parse_rig", "player_wearable", "rig_from_player", "rig_hint", "rig_places",
+           "motor_columns", "motors_of_slots", "own_rig", "parse_rig", "player_wearable", "rig_from_player", "rig_hint", "rig_places",
            "rig_track", "transfer"]
