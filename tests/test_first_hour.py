@@ -195,6 +195,13 @@ def test_skipped_rows_are_said_in_a_sentence():
     assert len(LiveStats(Faults("test"), frames_in=5, rendered=5).summary_lines("play")) == 1   # nothing skipped: no line
 
 
+def test_rows_skipped_at_a_high_speed_name_the_speed():
+    stats = LiveStats(Faults("test"), fps=50.0, frames_in=3169, rendered=3151, superseded=18)
+    line = stats.summary_lines("play", 8.0)[1]
+    assert "at --speed 8 a row is due every 2.5 ms" in line and "CPU load" not in line, line
+    assert "CPU load" in stats.summary_lines("play", 1.0)[1]  # at its own speed a late wake-up is the machine's
+
+
 # ------------------------------------------------------------------------------- exit codes (real subprocesses)
 def _env():
     return {**os.environ, "PYTHONUNBUFFERED": "1"}

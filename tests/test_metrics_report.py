@@ -87,6 +87,28 @@ def test_tables_show_undefined_as_dash_and_empty():
     assert float(rec["locus_cm"]) == 1.234 and float(rec["hf_power_pct"]) == 12.5 and rec["speed_rho"] == ""
 
 
+def test_a_negative_zero_is_shown_as_zero():
+    """A stillness ratio a hair under 0 (a level below the moving one's baseline) is shown as 0, never -0, in the
+    table, the bench table and the verdict; a real negative stays negative."""
+    from hapmotion.metrics.tables import bench_markdown, number
+    from hapmotion.metrics.verdict import run_sentence
+
+    rows = [{"clip": "c", "method": "mst", "preset": "felt", **{c.key: None for c in COLUMNS}}]
+    rows[0].update(still_ratio=-0.0004, speed_rho=-0.001, reach_rho=-0.3)
+    md = markdown_table(rows, COLUMNS)
+    assert "-0" not in md.replace("-0.30", "") and "| 0 |" in md and "| 0.00 |" in md and "| -0.30 |" in md, md
+    assert number(-0.004, ".2f") == "0.00" and number(-0.006, ".2f") == "-0.01" and number(0.0, ".0f") == "0"
+    assert "-0" not in bench_markdown([{"case": "c", "preset": "felt", "phantom": "energy", "range_db": -0.001,
+                                        "jerk": -0.0}])
+
+    class Run:  # what run_sentence reads of a run
+        method, preset = "mst", "felt"
+        scores = {"felt_moving": 1.0, "peak_moving": 86.0, "speed_rho": -0.001, "still_ratio": -0.0004,
+                  "lateral": 0.85}
+    text = run_sentence(Run())
+    assert "(0 % of the moving level)" in text and "(rank correlation 0.00)" in text and "-0" not in text, text
+
+
 # ------------------------------------------------------------------ the report on every bundled recording
 SOMETIMES = {"still_ratio": "still", "lateral": "hand"}
 """Columns defined only where the recording has frames of their kind (stillness, a hand moving alone)."""
@@ -201,6 +223,8 @@ def test_report_values_are_sane(report):
 
 @pytest.mark.slow
 def test_verdict_says_what_the_table_says(report):
+    from hapmotion.metrics.tables import number
+
     rep, out = report
     md = (out / "metrics.md").read_text()
     verdicts = md.split("## Key metrics")[0]
@@ -210,7 +234,7 @@ def test_verdict_says_what_the_table_says(report):
         assert (f"With {run.method}/{run.preset}, it is " in verdicts)
         assert f"in {100 * s['felt_moving']:.0f} % of those frames, strongest motor {s['peak_moving']:.0f} of 100" \
             in verdicts
-        assert f"(rank correlation {s['speed_rho']:.2f})" in verdicts
+        assert f"(rank correlation {number(s['speed_rho'], '.2f')})" in verdicts
 
 
 def test_one_hand_punches_land_on_the_mirrored_side():

@@ -201,3 +201,27 @@ def test_body_drawing_of_a_real_clip_shows_each_motors_mean():
     assert (f"{mean[busiest]:.1f}" if mean[busiest] < 9.95 else f"{mean[busiest]:.0f}") in texts
     assert {"LEFT SHOULDER", "RIGHT SHOULDER", "wearer's LEFT", "wearer's RIGHT"} <= texts
     assert "mirrored" in ax.get_title()
+
+
+@pytest.mark.parametrize("rig", ["x16+gloves+tactvisor", "pro+tactosy+gloves+tactvisor", None])
+def test_no_label_of_the_body_drawing_runs_into_another(tmp_path, rig):
+    """Every panel's title, subtitle and edge labels stay clear of each other and of the grids, on a rig of many
+    small panels as on the body chart: measured on the laid-out figure, in pixels."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    out = tmp_path / "t.csv"
+    assert main(["render", str(PUNCH), *(["--rig", rig] if rig else []), "-o", str(out)]) == 0
+    fig = track_figure(hapmotion.load_track(out))
+    FigureCanvasAgg(fig).draw()
+    renderer = fig.canvas.get_renderer()
+    ax = next(a for a in fig.axes if a.get_label() == "body")
+    grids = [p.get_window_extent(renderer) for p in ax.patches]
+    labels = [t for t in ax.texts if t.get_text().strip() and not any(
+        g.contains(*t.get_window_extent(renderer).get_points().mean(axis=0)) for g in grids)]
+    boxes = [(t.get_text(), t.get_window_extent(renderer)) for t in labels]
+    assert len(boxes) >= 5 * 4
+    for i, (a, box_a) in enumerate(boxes):
+        for b, box_b in boxes[i + 1:]:
+            assert not box_a.overlaps(box_b), (a, b)
+        for g in grids:
+            assert not box_a.overlaps(g), (a, "a grid cell")

@@ -16,7 +16,7 @@ from hapmotion.bhaptics.sdk2 import v3_dot_messages
 from hapmotion.errors import UsageError
 from hapmotion.layout import load_layout
 from hapmotion.rig import DEFAULT_RIG, lift, parse_rig
-from support.data import TACT
+from support.data import MOTION, TACT
 
 LAYOUT = load_layout()
 IDS = LAYOUT.actuators
@@ -233,3 +233,39 @@ def test_a_long_rig_text_is_echoed_cut_short(text, echoed):
         parse_rig(text)
     msg = str(info.value)
     assert len(msg) < 400 and "\n" not in msg and f"... ({echoed} characters)" in msg, msg
+
+
+@pytest.mark.parametrize("rig, undriven", [
+    ("x40+tactvisor", (("tactvisor", ("head",)),)),
+    ("pro+tactosy-feet+tactal", (("tactosy-feet", ("foot",)), ("tactal", ("head",)))),
+    ("x16+gloves+tactvisor", (("tactvisor", ("head",)),)),
+    ("pro+gloves", ()), ("air", ()), ("x40+tactosy-hands", ()), ("gloves", ()),
+])
+def test_the_wearables_the_body_chart_does_not_reach_are_named(rig, undriven):
+    assert parse_rig(rig).undriven() == undriven
+
+
+def test_render_play_live_and_plot_say_once_which_wearables_the_show_leaves_at_0(tmp_path, capsys):
+    """A head on the rig is never driven by a show (no body chart place reaches it): every command that plays the
+    body chart on the rig says so in one line, and the head's columns are indeed 0."""
+    from hapmotion.cli import main
+
+    clip = MOTION / "dataset-1_punch_normal_001.bvh"
+    out = tmp_path / "xv.csv"
+    assert main(["render", str(clip), "--rig", "x40+tactvisor", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    line = "--rig x40+tactvisor: the body chart has no place for tactvisor (head), so the show leaves its motors at 0"
+    assert err.count(line) == 1 and err.count("\n") == 1, err
+    track = hapmotion.load_track(out)
+    head = [i for i, a in enumerate(track.actuators) if a.startswith("Head_")]
+    assert len(head) == 4 and not track.intensities[:, head].any() and track.intensities.max() > 50
+    assert main(["plot", str(clip), "--rig", "x40+tactvisor", "-o", str(tmp_path / "p.png")]) == 0
+    assert capsys.readouterr().err.count(line) == 1
+    assert main(["play", str(out), "--rig", "x40+tactvisor", "--sink", f"record:{tmp_path / 't.csv'}", "-q",
+                 "--speed", "4"]) == 0
+    assert capsys.readouterr().err.count(line) == 1
+    assert main(["live", "--source", f"replay:{clip}", "--rig", "x40+tactvisor", "--speed", "4", "-q",
+                 "--sink", f"record:{tmp_path / 'l.csv'}"]) == 0
+    assert capsys.readouterr().err.count(line) == 1
+    assert main(["render", str(clip), "--rig", "pro+gloves", "-o", str(tmp_path / "pg.csv")]) == 0
+    assert "no place" not in capsys.readouterr().err  # every wearable reached: nothing said

@@ -171,13 +171,13 @@ def test_info_and_play_name_the_rig_of_gloves(tmp_path, caplog):
     code, out = _cli("info", tmp_path / "pg.tact")
     assert code == 0
     line = next(x for x in out.splitlines() if x.startswith("not in the default layout"))
-    assert "GloveL, GloveR" in line and "--rig x40+gloves" in line
+    assert "GloveL, GloveR" in line and "--rig x40+tactosy-shoulders+gloves" in line
     code, out = _cli("info", "--json", tmp_path / "pg.tact")
-    assert json.loads(out)["rig_hint"] == "x40+gloves"
+    assert json.loads(out)["rig_hint"] == "x40+tactosy-shoulders+gloves" and json.loads(out)["rig"] is None
     player = _play_on_player(tmp_path / "pg.tact", None)
     assert player.frames
     notes = [r.getMessage() for r in caplog.records if "GloveL" in r.getMessage()]
-    assert notes and "left out" in notes[0] and "--rig x40+gloves" in notes[0], notes
+    assert notes and "left out" in notes[0] and "--rig x40+tactosy-shoulders+gloves" in notes[0], notes
     assert rig_hint(["GloveL", "GloveR"]) == "x40+tactosy-shoulders+gloves" and rig_hint(["Nothing"]) == ""
 
 
@@ -198,3 +198,67 @@ def test_the_play_startup_line_names_the_rig(tmp_path, capsys):
     assert "on the layout's own devices (no --rig) to record" in capsys.readouterr().err
     take = hapmotion.load_track(tmp_path / "take.csv")  # the recorder keeps the rig's motors, named as such
     assert take.layout == "air" and take.intensities.max() == pytest.approx(80.0)
+
+
+@pytest.mark.parametrize("rig", ["pro+gloves", "pro", "x16", "pro+tactosy"])
+def test_a_tact_rendered_for_a_rig_plays_on_that_rig_and_info_names_its_device_types(tmp_path, rig):
+    """A .tact file holds SDK1 slots per device type, not a rig: info says so for every rig alike, and the rig it
+    was rendered for (or any other whose devices cover it) plays it."""
+    out = tmp_path / "r.tact"
+    assert _cli("render", HEARTBEAT, "--rig", rig, "-o", out)[0] == 0
+    assert own_rig(hapmotion.load_track(out)) is None
+    code, text = _cli("info", out)
+    row = next(x for x in text.splitlines() if x.startswith("rig "))
+    types = "Tactot, TactGlove" if "gloves" in rig else "Tactot, Tactosy2" if "tactosy" in rig else "Tactot"
+    assert code == 0 and f"a .tact file holds device types ({types}), not a rig" in row, row
+    take = tmp_path / "take.csv"
+    assert main(["play", str(out), "--rig", rig, "--sink", f"record:{take}", "-q", "--speed", "4"]) == 0
+    played = hapmotion.load_track(take)
+    assert played.intensities.max() > 20  # the heartbeat reached the rig's motors (a Pro's peak: 48)
+    if rig == "pro+gloves":  # an X40 + gloves rig covers the same device types: it plays there too
+        assert main(["play", str(out), "--rig", "x40+gloves", "--sink", f"record:{tmp_path / 'x.csv'}", "-q",
+                     "--speed", "4"]) == 0
+
+
+def test_a_rigs_own_take_records_to_tact_as_render_writes_it(tmp_path, capsys):
+    """``play air.csv --rig air --sink record:take.tact`` keeps the rig's motors; the .tact file gets them on the
+    SDK1 slots they play (one file per device type), as ``render --rig air -o x.tact`` writes them."""
+    path = tmp_path / "air.csv"
+    hapmotion.save_track(air_track(), path)
+    take = tmp_path / "take.tact"
+    assert main(["play", str(path), "--rig", "air", "--sink", f"record:{take}", "-q"]) == 0, capsys.readouterr().err
+    assert not (tmp_path / "take.tact.journal.csv").exists()
+    assert _cli("render", path, "-o", tmp_path / "render.tact")[0] == 0
+    got, want = hapmotion.load_track(take), hapmotion.load_track(tmp_path / "render.tact")
+    assert got.actuators == want.actuators and len(got.actuators) == 40
+    n = min(got.n_frames, want.n_frames) - 2  # the take is as long as it was played, a tick more or less
+    np.testing.assert_allclose(got.intensities[2:n], want.intensities[2:n])
+    hapmotion.save_track(air_track(), tmp_path / "direct.tact")  # save_track itself puts the motors on slots
+    np.testing.assert_array_equal(hapmotion.load_track(tmp_path / "direct.tact").intensities,
+                                  want.intensities)
+
+
+@pytest.mark.parametrize("rig", ["pro", "x16", "pro+gloves"])
+def test_a_tact_rendered_for_a_rig_plays_its_motors_as_rendered(tmp_path, rig):
+    """The .tact of ``render --rig pro`` holds each Pro motor on the X40 dots nearest it; played with ``--rig pro``
+    those dots are read back as the Pro's motors (every motor's dots equal), not put through the body chart."""
+    clip = MOTION / "dataset-1_punch_normal_001.bvh"
+    assert _cli("render", clip, "--rig", rig, "-o", tmp_path / "r.tact")[0] == 0
+    assert _cli("render", clip, "--rig", rig, "-o", tmp_path / "r.csv")[0] == 0
+    take = tmp_path / "take.csv"
+    assert main(["play", str(tmp_path / "r.tact"), "--rig", rig, "--sink", f"record:{take}", "-q",
+                 "--speed", "2"]) == 0
+    got, want = hapmotion.load_track(take), hapmotion.load_track(tmp_path / "r.csv").resample(50.0)
+    assert got.layout == rig and got.actuators == parse_rig(rig).actuators  # the rig's motors, recorded as such
+    assert got.intensities.max() > 50
+    # every row played is one of the rendered rows (whole percents on the Player's tick), whichever rows a late
+    # wake-up skipped: through the body chart they would not be
+    nearest = np.abs(got.intensities[:, None, :] - want.intensities[None, :, :]).max(axis=2).min(axis=1)
+    assert (nearest <= 0.5).mean() > 0.99, np.percentile(nearest, [50, 99])
+    direct = rig_track(hapmotion.load_track(tmp_path / "r.tact"), LAYOUT.with_rig(parse_rig(rig)))
+    n = min(direct.n_frames, want.n_frames)
+    np.testing.assert_allclose(direct.intensities[:n], want.intensities[:n], atol=0.5)
+    x40 = parse_rig("x40+gloves" if "gloves" in rig else "x40")  # an X40 pattern's grouped dots differ: the chart
+    heartbeat = hapmotion.load_track(HEARTBEAT)
+    from hapmotion.rig import motors_of_slots
+    assert motors_of_slots(heartbeat, parse_rig("air")) is None and motors_of_slots(heartbeat, x40) is not None

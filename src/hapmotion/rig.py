@@ -34,6 +34,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from .bhaptics.devices import bhaptics_devices
 from .bhaptics.wearables import Motor, Wearable, bundled_wearables, find_wearable, shown
 from .errors import InputError, UsageError
 from .layout import Device, Layout, default_layout
@@ -203,6 +204,20 @@ class Rig:
         weights = transfer(layout.played_places(), [(m.chart, m.across, m.height) for m in self.motors])
         return Projection(self.actuators, weights, self.energy, _identity(weights))
 
+    def undriven(self, layout: Optional[Layout] = None) -> tuple[tuple[str, tuple[str, ...]], ...]:
+        """``(wearable name, its limbs)`` of each wearable none of whose motors a place of ``layout``'s body chart
+        reaches (default: the default layout with this rig's hand places): a show rendered on the body chart leaves
+        them at 0 (a visor: ``("tactvisor", ("head",))``; feet). Data only: the projection's weights decide."""
+        layout = layout or default_layout().with_rig(self)
+        reached = self.projection(layout).weights.any(axis=0)  # (K,) motors some place reaches
+        out, k = [], 0
+        for w in self.wearables:
+            n = sum(len(w.device_motors(d)) for d in w.devices)
+            if not reached[k:k + n].any():
+                out.append((w.name, tuple(dict.fromkeys(m.limb for m in w.motors))))
+            k += n
+        return tuple(out)
+
     def sdk2_groups(self) -> tuple:
         """Per SDK2 position ``(position, array length, ((array slot, motor column), ...))``."""
         groups: dict[int, tuple[int, list]] = {}
@@ -364,6 +379,8 @@ def _track_rig(name: str, ids: Sequence[str]) -> Optional[Rig]:
     """The rig a track's layout name names when the track's columns are its motors (not the body chart's own)."""
     if not name or name == DEFAULT_RIG or "+" not in name and name not in bundled_wearables():
         return None
+    if all(part in bhaptics_devices() for part in name.split("+")):
+        return None  # a .tact file's device types (Tactot+TactGlove): SDK1 slots of positions, not a rig's motors
     try:
         rig = parse_rig(name)
     except (UsageError, InputError):
@@ -377,6 +394,34 @@ def own_rig(track: HapticTrack) -> Optional[Rig]:
     motors are the body chart's places). An Air's ``VestFront_0..7`` are not an X40's first eight dots: such a track
     is played as it is only on a rig with the same motors (:func:`motor_columns`)."""
     return _track_rig(track.layout, track.actuators)
+
+
+def motors_of_slots(track: HapticTrack, rig: Optional[Rig]) -> Optional[HapticTrack]:
+    """``track`` (SDK1 slots per position, as a ``.tact`` file holds them: ``VestFront_0..19``, ``GloveL_0..5``) as
+    ``rig``'s own motors, when it holds exactly what a track rendered for ``rig`` writes there: every column one of
+    the rig's slots, and every motor's slots equal in every row (an X16 motor on each of the X40 dots it groups).
+    Motors of devices the track lacks are 0. None otherwise (a pattern authored for another wearable, whose grouped
+    dots differ, goes through the body chart). So a ``.tact`` rendered with ``--rig pro`` plays on a Pro with the
+    numbers it was rendered with (``(T, K)`` rows, layout name the rig's)."""
+    if rig is None or own_rig(track) is not None:
+        return None
+    slot_col = {sid: j for j, sid in enumerate(rig.slot_ids)}
+    if not track.actuators or any(a not in slot_col for a in track.actuators):
+        return None
+    devices = {a.rpartition("_")[0] for a in track.actuators}
+    rows = np.zeros((track.n_frames, len(rig.actuators)))
+    index = {a: i for i, a in enumerate(track.actuators)}
+    for k, m in enumerate(rig.motors):
+        if m.sdk1_position not in devices:
+            continue
+        cols = [index.get(f"{m.sdk1_position}_{s}") for s in m.sdk1_slots]
+        if any(c is None for c in cols):
+            return None
+        values = track.intensities[:, cols]
+        if not np.array_equal(values, np.repeat(values[:, :1], len(cols), axis=1)):
+            return None
+        rows[:, k] = values[:, 0]
+    return HapticTrack(rows, track.fps, rig.actuators, layout=rig.name, meta=dict(track.meta, rig=rig.name))
 
 
 def motor_columns(rig: Rig, ids: Sequence[str], places: Sequence[tuple[str, float, float]], *,
@@ -484,6 +529,7 @@ def rig_track(track: HapticTrack, layout: Layout, *, slots: bool = False) -> Hap
     rig = layout.rig
     if rig is None:
         return track
+    track = motors_of_slots(track, rig) or track  # a .tact rendered for this rig: its motors, as rendered
     own = own_rig(track)
     if own is None and tuple(track.actuators) == rig.actuators \
             and motor_columns(rig, layout.played_actuators, layout.played_places()) is None:
@@ -517,5 +563,5 @@ def rig_track(track: HapticTrack, layout: Layout, *, slots: bool = False) -> Hap
 
 
 __all__ = ["DEFAULT_RIG", "FOLDS", "Projection", "Rig", "SDK1_POSITION_WEARABLES", "default_rig", "lift", "lift_track",
-           "motor_columns", "own_rig", "parse_rig", "player_wearable", "rig_from_player", "rig_hint", "rig_places",
+           "motor_columns", "motors_of_slots", "own_rig", "parse_rig", "player_wearable", "rig_from_player", "rig_hint", "rig_places",
            "rig_track", "transfer"]

@@ -105,6 +105,14 @@ def track_summary(track: HapticTrack, path: "str | os.PathLike[str]") -> dict[st
     }
 
 
+def tact_types(devices: dict[str, dict[str, Any]]) -> list[str]:
+    """The bHaptics device types (``.tact`` layouts: Tactot, TactGlove ...) of a summary's ``devices``."""
+    from ..bhaptics.devices import type_for_position
+
+    found = (type_for_position(name, d["motors"]) for name, d in devices.items())
+    return list(dict.fromkeys(t.name for t in found if t is not None))
+
+
 def describe_track(s: dict[str, Any]) -> list[tuple[str, str]]:
     """``(label, value)`` rows of :func:`track_summary` for the plain-text table."""
     lacking = s["devices_not_in_default_layout"]
@@ -121,6 +129,8 @@ def describe_track(s: dict[str, Any]) -> list[tuple[str, str]]:
             f"{name}: {d['motors']} motors, peak {d['peak']:.0f}, felt in {d['felt_pct']:.0f}% of rows"
             for name, d in s["devices"].items())),
         ("rig", f"{s['rig']} (the columns are its motors: play with --rig {s['rig']})" if s["rig"]
+         else (f"none: a .tact file holds device types ({', '.join(tact_types(s['devices']))}), not a rig; it plays on "
+               f"any --rig that has {', '.join(s['devices'])}") if s["format"] == TRACK_FORMATS[".tact"]
          else "none recorded (the body chart's places, or a pattern)"),
         ("not in the default layout", "none" if not lacking else ", ".join(lacking) + (
             f" (other motors than the X40's of those names: play refuses it without --rig {s['rig']})"

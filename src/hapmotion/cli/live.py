@@ -10,7 +10,7 @@ from ..show import Show
 from .audience_options import publisher_security_options
 from .kinds_help import KindsHelpCommand
 from .motion_options import CLI_SPELLING, motion_options, read_motion
-from .show_options import cue_port_option, rig_line, session_options, show_options, split_values
+from .show_options import cue_port_option, rig_line, session_options, show_options, split_values, undriven_line
 from .token_option import token_options
 from .session_report import finish_session, setup_logging
 
@@ -85,6 +85,9 @@ def command(source: Optional[str], sinks: tuple[str, ...], speed: float, loop: b
         exposure = engine.source.exposure()
         click.echo(f"live: listening on {engine.source.describe()}" + (f" ({exposure})" if exposure else "")
                    + f"; on {rig_line(show.layout)}; sinks: {names}; Ctrl-C stops", err=True)
+        undriven = undriven_line(show.layout)
+        if undriven:
+            click.echo(f"live: {undriven}", err=True)
         trigger = getattr(engine.cues, "trigger", None)
         if trigger is not None:
             click.echo(f"live: cues fired on {trigger.describe()} NAME [gain] ({trigger.exposure()}); "

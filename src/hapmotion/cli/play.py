@@ -9,7 +9,7 @@ import click
 from .kinds_help import KindsHelpCommand
 from .motion_options import cli_limits, limit_option
 from ..show.settings import Show
-from .show_options import cue_port_option, rig_line, session_options, show_options
+from .show_options import cue_port_option, rig_line, session_options, show_options, undriven_line
 
 HELP = """Play TRACK in real time to the same sinks as 'hapmotion live'.
 
@@ -62,6 +62,9 @@ def command(track: str, sinks: tuple[str, ...], loop: bool, speed: float, show_s
         names = ", ".join(s.describe() for s in engine.sinks)
         click.echo(f"play: {track} ({engine.source.n} rows at {engine.source.fps:g}/s"
                    f"{', looped' if loop else ''}) on {rig_line(show.layout)} to {names}; Ctrl-C stops", err=True)
+        undriven = undriven_line(show.layout)
+        if undriven:
+            click.echo(f"play: {undriven}", err=True)
         trigger = getattr(engine.cues, "trigger", None)
         if trigger is not None:
             click.echo(f"play: cues fired on {trigger.describe()} NAME [gain] ({trigger.exposure()}); "

@@ -12,7 +12,7 @@ from ..errors import UsageError
 from ..show.settings import Show
 from .motion_options import motion_options, read_motion, read_track
 from .render import progress_bar
-from .show_options import show_options
+from .show_options import show_options, undriven_line
 
 
 @click.command("plot")
@@ -64,4 +64,7 @@ def command(input_path: Path, output: Optional[Path], start_s: Optional[float], 
                vmax=vmax)
     for note in loaded.notes:
         click.echo(f"note: {note}", err=True)
+    undriven = undriven_line(show.layout)
+    if undriven:
+        click.echo(undriven, err=True)
     click.echo(f"wrote {output}")

@@ -15,7 +15,7 @@ from ..rig import motor_columns, own_rig, rig_places, rig_track
 from ..show.settings import Show
 from ..track_files.sniff import is_track_file
 from .motion_options import CLI_SPELLING, motion_options, read_motion, read_track
-from .show_options import show_options
+from .show_options import show_options, undriven_line
 
 
 def progress_bar(total: int, label: str):
@@ -75,6 +75,9 @@ def command(motion_file: Optional[str], output: str, show: Show, motion_opts: di
     if out_path.suffix.lower() == ".tact" and track.debug:  # a .tact file holds no debug: let it go before writing
         track = dataclasses.replace(track, debug={})
     written = save_track(track, out_path)
+    undriven = undriven_line(show.layout)
+    if undriven:
+        click.echo(undriven, err=True)
     peak = float(track.intensities.max()) if track.n_frames else 0.0
     also = f" and {', '.join(p.name for p in written[1:])}" if len(written) > 1 else ""
     click.echo(f"wrote {out_path}{also} ({track.n_frames} frames at {track.fps:g} fps, {track.duration:.2f} s, "
@@ -109,6 +112,9 @@ def convert_track(path: str, output: str, show: Show, motion_opts: dict) -> None
         if own is not None and motor_columns(own, layout.rig.actuators, rig_places(layout.rig)) is None:
             how = f", from the rig {own.name} through the body chart"
         track = rig_track(track, layout, slots=tact)
+        undriven = undriven_line(layout) if how or own is None else None  # through the body chart
+        if undriven:
+            click.echo(undriven, err=True)
     elif own is not None and tact:  # a rig's own track: its motors on the SDK1 slots they play, as they are
         track = rig_track(track, load_layout().with_rig(own), slots=True)
     written = save_track(track, Path(output))

@@ -64,7 +64,7 @@ def finish_session(engine, stats_json: Optional[str], command: str) -> list[str]
     log = logging.getLogger("hapmotion.live")
     stats = engine.stats
     try:
-        for line in stats.summary_lines(command):
+        for line in stats.summary_lines(command, getattr(engine.source, "speed", 1.0)):
             click.echo(line, err=True)
     except OSError:  # the terminal is gone (SIGHUP after an ssh session closed): the summary has nowhere to go
         pass

@@ -188,6 +188,19 @@ def rig_line(layout: Any) -> str:
     return f"--rig {rig.name}" if rig is not None else "the layout's own devices (no --rig)"
 
 
+def undriven_line(layout: Any) -> Optional[str]:
+    """One line naming the ``--rig`` wearables the body chart has no place for (a visor, feet: their motors stay at
+    0 in whatever is rendered or played through the chart), or None when it reaches every wearable or there is no
+    rig (docs/wearables.md, "What the show does not drive")."""
+    rig = getattr(layout, "rig", None)
+    gone = rig.undriven(layout) if rig is not None else ()
+    if not gone:
+        return None
+    names = ", ".join(f"{name} ({', '.join(limbs)})" for name, limbs in gone)
+    return (f"note: --rig {rig.name}: the body chart has no place for {names}, so the show leaves "
+            f"{'its' if len(gone) == 1 else 'their'} motors at 0")
+
+
 def rig_of(text: str, layout: Any, *, energy: bool, credentials: tuple = (None, None)) -> Any:
     """The :class:`~hapmotion.rig.Rig` a ``--rig`` value names: wearables joined by '+', or ``player[://HOST:PORT]``
     / ``player-v3[://HOST:PORT]`` (the devices that SDK1 or SDK2 Player reports connected, asked with the SDK2

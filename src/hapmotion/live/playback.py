@@ -28,7 +28,7 @@ from ..bhaptics.device_map import DeviceMap
 from ..errors import InputError, UsageError
 from ..layout import Layout
 from ..limits import LimitsArg
-from ..rig import lift_track, motor_columns, own_rig, rig_hint, rig_places
+from ..rig import lift_track, motor_columns, motors_of_slots, own_rig, rig_hint, rig_places
 from ..show.cues import Cue, pattern_rows
 from ..show.settings import Show
 from ..show.stage import OutputStage
@@ -199,6 +199,7 @@ async def play(
         log.info("%s: %g rows/s played at %g rows/s (%s)", name, track.fps, fps,
                  "each row repeated" if fps > track.fps else "resampled, peaks kept")
         track = track.resample(fps)
+    track = motors_of_slots(track, session_layout.rig) or track  # a .tact rendered for the --rig: its motors
     meta: dict[str, Any] = {}  # filled below; a rig's sinks are built when the session starts
     session_layout, sinks, exact = own_rig_session(track, name, session_layout, list(sinks),
                                                    SinkOptions(workspace_id, api_key, meta, speed))

@@ -147,9 +147,9 @@ class LiveStats:
             "sinks": [s.as_dict() for s in self.sinks.values()], "stop_reason": self.stop_reason,
         }
 
-    def summary_lines(self, command: str = "live") -> list[str]:
+    def summary_lines(self, command: str = "live", speed: float = 1.0) -> list[str]:
         """The human summary printed at exit, its first line headed by the ``command`` that ran (live, play,
-        listen)."""
+        listen); ``speed``: play's ``--speed``, which the line on skipped rows names when it is above 1."""
         lat = self.pooled_latency()
         lines = [
             f"{command}: {self.frames_in} frames in, {self.rendered} out, {self.dropped} dropped "
@@ -157,7 +157,7 @@ class LiveStats:
             f"{self.fade_frames} fade frames, {self.stalls} stalls; latency {_fmt(lat)}"
             + (f"; stopped: {self.stop_reason}" if self.stop_reason else ""),
         ]
-        merged = self.merged_line(command)
+        merged = self.merged_line(command, speed)
         if merged:
             lines.append(merged)
         if self.faults.counts:
@@ -173,18 +173,24 @@ class LiveStats:
                 + "".join(f", {k.replace('_', ' ')} {v}" for k, v in s.extra.items()))
         return lines
 
-    def merged_line(self, command: str = "live") -> Optional[str]:
+    def merged_line(self, command: str = "live", speed: float = 1.0) -> Optional[str]:
         """One plain sentence when rows or frames were not played on their own (``superseded``), else None.
 
         In ``play`` (and ``check``) every row of the file was meant to be felt: a row skipped because the process
         woke late (CPU load) changes the pattern, so the count is said in words, with its share. In ``live`` and
         ``listen`` the newest frame winning over an older one is the design (a source faster than the render rate,
-        or a busy machine), and it is said as such."""
+        or a busy machine), and it is said as such. Played faster than written (``speed`` above 1), a row is due
+        ``speed`` times as often, closer than the process wakes reliably: the speed is then named as the cause."""
         n = self.superseded
         if n <= 0:
             return None
         total = max(self.frames_in, n)
         share = f"{n} of {total} {'rows' if command in ('play', 'check') else 'frames'} ({n / total:.0%})"
+        if command in ("play", "check") and speed > 1.0:
+            period_ms = 1e3 / (self.fps * speed)
+            return (f"  {share} were not played on their own: at --speed {speed:g} a row is due every "
+                    f"{period_ms:.1f} ms, more often than the process wakes reliably, so rows it woke late for were "
+                    "skipped rather than played late (superseded; a lower --speed plays every row)")
         if command in ("play", "check"):
             return (f"  {share} were not played on their own: the computer fell behind (CPU load) and skipped them "
                     "rather than play them late, so the pattern was felt coarser than written (superseded)")

@@ -15,7 +15,16 @@ from typing import Any, Sequence
 from .motor import MotorModel
 from .scorecard import PERCENT_KEYS, Column, csv_key
 
-__all__ = ["shown", "cell", "header", "markdown_table", "legend", "csv_text", "bench_markdown", "bench_csv"]
+__all__ = ["number", "shown", "cell", "header", "markdown_table", "legend", "csv_text", "bench_markdown", "bench_csv"]
+
+
+def number(value: float, spec: str) -> str:
+    """``value`` formatted by ``spec`` (``".0f"``, ``".2f"`` ...), a negative value that rounds to zero shown as
+    ``0`` (``0.00``) rather than ``-0``: a reader takes the sign for a direction the value does not have."""
+    text = format(value, spec)
+    if text.startswith("-") and float(text) == 0.0:
+        return text[1:]
+    return text
 
 
 def shown(key: str, value: float | None) -> float | None:
@@ -30,7 +39,7 @@ def cell(col: Column, value: float | None) -> str:
     v = shown(col.key, value)
     if v is None or not math.isfinite(v):
         return "–"
-    return format(v, col.fmt)
+    return number(v, col.fmt)
 
 
 def header(col: Column) -> str:
@@ -96,7 +105,7 @@ def bench_markdown(rows: Sequence[dict[str, Any]]) -> str:
         cells = [r["case"], r["preset"], r["phantom"]]
         for key, _, fmt in BENCH_FIELDS:
             v = r.get(key)
-            cells.append("–" if v is None else format(v, fmt))
+            cells.append("–" if v is None else number(v, fmt))
         lines.append("| " + " | ".join(map(str, cells)) + " |")
     return "\n".join(lines) + "\n"
 

@@ -12,6 +12,7 @@ import numpy as np
 
 from .felt import FELT_LEVEL, MOVING_MPS
 from .motor import DEFAULT_MOTOR, MotorModel
+from .tables import number
 
 __all__ = ["felt_words", "coupling_words", "stillness_words", "side_words", "run_sentence", "clip_verdict"]
 
@@ -61,7 +62,7 @@ def side_words(accuracy: float) -> str:
 
 
 def _pct(x: float) -> str:
-    return f"{100 * x:.0f} %"
+    return f"{number(100 * x, '.0f')} %"
 
 
 def run_sentence(run, motor: MotorModel = DEFAULT_MOTOR) -> str:
@@ -77,7 +78,7 @@ def run_sentence(run, motor: MotorModel = DEFAULT_MOTOR) -> str:
         parts.append(f"it is {felt_words(s['felt_moving'])} while a hand moves (a motor at {FELT_LEVEL:.0f} or more "
                      f"in {_pct(s['felt_moving'])} of those frames, strongest motor {peak:.0f} of 100{low})")
     if s.get("speed_rho") is not None:
-        parts.append(f"it {coupling_words(s['speed_rho'])} (rank correlation {s['speed_rho']:.2f})")
+        parts.append(f"it {coupling_words(s['speed_rho'])} (rank correlation {number(s['speed_rho'], '.2f')})")
     if s.get("still_ratio") is not None:
         parts.append(f"it is {stillness_words(s['still_ratio'])} ({_pct(s['still_ratio'])} of the moving level)")
     if s.get("lateral") is not None:
@@ -91,10 +92,11 @@ def run_sentence(run, motor: MotorModel = DEFAULT_MOTOR) -> str:
             music.append(("the gesture's side is drowned: it" if covered else "the gesture")
                          + f" lands {side_words(s['mix_lateral'])} ({_pct(s['mix_lateral'])})")
         if s.get("onset_f") is not None:
-            music.append(f"the music's onsets arrive as kicks the motors render with F = {s['onset_f']:.2f}")
+            music.append(f"the music's onsets arrive as kicks the motors render with F = "
+                         f"{number(s['onset_f'], '.2f')}")
         if s.get("mix_follows_audio") is not None:
             music.append(f"the overall level follows the music with a rank correlation of "
-                         f"{s['mix_follows_audio']:.2f}")
+                         f"{number(s['mix_follows_audio'], '.2f')}")
         text += " With the music, " + ", ".join(music) + "."
     return text
 

@@ -12,6 +12,8 @@ import os
 from pathlib import Path
 
 from ..errors import InputError, UsageError
+from ..layout import default_layout
+from ..rig import own_rig, rig_track
 from ..track import HapticTrack
 from ..filesafety import atomic_path
 from ..limits import LimitsArg, as_limits
@@ -37,8 +39,14 @@ def _ext(path: "str | os.PathLike[str]", table: dict) -> str:
 
 def save_track(track: HapticTrack, path: "str | os.PathLike[str]") -> list[Path]:
     """Write ``track`` in the format its extension names; return the files written, ``path`` first (``.tact`` also
-    writes one file per sleeve, see tact.py)."""
-    written = WRITERS[_ext(path, WRITERS)](track, Path(path))
+    writes one file per sleeve, see tact.py). A rig's own track (its columns the motors of the rig it was rendered
+    or recorded for, :func:`hapmotion.rig.own_rig`) goes to a ``.tact`` file on the SDK1 slots its motors play, as
+    ``hapmotion render --rig`` writes it (one file per device type)."""
+    ext = _ext(path, WRITERS)
+    own = own_rig(track) if ext == ".tact" else None
+    if own is not None:
+        track = rig_track(track, default_layout().with_rig(own), slots=True)
+    written = WRITERS[ext](track, Path(path))
     return list(written) if written else [Path(path)]
 
 

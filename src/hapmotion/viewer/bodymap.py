@@ -17,6 +17,7 @@ named, side by side under the front row, the wearer's left hand on the left (:fu
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Optional, Sequence
 
@@ -259,13 +260,132 @@ def _value_text(v: float) -> str:
     return "<0.1" if v < 0.05 else f"{v:.1f}" if v < 9.95 else f"{v:.0f}"
 
 
+TITLE_PT, LABEL_PT = 8.5, 8.0
+"""Font sizes (points) of a panel's title and of its other labels in the matplotlib drawing."""
+
+
+def _text_pt(text: str, size: float, bold: bool = False) -> tuple[float, float]:
+    """``(width, height)`` in points of ``text`` (its widest line; every line's height) in matplotlib's font at
+    ``size`` points: measured on the glyphs' outlines, so the drawing can leave each text its room."""
+    from matplotlib.font_manager import FontProperties
+    from matplotlib.textpath import TextPath
+
+    prop = FontProperties(size=size, weight="bold" if bold else "normal")
+    lines = text.split("\n")
+    width = max((TextPath((0, 0), line, prop=prop).get_extents().width for line in lines if line.strip()),
+                default=0.0)
+    return width, 1.25 * size * len(lines)
+
+
+@dataclass(frozen=True)
+class Fitted:
+    """The body drawing spaced for its axes (:func:`_fit`): panels (their texts wrapped as drawn) and cells moved
+    apart, the drawing's ``left``/``right`` edges, the ``base`` of the subtitles, the foot of the labels above the
+    grids (``over``) and the head of those under them (``under``) (drawing units), ``scale`` of
+    the label fonts (1: :data:`TITLE_PT`, :data:`LABEL_PT`), ``unit`` drawing units per point, and the most lines
+    a subtitle and a title take."""
+
+    panels: list
+    cells: list
+    left: float
+    right: float
+    base: float
+    over: float
+    under: float
+    scale: float
+    unit: float
+    subtitle_lines: int
+    title_lines: int
+
+
+def _wrap_title(text: str) -> str:
+    """A panel title on two lines: its parenthesis on the second (``FRONT`` / ``(wearer's left | right)``), else
+    split near its middle (``LEFT FOREARM`` / ``SLEEVE``)."""
+    return text.replace(" (", "\n(", 1) if " (" in text else _wrap_half(text)
+
+
+def _wrap_half(text: str) -> str:
+    """A subtitle on two lines of about half its length (split at the space nearest its middle)."""
+    spaces = [i for i, ch in enumerate(text) if ch == " "]
+    if "\n" in text or not spaces:
+        return text
+    cut = min(spaces, key=lambda i: abs(i - len(text) / 2))
+    return text[:cut] + "\n" + text[cut + 1:]
+
+
+def _fit(panels: list[BodyPanel], cells: list[BodyCell], size_pt: tuple[float, float]) -> Fitted:
+    """The panels and cells moved apart so that no panel's title, subtitle or edge label runs into its
+    neighbour's, for a drawing of at most ``size_pt`` (width, height) points (the axes it is drawn in, its aspect
+    kept: the tighter of the two sets the scale). Each panel takes the room of its widest text; a text wider than
+    its panel's room is wrapped (a title before its parenthesis, a subtitle near its middle, an edge label longer
+    than its panel is high after its first word); when the texts still need more than the whole width (many small
+    panels), the fonts are made smaller, down to 60 %. The texts' scale depends on the drawing's total size, so the
+    room is found by a few rounds of the same sums."""
+    grids = sum(p.w + 2 * EDGE_ROOM + PANEL_GAP for p in panels)
+    wrapped: dict[tuple[str, str], str] = {}
+    for scale in (1.0, 0.85, 0.72, 0.6):
+        title_pt, label_pt = TITLE_PT * scale, LABEL_PT * scale
+        width, height = grids, max(p.h for p in panels) + 2.0
+        for _ in range(16):
+            u = max(width / size_pt[0], height / size_pt[1])  # drawing units per point
+            line = 1.25 * label_pt * u
+            out, cursor, sub_lines, title_lines = [], 0.0, 1, 1
+            over, under = 0.08, min(p.y for p in panels) - 0.08  # clear of the grids and of the edge labels
+            for p in panels:
+                text = {k: wrapped.get((p.device, k), v) for k, v in p.text.items()}
+                bold = p.chart in ("front", "back")
+                thick = {}
+                for k in ("left", "right"):
+                    length, high = _text_pt(text[k], label_pt, bold)
+                    if length * u > p.h + 0.2 and " " in text[k] and "\n" not in text[k]:  # taller than its panel
+                        text[k] = wrapped[(p.device, k)] = text[k].replace(" ", "\n", 1)
+                        length, high = _text_pt(text[k], label_pt, bold)
+                    thick[k] = high * u
+                    over = max(over, p.y + p.h / 2 + length * u / 2 + 0.05)
+                    under = min(under, p.y + p.h / 2 - length * u / 2 - 0.05)
+                room = p.w / 2 + 0.12 + max(thick.values())  # half the grid and its edge labels
+                if _text_pt(text["title"], title_pt, True)[0] * u / 2 > room:
+                    text["title"] = wrapped[(p.device, "title")] = _wrap_title(text["title"])
+                if _text_pt(text["subtitle"], label_pt)[0] * u / 2 > room:
+                    text["subtitle"] = wrapped[(p.device, "subtitle")] = _wrap_half(text["subtitle"])
+                sub_lines = max(sub_lines, text["subtitle"].count("\n") + 1)
+                title_lines = max(title_lines, text["title"].count("\n") + 1)
+                half = 0.5 * u * max(_text_pt(text["title"], title_pt, True)[0],
+                                     *(_text_pt(text[k], label_pt)[0] for k in ("subtitle", "top", "bottom")))
+                left = max(p.w / 2 + 0.12 + thick["left"], half)
+                right = max(p.w / 2 + 0.12 + thick["right"], half)
+                center = cursor + left
+                out.append(BodyPanel(p.device, p.chart, center - p.w / 2, p.y, p.w, p.h, text))
+                cursor = center + right + max(PANEL_GAP, 6.0 * u)
+            used = cursor - max(PANEL_GAP, 6.0 * u)
+            base = over + 1.15 * line
+            tall = base + (sub_lines + title_lines + 0.45) * line - under + 1.2 * line
+            settled = abs(used - width) < 1e-3 * width and abs(tall - height) < 1e-3 * height
+            width, height = used, tall
+            if settled or width > 3.0 * grids:
+                break
+        if width <= 3.0 * grids:  # the texts fit beside grids still drawn at a readable size
+            break
+    shift = {q.device: q.x - p.x for p, q in zip(panels, out)}
+    moved = [dataclasses.replace(c, x=c.x + shift[c.device]) for c in cells]
+    return Fitted(out, moved, 0.0, used, base, over, under, scale, u, sub_lines, title_lines)
+
+
+def axes_size_pt(ax) -> tuple[float, float]:
+    """``(width, height)`` in points of the box matplotlib gives ``ax`` in its figure (before its aspect is kept)."""
+    box = ax.get_position(original=True)
+    return box.width * ax.figure.get_figwidth() * 72.0, box.height * ax.figure.get_figheight() * 72.0
+
+
 def draw_body(ax, values: np.ndarray, actuators: Sequence[str], cmap, norm, *, fmt=None,
-              rig: Optional[str] = None) -> list[BodyCell]:
+              rig: Optional[str] = None, size_pt: Optional[tuple[float, float]] = None) -> list[BodyCell]:
     """Draw the body on matplotlib axes ``ax``: one rectangle per actuator coloured by ``values`` (``(N,)``, Player
     units, one per track column) through ``cmap``/``norm``, its index top left and its value bottom right, each
     panel titled and its edges labelled. Each rectangle's ``gid`` is its actuator id. Returns the cells drawn
     (``[]``, and nothing drawn, for a track of an unknown layout). ``rig``: the track's layout name, drawn as that
-    rig when it is one (:func:`rig_panels`)."""
+    rig when it is one (:func:`rig_panels`). ``size_pt``: the axes' (width, height) in points once the figure is
+    laid out
+    (default: as it is now); the panels are spaced for it (:func:`_fit`), so that no text crowds another."""
     from matplotlib.patches import Rectangle
 
     panels, cells = body_layout(actuators, rig=rig)
@@ -273,30 +393,37 @@ def draw_body(ax, values: np.ndarray, actuators: Sequence[str], cmap, norm, *, f
     ax.set_axis_off()
     if not cells:
         return []
+    if size_pt is None:
+        size_pt = axes_size_pt(ax)
+    fit = _fit(panels, cells, size_pt)
+    panels, cells = fit.panels, fit.cells
+    title_pt, label_pt = TITLE_PT * fit.scale, LABEL_PT * fit.scale
     for c in cells:
         v = float(values[c.column])
         face = cmap(norm(v)) if v > 0 else (1.0, 1.0, 1.0, 1.0)
         ax.add_patch(Rectangle((c.x, c.y), c.w, c.h, facecolor=face, edgecolor="0.55", linewidth=0.6, gid=c.actuator))
         dark = v > 0 and norm(v) > 0.5   # magma_r darkens with the value: light text from the middle of the scale
         ink = "white" if dark else "0.15"
-        ax.text(c.x + 0.05, c.y + c.h - 0.05, str(c.index), ha="left", va="top", fontsize=8, color=ink, alpha=0.75)
+        ax.text(c.x + 0.05, c.y + c.h - 0.05, str(c.index), ha="left", va="top", fontsize=label_pt, color=ink,
+                alpha=0.75)
         if v > 0:
-            ax.text(c.x + c.w - 0.05, c.y + 0.05, fmt(v), ha="right", va="bottom", fontsize=8, fontweight="bold",
-                    color=ink)
+            ax.text(c.x + c.w - 0.05, c.y + 0.05, fmt(v), ha="right", va="bottom", fontsize=label_pt,
+                    fontweight="bold", color=ink)
+    line = 1.25 * label_pt * fit.unit  # one line of label text, drawing units
     for p in panels:
         t = p.text
-        ax.text(p.center_x, 1.05, t["title"], ha="center", va="bottom", fontsize=8.5, fontweight="bold")
-        ax.text(p.center_x, 0.62, t["subtitle"], ha="center", va="bottom", fontsize=8, color="0.3")
-        ax.text(p.center_x, 0.12, t["top"], ha="center", va="bottom", fontsize=8, color="0.3")
-        ax.text(p.center_x, p.y - 0.12, t["bottom"], ha="center", va="top", fontsize=8, color="0.3")
+        ax.text(p.center_x, fit.base + (fit.subtitle_lines + 0.15) * line, t["title"], ha="center", va="bottom",
+                fontsize=title_pt, fontweight="bold", multialignment="center")
+        ax.text(p.center_x, fit.base, t["subtitle"], ha="center", va="bottom", fontsize=label_pt, color="0.3",
+                multialignment="center")
+        ax.text(p.center_x, fit.over, t["top"], ha="center", va="bottom", fontsize=label_pt, color="0.3")
+        ax.text(p.center_x, fit.under, t["bottom"], ha="center", va="top", fontsize=label_pt, color="0.3")
         bold = p.chart in ("front", "back")
         for side, xx in (("left", p.x - 0.12), ("right", p.x + p.w + 0.12)):
             ax.text(xx, p.y + p.h / 2, t[side], ha="right" if side == "left" else "left", va="center", rotation=90,
-                    fontsize=8, fontweight="bold" if bold else "normal")
-    left = min(p.x for p in panels) - EDGE_ROOM
-    right = max(p.x + p.w for p in panels) + EDGE_ROOM
-    bottom = min(p.y for p in panels) - 0.6
-    ax.set_xlim(left, right)
-    ax.set_ylim(bottom, 1.55)
+                    fontsize=label_pt, fontweight="bold" if bold else "normal", multialignment="center")
+    bottom = fit.under - line * 1.2
+    ax.set_xlim(fit.left, fit.right)
+    ax.set_ylim(bottom, fit.base + (fit.subtitle_lines + fit.title_lines + 0.45) * line)
     ax.set_aspect("equal", adjustable="box")
     return cells

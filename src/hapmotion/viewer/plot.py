@@ -20,7 +20,7 @@ from ..errors import UsageError
 from ..filesafety import atomic_path
 from ..layout import load_layout
 from ..track import HapticTrack, parse_actuator_id
-from .bodymap import draw_body
+from .bodymap import axes_size_pt, body_layout, draw_body
 from .colors import plot_cmap, scale_top
 from .curves import ENERGY_UNITS, total_intensity, track_motion_energy
 
@@ -181,31 +181,45 @@ def track_figure(
         axes += [fig.add_subplot(grid[k], sharex=axes[0]) for k in range(2, n_panels + 1)]
         for ax in axes[:-1]:
             ax.tick_params(labelbottom=False)
-        _draw_body(fig, ax_body, track, inten, x0, x1)
+        redraw = _draw_body(fig, ax_body, track, inten, x0, x1)
         _draw(fig, axes, track, sel, t, x0, x1, inten, groups, audio, title, top)
+        if redraw is not None:  # the body's texts are spaced for the axes' width once the figure is laid out
+            fig.draw_without_rendering()
+            redraw(axes_size_pt(ax_body))
     return fig
 
 
-def _draw_body(fig, ax, track, inten, x0, x1) -> None:
-    """The body as the wearer feels it, coloured by each motor's mean intensity over the drawn frames."""
+def _draw_body(fig, ax, track, inten, x0, x1):
+    """The body as the wearer feels it, coloured by each motor's mean intensity over the drawn frames. Returns a
+    function that draws the body again for the axes' width in points (``None`` when there is no body drawing)."""
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
 
     mean = inten.mean(axis=0)
     top = scale_top(float(mean.max()))
     cmap, norm = plot_cmap(), Normalize(vmin=0.5 * top / 100, vmax=top)
-    cells = draw_body(ax, mean, track.actuators, cmap, norm, rig=track.layout)
     mirror = (track.meta or {}).get("mirror")
     note = {True: "\nmirrored: the performer's left hand is felt on the wearer's right",
             False: "\nnot mirrored: the performer's left is the wearer's left"}.get(mirror, "")
-    ax.set_title(f"the body as the wearer feels it, wearer's left on the left: each motor's mean intensity over "
-                 f"{x0:.1f}-{x1:.1f} s{note}", loc="center")
-    if not cells:
+    heading = (f"the body as the wearer feels it, wearer's left on the left: each motor's mean intensity over "
+               f"{x0:.1f}-{x1:.1f} s{note}")
+    if not body_layout(track.actuators, rig=track.layout)[1]:
+        ax.set_axis_off()
+        ax.set_title(heading, loc="center")
         ax.text(0.5, 0.5, "no body drawing: the track's actuators are not those of the bundled layout "
                 "(x40_shoulders)", transform=ax.transAxes, ha="center", va="center", color="0.35", parse_math=False)
-        return
+        return None
+    # the colour bar first: it takes its room from the body's axes, whose width the drawing is spaced for
     bar = fig.colorbar(ScalarMappable(norm, cmap), ax=ax, pad=0.01, fraction=0.025, extend="min")
     bar.set_label(f"mean (Player units, 0..{top:g})")
+
+    def draw(size_pt=None) -> None:
+        ax.cla()
+        ax.set_title(heading, loc="center")
+        draw_body(ax, mean, track.actuators, cmap, norm, rig=track.layout, size_pt=size_pt)
+
+    draw()
+    return draw
 
 
 def _draw(fig, axes, track, sel, t, x0, x1, inten, groups, audio, title, top) -> None:
