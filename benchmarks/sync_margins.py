@@ -27,13 +27,14 @@ import math
 import numpy as np
 import soundfile as sf
 
-from hapmotion.audience.sync_estimator import NEAR_S, SHARP_MARGIN, estimate, match
+from hapmotion.audience.sync_estimator import NEAR_S, SHARP_MARGIN, estimate
 from hapmotion.audience.seat_sync import SyncSettings
 from hapmotion.audience.sync_tracker import (AGREE_S, JUMP_LEAD, MIN_MARGIN, MIN_SCORE, STREAK_S, UNIQUE_MARGIN,
                                              DelayTracker)
-from hapmotion.audio.sync_features import N_BANDS, RATE, LevelStream, dequantise, quantise, signal_levels
+from hapmotion.audio.sync_features import N_BANDS, RATE, dequantise, quantise, signal_levels
 
 from tests.support.data import AUDIO
+from tests.support.sync_signals import follow as seat_matching
 
 from . import sync_scenes as scenes
 
@@ -43,26 +44,9 @@ MAX_DELAY_S = SyncSettings().max_delay_s  # the seat's default range (--sync-max
 
 def follow(heard: np.ndarray, source: np.ndarray) -> tuple[list, DelayTracker]:
     """The seat's matching of ``heard`` (local time: its sample time) against ``source`` (media time: its sample
-    time): [Estimate or None] per window and the tracker after it all."""
-    ref = dequantise(quantise(signal_levels(source, SR)))
-    stream = LevelStream(SR)
-    levels = dequantise(quantise(np.concatenate([stream.push(heard[k:k + 441])
-                                                 for k in range(0, heard.size, 441)])))
-    tracker, out = DelayTracker(), []
-    for end in range(int(1.5 * RATE), levels.shape[0], 10):
-        n = min(end, 300)
-        t_heard = (end - n) / RATE
-        first = int(math.floor((t_heard - MAX_DELAY_S) * RATE))
-        span = n + int((MAX_DELAY_S + 0.25) * RATE)
-        idx = np.arange(first, first + span)
-        r = np.full((span, N_BANDS), np.nan)
-        ok = (idx >= 0) & (idx < ref.shape[0])
-        r[ok] = ref[idx[ok]]
-        at = t_heard + (n - 1) / RATE
-        est = match(levels[end - n:end], t_heard, r, first / RATE, held=tracker.offset_at(at))
-        tracker.update(est, at)
-        out.append(est)
-    return out, tracker
+    time) over the seat's default range of delays: [Estimate or None] per window and the tracker after it all."""
+    history, tracker = seat_matching(heard, source, max_delay_s=MAX_DELAY_S)
+    return [est for _, est, _ in history], tracker
 
 
 def longest_runs(ests: list, delay_s: float) -> tuple[float, float]:

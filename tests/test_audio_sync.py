@@ -5,54 +5,40 @@ reference batches and the audio inputs."""
 
 from __future__ import annotations
 
-import math
 import os
 import threading
 
 import numpy as np
 import pytest
 import soundfile as sf
-from support.sync_signals import SR, noisy, played, real_song, song, speech_like
+from support.sync_signals import SR, follow, noisy, played, real_song, song, speech_like
 
-from hapmotion.audience.seat_sync import (STEP_S, UNSTEADY_S, WINDOW_S, HeardClock, ReferenceStore, SeatSync,
-                                          SyncSettings)
+from hapmotion.audience.seat_sync import (
+    UNSTEADY_S,
+    HeardClock,
+    ReferenceStore,
+    SeatSync,
+    SyncSettings,
+)
 from hapmotion.audience.sync_estimator import Estimate, match
-from hapmotion.audience.sync_reference import ReferencePublisher, SongReference, decode_batch, encode_batch
+from hapmotion.audience.sync_reference import (
+    ReferencePublisher,
+    SongReference,
+    decode_batch,
+    encode_batch,
+)
 from hapmotion.audience.sync_tracker import STREAK_S, DelayTracker
 from hapmotion.audio.inputs import FileInput, PipeInput, open_input
-from hapmotion.audio.sync_features import (BANDS, N_BANDS, RATE, LevelStream, dequantise, quantise,
-                                           signal_levels)
+from hapmotion.audio.sync_features import (
+    BANDS,
+    N_BANDS,
+    RATE,
+    LevelStream,
+    dequantise,
+    quantise,
+    signal_levels,
+)
 from hapmotion.errors import UsageError
-
-MAX_DELAY = 5.0
-
-
-def follow(heard: np.ndarray, source: np.ndarray, step_s: float = STEP_S, window_s: float = WINDOW_S,
-           start_s: float = 0.0):
-    """Run the seat's matching over ``heard`` (local time = its own sample time + ``start_s``: a seat that starts
-    listening then) against the reference levels of ``source`` (media time = its sample time), as the seat does:
-    levels streamed in 20 ms blocks, a 3 s window every ``step_s`` (asking for the score at the held offset), offsets
-    from -0.25 s to ``MAX_DELAY``. Returns [(local time, Estimate or None, SyncState)]."""
-    ref = dequantise(quantise(signal_levels(source, SR)))
-    stream = LevelStream(SR)
-    heard_levels = np.concatenate([stream.push(heard[k:k + 441]) for k in range(0, heard.size, 441)])
-    heard_levels = dequantise(quantise(heard_levels))
-    tracker = DelayTracker()
-    out = []
-    w, step = int(window_s * RATE), int(step_s * RATE)
-    for end in range(int(1.5 * RATE), heard_levels.shape[0], step):
-        n = min(end, w)
-        t_heard = start_s + (end - n) / RATE
-        first = int(math.floor((t_heard - MAX_DELAY) * RATE))
-        span = n + int((MAX_DELAY + 0.25) * RATE)
-        idx = np.arange(first, first + span)
-        r = np.full((span, N_BANDS), np.nan)
-        ok = (idx >= 0) & (idx < ref.shape[0])
-        r[ok] = ref[idx[ok]]
-        at = t_heard + (n - 1) / RATE
-        est = match(heard_levels[end - n:end], t_heard, r, first / RATE, held=tracker.offset_at(at))
-        out.append((at, est, tracker.update(est, at)))
-    return out, tracker
 
 
 def delayed(source: np.ndarray, delay_s: float, seconds: float, drift: float = 0.0) -> np.ndarray:

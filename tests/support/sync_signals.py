@@ -1,10 +1,24 @@
 """Signals for the audio-sync tests: a random song whose answer is known by construction, a speech-like signal,
-delayed, drifting and jumping copies (no tests here)."""
+delayed, drifting and jumping copies, and the seat's matching run over a heard signal (no tests here)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import soundfile as sf
+
+from hapmotion.audience.seat_sync import STEP_S, WINDOW_S
+from hapmotion.audience.sync_estimator import match
+from hapmotion.audience.sync_tracker import DelayTracker
+from hapmotion.audio.sync_features import (
+    N_BANDS,
+    RATE,
+    LevelStream,
+    dequantise,
+    quantise,
+    signal_levels,
+)
 
 from .data import AUDIO
 
@@ -68,3 +82,31 @@ def noisy(x: np.ndarray, snr_db: float, seed: int) -> np.ndarray:
     noise = np.convolve(rng.normal(size=x.size), np.ones(8) / 8, mode="same")
     rms = np.sqrt(np.mean(x * x))
     return x + noise / noise.std() * rms / 10 ** (snr_db / 20)
+
+
+def follow(heard: np.ndarray, source: np.ndarray, step_s: float = STEP_S, window_s: float = WINDOW_S,
+           start_s: float = 0.0, max_delay_s: float = 5.0):
+    """Run the seat's matching over ``heard`` (local time = its own sample time + ``start_s``: a seat that starts
+    listening then) against the reference levels of ``source`` (media time = its sample time), as the seat does:
+    levels streamed in 20 ms blocks, a 3 s window every ``step_s`` (asking for the score at the held offset), offsets
+    from -0.25 s to ``max_delay_s``. Returns [(local time, Estimate or None, SyncState)]."""
+    ref = dequantise(quantise(signal_levels(source, SR)))
+    stream = LevelStream(SR)
+    heard_levels = np.concatenate([stream.push(heard[k:k + 441]) for k in range(0, heard.size, 441)])
+    heard_levels = dequantise(quantise(heard_levels))
+    tracker = DelayTracker()
+    out = []
+    w, step = int(window_s * RATE), int(step_s * RATE)
+    for end in range(int(1.5 * RATE), heard_levels.shape[0], step):
+        n = min(end, w)
+        t_heard = start_s + (end - n) / RATE
+        first = int(math.floor((t_heard - max_delay_s) * RATE))
+        span = n + int((max_delay_s + 0.25) * RATE)
+        idx = np.arange(first, first + span)
+        r = np.full((span, N_BANDS), np.nan)
+        ok = (idx >= 0) & (idx < ref.shape[0])
+        r[ok] = ref[idx[ok]]
+        at = t_heard + (n - 1) / RATE
+        est = match(heard_levels[end - n:end], t_heard, r, first / RATE, held=tracker.offset_at(at))
+        out.append((at, est, tracker.update(est, at)))
+    return out, tracker
