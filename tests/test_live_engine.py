@@ -309,6 +309,28 @@ def test_a_session_that_cannot_start_leaves_nothing_frozen():
     assert gc.get_freeze_count() == 0
 
 
+def test_a_session_cancelled_again_while_turning_off_leaves_nothing_frozen():
+    """A seat stopped while its hung Player's turn-off still waits (a second cancel, as at the end of asyncio.run):
+    the heap is handed back all the same, or the collector would skip it for the rest of the process."""
+    import gc
+
+    class Hung(MemorySink):
+        async def shutdown(self):
+            await asyncio.Event().wait()  # a Player that never answers its turn-off
+
+    async def scenario():
+        engine = make([Hung()])
+        task = asyncio.create_task(engine.run(ScriptSource(waving(n=1000))))
+        await asyncio.sleep(0.3)
+        task.cancel()  # the stop
+        await asyncio.sleep(0.1)
+        task.cancel()  # again, while the turn-off waits
+        await asyncio.gather(task, return_exceptions=True)
+
+    asyncio.run(asyncio.wait_for(scenario(), 10))
+    assert gc.get_freeze_count() == 0
+
+
 def test_a_stop_while_a_sink_is_still_starting_ends_the_start_at_once():
     """Ctrl-C while a sink still looks for its server: the start is cancelled, nothing was streamed."""
 

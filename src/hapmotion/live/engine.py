@@ -328,20 +328,22 @@ class LiveEngine:
                 self._stop_reason = f"could not start ({reason})"
             raise
         finally:
-            self._close()
-            for t in tasks:
-                t.cancel()
-            await asyncio.gather(*tasks, return_exceptions=True)
-            await self._turn_off(sink_tasks, started=running)
-            try:
-                await source.close()
-            except Exception as exc:  # closing must not hide the stop
-                log.warning("closing the source failed: %s", exc)
-            self.stats.stop_reason = self._stop_reason
-            for sig in installed:
-                loop.remove_signal_handler(sig)
-            if held:
-                steady_heap.release()
+            try:  # a second cancel during the turn-off must still give the heap back and the signals
+                self._close()
+                for t in tasks:
+                    t.cancel()
+                await asyncio.gather(*tasks, return_exceptions=True)
+                await self._turn_off(sink_tasks, started=running)
+                try:
+                    await source.close()
+                except Exception as exc:  # closing must not hide the stop
+                    log.warning("closing the source failed: %s", exc)
+                self.stats.stop_reason = self._stop_reason
+            finally:
+                for sig in installed:
+                    loop.remove_signal_handler(sig)
+                if held:
+                    steady_heap.release()
         if error is not None:
             raise error
         return self.stats
