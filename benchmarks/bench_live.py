@@ -158,10 +158,16 @@ class Sender(asyncio.DatagramProtocol):
 
 
 class Player:
-    """Records the receipt time of every SDK1 request (answers nothing: the Player's reply is optional)."""
+    """Keeps (arrival time, request) of every SDK1 request in ``got`` (answers nothing: the Player's reply is
+    optional)."""
 
     def __init__(self) -> None:
-        self.times: list[float] = []
+        self.got: list[tuple[float, str]] = []
+
+    @property
+    def times(self) -> list[float]:
+        """The arrival time (perf_counter) of every request."""
+        return [t for t, _ in self.got]
 
     async def start(self) -> "Player":
         self.server = await serve(self._handler, "127.0.0.1", 0, compression=None)
@@ -170,7 +176,7 @@ class Player:
 
     async def _handler(self, ws) -> None:
         async for text in ws:
-            self.times.append(time.perf_counter())
+            self.got.append((time.perf_counter(), text))
 
 
 class PlayerV3(Player):

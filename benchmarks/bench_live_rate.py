@@ -38,9 +38,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-from websockets.asyncio.server import serve
 
 import hapmotion
+from benchmarks.bench_live import Player
 from hapmotion.bhaptics.device_map import DeviceMap
 from hapmotion.bhaptics.tick import PLAYER_TICK_S
 from hapmotion.layout import load_layout
@@ -56,22 +56,6 @@ from tests.support.data import MOTION  # the one place that says where the real 
 from tests.support.vmc_sender import VmcSender
 
 WAVE = MOTION / "dataset-1_byebye_happy_001.bvh"
-
-
-class Player:
-    """Keeps (arrival time, request) of every SDK1 request; answers nothing (the Player's reply is optional)."""
-
-    def __init__(self) -> None:
-        self.got: list[tuple[float, str]] = []
-
-    async def start(self) -> "Player":
-        self.server = await serve(self._handler, "127.0.0.1", 0, compression=None)
-        self.port = self.server.sockets[0].getsockname()[1]
-        return self
-
-    async def _handler(self, ws) -> None:
-        async for text in ws:
-            self.got.append((time.perf_counter(), text))
 
 
 def played(requests: list[tuple[float, str]], dmap: DeviceMap) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

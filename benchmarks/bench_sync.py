@@ -54,10 +54,10 @@ from hapmotion.audience.seat_sync import SyncSettings
 from hapmotion.audience.server import LocalNatsServer
 from hapmotion.audience.wire import decode_frame, subject
 from hapmotion.live import ReplaySource, live
-from hapmotion.live.sinks import Sink
 from hapmotion.show import Show
 
 from tests.support.data import AUDIO, MOTION
+from tests.support.live_fakes import PlayTimes
 
 from . import sync_scenes as scenes
 
@@ -71,19 +71,6 @@ TARGETED = ("stream", "noisy")
 as the right music) are held to no false lock: speech over the music may lock at the right delay or not at all."""
 
 
-class Tap(Sink):
-    """Every frame a seat's engine emits, with the local time (perf_counter) it did."""
-
-    def __init__(self, *_: object):
-        super().__init__("tap")
-        self.frames: list[tuple[float, float]] = []
-
-    def offer(self, frame) -> None:
-        if frame.kind == "frame":
-            self.frames.append((time.perf_counter(), frame.t))
-
-    async def run(self) -> None:
-        await asyncio.Event().wait()
 
 
 @dataclass
@@ -103,7 +90,7 @@ class Viewer:
     jump: float = 0.0
     jump_at: float = 30.0       # seconds after the music reaches the viewer
     over: np.ndarray | None = None  # (n,) a signal mixed over the music, as loud as the music (0 dB)
-    taps: Tap = field(default_factory=Tap)
+    taps: PlayTimes = field(default_factory=PlayTimes)
     sync: object = None
     t0: float | None = None     # local time from which the signal (not silence) is written
     edge: float = 0.0           # venue: media m plays at local m + edge

@@ -9,7 +9,6 @@ import math
 import os
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +17,7 @@ import soundfile as sf
 from click.testing import CliRunner
 from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
 from support.audience import REHEARSAL, SONG, Venue, stop
-from support.live_fakes import start_session, wait_for
+from support.live_fakes import PlayTimes, start_session, wait_for
 from support.sync_signals import SR, real_song
 
 import hapmotion
@@ -27,7 +26,6 @@ from hapmotion.audience.seat_sync import MAX_EDGES, SeatSync, SyncSettings
 from hapmotion.audience.signing import SeatTrust, VenueSigner
 from hapmotion.audience.sync_reference import encode_batch
 from hapmotion.cli.listen import command
-from hapmotion.live.sinks import Sink
 
 pytestmark = pytest.mark.slow
 
@@ -35,19 +33,6 @@ LEAD_S = 2.5
 """Silence before the song in the heard file: the seat hears media time 0 at the file's start + LEAD_S."""
 
 
-class PlayTimes(Sink):
-    """The local time (perf_counter) each rendered frame reached the seat's sinks, with its media time."""
-
-    def __init__(self, *_: object):
-        super().__init__("play times")
-        self.frames: list[tuple[float, float]] = []
-
-    def offer(self, frame) -> None:
-        if frame.kind == "frame":
-            self.frames.append((time.perf_counter(), frame.t))
-
-    async def run(self) -> None:
-        await asyncio.Event().wait()
 
 
 def heard_file(tmp_path, music: np.ndarray) -> str:

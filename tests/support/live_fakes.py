@@ -28,6 +28,7 @@ from pythonosc.udp_client import SimpleUDPClient
 from websockets.asyncio.server import serve
 
 from hapmotion.live.frames import SkeletonFrame
+from hapmotion.live.sinks import Sink
 from hapmotion.live.sources import Source
 from websockets.exceptions import ConnectionClosed
 from .certificates import self_signed_cert  # noqa: F401  (the tests import it from here too)
@@ -525,3 +526,19 @@ async def start_live_process(command: list, *args: str, timeout: float = 60.0):
         m = re.search(r"listening on osc://127\.0\.0\.1:(\d+)", line)
         port = int(m.group(1)) if m else None
     return proc, port, lines
+
+
+class PlayTimes(Sink):
+    """The local time (perf_counter) each rendered frame reached the sinks, with its media time: ``frames``
+    [(seconds, media seconds)]."""
+
+    def __init__(self, *_: object):
+        super().__init__("play times")
+        self.frames: list[tuple[float, float]] = []
+
+    def offer(self, frame) -> None:
+        if frame.kind == "frame":
+            self.frames.append((time.perf_counter(), frame.t))
+
+    async def run(self) -> None:
+        await asyncio.Event().wait()
