@@ -141,8 +141,9 @@ def numbered_sinks(sinks: Sequence[SinkSpec], session: int) -> list[SinkSpec]:
         return list(sinks)
     out: list[SinkSpec] = []
     for spec in sinks:
-        if isinstance(spec, str) and parse_sink(spec).kind == "record":
-            path = Path(parse_sink(spec).path)
+        parsed = parse_sink(spec) if isinstance(spec, str) else None
+        if parsed is not None and parsed.kind == "record":
+            path = Path(parsed.path)
             n = session
             while (candidate := path.with_name(f"{path.stem}-{n}{path.suffix}")).exists():
                 n += 1

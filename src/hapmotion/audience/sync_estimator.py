@@ -135,8 +135,9 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
     if near is not None:
         lags = np.arange(n_lags)
         dist = np.abs(t_heard - t_ref - lags / RATE - near)  # offset of lag l: t_heard - t_ref - l / RATE
-        if (dist <= NEAR_S).any():
-            near_score = float(score[dist <= NEAR_S].max())
+        close = dist <= NEAR_S
+        if close.any():
+            near_score = float(score[close].max())
     return Estimate(float(offset), peak, peak - second, int(active.sum()), t_heard + (w - 1) / RATE, even,
                     near_score)
 

@@ -102,10 +102,14 @@ def _agreed(points: list[tuple[float, float, float]]) -> Optional[float]:
     size, median, span = _cluster([(a, o) for a, o, _ in points], AGREE_S)
     if size >= LOCK_VOTES and span >= LOCK_SPAN_S:
         return median
+    return _sharp_median(points)
+
+
+def _sharp_median(points: list[tuple[float, float, float]]) -> Optional[float]:
+    """The offset that the sharp ``(at, offset, margin)`` votes (margin at least ``SHARP_MARGIN``) agree on, enough
+    of them over a long enough time, or None."""
     size, median, span = _cluster([(a, o) for a, o, m in points if m >= SHARP_MARGIN], SHARP_AGREE_S)
-    if size >= SHARP_VOTES and span >= SHARP_SPAN_S:
-        return median
-    return None
+    return median if size >= SHARP_VOTES and span >= SHARP_SPAN_S else None
 
 
 def _cluster(points: list[tuple[float, float]], agree: float) -> tuple[int, float, float]:
@@ -219,9 +223,9 @@ class DelayTracker:
             if unique:
                 self._jump.append((at, est.offset_s, est.margin if est.even else 0.0))
             size, median, span = _cluster([(a, o) for a, o, _ in self._jump], AGREE_S)
-            sharp = _cluster([(a, o) for a, o, m in self._jump if m >= SHARP_MARGIN], SHARP_AGREE_S)
-            if sharp[0] >= SHARP_VOTES and sharp[2] >= SHARP_SPAN_S:
-                size, median, span = JUMP_VOTES, sharp[1], JUMP_SPAN_S
+            sharp = _sharp_median(self._jump)
+            if sharp is not None:  # here sharp votes win over the ordinary cluster (a jump follows them sooner)
+                size, median, span = JUMP_VOTES, sharp, JUMP_SPAN_S
             if streak is not None and abs(streak - x[0]) > GATE_S:
                 size, median, span = JUMP_VOTES, streak, JUMP_SPAN_S
             if size >= JUMP_VOTES and span >= JUMP_SPAN_S:

@@ -49,6 +49,12 @@ enough that speeds and accelerations (a frame's motion times the rate, twice) st
 overflowed, and the debug values went NaN."""
 
 
+def one_pole_alpha(fps: float, time_constant_s: float) -> float:
+    """The step ``alpha`` of a one-pole filter ``s += alpha (x - s)`` run at ``fps`` (Hz) with the time constant
+    ``time_constant_s`` (seconds); 1 (no smoothing) for a time constant of 0."""
+    return 1.0 - float(np.exp(-1.0 / (fps * time_constant_s))) if time_constant_s > 0 else 1.0
+
+
 def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
     """The frame loop's parameter vector ``(N_PARAMS,)`` for a method at a frame rate (``packed.P_*`` slots)."""
     if method not in METHODS:
@@ -93,8 +99,7 @@ def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
     p[packed.P_SLEEVE_SHARE] = params.sleeve_share
     p[packed.P_SLEEVE_REACH] = params.sleeve_reach_m
     p[packed.P_HOLD] = max(1, int(round(params.choice_hold_s * fps))) if params.choice_hold_s > 0 else 0
-    p[packed.P_DP_ALPHA] = (1.0 - float(np.exp(-1.0 / (fps * params.point_smoothing_s)))
-                            if params.point_smoothing_s > 0 else 1.0)
+    p[packed.P_DP_ALPHA] = one_pole_alpha(fps, params.point_smoothing_s)
     p[packed.P_SILENCE] = params.silence_floor
     p[packed.P_W_WINDOW] = (min(packed.MAX_WINDOW, max(1, int(round(params.weight_window_s * fps))))
                             if params.weight_window_s > 0 else 0)
@@ -105,13 +110,11 @@ def pack_params(params: Params, method: str, fps: float) -> np.ndarray:
     p[packed.P_REACH_SHARE] = params.reach_share
     p[packed.P_ACTIVE_SPEED] = params.active_speed_mps
     p[packed.P_OPPOSITE_W] = params.opposite_weight
-    p[packed.P_SPEED_ALPHA] = (1.0 - float(np.exp(-1.0 / (fps * params.speed_smoothing_s)))
-                               if params.speed_smoothing_s > 0 else 1.0)
+    p[packed.P_SPEED_ALPHA] = one_pole_alpha(fps, params.speed_smoothing_s)
     p[packed.P_SPEED_W] = params.speed_weight
     p[packed.P_LEAD_RATIO] = params.lead_ratio
     p[packed.P_SIDE_MARGIN] = params.hand_side_m
-    p[packed.P_LEAD_ALPHA] = (1.0 - float(np.exp(-1.0 / (fps * params.choice_hold_s)))
-                              if params.choice_hold_s > 0 else 1.0)
+    p[packed.P_LEAD_ALPHA] = one_pole_alpha(fps, params.choice_hold_s)
     return p
 
 
