@@ -9,6 +9,7 @@ import asyncio
 
 import numpy as np
 import pytest
+from support.bounded import run_within
 from support.live_fakes import BVH, FakePlayerSdk1, is_tick_max_sequence, start_session, wait_for
 
 import hapmotion
@@ -74,7 +75,7 @@ def test_done_when_each_seat_gets_its_own_rendering_shifted_by_its_delay(nats_se
         return stats, taps, players, sources
 
     try:
-        stats, taps, players, sources = asyncio.run(asyncio.wait_for(scenario(), 60))
+        stats, taps, players, sources = run_within(scenario(), 60)
     finally:
         if venue is not None:
             venue.__exit__()
@@ -137,7 +138,7 @@ def test_a_cue_fired_at_the_venue_plays_on_the_seat_at_its_media_time(nats_serve
                 await stop(task)
         return tap
 
-    tap = asyncio.run(asyncio.wait_for(scenario(), 60))
+    tap = run_within(scenario(), 60)
     got = tap.rendered()
     ks = np.array([round(f.t * motion.fps) for _, f in got])
     rows = np.array([f.row for _, f in got])

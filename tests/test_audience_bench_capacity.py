@@ -21,6 +21,7 @@ if str(ROOT) not in sys.path:  # the benchmarks package lives beside tests/ (pyt
     sys.path.insert(0, str(ROOT))
 from benchmarks import bench_audience_capacity as cap  # noqa: E402
 from benchmarks import bench_audience_load as load  # noqa: E402
+from support.bounded import run_within
 
 
 def test_a_seat_moved_to_another_show_receives_only_that_shows_frames():
@@ -69,7 +70,7 @@ def test_a_seat_moved_to_another_show_receives_only_that_shows_frames():
             conn.transport.close()
             writer.close()
 
-    asyncio.run(asyncio.wait_for(scenario(), 60))
+    run_within(scenario(), 60)
 
 
 def test_fit_and_saturation_on_numbers_worked_out_by_hand():

@@ -20,6 +20,7 @@ from hapmotion.audience.server import LocalNatsServer
 from hapmotion.audience.signing import VenueSigner, load_private_key
 from hapmotion.audience.wire import encode_frame, subject
 from support.audience import make_tls
+from support.bounded import run_within
 
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:  # the benchmarks package lives beside tests/ (python -m pytest puts it there too)
@@ -51,11 +52,11 @@ def test_the_secure_benchmark_server_refuses_a_plain_client(venue):
         finally:
             sock.close()
 
-    info = asyncio.run(asyncio.wait_for(info_of_server(), 30))
+    info = run_within(info_of_server(), 30)
     assert info["tls_required"] is True and info["auth_required"] is True
     # the plain CONNECT is taken for a failed TLS handshake: the connection is closed before any answer
     with pytest.raises(ConnectionError, match="closed by the server"):
-        asyncio.run(asyncio.wait_for(plain(), 30))
+        run_within(plain(), 30)
 
 
 def test_the_load_generator_speaks_tls_with_the_seat_nkey_and_receives_signed_frames(venue):
@@ -82,7 +83,7 @@ def test_the_load_generator_speaks_tls_with_the_seat_nkey_and_receives_signed_fr
             conn.transport.close()
         return conn, ssl_object, marks, len(frame)
 
-    conn, ssl_object, marks, size = asyncio.run(asyncio.wait_for(scenario(), 30))
+    conn, ssl_object, marks, size = run_within(scenario(), 30)
     assert ssl_object is not None and ssl_object.version() in ("TLSv1.2", "TLSv1.3")
     assert ssl_object.getpeercert()["subjectAltName"]  # the server's certificate, checked against the run's CA
     assert conn.count == 2                              # both subscriptions got the frame
@@ -101,4 +102,4 @@ def test_the_load_generator_refuses_a_server_certificate_of_another_ca(venue, tm
                                                  venue=str(folder))
 
     with pytest.raises(ssl.SSLCertVerificationError):
-        asyncio.run(asyncio.wait_for(attempt(), 30))
+        run_within(attempt(), 30)

@@ -4,13 +4,13 @@ credential says so in one line."""
 
 from __future__ import annotations
 
-import asyncio
 import socket
 import subprocess
 import time
 
 import pytest
 from support.audience import Venue
+from support.bounded import run_within
 from support.certificates import make_tls
 from support.live_fakes import BVH, free_port
 
@@ -100,7 +100,7 @@ def test_a_certificate_for_another_name_suggests_nats_tls_name_not_the_ca(tmp_pa
         assert "mismatch" in err and "--nats-tls-name NAME" in err and "--nats-ca" not in err, err
         # what the hint says works: the certificate's name given, the same CA
         auth = NatsAuth(nkey=str(venue.paths["seat_nkey"]), ca=venue.tls["ca"], tls_name="nats.example")
-        assert asyncio.run(asyncio.wait_for(connected_over_tls(venue.url, auth), 15))
+        assert run_within(connected_over_tls(venue.url, auth), 15)
 
 
 async def connected_over_tls(url: str, auth) -> bool:
@@ -141,6 +141,6 @@ def test_a_publisher_with_the_seats_credential_is_one_permission_error(tmp_path,
         assert "the seat's key instead of the venue's" in lines[0] and "TimeoutError" not in err, err
         assert "lost the NATS server" not in err, err
         # a bucket the venue made: the put of the description is refused
-        text = asyncio.run(asyncio.wait_for(with_bucket(venue), 30))
+        text = run_within(with_bucket(venue), 30)
     assert "may not publish the show" in text and "hapmotion_shows.concert" in text.lower(), text
     assert "\n" not in text and "TimeoutError" not in text, text

@@ -11,6 +11,7 @@ import time
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from support.bounded import run_within
 from support.live_fakes import BVH, FakePlayerSdk1, start_session, wait_for
 from support.audience import REHEARSAL, DelayedReplay, LoopWatch, Tap, reference_rows, start_seat, stop
 from support.audience import rehearsal  # noqa: F401 (the fixture every test here uses)
@@ -77,7 +78,7 @@ def test_late_join_gets_the_description_and_renders_from_its_first_frame(nats_se
         await stop(task)
         return tap
 
-    tap = asyncio.run(asyncio.wait_for(scenario(), 40))
+    tap = run_within(scenario(), 40)
     got = tap.rendered()
     ks = [round(f.t * motion.fps) for _, f in got]
     assert 20 <= ks[0] and ks == sorted(set(ks)) and len(ks) >= 0.9 * (motion.n_frames - ks[0])
@@ -109,7 +110,7 @@ def test_missing_then_wrong_then_right_description(nats_server, motion, caplog):
         await stop(task)
         return tap, missing_or_wrong
 
-    tap, before = asyncio.run(asyncio.wait_for(scenario(), 40))
+    tap, before = run_within(scenario(), 40)
     assert before == []  # nothing plays without a usable description
     assert len(tap.rendered()) >= 25
     text = caplog.text
@@ -136,7 +137,7 @@ def test_publisher_restart_same_settings_plays_on_changed_settings_rebuild(nats_
         await stop(task)
         return tap, n_first, n_second, one_session, sessions
 
-    tap, n_first, n_second, one_session, sessions = asyncio.run(asyncio.wait_for(scenario(), 40))
+    tap, n_first, n_second, one_session, sessions = run_within(scenario(), 40)
     assert n_first >= 18 and n_second >= 30 and one_session == 1
     # different settings: a new seat session with the new renderer, which rendered frames too
     assert len(sessions) == 2 and sessions[1][0].upstream.renderer.method == "baseline"
@@ -159,7 +160,7 @@ def test_clock_jumps_keep_playing_at_the_delay(nats_server, motion):
         await stop(task)
         return tap, sessions[0][1], watch.longest
 
-    tap, source, held = asyncio.run(asyncio.wait_for(scenario(), 40))
+    tap, source, held = run_within(scenario(), 40)
     got = tap.rendered()
     if held < delay:  # (a machine that held this whole process up longer than the delay makes frames late itself)
         assert len(got) >= 85 and source.clock.jumps == 2
@@ -185,7 +186,7 @@ def test_a_slow_player_does_not_hold_up_its_seat_or_the_others(nats_server, moti
         await fine.stop()
         return slow, fine, tap_slow, tap_fine
 
-    slow, fine, tap_slow, tap_fine = asyncio.run(asyncio.wait_for(scenario(), 40))
+    slow, fine, tap_slow, tap_fine = run_within(scenario(), 40)
     # the seat with the hung Player renders as many frames as the other: its Player sink alone falls behind
     assert slow.hung and len(tap_slow.rendered()) >= 0.9 * motion.n_frames
     assert len(tap_fine.rendered()) >= 0.9 * motion.n_frames
@@ -217,7 +218,7 @@ def test_lost_server_fades_to_zero_and_the_show_comes_back(motion):
         return tap, player, during_loss, at_return
 
     with LocalNatsServer() as server:
-        tap, player, during_loss, at_return = asyncio.run(asyncio.wait_for(scenario(server), 40))
+        tap, player, during_loss, at_return = run_within(scenario(server), 40)
     # while the server is gone the seat fades out and turns the vest off, once (a busy machine may also have faded
     # it earlier, when it held frames of the first part up beyond their play time: what counts here is the loss)
     assert "fade" in during_loss and during_loss.count("off") == 1 and "frame" not in during_loss
@@ -242,7 +243,7 @@ def test_publisher_announces_cues_to_the_seat(nats_server, motion):
         await stop(task)
         return heard
 
-    heard = asyncio.run(asyncio.wait_for(scenario(), 20))
+    heard = run_within(scenario(), 20)
     assert heard[0]["name"] == "pyro" and heard[0]["t"] == 12.5 and heard[0]["gain"] == 1.2
 
 

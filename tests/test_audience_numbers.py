@@ -13,6 +13,7 @@ import time
 
 import pytest
 from support.audience import REHEARSAL, Tap, stop
+from support.bounded import run_within
 from support.live_fakes import BVH, wait_for
 from support.seat_offline import venue_show
 
@@ -232,7 +233,7 @@ def test_a_rehearsal_seat_survives_forged_numbers_waiting_and_playing(nats_serve
         await stop(task)
         return tap, engine, source
 
-    tap, engine, source = asyncio.run(asyncio.wait_for(scenario(), 60))
+    tap, engine, source = run_within(scenario(), 60)
     assert source.desc.epoch == 22                       # the forged far-future run never locked the real one out
     times = [f.t for _, f in tap.rendered()]
     assert sum(t >= 50 / fps for t in times) >= 25       # the next run played

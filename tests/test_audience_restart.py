@@ -10,6 +10,7 @@ import time
 import hapmotion
 import pytest
 from support.audience import REHEARSAL, Tap, start_seat, stop
+from support.bounded import run_within
 from support.live_fakes import BVH, wait_for
 
 from hapmotion.audience import Seat, listen
@@ -59,7 +60,7 @@ def test_frames_of_a_new_format_before_its_description_are_format_changing_not_m
         await stop(task)
         return counts, played_before
 
-    counts, played_before = asyncio.run(asyncio.wait_for(scenario(), 30))
+    counts, played_before = run_within(scenario(), 30)
     assert counts.get("format_changing", 0) == 20 and counts.get("malformed", 0) == 0, counts
     assert played_before == 0                      # never decoded with the full frames' decoder
     text = " ".join(r.getMessage() for r in live_log)
@@ -101,7 +102,7 @@ def test_a_seats_recording_stops_when_the_show_ends_and_the_next_show_records_to
         await stop(task)
         await nc.close()
 
-    asyncio.run(asyncio.wait_for(scenario(), 60))
+    run_within(scenario(), 60)
     rows = hapmotion.load_track(path).intensities
     # 60 frames, the fade (stall_ms 250) and a few rows of margin (0.4 s: the end's timer, the recorder's flush);
     # not the 1.5 s of silence waited after it

@@ -15,6 +15,7 @@ import time
 import numpy as np
 import pytest
 from support.audience import REHEARSAL, Tap, Venue, reference_rows, start_seat, stop
+from support.bounded import run_within
 from support.live_fakes import BVH, start_session, wait_for
 
 import hapmotion
@@ -138,7 +139,7 @@ def test_a_seats_credentials_cannot_publish_or_delete_anything(tmp_path, motion)
             return heard, errors, outcomes, stored, show.desc.to_json()
 
     with Venue(tmp_path, show="concert") as venue:
-        heard, errors, outcomes, stored, original = asyncio.run(asyncio.wait_for(scenario(venue), 30))
+        heard, errors, outcomes, stored, original = run_within(scenario(venue), 30)
     assert heard == [subject("concert", "frame")] * 2                     # only the venue's two frames
     violations = " ".join(errors)
     for what in ("hapmotion.show.concert.frame", "hapmotion.show.concert.cue", "hapmotion.show.concert.end",
@@ -214,7 +215,7 @@ def test_a_signed_show_holds_against_forged_replayed_and_unsigned_messages(nats_
         await stop(task)
         return tap, sessions
 
-    tap, sessions = asyncio.run(asyncio.wait_for(scenario(), 40))
+    tap, sessions = run_within(scenario(), 40)
     assert len(sessions) == 1                             # the forged description changed nothing
     got = tap.rendered()
     ks = [round(f.t * motion.fps) for _, f in got]
@@ -251,7 +252,7 @@ def test_a_far_future_seq_cannot_silence_a_rehearsal(nats_server, motion):
         await stop(task)
         return tap, sessions[0][0]
 
-    tap, engine = asyncio.run(asyncio.wait_for(scenario(), 30))
+    tap, engine = run_within(scenario(), 30)
     assert engine.faults.counts["seq_jump"] == 1
     assert len([1 for _, f in tap.rendered() if f.t >= 20 / motion.fps]) >= 35   # the show went on
 
@@ -290,7 +291,7 @@ def test_every_invalid_description_is_one_line_and_the_seat_waits_for_a_valid_on
         await stop(task)
         return tap
 
-    tap = asyncio.run(asyncio.wait_for(scenario(), 30))
+    tap = run_within(scenario(), 30)
     assert len(tap.rendered()) >= 25
     text = [r.getMessage() for r in live_log if r.levelno >= logging.WARNING]
     for field in ("stall_ms", "render.overrides.no_such_knob", "render.overrides.near_m", "body.shoulder_width",
@@ -331,7 +332,7 @@ def test_a_cue_flood_neither_moves_the_clock_nor_piles_up(nats_server, motion, t
         await stop(task)
         return engine, source, most_pending, fired_gains, flood_s
 
-    engine, source, most_pending, gains, flood_s = asyncio.run(asyncio.wait_for(scenario(), 40))
+    engine, source, most_pending, gains, flood_s = run_within(scenario(), 40)
     assert source.clock.jumps == 0 and engine.faults.counts["stale"] == 0
     assert engine.faults.counts["cue_flood"] >= 1000
     assert 1 <= len(gains) <= BURST + RATE * (flood_s + 1.5) and set(gains) == {1.0}
@@ -352,7 +353,7 @@ def test_a_bucket_made_with_a_tiny_value_limit_is_a_clear_error(motion):
 
     with LocalNatsServer() as server:
         with pytest.raises(UsageError, match="exists with a value limit of 16 bytes"):
-            asyncio.run(asyncio.wait_for(scenario(server), 20))
+            run_within(scenario(server), 20)
 
 
 def test_a_deleted_description_is_waited_for_and_the_show_plays_when_it_is_back(motion, live_log):
@@ -374,7 +375,7 @@ def test_a_deleted_description_is_waited_for_and_the_show_plays_when_it_is_back(
         return tap, at
 
     with LocalNatsServer() as server:
-        tap, at = asyncio.run(asyncio.wait_for(scenario(server), 30))
+        tap, at = run_within(scenario(server), 30)
     assert len(tap.rendered()) - at >= 35
 
 
@@ -393,7 +394,7 @@ def test_a_seat_waiting_before_the_show_plays_it_from_its_first_frame(nats_serve
         await stop(task)
         return tap
 
-    tap = asyncio.run(asyncio.wait_for(scenario(), 30))
+    tap = run_within(scenario(), 30)
     ks = [round(f.t * motion.fps) for _, f in tap.rendered()]
     assert ks[0] == 0 and len(ks) >= 0.9 * motion.n_frames
     assert any("waiting" in r.getMessage() and "opening" in r.getMessage() for r in live_log)
@@ -417,7 +418,7 @@ def test_a_seats_recordings_are_numbered_not_overwritten(nats_server, motion, tm
             await asyncio.sleep(0.3)
         await stop(task)
 
-    asyncio.run(asyncio.wait_for(scenario(), 30))
+    run_within(scenario(), 30)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["seat-2.csv", "seat.csv"]
     first, second = (hapmotion.load_track(tmp_path / n) for n in ("seat.csv", "seat-2.csv"))
     assert first.n_frames >= 15 and second.n_frames >= 25
@@ -455,7 +456,7 @@ def test_user_password_and_token_against_a_real_server(server_args, good, bad):
         return ok
 
     with LocalNatsServer(extra_args=server_args) as server:
-        assert asyncio.run(asyncio.wait_for(scenario(server), 20))
+        assert run_within(scenario(server), 20)
 
 
 def test_a_replayed_older_description_is_refused(keys):
@@ -498,7 +499,7 @@ def test_a_description_stored_while_the_seat_did_not_hear_it_is_read_when_its_fr
         await stop(task)
         return tap, sessions
 
-    tap, sessions = asyncio.run(asyncio.wait_for(scenario(), 30))
+    tap, sessions = run_within(scenario(), 30)
     assert sessions[0][1].desc.epoch == 2                           # the same show settings: played on
     assert sum(1 for _, f in tap.rendered() if f.t >= 10 / motion.fps) >= 45
 
@@ -535,7 +536,7 @@ def test_the_publisher_stores_its_description_again_when_it_is_deleted_or_replac
         return back, repaired
 
     with LocalNatsServer() as server:
-        assert asyncio.run(asyncio.wait_for(scenario(server), 40)) == (True, True)
+        assert run_within(scenario(server), 40) == (True, True)
 
 
 def test_a_certificate_that_does_not_verify_is_named_in_the_one_line_error(tmp_path, capsys):

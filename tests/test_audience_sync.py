@@ -17,6 +17,7 @@ import soundfile as sf
 from click.testing import CliRunner
 from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
 from support.audience import REHEARSAL, SONG, Venue, stop
+from support.bounded import run_within
 from support.live_fakes import PlayTimes, start_session, wait_for
 from support.sync_signals import SR, real_song
 
@@ -41,32 +42,39 @@ def heard_file(tmp_path, music: np.ndarray) -> str:
     return str(path)
 
 
-async def show_and_seat(url: str, heard: str, *, unsynced: str = "delay", seconds: float = 14.0,
-                        publisher=PublisherSecurity(unsigned=True), seat_security=REHEARSAL):
-    """The song published as a music-only show (the venue's reference with it) and one seat listening to ``heard``;
-    returns (play times, the seat's sync)."""
-    tap = PlayTimes()
-    sync = SyncSettings(input=f"file:{heard}", unsynced=unsynced, max_delay_s=5.0)
-    sessions: list = []
-    # the seat waits for the show, as an audience does: it holds the reference from the show's start
-    seat_task = asyncio.create_task(listen(url, [lambda d, f, t=tap: t], seat=Seat(), security=seat_security,
-                                           sync=sync, handle_signals=False, sessions=sessions))
+async def show_and_seats(url: str, heard: str, *, unsynced: tuple[str, ...] = ("delay",), seconds: float = 14.0,
+                         publisher=PublisherSecurity(unsigned=True), seat_security=REHEARSAL):
+    """The song published as a music-only show (the venue's reference with it) and one seat listening to ``heard``
+    for each of ``unsynced`` (what it does while unlocked); returns [(play times, the seat's sync)], one a seat."""
+    taps = [PlayTimes() for _ in unsynced]
+    session_lists: list[list] = [[] for _ in unsynced]
+    # the seats wait for the show, as an audience does: they hold the reference from the show's start
+    seat_tasks = [asyncio.create_task(listen(url, [lambda d, f, t=tap: t], seat=Seat(), security=seat_security,
+                                             sync=SyncSettings(input=f"file:{heard}", unsynced=mode, max_delay_s=5.0),
+                                             handle_signals=False, sessions=sessions))
+                  for tap, mode, sessions in zip(taps, unsynced, session_lists)]
     await asyncio.sleep(1.0)
     with publishing(publisher):
         show_task, _ = await start_session(None, [url.replace("tls://", "nats://")], audio=SONG, mode="audio")
     try:
-        await wait_for(lambda: sessions or seat_task.done(), 10)
+        await wait_for(lambda: all(sessions or task.done() for sessions, task in zip(session_lists, seat_tasks)), 10)
         await asyncio.sleep(seconds)
-        source = sessions[-1][1]
+        sources = [sessions[-1][1] for sessions in session_lists]
     finally:
-        await stop(seat_task)
+        for task in seat_tasks:
+            await stop(task)
         await stop(show_task)
-    return tap, source.sync
+    return [(tap, source.sync) for tap, source in zip(taps, sources)]
+
+
+async def show_and_seat(url: str, heard: str, **kwargs):
+    """:func:`show_and_seats` with one seat: (play times, the seat's sync)."""
+    return (await show_and_seats(url, heard, **kwargs))[0]
 
 
 def test_a_seat_locks_on_the_heard_music_and_plays_each_frame_when_it_is_heard(nats_server, tmp_path):
     heard = heard_file(tmp_path, real_song(seconds=20.0))
-    tap, sync = asyncio.run(asyncio.wait_for(show_and_seat(f"{nats_server.url}/synced", heard), 60))
+    tap, sync = run_within(show_and_seat(f"{nats_server.url}/synced", heard), 60)
     truth = sync.audio.started + LEAD_S     # local time minus media time of what the seat heard
     locked = [(at, s) for at, _, s in sync.estimates if s.state == "locked"]
     assert locked, "the seat never locked"
@@ -82,17 +90,15 @@ def test_a_seat_locks_on_the_heard_music_and_plays_each_frame_when_it_is_heard(n
     assert np.percentile(np.abs(skew), 90) < 0.050
 
 
-@pytest.mark.parametrize("unsynced", ["delay", "silent"])
-def test_a_seat_hearing_another_song_never_locks_and_plays_as_the_user_chose(nats_server, tmp_path, unsynced):
+def test_seats_hearing_another_song_never_lock_and_play_as_their_users_chose(nats_server, tmp_path):
     heard = heard_file(tmp_path, real_song("lets_go_fishin.ogg", 20.0))
-    tap, sync = asyncio.run(asyncio.wait_for(show_and_seat(f"{nats_server.url}/other{unsynced}", heard,
-                                                              unsynced=unsynced, seconds=12.0), 60))
-    assert all(s.state == "searching" for _, _, s in sync.estimates)
-    assert sync.tracker.locks == 0
-    if unsynced == "delay":
-        assert len(tap.frames) > 300      # the manual delay (0 ms): every frame plays at the live edge
-    else:
-        assert tap.frames == []           # the vest stays still
+    (tap_delay, sync_delay), (tap_silent, sync_silent) = run_within(
+        show_and_seats(f"{nats_server.url}/other", heard, unsynced=("delay", "silent"), seconds=12.0), 60)
+    for sync in (sync_delay, sync_silent):
+        assert sync.estimates and all(s.state == "searching" for _, _, s in sync.estimates)
+        assert sync.tracker.locks == 0
+    assert len(tap_delay.frames) > 300      # the manual delay (0 ms): every frame plays at the live edge
+    assert tap_silent.frames == []          # the vest stays still
 
 
 def test_a_signed_show_carries_a_signed_reference_that_a_checking_seat_locks_on(tmp_path):
@@ -100,9 +106,9 @@ def test_a_signed_show_carries_a_signed_reference_that_a_checking_seat_locks_on(
     try:
         heard = heard_file(tmp_path, real_song(seconds=14.0))
         url = f"{venue.url}/signedsync"
-        tap, sync = asyncio.run(asyncio.wait_for(show_and_seat(url, heard, seconds=11.0,
-                                                                  publisher=venue.publisher(),
-                                                                  seat_security=venue.seat()), 60))
+        tap, sync = run_within(show_and_seat(url, heard, seconds=11.0,
+                                                publisher=venue.publisher(),
+                                                seat_security=venue.seat()), 60)
     finally:
         venue.__exit__()
     assert sync.faults == {}

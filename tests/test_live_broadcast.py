@@ -18,6 +18,7 @@ import logging
 import time
 
 import numpy as np
+from support.bounded import run_within
 from support.live_fakes import FakePlayerSdk1, real_frames, send_osc, start_session, stuck_viewers, wait_for
 from websockets.asyncio.client import connect
 from websockets.exceptions import ConnectionClosed
@@ -81,9 +82,9 @@ def test_a_thousand_stuck_viewers_cost_the_player_nothing():
     for lg in loggers:
         lg.addHandler(handler)
     try:
-        alone, cpu_alone, _, _, _ = asyncio.run(asyncio.wait_for(_session(frames, 0), 60))
+        alone, cpu_alone, _, _, _ = run_within(_session(frames, 0), 60)
         before = len(handler.records)
-        crowd, cpu_crowd, sink, stats, got = asyncio.run(asyncio.wait_for(_session(frames, STUCK), 120))
+        crowd, cpu_crowd, sink, stats, got = run_within(_session(frames, STUCK), 120)
         lines = len(handler.records) - before
     finally:
         for lg in loggers:
@@ -135,11 +136,11 @@ async def _watchers(sink_options: str):
 
 
 def test_the_broadcast_refuses_web_pages_from_origins_not_allowed():
-    statuses, hello, sink = asyncio.run(asyncio.wait_for(_watchers("?allow_origin=https://show.example"), 60))
+    statuses, hello, sink = run_within(_watchers("?allow_origin=https://show.example"), 60)
     assert statuses == {"program": 101, "file page": 101, "listed site": 101, "other site": 403, "two origins": 403}
     assert hello["type"] == "hello" and sink.stats.extra["origins_refused"] == 2
 
 
 def test_local_pages_can_be_refused_too():
-    statuses, _, _ = asyncio.run(asyncio.wait_for(_watchers("?allow_origin=https://show.example&local_pages=0"), 60))
+    statuses, _, _ = run_within(_watchers("?allow_origin=https://show.example&local_pages=0"), 60)
     assert statuses == {"program": 101, "file page": 403, "listed site": 101, "other site": 403, "two origins": 403}

@@ -13,6 +13,7 @@ import time
 
 import pytest
 from click.testing import CliRunner
+from support.bounded import run_within
 from support.live_fakes import send_osc
 from support.live_fakes import FakePlayerSdk1, real_frames, start_live_process, wait_for
 
@@ -82,7 +83,7 @@ def test_signal_stops_a_running_session_with_turn_off(sig, tmp_path):
         await player.stop()
         return code, "".join(lines) + rest.decode(), player, sent_at
 
-    code, err, player, sent_at = asyncio.run(asyncio.wait_for(scenario(), 90))
+    code, err, player, sent_at = run_within(scenario(), 90)
     assert code == 0, err
     assert player.errors == []
     assert player.turn_off_all and player.turn_off_all[-1] - sent_at < 2.0

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from pythonosc.osc_message_builder import OscMessageBuilder
 from pythonosc.udp_client import SimpleUDPClient
+from support.bounded import run_within
 from support.live_fakes import (BVH, FakePlayerSdk1, FakePlayerSdk2, OscReceiver, Tap, free_port,
                                is_tick_max_sequence, real_frames, self_signed_cert, send_osc, start_session,
                                wait_for)
@@ -89,7 +90,7 @@ def test_osc_recording_drives_every_sink(recording, expected, tmp_path):
         await v3.stop()
         return stats, v2, v3, osc_rx, viewer, tap
 
-    stats, v2, v3, osc_rx, viewer, tap = asyncio.run(asyncio.wait_for(scenario(), 40))
+    stats, v2, v3, osc_rx, viewer, tap = run_within(scenario(), 40)
     n = len(recording)
     assert stats.frames_in == n and stats.late == 0 and not stats.faults.counts
     if stats.superseded == 0 and stats.fade_frames == 0:  # nothing dropped or faded (a machine not overloaded):
@@ -188,7 +189,7 @@ def test_websocket_source_with_bad_messages(recording, expected):
         await player.stop()
         return stats, player, tap
 
-    stats, player, tap = asyncio.run(asyncio.wait_for(scenario(), 30))
+    stats, player, tap = run_within(scenario(), 30)
     counts = stats.faults.counts
     assert counts["malformed"] == 1 and counts["wrong_joint_count"] == 1 and counts["binary"] == 1
     assert counts["nan"] == 1 and counts["late"] == 1 and counts["absurd"] == 1
@@ -243,7 +244,7 @@ def test_osc_faults_and_flood_do_not_stop_the_stream(recording):
         await player.stop()
         return stats, player, flood_end
 
-    stats, player, flood_end = asyncio.run(asyncio.wait_for(scenario(), 40))
+    stats, player, flood_end = run_within(scenario(), 40)
     c = stats.faults.counts
     assert c["malformed"] == 1 and c["wrong_joint_count"] == 1 and c["unknown_joint"] == 1 and c["absurd"] == 1
     assert c["empty"] == 1
@@ -265,7 +266,7 @@ def test_replay_is_paced_and_its_end_turns_everything_off(recording):
         stats = await task
         return stats, player, time.perf_counter() - t0
 
-    stats, player, elapsed = asyncio.run(asyncio.wait_for(scenario(), 20))
+    stats, player, elapsed = run_within(scenario(), 20)
     assert motion.fps == 30.0 and stats.stop_reason == "source ended"
     assert 29 / 45 - 0.02 <= elapsed < 30 / 45 + 0.5    # paced: 30 frames at 30 fps x 1.5 take 2/3 s
     assert stats.frames_in == 30 and stats.rendered >= 28
@@ -286,7 +287,7 @@ def test_replay_loop_keeps_going():
         await asyncio.wait_for(vtask, 3)
         return viewer.frames(), src
 
-    frames, src = asyncio.run(asyncio.wait_for(scenario(), 20))
+    frames, src = run_within(scenario(), 20)
     shows = [f["t"] for f in frames if f["skeleton"] is not None]
     restarts = sum(1 for a, b in zip(shows, shows[1:]) if b < a)
     assert max(shows) <= 7 / motion.fps + 1e-6 and restarts >= 2          # show time starts again each loop
@@ -313,7 +314,7 @@ def test_player_refusing_then_coming_back_gets_registrations_again(recording, tm
         await player.stop()
         return stats, player, sink
 
-    stats, player, sink = asyncio.run(asyncio.wait_for(scenario(), 30))
+    stats, player, sink = run_within(scenario(), 30)
     assert player.errors == []
     assert all(c["registered"] == ["intro"] for c in player.connections)   # re-registered on every connection
     assert all(c["requests"] >= 2 for c in player.connections[:2])
@@ -340,7 +341,7 @@ def test_v3_player_restart_gets_auth_again(recording, tmp_path):
         await player2.stop()
         return player, player2, engine.sinks[0], stats
 
-    p1, p2, sink, stats = asyncio.run(asyncio.wait_for(scenario(), 30))
+    p1, p2, sink, stats = run_within(scenario(), 30)
     assert stats.stop_reason == "test over" and p1.errors == [] and p2.errors == []
     assert len(p1.auths) == 1 and len(p2.auths) == 1 and sink.stats.connects == 2
     assert p2.stop_all and [d[2] for d in p2.dots[-3:]] == [[0] * 40, [0] * 6, [0] * 6]
@@ -370,7 +371,7 @@ def test_never_reading_client_does_not_block_the_others(recording):
         stuck.transport.abort()
         return stats, sink, viewer
 
-    stats, sink, viewer = asyncio.run(asyncio.wait_for(scenario(), 30))
+    stats, sink, viewer = run_within(scenario(), 30)
     rendered = [f for f in viewer.frames() if f["skeleton"] is not None]
     assert len(rendered) == stats.rendered >= len(recording) // 2   # the reading viewer missed nothing
     assert sink.client_skips > 0 and sink.clients_dropped == 1
@@ -391,7 +392,7 @@ def test_stalled_osc_source_fades_the_player_to_zero(recording):
         await player.stop()
         return frames_at_stall, last_sent
 
-    frames, last_sent = asyncio.run(asyncio.wait_for(scenario(), 20))
+    frames, last_sent = run_within(scenario(), 20)
     after = [(t, vals) for t, pos, vals, _ in frames if pos == "VestFront" and t > last_sent]
     zero_at = next(t for t, vals in after if not any(vals))
     assert zero_at - last_sent < 0.25 + 0.03                     # faded to zero within the default 250 ms
@@ -427,7 +428,7 @@ def test_multimodal_replay_mixes_the_song_at_show_time():
         stats = await task
         return stats, tap
 
-    stats, tap = asyncio.run(asyncio.wait_for(scenario(), 20))
+    stats, tap = run_within(scenario(), 20)
     # the paper preset's music: the whole-suit pattern, mixed as the paper's 2:3 weighted sum
     audio_rows = audio_track(analyze_file(SONG, fps=motion.fps, params=PAPER_PARAMS)).intensities
     frames = [f for f in tap.frames if f.kind == "frame"]
@@ -462,7 +463,7 @@ def test_audio_only_mode_plays_the_song_on_the_clock_then_stops(tmp_path):
         await asyncio.wait_for(vtask, 3)
         return stats, viewer.frames()
 
-    stats, frames = asyncio.run(asyncio.wait_for(scenario(), 20))
+    stats, frames = run_within(scenario(), 20)
     rows = limit_power(audio_track(analyze_file(song, fps=FPS)).intensities, 0.75 * 52)  # as offline
     assert stats.stop_reason == "source ended" and rows.max() > 20
     played = [f for f in frames if f["skeleton"] is None and f["seq"] < stats.rendered]
@@ -498,7 +499,7 @@ def test_an_exception_mid_show_still_turns_the_players_off(recording, tmp_path):
         await v3.stop()
         return v2, v3, engine
 
-    v2, v3, engine = asyncio.run(asyncio.wait_for(scenario(), 20))
+    v2, v3, engine = run_within(scenario(), 20)
     assert engine.stats.rendered == 29 and engine.stats.stop_reason.startswith("error (ZeroDivisionError")
     assert v2.errors == [] and v2.turn_off_all and v2.last_values("VestBack") == [0] * 20
     assert v3.errors == [] and v3.stop_all and v3.dots[-3][2] == [0] * 40

@@ -8,6 +8,7 @@ import time
 
 import numpy as np
 import pytest
+from support.bounded import run_within
 from support.live_fakes import ScriptSource
 from support.synthetic import pose, waving
 
@@ -74,7 +75,7 @@ class CountingRenderer:
 
 
 def run(engine, source, timeout=10.0):
-    return asyncio.run(asyncio.wait_for(engine.run(source), timeout))
+    return run_within(engine.run(source), timeout)
 
 
 def make(sinks, renderer=None, **kw):
@@ -117,7 +118,7 @@ def test_stalled_source_fades_to_zero_within_stall_time_then_resets():
         engine.request_stop("test over")
         return await task
 
-    stats = asyncio.run(asyncio.wait_for(scenario(), 10))
+    stats = run_within(scenario(), 10)
     kinds = sink.kinds()
     first_off = kinds.index("off")
     last = max(i for i, k in enumerate(kinds[:first_off]) if k == "frame")
@@ -290,7 +291,7 @@ def test_the_startup_heap_is_frozen_while_sessions_run_and_handed_back_after_the
         return after_a
 
     assert gc.get_freeze_count() == 0
-    after_a = asyncio.run(asyncio.wait_for(both(), 10))
+    after_a = run_within(both(), 10)
     # everything the process held at the start (NumPy, numba, the renderer: tens of thousands of objects) is frozen
     assert min(seen["a"] + seen["b"]) > 10_000
     assert after_a > 10_000          # the other session still runs: still frozen
@@ -327,7 +328,7 @@ def test_a_session_cancelled_again_while_turning_off_leaves_nothing_frozen():
         task.cancel()  # again, while the turn-off waits
         await asyncio.gather(task, return_exceptions=True)
 
-    asyncio.run(asyncio.wait_for(scenario(), 10))
+    run_within(scenario(), 10)
     assert gc.get_freeze_count() == 0
 
 
@@ -346,6 +347,6 @@ def test_a_stop_while_a_sink_is_still_starting_ends_the_start_at_once():
             await engine.run(ScriptSource(waving(n=5)))
         return engine, time.perf_counter() - t0
 
-    engine, took = asyncio.run(asyncio.wait_for(scenario(), 10))
+    engine, took = run_within(scenario(), 10)
     assert took < 2.0 and engine.stats.stop_reason.startswith("could not start")
     assert engine.stats.rendered == 0

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
 from typing import Any
 
 import pytest
 
+from support.bounded import run_within
 from support.live_fakes import FakePlayerSdk1, FakePlayerSdk2, self_signed_cert
 
 
@@ -50,8 +52,6 @@ def test_fake_v3_rejects_wrong_array_lengths(tmp_path):
 def test_fake_player_that_stops_reading_swallows_frames_silently():
     """What makes a hung Player hard to notice: after it stops reading, sends still succeed (the kernels' buffers
     take them) and only a ping shows that nobody reads."""
-    import asyncio
-
     from websockets.asyncio.client import connect
 
     async def scenario():
@@ -72,5 +72,29 @@ def test_fake_player_that_stops_reading_swallows_frames_silently():
         await player.stop()
         return player
 
-    player = asyncio.run(asyncio.wait_for(scenario(), 20))
+    player = run_within(scenario(), 20)
     assert player.hung and player.requests == 5 and len(player.frames) == 5 and player.errors == []
+
+
+# ------------------------------------------------------------------------------------- the bounded test loop
+def test_a_scenario_that_hangs_fails_with_the_await_that_never_ended():
+    async def turn_off_that_never_ends() -> None:
+        await asyncio.Event().wait()
+
+    async def scenario() -> None:
+        helper = asyncio.create_task(turn_off_that_never_ends(), name="hung helper")
+        await helper
+
+    with pytest.raises(AssertionError) as failed:
+        run_within(scenario(), 0.2)
+    text = str(failed.value)
+    assert "not done within 0.2 s" in text
+    assert "hung helper" in text and "turn_off_that_never_ends" in text
+
+
+def test_a_scenario_that_ends_gives_its_result():
+    async def scenario() -> int:
+        await asyncio.sleep(0.01)
+        return 7
+
+    assert run_within(scenario(), 5) == 7

@@ -18,6 +18,7 @@ import time
 
 import numpy as np
 import pytest
+from support.bounded import run_within
 from support.live_fakes import FakePlayerSdk1, FakePlayerSdk2, is_tick_max_sequence, self_signed_cert, wait_for
 
 from hapmotion.errors import UsageError
@@ -121,7 +122,7 @@ def test_a_reading_player_is_never_taken_for_a_stuck_one(live_log):
         await player.stop()
         return sink, player
 
-    sink, player = asyncio.run(asyncio.wait_for(scenario(), 30))
+    sink, player = run_within(scenario(), 30)
     assert player.errors == [] and sink.stats.connects == 1
     assert sink.stats.extra["unresponsive"] == 0 and sink.stats.undelivered == 0 and sink.stats.sent == 150
     assert player.turn_off_all and any("turn-off delivered" in line for line in live_log)
@@ -147,7 +148,7 @@ def test_a_120_fps_stream_reaches_the_player_once_per_tick_with_its_peaks():
         await player.stop()
         return sink, player, span
 
-    sink, player, span = asyncio.run(asyncio.wait_for(scenario(), 30))
+    sink, player, span = run_within(scenario(), 30)
     front = [(t, vals) for t, pos, vals, _ in player.frames if pos == "VestFront"]
     times = np.array([t for t, _ in front])
     gaps = np.diff(times)
@@ -199,7 +200,7 @@ def test_sdk2_auth_sends_the_version_as_an_integer(tmp_path):
         await player.stop()
         return player
 
-    player = asyncio.run(asyncio.wait_for(scenario(), 30))
+    player = run_within(scenario(), 30)
     assert player.errors == [] and player.auths[0]["version"] == 3
     assert "version=3" in player.queries[0]
     with pytest.raises(UsageError, match="whole number"):
@@ -236,7 +237,7 @@ def test_a_request_that_cannot_be_built_is_counted_and_the_stream_goes_on(live_l
         await sink.shutdown()
         return sink, player
 
-    sink, player = asyncio.run(asyncio.wait_for(scenario(), 30))
+    sink, player = run_within(scenario(), 30)
     assert sink.stats.errors >= 1 and sink.stats.skipped >= 1
     assert sink.stats.sent + sink.stats.skipped >= 60 - 1 and player.requests >= 50
     assert sum("could not build a request" in line for line in live_log) == 1

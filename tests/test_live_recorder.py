@@ -22,6 +22,7 @@ import time
 
 import numpy as np
 import pytest
+from support.bounded import run_within
 from support.live_fakes import BVH, ScriptSource, wait_for
 from support.synthetic import waving
 
@@ -73,7 +74,7 @@ def test_sigkill_leaves_a_journal_that_is_the_take_so_far(tmp_path):
         code = await proc.wait()
         return code, rows_a, t_kill - t_a
 
-    code, rows_a, waited = asyncio.run(asyncio.wait_for(scenario(), 90))
+    code, rows_a, waited = run_within(scenario(), 90)
     assert code == -signal.SIGKILL
     assert not out.exists()                                   # nothing finished it ...
     track = load_track(journal)                               # ... but the journal is a CSV track as it is
@@ -117,7 +118,7 @@ def _record_session(tmp_path, frames, *, wait_after: float, **kw):
         await task
 
     t0 = time.perf_counter()
-    asyncio.run(asyncio.wait_for(scenario(), 30))
+    run_within(scenario(), 30)
     return rec, time.perf_counter() - t0, seen
 
 
@@ -284,7 +285,7 @@ def test_a_full_disk_during_the_show_loses_only_its_own_rows_and_the_summary_say
         return await task
 
     with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
-        stats = asyncio.run(asyncio.wait_for(scenario(), 60))
+        stats = run_within(scenario(), 60)
     track = load_track(rec.path)
     assert not rec.journal_path.exists()
     assert track.n_frames == len(rec.rows())                               # the take is whole

@@ -15,6 +15,7 @@ import time
 import numpy as np
 import pytest
 from pythonosc.osc_message_builder import OscMessageBuilder
+from support.bounded import run_within
 from support.live_fakes import Tap, real_frames, start_session, wait_for
 from websockets.asyncio.client import connect
 from websockets.exceptions import InvalidStatus
@@ -78,7 +79,7 @@ def test_browser_pages_are_refused_unless_their_origin_is_allowed(frames):
         engine.request_stop("test over")
         return await task, evil, evil_frames
 
-    stats, evil, evil_frames = asyncio.run(asyncio.wait_for(scenario(), 30))
+    stats, evil, evil_frames = run_within(scenario(), 30)
     assert evil == 403 and evil_frames == -1
     assert stats.faults.counts["origin_refused"] == 2
     assert stats.frames_in == 10  # only the allowed page's and the program's frames
@@ -99,7 +100,7 @@ def test_a_token_is_required_in_a_header_or_the_query(frames):
         engine.request_stop("test over")
         return await task, statuses, engine.source.exposure()
 
-    stats, statuses, exposure = asyncio.run(asyncio.wait_for(scenario(), 30))
+    stats, statuses, exposure = run_within(scenario(), 30)
     assert statuses == [401, 401, 401, 401]
     assert stats.faults.counts["token_refused"] == 4 and stats.frames_in == 8
     assert "token: required" in exposure and "browser pages: refused" in exposure
@@ -115,7 +116,7 @@ def test_osc_listens_on_loopback_unless_told_otherwise():
         await task
         return bound, line
 
-    bound, line = asyncio.run(asyncio.wait_for(scenario(), 30))
+    bound, line = run_within(scenario(), 30)
     assert bound == "127.0.0.1"
     assert line.startswith("reachable from this machine only; senders: any address")
 
@@ -142,7 +143,7 @@ def test_osc_sender_allow_list(frames):
         friend.close()
         return stats, engine.source.exposure()
 
-    stats, exposure = asyncio.run(asyncio.wait_for(scenario(), 30))
+    stats, exposure = run_within(scenario(), 30)
     assert stats.faults.counts["sender_refused"] == 20 and stats.frames_in == 5
     assert "senders: 127.0.0.1" in exposure
 
@@ -184,7 +185,7 @@ def test_osc_flood_from_one_sender_does_not_starve_another(frames):
         performer.close()
         return await task, float(np.diff(sent).max())
 
-    stats, send_gap = asyncio.run(asyncio.wait_for(scenario(), 40))
+    stats, send_gap = run_within(scenario(), 40)
     assert stats.flood > 0                                     # the flooding sender was held to its budget
     assert stats.faults.counts["wrong_joint_count"] > 0        # (what it was allowed to send was decoded)
     # None of the performer's frames was refused (with one bucket for all senders, about a third were). On a busy
@@ -254,7 +255,7 @@ def test_a_thousand_hostile_connections_do_not_starve_the_performer(frames):
         watcher.cancel()
         return await task, int(out.decode().strip()), most, float(np.diff(sent).max())
 
-    stats, opened, most, send_gap = asyncio.run(asyncio.wait_for(scenario(), 60))
+    stats, opened, most, send_gap = run_within(scenario(), 60)
     c = stats.faults.counts
     assert 1 <= most <= 8                        # never more than 8 senders at once, the performer one of them
     assert c["too_many_senders"] >= 500 and opened + c["too_many_senders"] <= 1000  # refused at the handshake
@@ -294,7 +295,7 @@ def test_crafted_websocket_messages_are_counted_and_the_stream_goes_on(frames):
     for name in ("hapmotion.live", "websockets", "asyncio"):  # ours (and the server library's), and the loop's
         logging.getLogger(name).addHandler(keep)
     try:
-        stats = asyncio.run(asyncio.wait_for(scenario(), 30))
+        stats = run_within(scenario(), 30)
     finally:
         for name in ("hapmotion.live", "websockets", "asyncio"):
             logging.getLogger(name).removeHandler(keep)

@@ -20,6 +20,7 @@ import sys
 import pytest
 from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
 from pythonosc.osc_message_builder import OscMessageBuilder
+from support.bounded import run_within
 from support.live_fakes import Tap, real_frames, start_session, wait_for
 from test_live_security import refused_status, skeleton_dgram, skeleton_json
 from websockets.asyncio.client import connect
@@ -58,7 +59,7 @@ def test_idle_websocket_connections_cannot_lock_the_performer_out(frames):
             await ws.close()
         return await task, closed, early
 
-    stats, closed, early = asyncio.run(asyncio.wait_for(scenario(), 60))
+    stats, closed, early = run_within(scenario(), 60)
     assert early == 503 and stats.faults.counts["too_many_senders"] == 1
     assert stats.frames_in == len(frames)                      # every frame of the performer decoded
     assert stats.faults.counts["sender_replaced"] == 1 and closed == [1008]   # one idle connection gave way
@@ -100,7 +101,7 @@ def test_osc_senders_of_junk_cannot_lock_the_performer_out(frames):
             s.close()
         return await task
 
-    stats = asyncio.run(asyncio.wait_for(scenario(), 60))
+    stats = run_within(scenario(), 60)
     c = stats.faults.counts
     assert c["sender_replaced"] >= 1 and c["wrong_joint_count"] >= 8
     # the performer was never refused; on a busy machine the kernel may drop a datagram or two
@@ -136,7 +137,7 @@ def test_a_60_kb_vmc_bundle_counts_for_what_it_holds():
         s.close()
         return await task
 
-    stats = asyncio.run(asyncio.wait_for(scenario(), 30))
+    stats = run_within(scenario(), 30)
     assert stats.flood == 2 and stats.faults.counts["flood"] == 2
 
 
@@ -157,7 +158,7 @@ def test_two_origin_headers_are_one_refused_request(caplog):
         return await task, statuses
 
     with caplog.at_level(logging.DEBUG):
-        stats, statuses = asyncio.run(asyncio.wait_for(scenario(), 30))
+        stats, statuses = run_within(scenario(), 30)
     assert statuses == [400, 400, 400] and stats.faults.counts["handshake"] == 3
     assert not [r for r in caplog.records if r.exc_info or r.levelno >= logging.ERROR]
     assert sum("two Origin headers" in r.getMessage() for r in caplog.records) == 1   # logged once
@@ -211,7 +212,7 @@ def test_a_slow_loris_flood_under_a_file_limit_is_logged_once(tmp_path):
     """The flood is held to a quarter of the file limit (16 connections waiting for their request): the oldest
     give way, one ``slow_request`` line says so, the failing accepts (if the limit is reached anyway) are one
     ``accept`` line, and the recording is still written at stop (its file needs a descriptor too)."""
-    code, err, held = asyncio.run(asyncio.wait_for(_slow_loris_session(tmp_path), 120))
+    code, err, held = run_within(_slow_loris_session(tmp_path), 120)
     assert held > 64                                              # more than the session can hold open
     assert code == 0, err
     assert err.count("slow_request: a connection from 127.0.0.1 that had not sent its opening request") == 1, err

@@ -8,6 +8,7 @@ import os
 import sys
 
 import pytest
+from support.bounded import run_within
 from support.live_fakes import real_frames
 from test_live_security import refused_status, skeleton_json
 from websockets.asyncio.client import connect
@@ -53,7 +54,7 @@ def test_the_token_from_a_file_or_the_environment_stays_out_of_the_process_list(
     path.write_text(SECRET + "\n")
     path.chmod(0o600)
     args, env = (("--token-file", str(path)), {}) if how == "file" else ((), {"HAPMOTION_LIVE_TOKEN": SECRET})
-    code, err, cmdline, without = asyncio.run(asyncio.wait_for(_session(tmp_path, *args, env=env), 120))
+    code, err, cmdline, without = run_within(_session(tmp_path, *args, env=env), 120)
     assert code == 0, err
     assert without == 401                                   # no token: refused
     assert "30 frames in" in err                            # the right token: streamed
@@ -63,7 +64,7 @@ def test_the_token_from_a_file_or_the_environment_stays_out_of_the_process_list(
 
 
 def test_a_token_on_the_command_line_is_warned_about(tmp_path):
-    code, err, cmdline, without = asyncio.run(asyncio.wait_for(_session(tmp_path, "--token", SECRET, env={}), 120))
+    code, err, cmdline, without = run_within(_session(tmp_path, "--token", SECRET, env={}), 120)
     assert code == 0 and without == 401 and SECRET in cmdline
     assert "the token is on the command line, which every user of this machine can read" in err and SECRET not in err
 
@@ -72,7 +73,7 @@ def test_a_token_file_others_can_read_is_warned_about(tmp_path):
     path = tmp_path / "token"
     path.write_text(SECRET)
     path.chmod(0o644)
-    code, err, _, _ = asyncio.run(asyncio.wait_for(_session(tmp_path, "--token-file", str(path), env={}), 120))
+    code, err, _, _ = run_within(_session(tmp_path, "--token-file", str(path), env={}), 120)
     assert code == 0 and f"--token-file {path} can be read by other users of this machine (chmod 600 it)" in err
 
 

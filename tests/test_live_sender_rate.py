@@ -16,6 +16,7 @@ import time
 import numpy as np
 import pytest
 from pythonosc.osc_message_builder import OscMessageBuilder
+from support.bounded import run_within
 from support.data import MOTION
 from support.live_fakes import Tap, start_session, wait_for
 from support.vmc_sender import VmcSender
@@ -256,7 +257,7 @@ def test_a_recording_sent_at_its_rate_renders_as_offline(kind, rate, jitter_ms, 
         return await task, tap, engine
 
     with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
-        stats, tap, engine = asyncio.run(asyncio.wait_for(scenario(), 60))
+        stats, tap, engine = run_within(scenario(), 60)
     assert stats.frames_in == n and stats.rendered == n and stats.late == 0
     assert engine.render_fps == rate
     got = tap.rendered()

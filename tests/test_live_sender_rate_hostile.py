@@ -7,13 +7,13 @@ sources, with a real recording."""
 
 from __future__ import annotations
 
-import asyncio
 import json
 import logging
 import socket
 
 import numpy as np
 from pythonosc.osc_message_builder import OscMessageBuilder
+from support.bounded import run_within
 from support.data import MOTION
 from support.live_fakes import Tap, start_session, wait_for
 from test_live_sender_rate import feed, paced
@@ -198,7 +198,7 @@ def test_osc_a_sender_claiming_half_a_frame_a_second_is_rendered_at_its_arrival_
         return await task, tap, engine
 
     with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
-        stats, tap, engine = asyncio.run(asyncio.wait_for(scenario(), 60))
+        stats, tap, engine = run_within(scenario(), 60)
     assert stats.frames_in == n and stats.rendered == n
     # (60 frames/s as sent; the arrival of 12 frames on a busy machine may pass for another tracker rate)
     assert MIN_FOLLOWED_FPS <= engine.render_fps <= MAX_FOLLOWED_FPS and engine.clock.refused_stamps
@@ -230,7 +230,7 @@ def test_websocket_a_sender_claiming_no_rate_keeps_its_connection():
             engine.request_stop("test over")
         return await task, tap, engine, open_after
 
-    stats, tap, engine, open_after = asyncio.run(asyncio.wait_for(scenario(), 60))
+    stats, tap, engine, open_after = run_within(scenario(), 60)
     assert open_after and stats.frames_in == n and stats.rendered == n
     assert MIN_FOLLOWED_FPS <= engine.render_fps <= MAX_FOLLOWED_FPS
     assert stats.faults.counts["rate_out_of_range"] >= 1

@@ -10,6 +10,7 @@ import sys
 import time
 
 import pytest
+from support.bounded import run_within
 from support.live_fakes import FakePlayerSdk1, real_frames, send_osc, start_live_process, wait_for
 
 from hapmotion.live.engine import STOP_SIGNALS
@@ -51,7 +52,7 @@ async def _session_until_signal(sig: int, out, close_terminal: bool):
                          ids=["SIGHUP", "SIGQUIT", "SIGHUP-terminal-gone"])
 def test_hangup_and_quit_end_the_session_like_ctrl_c(sig, close_terminal, tmp_path):
     out = tmp_path / "take.npz"
-    code, err, player, sent_at = asyncio.run(asyncio.wait_for(_session_until_signal(sig, out, close_terminal), 120))
+    code, err, player, sent_at = run_within(_session_until_signal(sig, out, close_terminal), 120)
     assert code >= 0, f"killed by signal {-code}: {err}"   # it ended by itself, not by the signal's default action
     assert player.errors == []
     assert player.turn_off_all and player.turn_off_all[-1] - sent_at < 2.0
@@ -88,7 +89,7 @@ async def _nohup_session(out):
 
 def test_nohup_keeps_the_session_running_when_the_terminal_hangs_up(tmp_path):
     out = tmp_path / "take.csv"
-    alive, code, err, player = asyncio.run(asyncio.wait_for(_nohup_session(out), 120))
+    alive, code, err, player = run_within(_nohup_session(out), 120)
     assert alive, err
     assert code == 0, err
     assert "SIGHUP" not in err and "stopped: SIGTERM" in err and "Traceback" not in err

@@ -7,6 +7,7 @@ import logging
 import time
 
 import numpy as np
+from support.bounded import run_within
 from support.live_fakes import OscReceiver
 
 from hapmotion.layout import load_layout
@@ -29,7 +30,7 @@ def test_osc_turn_off_is_sent_three_times_even_when_the_buffer_is_over_its_limit
         rx.close()
         return sink, rx
 
-    sink, rx = asyncio.run(asyncio.wait_for(scenario(), 10))
+    sink, rx = run_within(scenario(), 10)
     assert sink.stats.skipped == 1                      # the frame was skipped ...
     assert rx.datagrams == 3 * len(dmap.devices)        # ... the turn-off was not: 3 bundles per device
     per_device = [p for _, a, p in rx.messages if a.count("/") == 2]  # /hapmotion/<Device> with every value
@@ -74,7 +75,7 @@ def test_player_turn_off_after_a_lost_connection_fits_in_the_stop_timeout():
     logger, handler = logging.getLogger("hapmotion.live"), ListHandler()
     logger.addHandler(handler)  # (the CLI tests turn propagation off, so pytest's caplog may not see it)
     try:
-        elapsed = asyncio.run(asyncio.wait_for(scenario(), 10))
+        elapsed = run_within(scenario(), 10)
     finally:
         logger.removeHandler(handler)
     assert 0.4 <= elapsed < 1.0

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
 from pythonosc.osc_message_builder import OscMessageBuilder
+from support.bounded import run_within
 from support.data import MOTION
 from support.live_fakes import Tap, start_session, wait_for
 from support.vmc_sender import VmcSender, send_vmc
@@ -417,7 +418,7 @@ def test_vmc_over_loopback_drives_the_renderer_like_the_recording(recording60):
         engine.request_stop("test over")
         return await task, tap
 
-    stats, tap = asyncio.run(asyncio.wait_for(scenario(), 30))
+    stats, tap = run_within(scenario(), 30)
     n = len(positions)
     assert stats.frames_in == n and stats.late == 0 and not stats.faults.counts
     # every frame the renderer got is a recording frame, in order (a busy machine may supersede some)
@@ -469,7 +470,7 @@ def test_vmc_over_loopback_counts_faults_and_floods_and_goes_on(recording60):
         raw.close()
         return stats, tap
 
-    stats, tap = asyncio.run(asyncio.wait_for(scenario(), 40))
+    stats, tap = run_within(scenario(), 40)
     c = stats.faults.counts
     assert c["missing_root"] == 1 and c["malformed"] == 2 and c["unknown_joint"] == 1 and c["nan"] == 1
     assert c["flood"] > 0 and stats.flood == c["flood"]
@@ -510,7 +511,7 @@ def test_vmc_source_refuses_senders_outside_the_allow_list(recording60):
         engine.request_stop("test over")
         return await task, exposure
 
-    stats, exposure = asyncio.run(asyncio.wait_for(scenario(), 20))
+    stats, exposure = run_within(scenario(), 20)
     assert stats.frames_in == 0 and stats.faults.counts["sender_refused"] >= 10
     assert "this machine only" in exposure and "10.1.2.0/24" in exposure and "at most 2 senders" in exposure
     assert "7680 messages/s" in exposure  # 2 x 64 datagrams per frame interval at 60 fps

@@ -13,6 +13,7 @@ import hapmotion
 from hapmotion.cli import main
 from hapmotion.show.comfort import Comfort
 from hapmotion.show import OutputStage, Show, render_show
+from support.bounded import run_within
 from support.data import AUDIO, MOTION, TACT
 
 PUNCH = MOTION / "dataset-1_punch_normal_001.bvh"
@@ -104,7 +105,7 @@ def test_live_applies_the_same_comfort_as_files():
     stage = OutputStage.for_show(Show(comfort=comfort), "motion", layout=renderer.layout, fps=60.0)
     engine = LiveEngine(renderer, [tap], stage=stage, n_actuators=len(renderer.layout.actuators), fps=60.0,
                         handle_signals=False)
-    stats = asyncio.run(asyncio.wait_for(engine.run(Script()), 20))
+    stats = run_within(engine.run(Script()), 20)
     assert stats.rendered == len(frames)
     plain, _ = hapmotion.Renderer(fps=60.0).run(frames)
     want, _ = limit_rows(plain, comfort, 60.0)

@@ -18,6 +18,7 @@ named, side by side under the front row, the wearer's left hand on the left (:fu
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 from typing import Optional, Sequence
 
@@ -264,9 +265,12 @@ TITLE_PT, LABEL_PT = 8.5, 8.0
 """Font sizes (points) of a panel's title and of its other labels in the matplotlib drawing."""
 
 
+@functools.lru_cache(maxsize=4096)
 def _text_pt(text: str, size: float, bold: bool = False) -> tuple[float, float]:
     """``(width, height)`` in points of ``text`` (its widest line; every line's height) in matplotlib's font at
-    ``size`` points: measured on the glyphs' outlines, so the drawing can leave each text its room."""
+    ``size`` points: measured on the glyphs' outlines, so the drawing can leave each text its room. Remembered:
+    :func:`_fit`'s rounds ask for the same few texts at the same sizes many times, and measuring an outline is
+    what a plot spent most of its time on."""
     from matplotlib.font_manager import FontProperties
     from matplotlib.textpath import TextPath
 
