@@ -431,37 +431,27 @@ def is_tick_max_sequence(sent: list, emitted: list) -> bool:
     (hapmotion.live.sinks.pacing): each sent row is the element-wise max of a run of consecutive emitted rows,
     the runs in order, each starting at the row still playing when the previous send went (or the next one).
     Rows are compared as the Player's integer percents (rounding commutes with max)."""
-    import functools
-
     em = [np.asarray(r) for r in emitted]
-
-    @functools.lru_cache(maxsize=None)
-    def fits(j: int, k: int) -> bool:  # sent[j:] matches from emitted row k on (k-1 still playing)
-        if j == len(sent):
-            return True
-        target = np.asarray(sent[j])
-        for a in (k - 1, k):
-            if a < 0:
-                continue
-            acc = em[a].copy() if a < len(em) else None
-            b = a
-            while acc is not None and (acc <= target).all():
-                if (acc == target).all() and fits(j + 1, b + 1):
-                    return True
+    # Walked level by level (sent row j), keeping the emitted rows each run can start from: no recursion, so no
+    # raised recursion limit (which Python 3.11.7's compiler later trips over: "AST constructor recursion depth
+    # mismatch").
+    starts = {0}  # sent[j:] may match from emitted row k on (k - 1 still playing)
+    for row in sent:
+        target = np.asarray(row)
+        after: set[int] = set()
+        for a in {a for k in starts for a in (k - 1, k) if 0 <= a < len(em)}:
+            acc, b = em[a].copy(), a
+            while (acc <= target).all():
+                if (acc == target).all():
+                    after.add(b + 1)
                 b += 1
                 if b >= len(em):
                     break
                 acc = np.maximum(acc, em[b])
-        return False
-
-    import sys
-
-    limit = sys.getrecursionlimit()
-    sys.setrecursionlimit(max(limit, 4 * len(sent) + 100))
-    try:
-        return fits(0, 0)
-    finally:
-        sys.setrecursionlimit(limit)
+        if not after:
+            return False
+        starts = after
+    return True
 
 
 class ScriptSource(Source):
