@@ -11,9 +11,10 @@ import pytest
 import hapmotion
 from support.data import AUDIO, MOTION
 
-# hypothesis is imported here, not by its pytest plugin at the end of the session: after the network tests, Python
-# 3.11.7 can refuse to compile a module afterwards ("SystemError: AST constructor recursion depth mismatch", a
-# CPython bug seen in threaded programs, python/cpython#106905, fixed in 3.11.8), and the plugin's late import then failed a run whose tests had all passed.
+# hypothesis is imported here, not by its pytest plugin at the end of the session: after the network tests,
+# Python 3.11.7 can refuse to compile a module ("SystemError: AST constructor recursion depth mismatch", a CPython
+# bug seen in threaded programs, python/cpython#106905, fixed in 3.11.8), and the plugin's late import then failed
+# a run whose tests had all passed.
 
 
 @pytest.fixture(scope="session")
