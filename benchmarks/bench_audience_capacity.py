@@ -32,6 +32,15 @@ straight lines extrapolated from the steps run, mostly well below a core: check 
 Printed beside them: the p99 frame age at the largest N run, and compact (packed) 30 Hz against today's 60 Hz, the
 target being at least twice the seats per server core at p99 under 50 ms.
 
+The control (at the largest N, after the sweep; ``--no-control`` leaves it out): why a write costs more at 30 Hz
+than at 60 Hz. Two windows with every seat following a show nobody publishes (the connections and the publishers
+alone), and two with the seats split in two halves, one following each of two streams of the same rate (compact@30
+and packed@30 by default): the server then fans out as many bursts a second as at 60 Hz while each seat is served at
+30 Hz. Each stream's server CPU above the idle seats, a write call, is printed beside the mixed windows' and beside
+what they would cost if a write's cost went with how often the server wakes (the 60 Hz reference's) or with how
+often its own seat is served (the two 30 Hz streams', weighted by their messages). The figures at N = 0 and this
+control are what docs/audience.md's "What remains" rests on.
+
 The other streams' publishers keep publishing while one is measured (the server receives 120 messages a second it
 sends nobody: its cost is in ``a``, and N = 0 shows it). Full seats (``listen`` to a fake Player) are not run here:
 ``bench_audience`` measures their frame age; here only the server's side.
@@ -243,7 +252,8 @@ def window(pid: int, groups: list[subprocess.Popen], seconds: float, perf: bool 
             "writes": rate["writes"], "switches": rate["voluntary"] + rate["involuntary"],
             "involuntary": rate["involuntary"], "wait": rate["wait"], "p50": pct(ages, 50), "p99": pct(ages, 99),
             "loss": 1 - sum(p["received"] for p in parts) / expected if expected else 0.0,
-            "generator": sum(p["cpu_per_s"] for p in parts), "perf": shares}
+            "generator": sum(p["cpu_per_s"] for p in parts), "perf": shares,
+            "by_group": [p["received"] / p["seconds"] for p in parts]}
 
 
 def fit(ns: list[int], cpus: list[float]) -> tuple[float, float]:
@@ -321,6 +331,71 @@ def summarise(rows: dict[str, list[tuple[int, int, dict]]], kinds: dict[str, tup
           f"{per_message[1] * 1e6:.2f} us each: rms {rms(alone, per_message):.2f} %)")
 
 
+IDLE_SHOW = "idle"
+"""A show nobody publishes: the control's seats follow it to measure the connections alone."""
+
+
+def control_pair(kinds: dict[str, tuple[str, float]]) -> tuple[str, str] | None:
+    """Two streams besides the reference with the same rate (the defaults: compact@30 and packed@30), played at
+    once to two halves of the seats by the control (module doc), or None."""
+    others = list(kinds)[1:]
+    for i, s in enumerate(others):
+        for t in others[i + 1:]:
+            if kinds[s][1] == kinds[t][1]:
+                return s, t
+    return None
+
+
+def halves(sizes: list[int]) -> tuple[list[int], list[int]]:
+    """The load-generator groups (seats each) split in two sides as even as whole groups allow: their indices."""
+    sides: tuple[list[int], list[int]] = ([], [])
+    load = [0, 0]
+    for i in sorted(range(len(sizes)), key=lambda i: -sizes[i]):
+        k = 0 if load[0] <= load[1] else 1
+        sides[k].append(i)
+        load[k] += sizes[i]
+    return sides
+
+
+def per_write_above_idle(w: dict, idle_cpu: float) -> float:
+    """A window's server CPU above the same seats' idle connections, per write call: seconds."""
+    return (w["cpu"] - idle_cpu) / w["writes"] if w["writes"] else float("nan")
+
+
+def summarise_control(rows: dict[str, list[tuple[int, int, dict]]], control: dict[str, list[dict]],
+                      kinds: dict[str, tuple[str, float]], top: int, pair: tuple[str, str]) -> dict[str, float]:
+    """The control at N = ``top`` (module doc): each stream's server CPU a write call above the idle seats, and the
+    two 30 Hz streams played at once. Returns the figures (microseconds a write; ``expected_*`` what the mixed
+    window would cost a write if the cost went with each seat's own rate or with the server's bursts)."""
+    idle = float(np.median([w["cpu"] for w in control["idle"]]))
+    ref = list(rows)[0]
+    per = {s: float(np.median([per_write_above_idle(w, idle) for n, _, w in rows[s] if n == top])) * 1e6
+           for s in rows}
+    mixed = [per_write_above_idle(w, idle) * 1e6 for w in control["mixed"]]
+    shares = np.array([w["by_group_sides"] for w in control["mixed"]]).mean(axis=0)
+    own = float(np.dot(shares / shares.sum(), [per[pair[0]], per[pair[1]]]))
+    burst_rate = kinds[pair[0]][1] * 2
+    out = {"idle": idle, **{f"per:{s}": v for s, v in per.items()}, "mixed": float(np.median(mixed)),
+           "expected_own": own, "expected_bursts": per[ref] if kinds[ref][1] == burst_rate else float("nan")}
+    print(f"control at N = {top} (two windows each): the seats' connections idle (following a show nobody "
+          f"publishes) {idle * 100:.1f} % of a core; server CPU above that, a write call: " + ", ".join(
+              f"{s} {per[s]:.2f} us ({np.median([w['writes'] / max(w['delivered'], 1) for n, _, w in rows[s] if n == top]):.2f} "
+              f"writes a message)" for s in rows))
+    print(f"  {pair[0]} and {pair[1]} at once, the seats split {shares[0]:,.0f} / {shares[1]:,.0f} messages a "
+          f"second between them (the server fanning out {burst_rate:g} bursts a second, each seat served at "
+          f"{kinds[pair[0]][1]:g} Hz): {out['mixed']:.2f} us a write ({' / '.join(f'{m:.2f}' for m in mixed)}); "
+          f"{own:.2f} us if a write's cost goes with its seat's own rate, "
+          + (f"{out['expected_bursts']:.2f} us ({ref}) if it goes with how often the server wakes"
+             if out["expected_bursts"] == out["expected_bursts"] else "(no reference at the bursts' rate)"))
+    for s in list(rows)[1:]:
+        r = per[s] / per[ref]
+        bound = COMPACT_TARGET / r if r > 0 else float("inf")
+        print(f"  {s}: a write costs {r:.2f}x one of {ref}; {kinds[s][1]:g} Hz carries {kinds[ref][1] / kinds[s][1]:g}x "
+              f"the seats only with a write no dearer than one of {ref}: at this cost about {bound:.2f}x "
+              f"({kinds[ref][1] / kinds[s][1]:g} / {r:.2f}, the idle part left out)")
+    return out
+
+
 def ratio(value: float, count: float, scale: float = 1.0, fmt: str = "5.1f") -> str:
     """``value / count * scale`` formatted, or "-" (right-aligned) where nothing was counted (a step with N = 0
     delivers no message: a cost per message there is not a number)."""
@@ -347,6 +422,8 @@ def main(argv=None) -> None:
     ap.add_argument("--steps", default=STEPS, help="seats at each step, cumulative, comma-separated, rising; at least two above 0 (the line "
                          "through N needs two points); 0 measures the publishers' cost alone")
     ap.add_argument("--seconds", type=float, default=SECONDS, help="seconds measured in each window")
+    ap.add_argument("--no-control", action="store_true",
+                    help="skip the control at the largest N (the seats idle; two streams of the same rate at once)")
     ap.add_argument("--perf", action="store_true",
                     help="sample the server with perf (Linux perf on PATH) in the first pass at the largest N")
     a = ap.parse_args(argv)
@@ -415,6 +492,24 @@ def main(argv=None) -> None:
                         if w["perf"]:
                             print(f"    perf, {w['perf'].get('samples', 0):.0f} samples (callees included): " + ", ".join(
                                 f"{name} {w['perf'].get(name, 0.0):.1f} %" for name in PERF_PARTS), flush=True)
+            pair = None if a.no_control else control_pair(kinds)
+            control: dict[str, list[dict]] = {"idle": [], "mixed": []}
+            if pair is not None:
+                sides = halves([int(x) for x in np.diff([0, *[n for n in steps if n > 0]])])
+                for pass_, order in enumerate((("idle", "mixed"), ("mixed", "idle"))):
+                    for what in order:
+                        for k, side in enumerate(sides):
+                            for i in side:
+                                show = IDLE_SHOW if what == "idle" else show_of(pair[k])
+                                ask(groups[i], f"FOLLOW {show}", expect="OK")
+                        time.sleep(SETTLE_S)
+                        w = window(srv.proc.pid, groups, a.seconds)
+                        w["by_group_sides"] = [sum(w["by_group"][i] for i in side) for side in sides]
+                        control[what].append(w)
+                        print(f"  N={steps[-1]:5d} control, {what:5s} pass {pass_ + 1}: {w['delivered']:8,.0f} msgs/s "
+                              f"delivered, server CPU {w['cpu'] * 100:5.1f} % of a core; "
+                              f"{ratio(w['writes'], w['delivered'], fmt='.2f')} writes a message"
+                              + (f", p99 {w['p99']:.1f} ms" if w["delivered"] else "") + f"; load average {os.getloadavg()[0]:.1f}", flush=True)
             for g in groups:
                 with contextlib.suppress(BrokenPipeError):
                     g.stdin.write("QUIT\n")
@@ -431,6 +526,9 @@ def main(argv=None) -> None:
                     p.wait()
     print(f"\nload average {os.getloadavg()[0]:.1f} at the end, {time.perf_counter() - t_start:.0f} s in all")
     summarise(rows, kinds, steps)
+    if control["idle"] and control["mixed"]:
+        summarise_control(rows, control, kinds, max(steps), pair)
+
 
 if __name__ == "__main__":
     main()
