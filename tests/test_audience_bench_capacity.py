@@ -165,3 +165,40 @@ def test_a_step_without_seats_prints_a_dash_not_nan():
     assert cap.ratio(0.05, 0, 1e6) == "    -" and cap.ratio(0.05, 1000, 1e6) == " 50.0"
     assert cap.ratio(3.0, 0, fmt=".2f") == "-" and cap.ratio(3.0, 2, fmt=".2f") == "1.50"
     assert "nan" not in cap.ratio(float("nan"), 0, 1, ".1f")
+
+
+def test_the_control_pairs_two_streams_of_one_rate_and_splits_the_seats_evenly():
+    kinds = {"full@60": ("full", 60.0), "compact@30": ("compact", 30.0), "packed@30": ("packed", 30.0)}
+    assert cap.control_pair(kinds) == ("compact@30", "packed@30")
+    assert cap.control_pair({"full@60": ("full", 60.0), "compact@30": ("compact", 30.0),
+                             "compact@20": ("compact", 20.0)}) is None
+    assert cap.control_pair({"full@60": ("full", 60.0), "compact@30": ("compact", 30.0),
+                             "full@30": ("full", 30.0)}) == ("compact@30", "full@30")
+    assert cap.control_pair({"compact@30": ("compact", 30.0), "full@60": ("full", 60.0),
+                             "packed@30": ("packed", 30.0)}) is None  # the reference is never played in the control
+    # the default steps' groups (200, 300 and 400 seats): 400 on one side, 300 + 200 on the other
+    assert cap.halves([200, 300, 400]) == ([2], [1, 0])
+    assert cap.halves([100, 100]) == ([0], [1])
+
+
+def test_the_control_reads_each_streams_write_above_the_idle_seats(capsys):
+    # idle seats 2 % of a core; at N = 900 a 60 Hz write 10 us, a 30 Hz one 12.5 us; the mixed windows cost what
+    # their own seats' 30 Hz writes cost: 2/1.25 = 1.60x is all 30 Hz can carry at that cost
+    def at_900(rate: float, per_write: float) -> list[tuple[int, int, dict]]:
+        writes = 900 * rate
+        return [(900, p, {"cpu": 0.02 + per_write * writes, "writes": writes, "delivered": writes}) for p in (0, 1)]
+
+    rows = {"full@60": at_900(60.0, 10e-6), "compact@30": at_900(30.0, 12.5e-6), "packed@30": at_900(30.0, 12.5e-6)}
+    kinds = {"full@60": ("full", 60.0), "compact@30": ("compact", 30.0), "packed@30": ("packed", 30.0)}
+    idle = {"cpu": 0.02, "writes": 0.0, "delivered": 0.0}
+    mixed = {"cpu": 0.02 + 12.5e-6 * 27000, "writes": 27000.0, "delivered": 27000.0,
+             "by_group_sides": [12000.0, 15000.0]}
+    out = cap.summarise_control(rows, {"idle": [idle, idle], "mixed": [mixed, mixed]}, kinds, 900,
+                                ("compact@30", "packed@30"))
+    assert out["idle"] == pytest.approx(0.02)
+    assert out["per:full@60"] == pytest.approx(10.0) and out["per:compact@30"] == pytest.approx(12.5)
+    assert out["mixed"] == pytest.approx(12.5) and out["expected_own"] == pytest.approx(12.5)
+    assert out["expected_bursts"] == pytest.approx(10.0)
+    text = capsys.readouterr().out
+    assert "compact@30: a write costs 1.25x one of full@60" in text and "about 1.60x" in text
+    assert "split 12,000 / 15,000 messages a second" in text
