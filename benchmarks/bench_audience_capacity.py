@@ -75,6 +75,14 @@ from benchmarks.bench_audience import (
     publisher_args,
 )
 from benchmarks.bench_audience_load import open_light_connection
+from benchmarks.capacity_control import (
+    IDLE_SHOW,
+    apart_ms,
+    control_pair,
+    halves,
+    phase_ms,
+    summarise_control,
+)
 
 STREAMS = "full@60,compact@30,packed@30"
 """Streams measured by default: frames@rate; the first is the reference the others are compared with."""
@@ -157,10 +165,12 @@ async def role_seats(url: str, n: int, show_name: str) -> None:
             for c in conns:
                 c.follow(subject(line.split()[1], "frame"))
             print("OK", flush=True)
-        elif line == "GO":
+        elif line.startswith("GO"):  # GO [HZ]: HZ, the phase of the stamps in that period is kept
             ages.clear()
             marks.clear()
             marks["on"] = True
+            if line != "GO":
+                marks["phase_hz"] = float(line.split()[1])
             count0, cpu0, t0 = sum(c.count for c in conns), time.process_time(), time.perf_counter()
         elif line == "STOP":
             marks["on"] = False
@@ -168,7 +178,8 @@ async def role_seats(url: str, n: int, show_name: str) -> None:
             received = sum(c.count for c in conns) - count0
             expected = (marks.get("last", 0) - marks.get("first", 0) + 1) * n if "first" in marks else 0
             print(json.dumps({"received": received, "seconds": seconds, "expected": expected,
-                              "ages": [round(a, 5) for a in ages], "cpu_per_s": (time.process_time() - cpu0) / seconds}),
+                              "ages": [round(a, 5) for a in ages], "cpu_per_s": (time.process_time() - cpu0) / seconds,
+                              "phase": phase_ms(marks)}),
                   flush=True)
         else:  # QUIT, or stdin closed
             break
@@ -233,11 +244,12 @@ def perf_shares(report: str) -> dict[str, float]:
     return shares
 
 
-def window(pid: int, groups: list[subprocess.Popen], seconds: float, perf: bool = False) -> dict:
+def window(pid: int, groups: list[subprocess.Popen], seconds: float, perf: bool = False,
+           phase_hz: float | None = None) -> dict:
     """One measurement: the server's counters and the seats' figures over ``seconds`` (``perf``: sampled by
-    :func:`profile` meanwhile)."""
+    :func:`profile` meanwhile; ``phase_hz``: each group's phase of the stamps in that period, ``phases``)."""
     for g in groups:
-        g.stdin.write("GO\n")
+        g.stdin.write("GO\n" if phase_hz is None else f"GO {phase_hz:g}\n")
         g.stdin.flush()
     s0, t0 = server_counters(pid), time.perf_counter()
     shares = profile(pid, seconds) if perf else None
@@ -253,7 +265,7 @@ def window(pid: int, groups: list[subprocess.Popen], seconds: float, perf: bool 
             "involuntary": rate["involuntary"], "wait": rate["wait"], "p50": pct(ages, 50), "p99": pct(ages, 99),
             "loss": 1 - sum(p["received"] for p in parts) / expected if expected else 0.0,
             "generator": sum(p["cpu_per_s"] for p in parts), "perf": shares,
-            "by_group": [p["received"] / p["seconds"] for p in parts]}
+            "by_group": [p["received"] / p["seconds"] for p in parts], "phases": [p.get("phase") for p in parts]}
 
 
 def fit(ns: list[int], cpus: list[float]) -> tuple[float, float]:
@@ -331,71 +343,6 @@ def summarise(rows: dict[str, list[tuple[int, int, dict]]], kinds: dict[str, tup
           f"{per_message[1] * 1e6:.2f} us each: rms {rms(alone, per_message):.2f} %)")
 
 
-IDLE_SHOW = "idle"
-"""A show nobody publishes: the control's seats follow it to measure the connections alone."""
-
-
-def control_pair(kinds: dict[str, tuple[str, float]]) -> tuple[str, str] | None:
-    """Two streams besides the reference with the same rate (the defaults: compact@30 and packed@30), played at
-    once to two halves of the seats by the control (module doc), or None."""
-    others = list(kinds)[1:]
-    for i, s in enumerate(others):
-        for t in others[i + 1:]:
-            if kinds[s][1] == kinds[t][1]:
-                return s, t
-    return None
-
-
-def halves(sizes: list[int]) -> tuple[list[int], list[int]]:
-    """The load-generator groups (seats each) split in two sides as even as whole groups allow: their indices."""
-    sides: tuple[list[int], list[int]] = ([], [])
-    load = [0, 0]
-    for i in sorted(range(len(sizes)), key=lambda i: -sizes[i]):
-        k = 0 if load[0] <= load[1] else 1
-        sides[k].append(i)
-        load[k] += sizes[i]
-    return sides
-
-
-def per_write_above_idle(w: dict, idle_cpu: float) -> float:
-    """A window's server CPU above the same seats' idle connections, per write call: seconds."""
-    return (w["cpu"] - idle_cpu) / w["writes"] if w["writes"] else float("nan")
-
-
-def summarise_control(rows: dict[str, list[tuple[int, int, dict]]], control: dict[str, list[dict]],
-                      kinds: dict[str, tuple[str, float]], top: int, pair: tuple[str, str]) -> dict[str, float]:
-    """The control at N = ``top`` (module doc): each stream's server CPU a write call above the idle seats, and the
-    two 30 Hz streams played at once. Returns the figures (microseconds a write; ``expected_*`` what the mixed
-    window would cost a write if the cost went with each seat's own rate or with the server's bursts)."""
-    idle = float(np.median([w["cpu"] for w in control["idle"]]))
-    ref = list(rows)[0]
-    per = {s: float(np.median([per_write_above_idle(w, idle) for n, _, w in rows[s] if n == top])) * 1e6
-           for s in rows}
-    mixed = [per_write_above_idle(w, idle) * 1e6 for w in control["mixed"]]
-    shares = np.array([w["by_group_sides"] for w in control["mixed"]]).mean(axis=0)
-    own = float(np.dot(shares / shares.sum(), [per[pair[0]], per[pair[1]]]))
-    burst_rate = kinds[pair[0]][1] * 2
-    out = {"idle": idle, **{f"per:{s}": v for s, v in per.items()}, "mixed": float(np.median(mixed)),
-           "expected_own": own, "expected_bursts": per[ref] if kinds[ref][1] == burst_rate else float("nan")}
-    print(f"control at N = {top} (two windows each): the seats' connections idle (following a show nobody "
-          f"publishes) {idle * 100:.1f} % of a core; server CPU above that, a write call: " + ", ".join(
-              f"{s} {per[s]:.2f} us ({np.median([w['writes'] / max(w['delivered'], 1) for n, _, w in rows[s] if n == top]):.2f} "
-              f"writes a message)" for s in rows))
-    print(f"  {pair[0]} and {pair[1]} at once, the seats split {shares[0]:,.0f} / {shares[1]:,.0f} messages a "
-          f"second between them (the server fanning out {burst_rate:g} bursts a second, each seat served at "
-          f"{kinds[pair[0]][1]:g} Hz): {out['mixed']:.2f} us a write ({' / '.join(f'{m:.2f}' for m in mixed)}); "
-          f"{own:.2f} us if a write's cost goes with its seat's own rate, "
-          + (f"{out['expected_bursts']:.2f} us ({ref}) if it goes with how often the server wakes"
-             if out["expected_bursts"] == out["expected_bursts"] else "(no reference at the bursts' rate)"))
-    for s in list(rows)[1:]:
-        r = per[s] / per[ref]
-        bound = COMPACT_TARGET / r if r > 0 else float("inf")
-        print(f"  {s}: a write costs {r:.2f}x one of {ref}; {kinds[s][1]:g} Hz carries {kinds[ref][1] / kinds[s][1]:g}x "
-              f"the seats only with a write no dearer than one of {ref}: at this cost about {bound:.2f}x "
-              f"({kinds[ref][1] / kinds[s][1]:g} / {r:.2f}, the idle part left out)")
-    return out
-
-
 def ratio(value: float, count: float, scale: float = 1.0, fmt: str = "5.1f") -> str:
     """``value / count * scale`` formatted, or "-" (right-aligned) where nothing was counted (a step with N = 0
     delivers no message: a cost per message there is not a number)."""
@@ -404,6 +351,71 @@ def ratio(value: float, count: float, scale: float = 1.0, fmt: str = "5.1f") -> 
 
 SHORT_RUN = "--steps 0,50,100 --seconds 3"
 """A short run (about a minute and a half with the three default streams): the fit needs two steps above 0."""
+
+
+def start_publisher(url: str, stream: str, kind: tuple[str, float]) -> subprocess.Popen:
+    """A publisher process playing ``stream`` (``kind``: frames, rate) to its own show; READY not yet read."""
+    args = publisher_args(kind[1], kind[0])
+    fps = args[args.index("--fps") + 1]
+    options = args[args.index("--sink-options") + 1] if "--sink-options" in args else ""
+    return spawn("--role", "publisher", "--url", url, "--show", show_of(stream), "--fps", fps,
+                 *(("--sink-options", options) if options else ()))
+
+
+PHASE_TRIES = 6
+"""Publishers of the control's second stream started again at most this many times to set its messages apart
+from the first's (each start falls anywhere in the period)."""
+
+
+def run_control(srv, pubs: list[subprocess.Popen], groups: list[subprocess.Popen], kinds: dict[str, tuple[str, float]],
+                pair: tuple[str, str], steps: list[int], seconds: float) -> tuple[list[subprocess.Popen], dict]:
+    """The control at the largest N (module doc): the two streams' publishers set at least a quarter period apart
+    (the second one started again while they are closer), then the windows idle, mixed, mixed, idle. Returns the
+    publishers started here and the windows."""
+    streams = list(kinds)
+    sides = halves([int(x) for x in np.diff([0, *[n for n in steps if n > 0]])])
+    period = 1000.0 / kinds[pair[0]][1]
+
+    def follow(what: str) -> None:
+        for k, side in enumerate(sides):
+            for i in side:
+                ask(groups[i], f"FOLLOW {IDLE_SHOW if what == 'idle' else show_of(pair[k])}", expect="OK")
+        time.sleep(SETTLE_S)
+
+    def measure(what: str, length: float) -> dict:
+        w = window(srv.proc.pid, groups, length, phase_hz=kinds[pair[0]][1])
+        w["by_group_sides"] = [sum(w["by_group"][i] for i in side) for side in sides]
+        if what == "mixed" and None not in w["phases"]:  # each side's stream's phase, from its first group
+            w["apart_ms"] = apart_ms(w["phases"][sides[0][0]], w["phases"][sides[1][0]], period)
+        return w
+
+    started: list[subprocess.Popen] = []
+    follow("mixed")
+    for attempt in range(PHASE_TRIES):
+        probe = measure("mixed", 1.0)
+        if probe.get("apart_ms", 0.0) >= period / 4 or attempt == PHASE_TRIES - 1:
+            break
+        i = streams.index(pair[1])  # started again: its show's seats stay subscribed and receive the new one's
+        print(f"  control: the two streams' messages {probe.get('apart_ms', float('nan')):.1f} ms apart in the "
+              f"{period:.1f} ms period: {pair[1]}'s publisher started again", flush=True)
+        pubs[i].stdin.close()
+        pubs[i].wait(30)
+        pubs[i] = start_publisher(srv.url, pair[1], kinds[pair[1]])
+        started.append(pubs[i])
+        ask(pubs[i], expect="READY")
+        time.sleep(1.0)
+    control: dict[str, list[dict]] = {"idle": [], "mixed": []}
+    for pass_, order in enumerate((("idle", "mixed"), ("mixed", "idle"))):
+        for what in order:
+            follow(what)
+            w = measure(what, seconds)
+            control[what].append(w)
+            print(f"  N={steps[-1]:5d} control, {what:5s} pass {pass_ + 1}: {w['delivered']:8,.0f} msgs/s "
+                  f"delivered, server CPU {w['cpu'] * 100:5.1f} % of a core; "
+                  f"{ratio(w['writes'], w['delivered'], fmt='.2f')} writes a message"
+                  + (f", p99 {w['p99']:.1f} ms, the two streams' messages stamped {w.get('apart_ms', float('nan')):.1f} "
+                     "ms apart" if what == "mixed" else "") + f"; load average {os.getloadavg()[0]:.1f}", flush=True)
+    return started, control
 
 
 def main(argv=None) -> None:
@@ -451,13 +463,7 @@ def main(argv=None) -> None:
     t_start = time.perf_counter()
     with LocalNatsServer() as srv:
         try:
-            pubs = []
-            for s, (frames, rate) in kinds.items():
-                args = publisher_args(rate, frames)
-                fps = args[args.index("--fps") + 1]
-                options = args[args.index("--sink-options") + 1] if "--sink-options" in args else ""
-                pubs.append(spawn("--role", "publisher", "--url", srv.url, "--show", show_of(s), "--fps", fps,
-                                  *(("--sink-options", options) if options else ())))
+            pubs = [start_publisher(srv.url, st, kind) for st, kind in kinds.items()]
             procs += pubs
             for p in pubs:
                 ask(p, expect="READY")
@@ -495,21 +501,8 @@ def main(argv=None) -> None:
             pair = None if a.no_control else control_pair(kinds)
             control: dict[str, list[dict]] = {"idle": [], "mixed": []}
             if pair is not None:
-                sides = halves([int(x) for x in np.diff([0, *[n for n in steps if n > 0]])])
-                for pass_, order in enumerate((("idle", "mixed"), ("mixed", "idle"))):
-                    for what in order:
-                        for k, side in enumerate(sides):
-                            for i in side:
-                                show = IDLE_SHOW if what == "idle" else show_of(pair[k])
-                                ask(groups[i], f"FOLLOW {show}", expect="OK")
-                        time.sleep(SETTLE_S)
-                        w = window(srv.proc.pid, groups, a.seconds)
-                        w["by_group_sides"] = [sum(w["by_group"][i] for i in side) for side in sides]
-                        control[what].append(w)
-                        print(f"  N={steps[-1]:5d} control, {what:5s} pass {pass_ + 1}: {w['delivered']:8,.0f} msgs/s "
-                              f"delivered, server CPU {w['cpu'] * 100:5.1f} % of a core; "
-                              f"{ratio(w['writes'], w['delivered'], fmt='.2f')} writes a message"
-                              + (f", p99 {w['p99']:.1f} ms" if w["delivered"] else "") + f"; load average {os.getloadavg()[0]:.1f}", flush=True)
+                restarted, control = run_control(srv, pubs, groups, kinds, pair, steps, a.seconds)
+                procs += restarted
             for g in groups:
                 with contextlib.suppress(BrokenPipeError):
                     g.stdin.write("QUIT\n")

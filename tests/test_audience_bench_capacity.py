@@ -192,7 +192,7 @@ def test_the_control_reads_each_streams_write_above_the_idle_seats(capsys):
     kinds = {"full@60": ("full", 60.0), "compact@30": ("compact", 30.0), "packed@30": ("packed", 30.0)}
     idle = {"cpu": 0.02, "writes": 0.0, "delivered": 0.0}
     mixed = {"cpu": 0.02 + 12.5e-6 * 27000, "writes": 27000.0, "delivered": 27000.0,
-             "by_group_sides": [12000.0, 15000.0]}
+             "by_group_sides": [12000.0, 15000.0], "apart_ms": 15.0}
     out = cap.summarise_control(rows, {"idle": [idle, idle], "mixed": [mixed, mixed]}, kinds, 900,
                                 ("compact@30", "packed@30"))
     assert out["idle"] == pytest.approx(0.02)
@@ -202,3 +202,20 @@ def test_the_control_reads_each_streams_write_above_the_idle_seats(capsys):
     text = capsys.readouterr().out
     assert "compact@30: a write costs 1.25x one of full@60" in text and "about 1.60x" in text
     assert "split 12,000 / 15,000 messages a second" in text
+    assert "stamped 15.0 / 15.0 ms apart in the 33.3 ms period)" in text and not out["overlapped"]
+    close = dict(mixed, apart_ms=3.0)  # the two publishers' bursts nearly at once: the server wakes 30 times a second
+    assert cap.summarise_control(rows, {"idle": [idle], "mixed": [close, mixed]}, kinds, 900,
+                                 ("compact@30", "packed@30"))["overlapped"]
+    assert "too close, the bursts may merge" in capsys.readouterr().out
+
+
+def test_the_phase_of_the_stamps_in_a_period():
+    # stamps 5 ms into each 33.3 ms period, read at 30 Hz; two phases 30 ms apart are 3.3 ms apart across the edge
+    import cmath
+    import math
+    stamps = [1_764_000_000.0 + k / 30 + 0.005 for k in range(90)]
+    marks = {"phase_hz": 30.0, "phase": sum(cmath.exp(2j * math.pi * 30.0 * t) for t in stamps)}
+    assert cap.phase_ms(marks) == pytest.approx(5.0, abs=0.01)
+    assert cap.phase_ms({"phase_hz": 30.0}) is None
+    assert cap.apart_ms(1.0, 31.0, 1000 / 30) == pytest.approx(1000 / 30 - 30.0)
+    assert cap.apart_ms(5.0, 20.0, 1000 / 30) == pytest.approx(15.0)
