@@ -32,14 +32,14 @@ straight lines extrapolated from the steps run, mostly well below a core: check 
 Printed beside them: the p99 frame age at the largest N run, and compact (packed) 30 Hz against today's 60 Hz, the
 target being at least twice the seats per server core at p99 under 50 ms.
 
-The control (at the largest N, after the sweep; ``--no-control`` leaves it out): why a write costs more at 30 Hz
-than at 60 Hz. Two windows with every seat following a show nobody publishes (the connections and the publishers
-alone), and two with the seats split in two halves, one following each of two streams of the same rate (compact@30
-and packed@30 by default): the server then fans out as many bursts a second as at 60 Hz while each seat is served at
-30 Hz. Each stream's server CPU above the idle seats, a write call, is printed beside the mixed windows' and beside
-what they would cost if a write's cost went with how often the server wakes (the 60 Hz reference's) or with how
-often its own seat is served (the two 30 Hz streams', weighted by their messages). The figures at N = 0 and this
-control are what docs/audience.md's "What remains" rests on.
+The control (at the largest N, after the sweep; ``--no-control`` leaves it out; benchmarks/capacity_control.py):
+why a write costs more at 30 Hz than at 60 Hz. A bare publisher on one clock sends compact-frame-sized messages at
+60 Hz to one show and at 30 Hz to two others, half a period apart; the seats follow a show nobody publishes (their
+connections and the publishers alone), all the first 30 Hz show, half of them each 30 Hz show (the server then woken
+and fanning out 60 times a second while each seat is served 30 times a second), or all the 60 Hz show, two windows
+each (A, B, C, D, D, C, B, A). Each window's server CPU above the idle one, a write call, says whether the dearer
+30 Hz write goes with how often the server wakes or with each seat's own rate; the sweep's streams at the largest N
+are measured the same way beside it.
 
 The other streams' publishers keep publishing while one is measured (the server receives 120 messages a second it
 sends nobody: its cost is in ``a``, and N = 0 shows it). Full seats (``listen`` to a fake Player) are not run here:
@@ -76,11 +76,9 @@ from benchmarks.bench_audience import (
 )
 from benchmarks.bench_audience_load import open_light_connection
 from benchmarks.capacity_control import (
-    IDLE_SHOW,
-    apart_ms,
-    control_pair,
+    CONTROL,
+    BarePublisher,
     halves,
-    phase_ms,
     summarise_control,
 )
 
@@ -165,12 +163,10 @@ async def role_seats(url: str, n: int, show_name: str) -> None:
             for c in conns:
                 c.follow(subject(line.split()[1], "frame"))
             print("OK", flush=True)
-        elif line.startswith("GO"):  # GO [HZ]: HZ, the phase of the stamps in that period is kept
+        elif line == "GO":
             ages.clear()
             marks.clear()
             marks["on"] = True
-            if line != "GO":
-                marks["phase_hz"] = float(line.split()[1])
             count0, cpu0, t0 = sum(c.count for c in conns), time.process_time(), time.perf_counter()
         elif line == "STOP":
             marks["on"] = False
@@ -178,8 +174,7 @@ async def role_seats(url: str, n: int, show_name: str) -> None:
             received = sum(c.count for c in conns) - count0
             expected = (marks.get("last", 0) - marks.get("first", 0) + 1) * n if "first" in marks else 0
             print(json.dumps({"received": received, "seconds": seconds, "expected": expected,
-                              "ages": [round(a, 5) for a in ages], "cpu_per_s": (time.process_time() - cpu0) / seconds,
-                              "phase": phase_ms(marks)}),
+                              "ages": [round(a, 5) for a in ages], "cpu_per_s": (time.process_time() - cpu0) / seconds}),
                   flush=True)
         else:  # QUIT, or stdin closed
             break
@@ -244,12 +239,11 @@ def perf_shares(report: str) -> dict[str, float]:
     return shares
 
 
-def window(pid: int, groups: list[subprocess.Popen], seconds: float, perf: bool = False,
-           phase_hz: float | None = None) -> dict:
+def window(pid: int, groups: list[subprocess.Popen], seconds: float, perf: bool = False) -> dict:
     """One measurement: the server's counters and the seats' figures over ``seconds`` (``perf``: sampled by
-    :func:`profile` meanwhile; ``phase_hz``: each group's phase of the stamps in that period, ``phases``)."""
+    :func:`profile` meanwhile)."""
     for g in groups:
-        g.stdin.write("GO\n" if phase_hz is None else f"GO {phase_hz:g}\n")
+        g.stdin.write("GO\n")
         g.stdin.flush()
     s0, t0 = server_counters(pid), time.perf_counter()
     shares = profile(pid, seconds) if perf else None
@@ -265,7 +259,7 @@ def window(pid: int, groups: list[subprocess.Popen], seconds: float, perf: bool 
             "involuntary": rate["involuntary"], "wait": rate["wait"], "p50": pct(ages, 50), "p99": pct(ages, 99),
             "loss": 1 - sum(p["received"] for p in parts) / expected if expected else 0.0,
             "generator": sum(p["cpu_per_s"] for p in parts), "perf": shares,
-            "by_group": [p["received"] / p["seconds"] for p in parts], "phases": [p.get("phase") for p in parts]}
+            "by_group": [p["received"] / p["seconds"] for p in parts]}
 
 
 def fit(ns: list[int], cpus: list[float]) -> tuple[float, float]:
@@ -362,60 +356,26 @@ def start_publisher(url: str, stream: str, kind: tuple[str, float]) -> subproces
                  *(("--sink-options", options) if options else ()))
 
 
-PHASE_TRIES = 6
-"""Publishers of the control's second stream started again at most this many times to set its messages apart
-from the first's (each start falls anywhere in the period)."""
-
-
-def run_control(srv, pubs: list[subprocess.Popen], groups: list[subprocess.Popen], kinds: dict[str, tuple[str, float]],
-                pair: tuple[str, str], steps: list[int], seconds: float) -> tuple[list[subprocess.Popen], dict]:
-    """The control at the largest N (module doc): the two streams' publishers set at least a quarter period apart
-    (the second one started again while they are closer), then the windows idle, mixed, mixed, idle. Returns the
-    publishers started here and the windows."""
-    streams = list(kinds)
+def run_control(pid: int, url: str, groups: list[subprocess.Popen], steps: list[int], seconds: float) -> dict:
+    """The control at the largest N (module doc): the bare publisher's streams, the windows in the order of
+    :data:`CONTROL`, then reversed. Returns the windows of each."""
     sides = halves([int(x) for x in np.diff([0, *[n for n in steps if n > 0]])])
-    period = 1000.0 / kinds[pair[0]][1]
-
-    def follow(what: str) -> None:
-        for k, side in enumerate(sides):
-            for i in side:
-                ask(groups[i], f"FOLLOW {IDLE_SHOW if what == 'idle' else show_of(pair[k])}", expect="OK")
-        time.sleep(SETTLE_S)
-
-    def measure(what: str, length: float) -> dict:
-        w = window(srv.proc.pid, groups, length, phase_hz=kinds[pair[0]][1])
-        w["by_group_sides"] = [sum(w["by_group"][i] for i in side) for side in sides]
-        if what == "mixed" and None not in w["phases"]:  # each side's stream's phase, from its first group
-            w["apart_ms"] = apart_ms(w["phases"][sides[0][0]], w["phases"][sides[1][0]], period)
-        return w
-
-    started: list[subprocess.Popen] = []
-    follow("mixed")
-    for attempt in range(PHASE_TRIES):
-        probe = measure("mixed", 1.0)
-        if probe.get("apart_ms", 0.0) >= period / 4 or attempt == PHASE_TRIES - 1:
-            break
-        i = streams.index(pair[1])  # started again: its show's seats stay subscribed and receive the new one's
-        print(f"  control: the two streams' messages {probe.get('apart_ms', float('nan')):.1f} ms apart in the "
-              f"{period:.1f} ms period: {pair[1]}'s publisher started again", flush=True)
-        pubs[i].stdin.close()
-        pubs[i].wait(30)
-        pubs[i] = start_publisher(srv.url, pair[1], kinds[pair[1]])
-        started.append(pubs[i])
-        ask(pubs[i], expect="READY")
-        time.sleep(1.0)
-    control: dict[str, list[dict]] = {"idle": [], "mixed": []}
-    for pass_, order in enumerate((("idle", "mixed"), ("mixed", "idle"))):
-        for what in order:
-            follow(what)
-            w = measure(what, seconds)
-            control[what].append(w)
-            print(f"  N={steps[-1]:5d} control, {what:5s} pass {pass_ + 1}: {w['delivered']:8,.0f} msgs/s "
-                  f"delivered, server CPU {w['cpu'] * 100:5.1f} % of a core; "
-                  f"{ratio(w['writes'], w['delivered'], fmt='.2f')} writes a message"
-                  + (f", p99 {w['p99']:.1f} ms, the two streams' messages stamped {w.get('apart_ms', float('nan')):.1f} "
-                     "ms apart" if what == "mixed" else "") + f"; load average {os.getloadavg()[0]:.1f}", flush=True)
-    return started, control
+    control: dict[str, list[dict]] = {what: [] for what in CONTROL}
+    with BarePublisher(url):
+        for pass_, order in enumerate((list(CONTROL), list(CONTROL)[::-1])):
+            for what in order:
+                for k, side in enumerate(sides):
+                    for i in side:
+                        ask(groups[i], f"FOLLOW {CONTROL[what][k]}", expect="OK")
+                time.sleep(SETTLE_S)
+                w = window(pid, groups, seconds)
+                control[what].append(w)
+                print(f"  N={steps[-1]:5d} control, {what:7s} pass {pass_ + 1}: {w['delivered']:8,.0f} msgs/s "
+                      f"delivered, server CPU {w['cpu'] * 100:5.1f} % of a core; "
+                      f"{ratio(w['writes'], w['delivered'], fmt='.2f')} writes a message"
+                      + (f", p99 {w['p99']:.1f} ms" if w["delivered"] else "")
+                      + f"; load average {os.getloadavg()[0]:.1f}", flush=True)
+    return control
 
 
 def main(argv=None) -> None:
@@ -498,11 +458,7 @@ def main(argv=None) -> None:
                         if w["perf"]:
                             print(f"    perf, {w['perf'].get('samples', 0):.0f} samples (callees included): " + ", ".join(
                                 f"{name} {w['perf'].get(name, 0.0):.1f} %" for name in PERF_PARTS), flush=True)
-            pair = None if a.no_control else control_pair(kinds)
-            control: dict[str, list[dict]] = {"idle": [], "mixed": []}
-            if pair is not None:
-                restarted, control = run_control(srv, pubs, groups, kinds, pair, steps, a.seconds)
-                procs += restarted
+            control = {} if a.no_control else run_control(srv.proc.pid, srv.url, groups, steps, a.seconds)
             for g in groups:
                 with contextlib.suppress(BrokenPipeError):
                     g.stdin.write("QUIT\n")
@@ -519,8 +475,8 @@ def main(argv=None) -> None:
                     p.wait()
     print(f"\nload average {os.getloadavg()[0]:.1f} at the end, {time.perf_counter() - t_start:.0f} s in all")
     summarise(rows, kinds, steps)
-    if control["idle"] and control["mixed"]:
-        summarise_control(rows, control, kinds, max(steps), pair)
+    if control:
+        summarise_control(rows, control, max(steps))
 
 
 if __name__ == "__main__":

@@ -6,9 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import base64
-import cmath
 import json
-import math
 import socket
 import ssl
 import time
@@ -90,9 +88,6 @@ class LightConnection(asyncio.Protocol):
                         self.ages.append(now - wall)
                         self.marks.setdefault("first", seq)
                         self.marks["last"] = seq
-                        if "phase_hz" in self.marks:  # when in the period the publisher sends (capacity control)
-                            self.marks["phase"] = self.marks.get("phase", 0j) + cmath.exp(
-                                2j * math.pi * self.marks["phase_hz"] * wall)
 
 
 async def read_info(sock: socket.socket) -> dict:

@@ -1,29 +1,84 @@
-"""The capacity sweep's control (benchmarks/bench_audience_capacity.py, its module doc): which streams it plays, how
-it splits the seats, where in the period each stream's messages are stamped, and what its windows say about why a
-write costs the server more at 30 Hz than at 60 Hz."""
+"""The capacity sweep's control (benchmarks/bench_audience_capacity.py, its module doc): why a write costs the
+server more at 30 Hz than at 60 Hz. A bare publisher on one clock plays three streams of compact-frame-sized
+messages: ``bare60`` at 60 Hz, and ``bare30a`` and ``bare30b`` at 30 Hz, half a period (16.7 ms) apart; the seats
+follow nobody (``idle``), all ``bare30a``, half of them each of the two 30 Hz streams (the server then woken and
+fanning out 60 times a second, each seat still served 30 times a second), or all ``bare60``."""
 
 from __future__ import annotations
 
-import cmath
-import math
+import socket
+import threading
+import time
+from typing import Self
+from urllib.parse import urlsplit
 
 import numpy as np
 
 from benchmarks.bench_audience import COMPACT_TARGET
+from hapmotion.audience.wire import HEADER, subject
 
-IDLE_SHOW = "idle"
-"""A show nobody publishes: the control's seats follow it to measure the connections alone."""
+CONTROL = {"idle": ("idle", "idle"), "30 Hz": ("bare30a", "bare30a"), "halves": ("bare30a", "bare30b"),
+           "60 Hz": ("bare60", "bare60")}
+"""The control's windows: the show each half of the seats follows (``idle``: a show nobody publishes)."""
+BARE_BYTES = 229
+"""A bare message's payload: a compact frame's size with the music row (docs/audience.md, "Compact frame")."""
+BARE_FPS = 60.0
+"""The bare publisher's clock: every tick to ``bare60``, even ticks to ``bare30a``, odd ones to ``bare30b``."""
 
 
-def control_pair(kinds: dict[str, tuple[str, float]]) -> tuple[str, str] | None:
-    """Two streams besides the reference with the same rate (the defaults: compact@30 and packed@30), played at
-    once to two halves of the seats by the control (module doc), or None."""
-    others = list(kinds)[1:]
-    for i, s in enumerate(others):
-        for t in others[i + 1:]:
-            if kinds[s][1] == kinds[t][1]:
-                return s, t
-    return None
+class BarePublisher:
+    """The control's publisher: a thread speaking the NATS text protocol (``PUB``; docs.nats.io, "Client
+    Protocol") on its own connection, each message the 32-byte frame header (its sequence number and the wall
+    clock, for the seats' frame age) padded to :data:`BARE_BYTES`, sent on a 60 Hz grid of one clock so that the
+    two 30 Hz streams stay half a period apart for the whole run. A context manager: started on entry, stopped
+    (and its connection closed) on exit."""
+
+    def __init__(self, url: str):
+        self.address = (urlsplit(url).hostname, urlsplit(url).port)
+        self.stop = threading.Event()
+        self.sent = 0
+
+    def __enter__(self) -> Self:
+        self.sock = socket.create_connection(self.address, timeout=10)
+        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.sock.sendall(b'CONNECT {"verbose":false,"pedantic":false}\r\n')
+        self.threads = [threading.Thread(target=self._play, daemon=True),
+                        threading.Thread(target=self._answer, daemon=True)]
+        for t in self.threads:
+            t.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop.set()
+        self.threads[0].join(5)
+        self.sock.close()
+        self.threads[1].join(5)
+
+    def _answer(self) -> None:
+        """Answer the server's PINGs (it closes a connection that does not)."""
+        while not self.stop.is_set():
+            try:
+                data = self.sock.recv(4096)
+            except OSError:
+                return
+            if not data:
+                return
+            if b"PING\r\n" in data:
+                self.sock.sendall(b"PONG\r\n")
+
+    def _play(self) -> None:
+        names = {show: subject(show, "frame").encode() for show in ("bare60", "bare30a", "bare30b")}
+        start, tick = time.perf_counter(), 0
+        while not self.stop.is_set():
+            tick += 1
+            time.sleep(max(0.0, start + tick / BARE_FPS - time.perf_counter()))
+            out = b""
+            for show in ("bare60", "bare30a" if tick % 2 == 0 else "bare30b"):
+                payload = HEADER.pack(b"HM", 2, 0, 7, 1, 0, tick, tick / BARE_FPS, time.time()).ljust(BARE_BYTES,
+                                                                                                     b"\0")
+                out += b"PUB %s %d\r\n%s\r\n" % (names[show], len(payload), payload)
+            self.sock.sendall(out)
+            self.sent += 2
 
 
 def halves(sizes: list[int]) -> tuple[list[int], list[int]]:
@@ -43,56 +98,35 @@ def per_write_above_idle(w: dict, idle_cpu: float) -> float:
 
 
 def summarise_control(rows: dict[str, list[tuple[int, int, dict]]], control: dict[str, list[dict]],
-                      kinds: dict[str, tuple[str, float]], top: int, pair: tuple[str, str]) -> dict[str, float]:
-    """The control at N = ``top`` (module doc): each stream's server CPU a write call above the idle seats, and the
-    two 30 Hz streams played at once. Returns the figures (microseconds a write; ``expected_*`` what the mixed
-    window would cost a write if the cost went with each seat's own rate or with the server's bursts)."""
+                      top: int) -> dict[str, float]:
+    """What the control's windows say (module doc), with each stream of the sweep at N = ``top`` measured the same
+    way (its server CPU above the idle seats, a write call, medians of the windows). Returns the figures in
+    microseconds a write, and ``explained``: the share of the 30 Hz write's extra cost that waking the server 60
+    times a second takes away."""
     idle = float(np.median([w["cpu"] for w in control["idle"]]))
-    ref = next(iter(rows))
-    per = {s: float(np.median([per_write_above_idle(w, idle) for n, _, w in rows[s] if n == top])) * 1e6
-           for s in rows}
-    mixed = [per_write_above_idle(w, idle) * 1e6 for w in control["mixed"]]
-    shares = np.array([w["by_group_sides"] for w in control["mixed"]]).mean(axis=0)
-    own = float(np.dot(shares / shares.sum(), [per[pair[0]], per[pair[1]]]))
-    burst_rate = kinds[pair[0]][1] * 2
-    period = 1000.0 / kinds[pair[0]][1]
-    apart = [w["apart_ms"] for w in control["mixed"] if w.get("apart_ms") is not None]
-    # bursts closer than a quarter period (8 ms at 30 Hz: about a 900-seat burst's length) merge into one wake-up
-    overlapped = bool(apart) and min(apart) < period / 4
-    out = {"idle": idle, **{f"per:{s}": v for s, v in per.items()}, "mixed": float(np.median(mixed)),
-           "overlapped": overlapped,
-           "expected_own": own, "expected_bursts": per[ref] if kinds[ref][1] == burst_rate else float("nan")}
-    print(f"control at N = {top} (two windows each): the seats' connections idle (following a show nobody "
-          f"publishes) {idle * 100:.1f} % of a core; server CPU above that, a write call: " + ", ".join(
-              f"{s} {per[s]:.2f} us ({np.median([w['writes'] / max(w['delivered'], 1) for n, _, w in rows[s] if n == top]):.2f} "
-              f"writes a message)" for s in rows))
-    print(f"  {pair[0]} and {pair[1]} at once, the seats split {shares[0]:,.0f} / {shares[1]:,.0f} messages a "
-          f"second between them (the server fanning out {burst_rate:g} bursts a second, each seat served at "
-          f"{kinds[pair[0]][1]:g} Hz; their messages stamped {' / '.join(f'{x:.1f}' for x in apart) or '?'} ms apart "
-          f"in the {period:.1f} ms period{': too close, the bursts may merge' if overlapped else ''}): "
-          f"{out['mixed']:.2f} us a write ({' / '.join(f'{m:.2f}' for m in mixed)}); "
-          f"{own:.2f} us if a write's cost goes with its seat's own rate, "
-          + (f"{out['expected_bursts']:.2f} us ({ref}) if it goes with how often the server wakes"
-             if out["expected_bursts"] == out["expected_bursts"] else "(no reference at the bursts' rate)"))
-    for s in list(rows)[1:]:
+    med = lambda ws: float(np.median([per_write_above_idle(w, idle) for w in ws])) * 1e6
+    bare = {what: med(control[what]) for what in CONTROL if what != "idle"}
+    low, halves_, high = bare["30 Hz"], bare["halves"], bare["60 Hz"]
+    explained = (low - halves_) / (low - high) if low != high else float("nan")
+    print(f"control at N = {top} (a bare publisher of {BARE_BYTES}-byte messages on one clock; two windows each, "
+          f"server CPU above the seats' idle connections ({idle * 100:.1f} % of a core), a write call):")
+    print(f"  every seat at 30 Hz {low:.2f} us; half the seats at 30 Hz and half at 30 Hz half a period later (the "
+          f"server woken 60 times a second, each seat served at 30 Hz) {halves_:.2f} us; every seat at 60 Hz "
+          f"{high:.2f} us: a 30 Hz write costs {low / high:.2f}x a 60 Hz one, and waking the server as often as at "
+          f"60 Hz takes {explained * 100:.0f} % of the difference away (0 %: the cost goes with each seat's own rate; "
+          "100 %: with how often the server wakes)")
+    streams = list(rows)
+    ref = streams[0]
+    per = {s: med([w for n, _, w in rows[s] if n == top]) for s in streams}
+    for s in streams[1:]:
         r = per[s] / per[ref]
-        bound = COMPACT_TARGET / r if r > 0 else float("inf")
-        print(f"  {s}: a write costs {r:.2f}x one of {ref}; {kinds[s][1]:g} Hz carries {kinds[ref][1] / kinds[s][1]:g}x "
-              f"the seats only with a write no dearer than one of {ref}: at this cost about {bound:.2f}x "
-              f"({kinds[ref][1] / kinds[s][1]:g} / {r:.2f}, the idle part left out)")
-    return out
+        times = per_rate(ref) / per_rate(s)
+        print(f"  {s}: {per[s]:.2f} us a write against {per[ref]:.2f} for {ref} ({r:.2f}x): {times:g}x fewer "
+              f"messages carry {times / r:.2f}x the seats ({times:g} / {r:.2f}, the idle part left out; target "
+              f">= {COMPACT_TARGET:g}x, which needs a write no dearer than one of {ref})")
+    return {"idle": idle, **bare, "explained": explained, **{f"per:{s}": v for s, v in per.items()}}
 
 
-def phase_ms(marks: dict) -> float | None:
-    """Where in the period of ``marks["phase_hz"]`` the frames were stamped (the circular mean of the stamps the
-    load generator read, ms from the period's start), or None."""
-    if "phase" not in marks or not marks["phase"]:
-        return None
-    period = 1000.0 / marks["phase_hz"]
-    return (cmath.phase(marks["phase"]) / (2 * math.pi) * period) % period
-
-
-def apart_ms(a: float, b: float, period: float) -> float:
-    """How far apart two phases (ms) are in a period: 0 to ``period / 2``."""
-    d = abs(a - b) % period
-    return min(d, period - d)
+def per_rate(stream: str) -> float:
+    """A stream's messages a second to each seat, from its name (``full@60`` -> 60)."""
+    return float(stream.rpartition("@")[2])
