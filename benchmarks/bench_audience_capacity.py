@@ -258,8 +258,7 @@ def window(pid: int, groups: list[subprocess.Popen], seconds: float, perf: bool 
             "writes": rate["writes"], "switches": rate["voluntary"] + rate["involuntary"],
             "involuntary": rate["involuntary"], "wait": rate["wait"], "p50": pct(ages, 50), "p99": pct(ages, 99),
             "loss": 1 - sum(p["received"] for p in parts) / expected if expected else 0.0,
-            "generator": sum(p["cpu_per_s"] for p in parts), "perf": shares,
-            "by_group": [p["received"] / p["seconds"] for p in parts]}
+            "generator": sum(p["cpu_per_s"] for p in parts), "perf": shares}
 
 
 def fit(ns: list[int], cpus: list[float]) -> tuple[float, float]:
@@ -344,7 +343,8 @@ def ratio(value: float, count: float, scale: float = 1.0, fmt: str = "5.1f") -> 
 
 
 SHORT_RUN = "--steps 0,50,100 --seconds 3"
-"""A short run (about a minute and a half with the three default streams): the fit needs two steps above 0."""
+"""A short run (about two minutes with the three default streams and the control): the fit needs two steps above
+0."""
 
 
 def start_publisher(url: str, stream: str, kind: tuple[str, float]) -> subprocess.Popen:
@@ -395,7 +395,8 @@ def main(argv=None) -> None:
                          "through N needs two points); 0 measures the publishers' cost alone")
     ap.add_argument("--seconds", type=float, default=SECONDS, help="seconds measured in each window")
     ap.add_argument("--no-control", action="store_true",
-                    help="skip the control at the largest N (the seats idle; two streams of the same rate at once)")
+                    help="skip the control at the largest N (a bare publisher; the seats idle, at 30 Hz, in halves "
+                         "at 30 Hz half a period apart, at 60 Hz)")
     ap.add_argument("--perf", action="store_true",
                     help="sample the server with perf (Linux perf on PATH) in the first pass at the largest N")
     a = ap.parse_args(argv)

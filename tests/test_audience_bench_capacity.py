@@ -194,7 +194,7 @@ def test_the_control_reads_each_write_above_the_idle_seats(capsys):
     assert out["per:full@60"] == pytest.approx(10.0)  # the windows at N = 900 only
     text = capsys.readouterr().out
     assert "a 30 Hz write costs 1.25x a 60 Hz one" in text and "takes 20 % of the difference away" in text
-    assert "compact@30: 12.50 us a write against 10.00 for full@60 (1.25x): 2x fewer messages carry 1.60x" in text
+    assert "compact@30: 12.50 us a write against 10.00 for full@60 (1.25x): 2x fewer messages carry 1.60x" in text and "[reported: a bound" in text
 
 
 def test_the_bare_publisher_plays_its_streams_half_a_period_apart():
