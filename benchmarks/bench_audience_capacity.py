@@ -32,6 +32,15 @@ straight lines extrapolated from the steps run, mostly well below a core: check 
 Printed beside them: the p99 frame age at the largest N run, and compact (packed) 30 Hz against today's 60 Hz, the
 target being at least twice the seats per server core at p99 under 50 ms.
 
+The control (at the largest N, after the sweep; ``--no-control`` leaves it out; benchmarks/capacity_control.py):
+why a write costs more at 30 Hz than at 60 Hz. A bare publisher on one clock sends compact-frame-sized messages at
+60 Hz to one show and at 30 Hz to two others, half a period apart; the seats follow a show nobody publishes (their
+connections and the publishers alone), all the first 30 Hz show, half of them each 30 Hz show (the server then woken
+and fanning out 60 times a second while each seat is served 30 times a second), or all the 60 Hz show, two windows
+each (A, B, C, D, D, C, B, A). Each window's server CPU above the idle one, a write call, says whether the dearer
+30 Hz write goes with how often the server wakes or with each seat's own rate; the sweep's streams at the largest N
+are measured the same way beside it.
+
 The other streams' publishers keep publishing while one is measured (the server receives 120 messages a second it
 sends nobody: its cost is in ``a``, and N = 0 shows it). Full seats (``listen`` to a fake Player) are not run here:
 ``bench_audience`` measures their frame age; here only the server's side.
@@ -66,6 +75,12 @@ from benchmarks.bench_audience import (
     publisher_args,
 )
 from benchmarks.bench_audience_load import open_light_connection
+from benchmarks.capacity_control import (
+    CONTROL,
+    BarePublisher,
+    halves,
+    summarise_control,
+)
 
 STREAMS = "full@60,compact@30,packed@30"
 """Streams measured by default: frames@rate; the first is the reference the others are compared with."""
@@ -328,7 +343,39 @@ def ratio(value: float, count: float, scale: float = 1.0, fmt: str = "5.1f") -> 
 
 
 SHORT_RUN = "--steps 0,50,100 --seconds 3"
-"""A short run (about a minute and a half with the three default streams): the fit needs two steps above 0."""
+"""A short run (about two minutes with the three default streams and the control): the fit needs two steps above
+0."""
+
+
+def start_publisher(url: str, stream: str, kind: tuple[str, float]) -> subprocess.Popen:
+    """A publisher process playing ``stream`` (``kind``: frames, rate) to its own show; READY not yet read."""
+    args = publisher_args(kind[1], kind[0])
+    fps = args[args.index("--fps") + 1]
+    options = args[args.index("--sink-options") + 1] if "--sink-options" in args else ""
+    return spawn("--role", "publisher", "--url", url, "--show", show_of(stream), "--fps", fps,
+                 *(("--sink-options", options) if options else ()))
+
+
+def run_control(pid: int, url: str, groups: list[subprocess.Popen], steps: list[int], seconds: float) -> dict:
+    """The control at the largest N (module doc): the bare publisher's streams, the windows in the order of
+    :data:`CONTROL`, then reversed. Returns the windows of each."""
+    sides = halves([int(x) for x in np.diff([0, *[n for n in steps if n > 0]])])
+    control: dict[str, list[dict]] = {what: [] for what in CONTROL}
+    with BarePublisher(url):
+        for pass_, order in enumerate((list(CONTROL), list(CONTROL)[::-1])):
+            for what in order:
+                for k, side in enumerate(sides):
+                    for i in side:
+                        ask(groups[i], f"FOLLOW {CONTROL[what][k]}", expect="OK")
+                time.sleep(SETTLE_S)
+                w = window(pid, groups, seconds)
+                control[what].append(w)
+                print(f"  N={steps[-1]:5d} control, {what:7s} pass {pass_ + 1}: {w['delivered']:8,.0f} msgs/s "
+                      f"delivered, server CPU {w['cpu'] * 100:5.1f} % of a core; "
+                      f"{ratio(w['writes'], w['delivered'], fmt='.2f')} writes a message"
+                      + (f", p99 {w['p99']:.1f} ms" if w["delivered"] else "")
+                      + f"; load average {os.getloadavg()[0]:.1f}", flush=True)
+    return control
 
 
 def main(argv=None) -> None:
@@ -347,6 +394,9 @@ def main(argv=None) -> None:
     ap.add_argument("--steps", default=STEPS, help="seats at each step, cumulative, comma-separated, rising; at least two above 0 (the line "
                          "through N needs two points); 0 measures the publishers' cost alone")
     ap.add_argument("--seconds", type=float, default=SECONDS, help="seconds measured in each window")
+    ap.add_argument("--no-control", action="store_true",
+                    help="skip the control at the largest N (a bare publisher; the seats idle, at 30 Hz, in halves "
+                         "at 30 Hz half a period apart, at 60 Hz)")
     ap.add_argument("--perf", action="store_true",
                     help="sample the server with perf (Linux perf on PATH) in the first pass at the largest N")
     a = ap.parse_args(argv)
@@ -374,13 +424,7 @@ def main(argv=None) -> None:
     t_start = time.perf_counter()
     with LocalNatsServer() as srv:
         try:
-            pubs = []
-            for s, (frames, rate) in kinds.items():
-                args = publisher_args(rate, frames)
-                fps = args[args.index("--fps") + 1]
-                options = args[args.index("--sink-options") + 1] if "--sink-options" in args else ""
-                pubs.append(spawn("--role", "publisher", "--url", srv.url, "--show", show_of(s), "--fps", fps,
-                                  *(("--sink-options", options) if options else ())))
+            pubs = [start_publisher(srv.url, st, kind) for st, kind in kinds.items()]
             procs += pubs
             for p in pubs:
                 ask(p, expect="READY")
@@ -415,6 +459,7 @@ def main(argv=None) -> None:
                         if w["perf"]:
                             print(f"    perf, {w['perf'].get('samples', 0):.0f} samples (callees included): " + ", ".join(
                                 f"{name} {w['perf'].get(name, 0.0):.1f} %" for name in PERF_PARTS), flush=True)
+            control = {} if a.no_control else run_control(srv.proc.pid, srv.url, groups, steps, a.seconds)
             for g in groups:
                 with contextlib.suppress(BrokenPipeError):
                     g.stdin.write("QUIT\n")
@@ -431,6 +476,9 @@ def main(argv=None) -> None:
                     p.wait()
     print(f"\nload average {os.getloadavg()[0]:.1f} at the end, {time.perf_counter() - t_start:.0f} s in all")
     summarise(rows, kinds, steps)
+    if control:
+        summarise_control(rows, control, max(steps))
+
 
 if __name__ == "__main__":
     main()

@@ -166,3 +166,61 @@ def test_a_step_without_seats_prints_a_dash_not_nan():
     assert cap.ratio(0.05, 0, 1e6) == "    -" and cap.ratio(0.05, 1000, 1e6) == " 50.0"
     assert cap.ratio(3.0, 0, fmt=".2f") == "-" and cap.ratio(3.0, 2, fmt=".2f") == "1.50"
     assert "nan" not in cap.ratio(float("nan"), 0, 1, ".1f")
+
+
+def test_the_control_splits_the_seats_evenly():
+    # the default steps' groups (200, 300 and 400 seats): 400 on one side, 300 + 200 on the other
+    assert cap.halves([200, 300, 400]) == ([2], [1, 0])
+    assert cap.halves([100, 100]) == ([0], [1])
+    assert cap.halves([50, 100, 150, 200]) == ([3, 0], [2, 1])
+
+
+def test_the_control_reads_each_write_above_the_idle_seats(capsys):
+    # idle seats 2 % of a core; at N = 900 a 60 Hz write 10 us, a 30 Hz one 12.5 us, and 12 us with the server woken
+    # 60 times a second: the wake-ups take (12.5 - 12) / (12.5 - 10) = 20 % of the difference away; the sweep's
+    # compact 30 Hz stream at 12.5 us a write against today's 60 Hz at 10: 2 / 1.25 = 1.60x the seats
+    def window(rate: float, per_write: float) -> dict:
+        writes = 900 * rate
+        return {"cpu": 0.02 + per_write * writes, "writes": writes, "delivered": writes}
+
+    rows = {"full@60": [(900, p, window(60.0, 10e-6)) for p in (0, 1)] + [(500, 0, window(60.0, 99e-6))],
+            "compact@30": [(900, p, window(30.0, 12.5e-6)) for p in (0, 1)]}
+    idle = {"cpu": 0.02, "writes": 0.0, "delivered": 0.0}
+    control = {"idle": [idle, idle], "30 Hz": [window(30.0, 12.5e-6)] * 2, "halves": [window(30.0, 12e-6)] * 2,
+               "60 Hz": [window(60.0, 10e-6)] * 2}
+    out = cap.summarise_control(rows, control, 900)
+    assert out["idle"] == pytest.approx(0.02)
+    assert out["30 Hz"] == pytest.approx(12.5) and out["halves"] == pytest.approx(12.0)
+    assert out["60 Hz"] == pytest.approx(10.0) and out["explained"] == pytest.approx(0.2)
+    assert out["per:full@60"] == pytest.approx(10.0)  # the windows at N = 900 only
+    text = capsys.readouterr().out
+    assert "a 30 Hz write costs 1.25x a 60 Hz one" in text and "takes 20 % of the difference away" in text
+    assert "compact@30: 12.50 us a write against 10.00 for full@60 (1.25x): 2x fewer messages carry 1.60x" in text and "[reported: a bound" in text
+
+
+def test_the_bare_publisher_plays_its_streams_half_a_period_apart():
+    # a light seat on each stream: 60 Hz gets every tick, the two 30 Hz streams the even and the odd ones
+    async def scenario():
+        with LocalNatsServer() as server:
+            seen: dict[str, list[int]] = {}
+            conns = {}
+            for show in ("bare60", "bare30a", "bare30b"):
+                marks: dict = {"on": True}
+                conns[show] = (await load.open_light_connection(server.url, 1, [], marks, show=show), marks)
+            with cap.BarePublisher(server.url) as pub:
+                while pub.sent < 60:  # 30 ticks, however slowly this machine plays them
+                    await asyncio.sleep(0.05)
+            for _ in range(200):  # every message sent delivered (one connection: in order)
+                if conns["bare60"][0].count * 2 >= pub.sent:
+                    break
+                await asyncio.sleep(0.05)
+            for show, (conn, marks) in conns.items():
+                seen[show] = [conn.count, marks.get("last", -1)]
+                conn.transport.close()
+            return seen, pub.sent
+
+    seen, sent = asyncio.run(asyncio.wait_for(scenario(), 60))
+    assert seen["bare60"][0] >= 30 and sent == 2 * seen["bare60"][0]
+    assert abs(seen["bare30a"][0] - seen["bare30b"][0]) <= 1
+    assert seen["bare30a"][0] + seen["bare30b"][0] == seen["bare60"][0]
+    assert seen["bare30a"][1] % 2 == 0 and seen["bare30b"][1] % 2 == 1
