@@ -45,6 +45,10 @@ MIN_ONSET_HOPS = 20.0
 removal spreads each onset over :data:`LOCAL_MEAN_S`, so the first 0.2 s of a song after silence passed the
 ratio above, and two different songs that start together lined up on their first onsets (score 0.77)."""
 
+N_PEAKS = 4
+"""Candidates an estimate lists: music that repeats a stretch within the offsets searched puts a peak at each repeat
+(the seat's default 10 s of delays hold two or three repeats of a 3-4 s loop)."""
+
 NEAR_S = 0.045
 """How close to a held offset a peak counts as that offset (the tracker's gate)."""
 
@@ -71,6 +75,9 @@ class Estimate:
     near_score: Optional[float] = None
     """The best score within :data:`NEAR_S` of the ``near`` offset asked for (the offset a locked seat holds), None
     when not asked or out of the range searched."""
+    peaks: tuple[tuple[float, float], ...] = ()
+    """The candidates: ``(offset_s, score)`` of the highest peaks of the score, at most :data:`N_PEAKS`, each at least
+    :data:`EXCLUSION_S` from a higher one, best first (the first is ``offset_s``, ``score``)."""
 
 
 def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
@@ -139,7 +146,7 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
         if close.any():
             near_score = float(score[close].max())
     return Estimate(float(offset), peak, peak - second, int(active.sum()), t_heard + (w - 1) / RATE, even,
-                    near_score)
+                    near_score, _peaks(score, ex, t_heard - t_ref))
 
 
 SHARP_MARGIN = 0.15
@@ -171,6 +178,20 @@ def match(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float
     # hop k of the window against reference hop k + l: the same offsets t_heard - t_ref - l / RATE as above
     recent = estimate(heard_db[k:], t_heard + k / RATE, ref_db[k:], t_ref + k / RATE, near=held)
     return recent if recent is not None and recent.margin >= SHARP_MARGIN else est
+
+
+def _peaks(score: np.ndarray, ex: int, zero: float) -> tuple[tuple[float, float], ...]:
+    """The :data:`N_PEAKS` highest local maxima of ``score`` ``(L,)`` at least ``ex`` lags from a higher one, as
+    ``(offset, score)`` best first (lag ``l`` is offset ``zero - l / RATE``, refined as the best one is)."""
+    s = score.copy()
+    out = []
+    for _ in range(N_PEAKS):
+        k = int(np.argmax(s))
+        if not np.isfinite(s[k]) or s[k] == -np.inf:
+            break
+        out.append((float(zero - (k + _refine(score, k)) / RATE), float(score[k])))
+        s[max(0, k - ex):k + ex + 1] = -np.inf
+    return tuple(out)
 
 
 def _refine(score: np.ndarray, k: int) -> float:

@@ -40,7 +40,7 @@ from typing import Optional
 
 import numpy as np
 
-from .sync_estimator import SHARP_MARGIN, Estimate
+from .sync_estimator import N_PEAKS, SHARP_MARGIN, Estimate
 
 MIN_SCORE = 0.40
 MIN_MARGIN = 0.02
@@ -70,6 +70,14 @@ is confirmed. Through a noisy copy (room noise at 10 dB SNR) a bar that repeats 
 to 0.06 above it over a 3 s window (benchmarks/sync_margins.py): such a lead passes this test but not
 :data:`UNIQUE_MARGIN` (the held offset is among the offsets it must stand clear of), nor, lasting 0.9 s at most,
 :data:`STREAK_S`."""
+PRIOR_MAX_S = 1.5
+"""How far from the offset a locked seat held the new offset after a jump may be for the prior to pick it among
+aliases: players re-sync at drifts of 0.1-0.9 s (VR world video players) and a short re-buffer or skip moves the
+stream about a second; further jumps wait for the music to tell the aliases apart."""
+PRIOR_FAR = 2.0
+"""The prior picks the candidate nearest the held offset only when every other candidate within
+:data:`UNIQUE_MARGIN` of the best score lies at least this many times as far from it (a repeat of the music one
+period away from a short jump lies a period further, 1.6-4 s for bars and loops of songs)."""
 SHARP_VOTES = 3
 SHARP_AGREE_S = 0.010
 SHARP_SPAN_S = 0.2
@@ -110,6 +118,27 @@ def _sharp_median(points: list[tuple[float, float, float]]) -> Optional[float]:
     of them over a long enough time, or None."""
     size, median, span = _cluster([(a, o) for a, o, m in points if m >= SHARP_MARGIN], SHARP_AGREE_S)
     return median if size >= SHARP_VOTES and span >= SHARP_SPAN_S else None
+
+
+def prior_pick(est: Estimate, held: float) -> Optional[float]:
+    """The candidate of ``est`` a seat that held ``held`` (seconds) moves to when the music does not tell its
+    candidates apart (module docstring), or None: every candidate within :data:`UNIQUE_MARGIN` of the best score is
+    ambiguous (a clearly better one is never passed over); the nearest ambiguous one to ``held`` is picked when it
+    lies beyond the gate and within :data:`PRIOR_MAX_S` of it, reaches :data:`MIN_SCORE`, and every other ambiguous
+    one lies :data:`PRIOR_FAR` times as far. The held offset itself scoring among them (``near_score``), or the
+    candidates listed running out before the ambiguous ones do, picks nothing."""
+    if not est.peaks or (est.near_score is not None and est.near_score > est.score - UNIQUE_MARGIN):
+        return None
+    close = [(abs(o - held), o, s) for o, s in est.peaks if s > est.score - UNIQUE_MARGIN]
+    if len(close) == len(est.peaks) and len(close) >= N_PEAKS:
+        return None  # more candidates may lie beyond the ones listed
+    close.sort()
+    dist, offset, score = close[0]
+    if not (GATE_S < dist <= PRIOR_MAX_S) or score < MIN_SCORE:
+        return None
+    if any(d < PRIOR_FAR * dist for d, _, _ in close[1:]):
+        return None
+    return offset
 
 
 def _cluster(points: list[tuple[float, float]], agree: float) -> tuple[int, float, float]:
@@ -219,9 +248,12 @@ class DelayTracker:
             # the held offset scores as well as the best one (a repeated section): still the music played here
             self._confirmed = at
             return self._report("locked")
-        if unique or streak is not None:
+        prior = prior_pick(est, float(x[0])) if (good and not unique) else None
+        if unique or streak is not None or prior is not None:
             if unique:
                 self._jump.append((at, est.offset_s, est.margin if est.even else 0.0))
+            elif prior is not None:
+                self._jump.append((at, prior, 0.0))
             size, median, span = _cluster([(a, o) for a, o, _ in self._jump], AGREE_S)
             sharp = _sharp_median(self._jump)
             if sharp is not None:  # here sharp votes win over the ordinary cluster (a jump follows them sooner)
