@@ -26,7 +26,17 @@ offset that is the best in every window for :data:`STREAK_S` (the later windows 
   unbroken :data:`STREAK_S` of one offset outside the gate is one too. A match
   elsewhere votes for a jump only when it beats the held offset's own score (``Estimate.near_score``) by
   :data:`JUMP_LEAD`; music that repeats a section exactly scores the same at both, and one that does not beat the
-  held offset confirms it instead (the seat keeps playing where it was rather than hopping to the repeat).
+  held offset confirms it instead (the seat keeps playing where it was rather than hopping to the repeat; it stays
+  *locked*, the vest in step with what is heard, its confidence the held offset's own score).
+* **after a jump in music that repeats** (a loop, bars that repeat their rhythm), the new offset and its aliases one
+  period away score alike and none stands :data:`UNIQUE_MARGIN` clear until the music leaves the repeat. The offset
+  just held is then a prior (:func:`prior_pick`): players re-sync at small drifts and re-buffer by about a second,
+  so among the candidates within :data:`UNIQUE_MARGIN` of the best score the one nearest the held offset, within
+  :data:`PRIOR_MAX_S` of it, votes for the jump (as a voting estimate does) when every other one lies at least
+  :data:`PRIOR_FAR` times as far (a repeat one period further); a candidate that scores clearly better is never
+  passed over (it is then the only candidate), and where two lie at like distances (a short repeat) none votes:
+  the seat keeps the held offset and, since that no longer matches what is heard, says it lost the music after
+  :data:`LOST_AFTER_S`.
 * **lost**: no good estimate within the gate for :data:`LOST_AFTER_S`: the seat keeps the prediction (the stream
   most likely still plays where it did) and says so; after :data:`HOLD_S` more it is searching again and plays
   the user's fallback (the manual delay, or nothing).
@@ -245,10 +255,13 @@ class DelayTracker:
             return self._report("locked")
         if est is not None and est.near_score is not None and est.near_score >= MIN_SCORE \
                 and est.score - est.near_score < JUMP_LEAD:
-            # the held offset scores as well as the best one (a repeated section): still the music played here
+            # the held offset scores as well as the best one (a repeated section): still the music played here, and
+            # the vest in step with what is heard; the confidence follows the held offset's own score
             self._confirmed = at
+            self._scores.append(est.near_score)
             return self._report("locked")
-        prior = prior_pick(est, float(x[0])) if (good and not unique) else None
+        # music that repeats exactly leaves the candidates no margin at all: the prior weighs them on their scores
+        prior = prior_pick(est, float(x[0])) if (est is not None and not unique) else None
         if unique or streak is not None or prior is not None:
             if unique:
                 self._jump.append((at, est.offset_s, est.margin if est.even else 0.0))
