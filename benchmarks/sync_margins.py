@@ -34,8 +34,8 @@ import soundfile as sf
 
 from hapmotion.audience.sync_estimator import NEAR_S, SHARP_MARGIN, estimate
 from hapmotion.audience.seat_sync import SyncSettings
-from hapmotion.audience.sync_tracker import (AGREE_S, JUMP_LEAD, MIN_MARGIN, MIN_SCORE, STREAK_S, UNIQUE_MARGIN,
-                                             DelayTracker)
+from hapmotion.audience.sync_tracker import (AGREE_S, CLEAR_MARGIN, CLEAR_SCORE, JUMP_LEAD, MIN_MARGIN, MIN_SCORE,
+                                             STREAK_S, UNIQUE_MARGIN, DelayTracker)
 from hapmotion.audio.sync_features import N_BANDS, RATE, dequantise, quantise, signal_levels
 
 from tests.support.data import AUDIO
@@ -149,6 +149,9 @@ def main(argv: list[str] | None = None) -> int:
           f"above it {int((w[:, 0] >= MIN_SCORE).sum())}")
     print(f"  highest margin with onsets in both halves {w[even, 1].max():.2f} (sharp: {SHARP_MARGIN:.2f}); "
           f"99.9th percentile {np.percentile(w[even, 1], 99.9):.2f}; sharp windows {int(sharp.sum())}")
+    clear = even & (w[:, 0] >= CLEAR_SCORE) & (w[:, 1] >= CLEAR_MARGIN)
+    print(f"  windows with onsets in both halves, a score of {CLEAR_SCORE:.2f} or more and {CLEAR_MARGIN:.2f} clear "
+          f"(good under the score {MIN_SCORE:.2f}): {int(clear.sum())} (target 0)")
     kinds = np.array([k for _, _, k in right])
     for kind in ("codec", "noisy", "speech over"):
         sel = kinds == kind
@@ -164,6 +167,11 @@ def main(argv: list[str] | None = None) -> int:
               f"lock or jump vote), {r_sharp[ok].mean() * 100:.0f} % are sharp; at a wrong delay {int(wrong.sum())} "
               f"reach the score, their margin at most {top} (a vote needs {UNIQUE_MARGIN:.2f}), "
               f"{int((wrong & (r[:, 1] >= UNIQUE_MARGIN)).sum())} reach it")
+        low = (r[:, 2] > 0) & (r[:, 0] >= CLEAR_SCORE) & (r[:, 0] < MIN_SCORE) & (r[:, 1] >= CLEAR_MARGIN)
+        print(f"  under the score {MIN_SCORE:.2f} but from {CLEAR_SCORE:.2f}, {CLEAR_MARGIN:.2f} clear with onsets in "
+              f"both halves: {int((low & ok).sum())} at the right delay, {int((low & ~ok).sum())} at a wrong one; at a "
+              f"wrong delay from {CLEAR_SCORE:.2f}, with onsets in both halves, the margin at most "
+              f"{np.max(r[~ok & (r[:, 0] >= CLEAR_SCORE) & (r[:, 2] > 0), 1], initial=0.0):.3f}")
         rr = np.array([(w, g) for k, w, g in runs if k == kind])
         print(f"  one offset best in every window, unbroken, at most: {rr[:, 0].max():.1f} s at a wrong delay, "
               f"{rr[:, 1].min():.1f}-{rr[:, 1].max():.1f} s at the right one per song (a lock or jump on that "
@@ -187,9 +195,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def relocks(secs: float) -> None:
-    """A 1 s jump 20 s into the music (both ways) through the codec and with room noise at 10 dB SNR, on the shared songs and
-    the harness's synthetic ones: how long the re-lock took, whether it went anywhere wrong, and, in the slowest,
-    the candidates that competed (each one's distance from the offset held, and its score under the best)."""
+    """A 1 s jump 20 s into the music (both ways) through the codec and with room noise at 10 dB SNR, on the shared
+    songs and the harness's synthetic ones: how long the re-lock took, whether it went anywhere wrong, and, in the
+    slowest, the candidates that competed (each one's distance from the offset held, and its score under the best)."""
     songs = [("vibe_ace", sf.read(AUDIO / "vibe_ace.ogg", dtype="float64")[0]),
              ("lets_go_fishin", sf.read(AUDIO / "lets_go_fishin.ogg", dtype="float64")[0])]
     songs += [(f"synthetic-{k}", scenes.synth_song(k, 2 * secs + 10.0)) for k in (2026, 2027, 7, 8)]
@@ -219,9 +227,9 @@ def relocks(secs: float) -> None:
                     f"{o - delay:+.2f} s ({s - est.score:+.2f})" for o, s in est.peaks if s > est.score - UNIQUE_MARGIN)
                 rows.append((t[0] if t else math.inf, name, kind, delay, jump, near))
     times = np.array([r[0] for r in rows])
-    print(f"a 1 s jump 20 s into the music ({len(rows)} runs: {len(songs)} songs, through the codec and with room noise, both "
-          f"ways): re-locked in median {np.median(times):.1f} s, worst {times.max():.1f} s (target 3 s); windows played "
-          f"at neither the old nor the new offset: {wrong} (target 0); the slowest, with the candidates 2 s after "
+    print(f"a 1 s jump 20 s into the music ({len(rows)} runs: {len(songs)} songs, through the codec and with room "
+          f"noise, both ways): re-locked in median {np.median(times):.1f} s, worst {times.max():.1f} s (target 3 s); "
+          f"windows played at neither the old nor the new offset: {wrong} (target 0); the slowest, with the candidates 2 s after "
           f"the jump (offset from the one held, score under the best):")
     for t, name, kind, delay, jump, near in sorted(rows, key=lambda r: -r[0])[:4]:
         print(f"  {name} {kind} {delay * 1000:.0f} ms {jump:+.0f} s: {t:.1f} s; {near}")
