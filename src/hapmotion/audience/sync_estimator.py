@@ -71,7 +71,11 @@ class Estimate:
     at: float
     even: bool = False
     """Both halves of the heard window hold onsets (:data:`MIN_ONSET_HOPS` / 2 in at least :data:`MIN_ACTIVE_BANDS`
-    bands each): the match does not rest on the music starting (or stopping) inside the window."""
+    bands each) and the reference over the best offset's window was all received (none of it before the song's start
+    or in a gap): the match does not rest on the music starting (or stopping) inside the window on either side. Room
+    noise before a song passes the first test; with the second, a window holding noise and under a second of the song
+    no longer made sharp votes for an offset where the song's first second resembles a later one (the true offset
+    lines the noise up with the reference before the song's start, whose bands hold too few onsets to count)."""
     near_score: Optional[float] = None
     """The best score within :data:`NEAR_S` of the ``near`` offset asked for (the offset a locked seat holds), None
     when not asked or out of the range searched."""
@@ -132,6 +136,9 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
     if not np.isfinite(score).any() or np.all(quiet):
         return None
     best = int(np.argmax(score))
+    # the reference at the best lag must be whole as well: a window that lines the heard audio up with the song's
+    # start (or a gap) rests on the music starting inside it on the reference's side
+    even = even and not bool(missing[best:best + w].any())
     peak = float(score[best])
     frac = _refine(score, best)
     ex = max(1, int(round(EXCLUSION_S * RATE)))
