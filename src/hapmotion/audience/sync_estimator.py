@@ -158,12 +158,12 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
 
 SHARP_MARGIN = 0.15
 """Margin of a *sharp* estimate, one whose peak stands well clear of every other offset searched. Over 3 s windows
-whose both halves hold onsets, a different song (the shared songs and synthetic ones from benchmarks/sync_scenes.py
+that are :attr:`Estimate.even`, a different song (the shared songs and synthetic ones from benchmarks/sync_scenes.py
 against each other, through the low-quality codec, with and without room noise) or a speech-like signal stood
-0.16 at most above its next peak, 0.15 or more in 5 of 9252 windows (never three agreeing, which a lock needs); the
-right song through the codec with room noise at 10 dB SNR was sharp in 63 % of its windows at the right delay, 85 %
-without the noise (benchmarks/sync_margins.py, 10 s of delays searched). The tracker locks and follows jumps on fewer sharp estimates; a recent part of the
-window (below) is believed only when sharp."""
+0.15 at most above its next peak, 0.15 or more in 1 of 9252 windows (never three agreeing, which a lock needs); the
+right song through the codec with room noise at 10 dB SNR was sharp in 57 % of its windows at the right delay, 82 %
+without the noise (benchmarks/sync_margins.py, 10 s of delays searched). The tracker locks and follows jumps on
+fewer sharp estimates; a recent part of the window (below) is believed only when sharp."""
 
 RECENT_S = 1.5
 """A locked seat whose full window does not confirm the offset it holds matches the last this-many seconds of it as

@@ -60,7 +60,7 @@ CLEAR_SCORE = 0.30
 CLEAR_MARGIN = 0.20
 """An estimate whose window holds onsets in both halves (``Estimate.even``) and whose peak stands this far clear of
 every other offset is good from :data:`CLEAR_SCORE` on, under :data:`MIN_SCORE`: over 9252 windows of unrelated
-signals (benchmarks/sync_margins.py) no such window stood more than 0.16 clear at any score, while the right song
+signals (benchmarks/sync_margins.py) no such window stood more than 0.15 clear at any score, while the right song
 through a noisy copy can stand 0.2-0.3 clear at a score of 0.36-0.39 for its first seconds (vibe_ace through room
 noise at 10 dB SNR: the seat waited 3 s more for the score to reach :data:`MIN_SCORE`)."""
 UNIQUE_MARGIN = 0.10
