@@ -194,7 +194,7 @@ def _peaks(score: np.ndarray, ex: int, zero: float) -> tuple[tuple[float, float]
     out = []
     for _ in range(N_PEAKS):
         k = int(np.argmax(s))
-        if not np.isfinite(s[k]) or s[k] == -np.inf:
+        if not np.isfinite(s[k]):  # every lag taken
             break
         out.append((float(zero - (k + _refine(score, k)) / RATE), float(score[k])))
         s[max(0, k - ex):k + ex + 1] = -np.inf
