@@ -1,5 +1,5 @@
 """What the sync thresholds rest on: the scores and margins a seat's matching gives the right music and music that is
-not the venue's (offline, no network; about 35 s of CPU). Not a timed test: figures are printed beside the
+not the venue's (offline, no network; about 45 s of CPU). Not a timed test: figures are printed beside the
 thresholds of :mod:`hapmotion.audience.sync_tracker` and :mod:`hapmotion.audience.sync_estimator`.
 
 ``python -m benchmarks.sync_margins [--seconds S]``
@@ -16,7 +16,12 @@ enough to vote for a lock or a jump and that are sharp, the highest margin an es
 in music that repeats its rhythm) reached, which the voting margin must exceed, and the longest unbroken run of
 windows whose best offset is one wrong delay, which the streak a lock may rest on must exceed; and, for the shared
 songs and the harness's synthetic ones (seeds 2026, 2027, 7, 8) heard 1.3 s late through the codec with room noise,
-how far a peak elsewhere (a bar that repeats the rhythm) ever scored above the true offset.
+how far a peak elsewhere (a bar that repeats the rhythm) ever scored above the true offset; whether the right music
+without a jump ever made the seat jump or play off the truth; and a 1 s jump 20 s into the music (both ways, the six
+songs through the codec and with room noise, delays of 1.3-3 s): how long the seat took to re-lock, whether it played
+at an offset that was neither the old nor the new one, and for the slowest re-locks the candidates that competed 2 s
+after the jump (each one's distance from the offset held and its score under the best: aliases a period apart score
+alike, and :func:`~hapmotion.audience.sync_tracker.prior_pick` decides among them by their distances).
 """
 
 from __future__ import annotations
@@ -29,8 +34,8 @@ import soundfile as sf
 
 from hapmotion.audience.sync_estimator import NEAR_S, SHARP_MARGIN, estimate
 from hapmotion.audience.seat_sync import SyncSettings
-from hapmotion.audience.sync_tracker import (AGREE_S, JUMP_LEAD, MIN_MARGIN, MIN_SCORE, STREAK_S, UNIQUE_MARGIN,
-                                             DelayTracker)
+from hapmotion.audience.sync_tracker import (AGREE_S, CLEAR_MARGIN, CLEAR_SCORE, JUMP_LEAD, MIN_MARGIN, MIN_SCORE,
+                                             STREAK_S, UNIQUE_MARGIN, DelayTracker)
 from hapmotion.audio.sync_features import N_BANDS, RATE, dequantise, quantise, signal_levels
 
 from tests.support.data import AUDIO
@@ -42,11 +47,13 @@ SR = scenes.SR
 MAX_DELAY_S = SyncSettings().max_delay_s  # the seat's default range (--sync-max-delay)
 
 
-def follow(heard: np.ndarray, source: np.ndarray) -> tuple[list, DelayTracker]:
+def follow(heard: np.ndarray, source: np.ndarray, states: bool = False) -> tuple:
     """The seat's matching of ``heard`` (local time: its sample time) against ``source`` (media time: its sample
-    time) over the seat's default range of delays: [Estimate or None] per window and the tracker after it all."""
+    time) over the seat's default range of delays: [Estimate or None] per window and the tracker after it all (and,
+    with ``states``, the tracker's SyncState after each window)."""
     history, tracker = seat_matching(heard, source, max_delay_s=MAX_DELAY_S)
-    return [est for _, est, _ in history], tracker
+    ests = [est for _, est, _ in history]
+    return (ests, tracker, [s for _, _, s in history]) if states else (ests, tracker)
 
 
 def longest_runs(ests: list, delay_s: float) -> tuple[float, float]:
@@ -106,6 +113,7 @@ def main(argv: list[str] | None = None) -> int:
         return np.concatenate([np.zeros(SR), x])[:n]
 
     wrong, right, wrong_locks, lead_rows, runs = [], [], 0, [], []
+    right_jumps = right_off = 0
     for i, song in enumerate(songs):
         ref = song[:int((secs + 15.0) * SR)]
         heard = []
@@ -128,8 +136,10 @@ def main(argv: list[str] | None = None) -> int:
             elif kind == "speech over":  # as loud as the music (0 dB)
                 o = np.resize(scenes.speech_like(i + 1, secs), n)
                 h = h + o * float(np.sqrt(np.mean(h * h))) / max(1e-9, float(np.sqrt(np.mean(o * o))))
-            ests, _ = follow(h, ref)
+            ests, tracker, states = follow(h, ref, states=True)
             runs.append((kind, *longest_runs(ests, delay)))
+            right_jumps += tracker.jumps
+            right_off += sum(s.state != "searching" and abs(s.offset_s - delay) > 0.04 for s in states)
             right += [(e, abs(e.offset_s - delay) < 0.04, kind) for e in ests if e is not None]
     w = np.array([(e.score, e.margin, e.even) for e in wrong])
     even = w[:, 2] > 0
@@ -139,6 +149,9 @@ def main(argv: list[str] | None = None) -> int:
           f"above it {int((w[:, 0] >= MIN_SCORE).sum())}")
     print(f"  highest margin with onsets in both halves {w[even, 1].max():.2f} (sharp: {SHARP_MARGIN:.2f}); "
           f"99.9th percentile {np.percentile(w[even, 1], 99.9):.2f}; sharp windows {int(sharp.sum())}")
+    clear = even & (w[:, 0] >= CLEAR_SCORE) & (w[:, 1] >= CLEAR_MARGIN)
+    print(f"  windows with onsets in both halves, a score of {CLEAR_SCORE:.2f} or more and {CLEAR_MARGIN:.2f} clear "
+          f"(good under the score {MIN_SCORE:.2f}): {int(clear.sum())} (target 0)")
     kinds = np.array([k for _, _, k in right])
     for kind in ("codec", "noisy", "speech over"):
         sel = kinds == kind
@@ -154,10 +167,17 @@ def main(argv: list[str] | None = None) -> int:
               f"lock or jump vote), {r_sharp[ok].mean() * 100:.0f} % are sharp; at a wrong delay {int(wrong.sum())} "
               f"reach the score, their margin at most {top} (a vote needs {UNIQUE_MARGIN:.2f}), "
               f"{int((wrong & (r[:, 1] >= UNIQUE_MARGIN)).sum())} reach it")
+        low = (r[:, 2] > 0) & (r[:, 0] >= CLEAR_SCORE) & (r[:, 0] < MIN_SCORE) & (r[:, 1] >= CLEAR_MARGIN)
+        print(f"  under the score {MIN_SCORE:.2f} but from {CLEAR_SCORE:.2f}, {CLEAR_MARGIN:.2f} clear with onsets in "
+              f"both halves: {int((low & ok).sum())} at the right delay, {int((low & ~ok).sum())} at a wrong one; at a "
+              f"wrong delay from {CLEAR_SCORE:.2f}, with onsets in both halves, the margin at most "
+              f"{np.max(r[~ok & (r[:, 0] >= CLEAR_SCORE) & (r[:, 2] > 0), 1], initial=0.0):.3f}")
         rr = np.array([(w, g) for k, w, g in runs if k == kind])
         print(f"  one offset best in every window, unbroken, at most: {rr[:, 0].max():.1f} s at a wrong delay, "
               f"{rr[:, 1].min():.1f}-{rr[:, 1].max():.1f} s at the right one per song (a lock or jump on that "
               f"alone needs {STREAK_S:.1f} s)")
+    print(f"right music, no jump (all three kinds): jumps followed {right_jumps}, windows played more than 40 ms off "
+          f"the truth {right_off} (target 0 and 0)")
     # the lead of a repeated bar: the shared songs and the harness's synthetic songs (seeds 2026, 2027, 7, 8), 44 s
     # each at 1.3 s, two noise draws each
     tau = np.arange(int(44.0 * SR)) / SR
@@ -170,7 +190,49 @@ def main(argv: list[str] | None = None) -> int:
           f"rhythm) scored at most {worst:.3f} above the truth over {sum(x.size for x in lead_rows)} windows of "
           f"{len(lead_rows)} songs (a jump vote needs a lead of {JUMP_LEAD:.2f}); songs where one ever led: "
           f"{sum(bool((x > 0).any()) for x in lead_rows)}")
+    relocks(secs)
     return 0
+
+
+def relocks(secs: float) -> None:
+    """A 1 s jump 20 s into the music (both ways) through the codec and with room noise at 10 dB SNR, on the shared
+    songs and the harness's synthetic ones: how long the re-lock took, whether it went anywhere wrong, and, in the
+    slowest, the candidates that competed (each one's distance from the offset held, and its score under the best)."""
+    songs = [("vibe_ace", sf.read(AUDIO / "vibe_ace.ogg", dtype="float64")[0]),
+             ("lets_go_fishin", sf.read(AUDIO / "lets_go_fishin.ogg", dtype="float64")[0])]
+    songs += [(f"synthetic-{k}", scenes.synth_song(k, 2 * secs + 10.0)) for k in (2026, 2027, 7, 8)]
+    rng = np.random.default_rng(11)
+    rows, wrong = [], 0
+    for i, (name, song) in enumerate(songs):
+        song = song if song.ndim == 1 else song.mean(axis=1)
+        ref = song[:int((2 * secs + 10.0) * SR)]
+        coded = scenes.codec_copy(ref)
+        for kind in ("codec", "noisy"):
+            for jump in (1.0, -1.0):
+                delay = float(rng.uniform(1.3, 3.0))
+                jump_t = delay + 20.0  # 20 s into the music, as in the harness (vibe_ace is in its loop then)
+                tau = np.arange(int((jump_t + 8.0) * SR)) / SR
+                h = scenes.heard(coded, np.where(tau < jump_t, tau - delay, tau - delay - jump))
+                if kind == "noisy":
+                    h = scenes.add_noise(h, 10.0, 20 + i)
+                history, _ = seat_matching(h, ref, max_delay_s=MAX_DELAY_S)
+                truth = delay + jump
+                t = [at - jump_t for at, _, st in history if at >= jump_t and st.state == "locked"
+                     and abs(st.offset_s - truth) <= 0.04]
+                wrong += sum(st.state != "searching" and min(abs(st.offset_s - delay), abs(st.offset_s - truth)) > 0.04
+                             for _, _, st in history)
+                # the candidates within the voting margin of the best, 2 s after the jump (the held offset's distance)
+                est = next((e for at, e, _ in history if at >= jump_t + 2.0 and e is not None), None)
+                near = "" if est is None else " ".join(
+                    f"{o - delay:+.2f} s ({s - est.score:+.2f})" for o, s in est.peaks if s > est.score - UNIQUE_MARGIN)
+                rows.append((t[0] if t else math.inf, name, kind, delay, jump, near))
+    times = np.array([r[0] for r in rows])
+    print(f"a 1 s jump 20 s into the music ({len(rows)} runs: {len(songs)} songs, through the codec and with room "
+          f"noise, both ways): re-locked in median {np.median(times):.1f} s, worst {times.max():.1f} s (target 3 s); "
+          f"windows played at neither the old nor the new offset: {wrong} (target 0); the slowest, with the candidates 2 s after "
+          f"the jump (offset from the one held, score under the best):")
+    for t, name, kind, delay, jump, near in sorted(rows, key=lambda r: -r[0])[:4]:
+        print(f"  {name} {kind} {delay * 1000:.0f} ms {jump:+.0f} s: {t:.1f} s; {near}")
 
 
 if __name__ == "__main__":

@@ -45,6 +45,10 @@ MIN_ONSET_HOPS = 20.0
 removal spreads each onset over :data:`LOCAL_MEAN_S`, so the first 0.2 s of a song after silence passed the
 ratio above, and two different songs that start together lined up on their first onsets (score 0.77)."""
 
+N_PEAKS = 4
+"""Candidates an estimate lists: music that repeats a stretch within the offsets searched puts a peak at each repeat
+(the seat's default 10 s of delays hold two or three repeats of a 3-4 s loop)."""
+
 NEAR_S = 0.045
 """How close to a held offset a peak counts as that offset (the tracker's gate)."""
 
@@ -67,10 +71,17 @@ class Estimate:
     at: float
     even: bool = False
     """Both halves of the heard window hold onsets (:data:`MIN_ONSET_HOPS` / 2 in at least :data:`MIN_ACTIVE_BANDS`
-    bands each): the match does not rest on the music starting (or stopping) inside the window."""
+    bands each) and the reference over the best offset's window was all received (none of it before the song's start
+    or in a gap): the match does not rest on the music starting (or stopping) inside the window on either side. Room
+    noise before a song passes the first test; with the second, a window holding noise and under a second of the song
+    no longer made sharp votes for an offset where the song's first second resembles a later one (the true offset
+    lines the noise up with the reference before the song's start, whose bands hold too few onsets to count)."""
     near_score: Optional[float] = None
     """The best score within :data:`NEAR_S` of the ``near`` offset asked for (the offset a locked seat holds), None
     when not asked or out of the range searched."""
+    peaks: tuple[tuple[float, float], ...] = ()
+    """The candidates: ``(offset_s, score)`` of the highest peaks of the score, at most :data:`N_PEAKS`, each at least
+    :data:`EXCLUSION_S` from a higher one, best first (the first is ``offset_s``, ``score``)."""
 
 
 def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
@@ -125,6 +136,9 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
     if not np.isfinite(score).any() or np.all(quiet):
         return None
     best = int(np.argmax(score))
+    # the reference at the best lag must be whole as well: a window that lines the heard audio up with the song's
+    # start (or a gap) rests on the music starting inside it on the reference's side
+    even = even and not bool(missing[best:best + w].any())
     peak = float(score[best])
     frac = _refine(score, best)
     ex = max(1, int(round(EXCLUSION_S * RATE)))
@@ -139,17 +153,17 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
         if close.any():
             near_score = float(score[close].max())
     return Estimate(float(offset), peak, peak - second, int(active.sum()), t_heard + (w - 1) / RATE, even,
-                    near_score)
+                    near_score, _peaks(score, ex, t_heard - t_ref))
 
 
 SHARP_MARGIN = 0.15
 """Margin of a *sharp* estimate, one whose peak stands well clear of every other offset searched. Over 3 s windows
-whose both halves hold onsets, a different song (the shared songs and synthetic ones from benchmarks/sync_scenes.py
+that are :attr:`Estimate.even`, a different song (the shared songs and synthetic ones from benchmarks/sync_scenes.py
 against each other, through the low-quality codec, with and without room noise) or a speech-like signal stood
-0.16 at most above its next peak, 0.15 or more in 5 of 9252 windows (never three agreeing, which a lock needs); the
-right song through the codec with room noise at 10 dB SNR was sharp in 63 % of its windows at the right delay, 85 %
-without the noise (benchmarks/sync_margins.py, 10 s of delays searched). The tracker locks and follows jumps on fewer sharp estimates; a recent part of the
-window (below) is believed only when sharp."""
+0.15 at most above its next peak, 0.15 or more in 1 of 9252 windows (never three agreeing, which a lock needs); the
+right song through the codec with room noise at 10 dB SNR was sharp in 57 % of its windows at the right delay, 82 %
+without the noise (benchmarks/sync_margins.py, 10 s of delays searched). The tracker locks and follows jumps on
+fewer sharp estimates; a recent part of the window (below) is believed only when sharp."""
 
 RECENT_S = 1.5
 """A locked seat whose full window does not confirm the offset it holds matches the last this-many seconds of it as
@@ -171,6 +185,20 @@ def match(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float
     # hop k of the window against reference hop k + l: the same offsets t_heard - t_ref - l / RATE as above
     recent = estimate(heard_db[k:], t_heard + k / RATE, ref_db[k:], t_ref + k / RATE, near=held)
     return recent if recent is not None and recent.margin >= SHARP_MARGIN else est
+
+
+def _peaks(score: np.ndarray, ex: int, zero: float) -> tuple[tuple[float, float], ...]:
+    """The :data:`N_PEAKS` highest local maxima of ``score`` ``(L,)`` at least ``ex`` lags from a higher one, as
+    ``(offset, score)`` best first (lag ``l`` is offset ``zero - l / RATE``, refined as the best one is)."""
+    s = score.copy()
+    out = []
+    for _ in range(N_PEAKS):
+        k = int(np.argmax(s))
+        if not np.isfinite(s[k]):  # every lag taken
+            break
+        out.append((float(zero - (k + _refine(score, k)) / RATE), float(score[k])))
+        s[max(0, k - ex):k + ex + 1] = -np.inf
+    return tuple(out)
 
 
 def _refine(score: np.ndarray, k: int) -> float:

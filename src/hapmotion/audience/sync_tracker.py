@@ -1,7 +1,8 @@
 """From a stream of delay estimates to the delay a seat plays at: searching, locked, lost (sans-I/O).
 
 Each :class:`~hapmotion.audience.sync_estimator.Estimate` is *good* when its score reaches :data:`MIN_SCORE` and
-its margin :data:`MIN_MARGIN`. The thresholds come from what unrelated signals reach: over a 3 s window, 6-10 s of
+its margin :data:`MIN_MARGIN`, or, over a window whose both halves hold onsets, its score :data:`CLEAR_SCORE` and its
+margin :data:`CLEAR_MARGIN`. The thresholds come from what unrelated signals reach: over a 3 s window, 6-10 s of
 lags and five bands, a different song (the two shared songs against each other and against synthetic songs)
 scored about 0.3 at most, a speech-like signal too, room noise 0.15, while the right song through a low-quality Vorbis
 copy with room noise at 10 dB SNR scored 0.48 and more once the window was full of music.
@@ -26,7 +27,17 @@ offset that is the best in every window for :data:`STREAK_S` (the later windows 
   unbroken :data:`STREAK_S` of one offset outside the gate is one too. A match
   elsewhere votes for a jump only when it beats the held offset's own score (``Estimate.near_score``) by
   :data:`JUMP_LEAD`; music that repeats a section exactly scores the same at both, and one that does not beat the
-  held offset confirms it instead (the seat keeps playing where it was rather than hopping to the repeat).
+  held offset confirms it instead (the seat keeps playing where it was rather than hopping to the repeat; it stays
+  *locked*, the vest in step with what is heard, its confidence the held offset's own score).
+* **after a jump in music that repeats** (a loop, bars that repeat their rhythm), the new offset and its aliases one
+  period away score alike and none stands :data:`UNIQUE_MARGIN` clear until the music leaves the repeat. The offset
+  just held is then a prior (:func:`prior_pick`): players re-sync at small drifts and re-buffer by about a second,
+  so among the candidates within :data:`UNIQUE_MARGIN` of the best score the one nearest the held offset, within
+  :data:`PRIOR_MAX_S` of it, votes for the jump (as a voting estimate does) when every other one lies at least
+  :data:`PRIOR_FAR` times as far (a repeat one period further); a candidate that scores clearly better is never
+  passed over (it is then the only candidate), and where two lie at like distances (a short repeat) none votes:
+  the seat keeps the held offset and, since that no longer matches what is heard, says it lost the music after
+  :data:`LOST_AFTER_S`.
 * **lost**: no good estimate within the gate for :data:`LOST_AFTER_S`: the seat keeps the prediction (the stream
   most likely still plays where it did) and says so; after :data:`HOLD_S` more it is searching again and plays
   the user's fallback (the manual delay, or nothing).
@@ -40,11 +51,18 @@ from typing import Optional
 
 import numpy as np
 
-from .sync_estimator import SHARP_MARGIN, Estimate
+from .sync_estimator import N_PEAKS, SHARP_MARGIN, Estimate
 
 MIN_SCORE = 0.40
 MIN_MARGIN = 0.02
 """Margin (score minus the best score elsewhere) of an estimate that confirms the offset a locked seat holds."""
+CLEAR_SCORE = 0.30
+CLEAR_MARGIN = 0.20
+"""An estimate whose window holds onsets in both halves (``Estimate.even``) and whose peak stands this far clear of
+every other offset is good from :data:`CLEAR_SCORE` on, under :data:`MIN_SCORE`: over 9252 windows of unrelated
+signals (benchmarks/sync_margins.py) no such window stood more than 0.15 clear at any score, while the right song
+through a noisy copy can stand 0.2-0.3 clear at a score of 0.36-0.39 for its first seconds (vibe_ace through room
+noise at 10 dB SNR: the seat waited 3 s more for the score to reach :data:`MIN_SCORE`)."""
 UNIQUE_MARGIN = 0.10
 """Margin of an estimate that votes for a lock or a jump: its peak must be the only candidate. Over the right song
 0.3-3 s late through the low-quality codec (twelve songs, 10 s of delays searched, benchmarks/sync_margins.py),
@@ -70,6 +88,14 @@ is confirmed. Through a noisy copy (room noise at 10 dB SNR) a bar that repeats 
 to 0.06 above it over a 3 s window (benchmarks/sync_margins.py): such a lead passes this test but not
 :data:`UNIQUE_MARGIN` (the held offset is among the offsets it must stand clear of), nor, lasting 0.9 s at most,
 :data:`STREAK_S`."""
+PRIOR_MAX_S = 1.5
+"""How far from the offset a locked seat held the new offset after a jump may be for the prior to pick it among
+aliases: players re-sync at drifts of 0.1-0.9 s (VR world video players) and a short re-buffer or skip moves the
+stream about a second; further jumps wait for the music to tell the aliases apart."""
+PRIOR_FAR = 2.0
+"""The prior picks the candidate nearest the held offset only when every other candidate within
+:data:`UNIQUE_MARGIN` of the best score lies at least this many times as far from it (a repeat of the music one
+period away from a short jump lies a period further, 1.6-4 s for bars and loops of songs)."""
 SHARP_VOTES = 3
 SHARP_AGREE_S = 0.010
 SHARP_SPAN_S = 0.2
@@ -110,6 +136,27 @@ def _sharp_median(points: list[tuple[float, float, float]]) -> Optional[float]:
     of them over a long enough time, or None."""
     size, median, span = _cluster([(a, o) for a, o, m in points if m >= SHARP_MARGIN], SHARP_AGREE_S)
     return median if size >= SHARP_VOTES and span >= SHARP_SPAN_S else None
+
+
+def prior_pick(est: Estimate, held: float) -> Optional[float]:
+    """The candidate of ``est`` a seat that held ``held`` (seconds) moves to when the music does not tell its
+    candidates apart (module docstring), or None: every candidate within :data:`UNIQUE_MARGIN` of the best score is
+    ambiguous (a clearly better one is never passed over); the nearest ambiguous one to ``held`` is picked when it
+    lies beyond the gate and within :data:`PRIOR_MAX_S` of it, reaches :data:`MIN_SCORE`, and every other ambiguous
+    one lies :data:`PRIOR_FAR` times as far. The held offset itself scoring among them (``near_score``), or the
+    candidates listed running out before the ambiguous ones do, picks nothing."""
+    if not est.peaks or (est.near_score is not None and est.near_score > est.score - UNIQUE_MARGIN):
+        return None
+    close = [(abs(o - held), o, s) for o, s in est.peaks if s > est.score - UNIQUE_MARGIN]
+    if len(close) == len(est.peaks) and len(close) >= N_PEAKS:
+        return None  # more candidates may lie beyond the ones listed
+    close.sort()
+    dist, offset, score = close[0]
+    if not (GATE_S < dist <= PRIOR_MAX_S) or score < MIN_SCORE:
+        return None
+    if any(d < PRIOR_FAR * dist for d, _, _ in close[1:]):
+        return None
+    return offset
 
 
 def _cluster(points: list[tuple[float, float]], agree: float) -> tuple[int, float, float]:
@@ -171,7 +218,8 @@ class DelayTracker:
 
     # ------------------------------------------------------------------ update
     def update(self, est: Optional[Estimate], at: float) -> SyncState:
-        good = est is not None and est.score >= MIN_SCORE and est.margin >= MIN_MARGIN
+        good = est is not None and ((est.score >= MIN_SCORE and est.margin >= MIN_MARGIN)
+                                    or (est.even and est.score >= CLEAR_SCORE and est.margin >= CLEAR_MARGIN))
         while self._votes and self._votes[0][0] < at - VOTE_S:
             self._votes.popleft()
         while self._jump and self._jump[0][0] < at - VOTE_S:
@@ -216,12 +264,18 @@ class DelayTracker:
             return self._report("locked")
         if est is not None and est.near_score is not None and est.near_score >= MIN_SCORE \
                 and est.score - est.near_score < JUMP_LEAD:
-            # the held offset scores as well as the best one (a repeated section): still the music played here
+            # the held offset scores as well as the best one (a repeated section): still the music played here, and
+            # the vest in step with what is heard; the confidence follows the held offset's own score
             self._confirmed = at
+            self._scores.append(est.near_score)
             return self._report("locked")
-        if unique or streak is not None:
+        # music that repeats exactly leaves the candidates no margin at all: the prior weighs them on their scores
+        prior = prior_pick(est, float(x[0])) if (est is not None and not unique) else None
+        if unique or streak is not None or prior is not None:
             if unique:
                 self._jump.append((at, est.offset_s, est.margin if est.even else 0.0))
+            elif prior is not None:
+                self._jump.append((at, prior, 0.0))
             size, median, span = _cluster([(a, o) for a, o, _ in self._jump], AGREE_S)
             sharp = _sharp_median(self._jump)
             if sharp is not None:  # here sharp votes win over the ordinary cluster (a jump follows them sooner)
