@@ -166,7 +166,7 @@ async def role_publisher(url: str, fps: float, venue: str | None, sink_options: 
     cpu = time.process_time() - cpu0
     wall = time.perf_counter() - t0
     published = marks["engine"].sinks[0].published - published0
-    loop = type(asyncio.get_running_loop()).__module__.split(".")[0]
+    loop = event_loop.loop_kind(asyncio.get_running_loop())
     task.cancel()
     await asyncio.gather(task, return_exceptions=True)
     engine = marks["engine"]

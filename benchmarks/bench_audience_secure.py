@@ -1,7 +1,7 @@
 """What the venue's security costs the audience publisher: the audience benchmark plain and secure, interleaved.
 
-    python -m benchmarks.bench_audience_secure                # 4 pairs, N = 300, 10 s each, 60 Hz full frames
-    python -m benchmarks.bench_audience_secure --pairs 5      # about 3 minutes
+    python -m benchmarks.bench_audience_secure                # 4 pairs, N = 300, 10 s each: under 3 minutes
+    python -m benchmarks.bench_audience_secure --loop both    # also on asyncio's loop: 4 runs a pair, 6 minutes
 
 Each pair is two runs of :func:`benchmarks.bench_audience.run` back to back, the same show (the publisher replaying
 dataset-1_byebye_happy_001.bvh at 60 fps, today's full frames, no music: ``bench_audience --light N --k 4
@@ -10,23 +10,20 @@ rehearsal (unsigned, plain TCP, no authentication) and once as a venue deploys i
 configuration of ``hapmotion venue-setup`` with TLS required, NKeys and per-subject permissions, every frame
 signed by the publisher and checked by every full seat). The order alternates from pair to pair (plain first, then
 secure first, ...) so that neither set-up always runs on a warmer machine, and each run has a server of its own
-started for it.
+started for it. The publisher runs on the event loop ``hapmotion live`` gives a ``nats://`` sink (uvloop where it
+is installed: ``hapmotion.live.event_loop``), in both set-ups; ``--loop asyncio`` puts it on asyncio's own loop
+(what it ran on before), ``--loop both`` takes the two in turn within each pair.
 
 Publisher CPU is the publisher process's CPU time (user + system, every thread: ``time.process_time``) over the
-measured window, as a share of one core. Reported: each set-up's median over the pairs with its spread (lowest to
-highest), the secure one's extra over the plain median, and the median of the pairs' own ratios (each secure run
-against the plain run beside it, which cancels the machine's slower drifts), beside the target: at most 10 % more
-publisher CPU. Also the frame age p50 / p99 (light subscribers and full seats; target p99 < 50 ms), the server's
-CPU per seat-frame and the bytes per frame. The load average is printed before every run: on a shared machine
-the figures are only as steady as that.
+measured window, as a share of one core and per frame published in the window (the figure compared: a loaded
+machine makes the engine skip frames, which lowers the share of a core without making a frame any cheaper).
+Reported: each set-up's median over the pairs with its spread (lowest to highest), the secure one's extra per frame
+over the plain median, and the median of the pairs' own ratios (each secure run against the plain run beside it,
+which cancels the machine's slower drifts), beside the target: at most 10 % more publisher CPU. Also the frame age
+p50 / p99 (light subscribers and full seats; target p99 < 50 ms), the server's CPU per seat-frame and the bytes per
+frame. The load average is printed before every run: on a shared machine the figures are only as steady as that.
 
-Measured with ``--pairs 5`` on a shared 2-core machine (load average 2.0 to 3.6), the signatures by libsodium:
-publisher 2.81 % of a core plain (2.78-2.94) against 3.26 % secure (3.11-3.62), +16.2 % between the medians and
-+14.1 % the median of the pairs (+12.1 to +29.2 %) [target <= +10 %: missed]; with ``cryptography``'s signatures
-(before) +20.8 % and +11.1 % (+6.9 to +41.6 %). Frame age p99 secure 13.5 ms at the light subscribers and 28.2 ms at
-the full seats' Players (worst runs 16.8 and 34.9 ms) [target < 50 ms: met]; server 10.6 against 13.4 us a
-seat-frame; 416 against 484 bytes a frame. Where the extra goes (one signature and one TLS record a frame, each
-slower with the caches cold between frames): ``benchmarks.bench_audience_publish``.
+FIGURES
 """
 
 from __future__ import annotations
