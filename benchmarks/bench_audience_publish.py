@@ -1,8 +1,12 @@
 """The audience publisher's own cost per frame, plain against secure: the publish path alone, in this process.
 
-    python -m benchmarks.bench_audience_publish                   # 4 set-ups x 3 repeats, paced and back to back
-    python -m benchmarks.bench_audience_publish --repeats 5 --seconds 6
+    python -m benchmarks.bench_audience_publish                   # 4 set-ups x 2 loops x 3 repeats: 3 minutes
+    python -m benchmarks.bench_audience_publish --loop default --repeats 5 --seconds 6
     python -m benchmarks.bench_audience_publish --profile secure  # cProfile of one paced secure run
+
+Every set-up runs on the event loop ``hapmotion live`` gives a ``nats://`` sink (``default``: uvloop where it is
+installed, ``hapmotion.live.event_loop``) and on asyncio's own (what it ran on before), taken in turn (``--loop``
+chooses one).
 
 A :class:`~hapmotion.audience.publisher.NatsPublisherSink` is given the frames of a real recording
 (dataset-1_byebye_happy_001.bvh, every joint, no music: the ``--frames full --no-music`` show of

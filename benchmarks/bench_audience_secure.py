@@ -23,7 +23,16 @@ which cancels the machine's slower drifts), beside the target: at most 10 % more
 p50 / p99 (light subscribers and full seats; target p99 < 50 ms), the server's CPU per seat-frame and the bytes per
 frame. The load average is printed before every run: on a shared machine the figures are only as steady as that.
 
-FIGURES
+Measured with ``--loop both --pairs 4`` on a shared 2-core machine (load average 0.6 to 3.2), signatures by
+libsodium, the publisher on uvloop as ``hapmotion live`` runs it: 521 us of CPU a published frame plain (508-572)
+against 603 us secure (585-640), 3.12 % and 3.61 % of a core: +15.7 % between the medians and +15.0 % the median of
+the pairs (+11.9 to +16.6 %) [target <= +10 %: missed]. The same pairs with the publisher on asyncio's loop (before):
+521 (510-575) against 655 (625-720) us, +25.6 % and +24.3 % (+17.9 to +32.7 %): uvloop takes 52 us a frame off the
+secure publisher (its TLS writes) and leaves the rehearsal's as it was, the extra down from 134 to 82 us a frame.
+Frame age p99 secure on uvloop 13.1 ms at the light subscribers and 31.8 ms at the full seats' Players (worst runs
+19.7 and 41.5 ms) [target < 50 ms: met]; server 11.8 against 14.9 us a seat-frame; 416 against 484 bytes a frame.
+Where the extra goes (one signature and one TLS record a frame, each slower with the caches cold between frames):
+``benchmarks.bench_audience_publish``.
 """
 
 from __future__ import annotations

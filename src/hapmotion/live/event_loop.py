@@ -5,9 +5,9 @@
 A session that publishes to an audience (``hapmotion live --sink nats://...``) writes one message a frame to the
 NATS server, over TLS at a venue. asyncio's TLS transport is written in Python (``asyncio.sslproto``): every write
 passes through several Python calls before OpenSSL sees it, where uvloop (libuv, with its TLS transport in Cython)
-does the same in compiled code, and runs the loop's own turns cheaper too. Measured on the publish path alone
-(``benchmarks.bench_audience_publish``, 60 frames a second), uvloop takes a TLS write from about 65 to about 20 us of
-CPU a frame above plain TCP; ``benchmarks.bench_audience_secure`` measures the whole publisher.
+does the same in compiled code. Measured over the whole publisher (``benchmarks.bench_audience_secure``, a 60 Hz
+show, every frame signed and sent over TLS), uvloop takes about 50 us of CPU a frame (8 %) off a venue's publisher and
+leaves a rehearsal's (plain TCP) as it was.
 
 uvloop runs on Linux and macOS only (pinned in pyproject.toml for those platforms): on Windows, or wherever it is not
 installed or does not import, the session runs on asyncio's default loop with nothing said, the same behaviour.
