@@ -31,6 +31,8 @@ the pairs (+11.9 to +16.6 %) [target <= +10 %: missed]. The same pairs with the 
 secure publisher (its TLS writes) and leaves the rehearsal's as it was, the extra down from 134 to 82 us a frame.
 Frame age p99 secure on uvloop 13.1 ms at the light subscribers and 31.8 ms at the full seats' Players (worst runs
 19.7 and 41.5 ms) [target < 50 ms: met]; server 11.8 against 14.9 us a seat-frame; 416 against 484 bytes a frame.
+The default run on a busier machine (load average 1.0 to 4.0): +17.4 % (pairs +10.7 to +24.7 %), 566 against
+665 us a frame, full seats' p99 52 and 63 ms plain and secure [missed: the seats' share of two loaded cores].
 Where the extra goes (one signature and one TLS record a frame, each slower with the caches cold between frames):
 ``benchmarks.bench_audience_publish``.
 """
