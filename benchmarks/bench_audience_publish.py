@@ -1,8 +1,12 @@
 """The audience publisher's own cost per frame, plain against secure: the publish path alone, in this process.
 
-    python -m benchmarks.bench_audience_publish                   # 4 set-ups x 3 repeats, paced and back to back
-    python -m benchmarks.bench_audience_publish --repeats 5 --seconds 6
+    python -m benchmarks.bench_audience_publish                   # 4 set-ups x 2 loops x 3 repeats: 3 minutes
+    python -m benchmarks.bench_audience_publish --loop default --repeats 5 --seconds 6
     python -m benchmarks.bench_audience_publish --profile secure  # cProfile of one paced secure run
+
+Every set-up runs on the event loop ``hapmotion live`` gives a ``nats://`` sink (``default``: uvloop where it is
+installed, ``hapmotion.live.event_loop``) and on asyncio's own (what it ran on before), taken in turn (``--loop``
+chooses one).
 
 A :class:`~hapmotion.audience.publisher.NatsPublisherSink` is given the frames of a real recording
 (dataset-1_byebye_happy_001.bvh, every joint, no music: the ``--frames full --no-music`` show of
@@ -48,13 +52,14 @@ from pathlib import Path
 import numpy as np
 
 import hapmotion
-from benchmarks.bench_audience import BVH, security, secure_venue
+from benchmarks.bench_audience import BVH, LOOPS, security, secure_venue
 from hapmotion.audience.publisher import NatsPublisherSink, PublisherSecurity, describe_show
 from hapmotion.audience.server import LocalNatsServer
 from hapmotion.audience.signing import SeatTrust, VenueSigner, domain, load_private_key
 from hapmotion.audience.wire import encode_frame
 from hapmotion.body.model import BodyModel
 from hapmotion.layout import load_layout
+from hapmotion.live import event_loop
 from hapmotion.live.frames import OutFrame
 from hapmotion.show import Show
 from hapmotion.show.stage import OutputStage
@@ -132,7 +137,14 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--seconds", type=float, default=4.0, help="seconds of frames per paced run")
     ap.add_argument("--profile", choices=SETUPS, help="one paced run of this set-up under cProfile, top 30 functions")
+    ap.add_argument("--loop", choices=(*LOOPS, "both"), default="both",
+                    help="the event loop: as `hapmotion live` runs a nats:// sink (default: uvloop where installed), "
+                         "asyncio's, or both in turn")
     a = ap.parse_args()
+    loops = LOOPS if a.loop == "both" else (a.loop,)
+
+    def on(loop: str, coro):
+        return event_loop.run(coro, fast=loop == "default")
     logging.getLogger("hapmotion.live").setLevel(logging.ERROR)  # the sink's start-up line, once a run
     positions = hapmotion.load_motion(BVH).positions
     print(f"publish path, frames of {BVH.name} (every joint, no music), {a.seconds:g} s at {FPS:g} frames/s a paced "
@@ -147,31 +159,35 @@ def main() -> None:
                "secure": f"tls://127.0.0.1:{secure.port}"}
         if a.profile:
             prof = cProfile.Profile()
-            us = asyncio.run(publish_run(url[a.profile], venue, a.profile, a.seconds, positions, prof))
+            us = on(loops[0], publish_run(url[a.profile], venue, a.profile, a.seconds, positions, prof))
             out = io.StringIO()
             pstats.Stats(prof, stream=out).sort_stats("tottime").print_stats(30)
-            print(f"{a.profile}: {us:.0f} us CPU per frame (under the profiler)\n{out.getvalue()}")
+            print(f"{a.profile} on the {loops[0]} loop: {us:.0f} us CPU per frame (under the profiler)\n"
+                  f"{out.getvalue()}")
             return
-        runs = {(s, paced): [] for paced in (True, False) for s in SETUPS}
+        runs = {(lp, s, paced): [] for lp in loops for paced in (True, False) for s in SETUPS}
         for r in range(a.repeats):
             for paced in (True, False):
-                for s in SETUPS:
-                    runs[s, paced].append(asyncio.run(publish_run(url[s], venue, s, a.seconds, positions,
-                                                                  unpaced=not paced)))
-            print(f"  repeat {r + 1}: " + ", ".join(f"{s} {runs[s, p][-1]:.0f}" for p in (True, False)
-                                                   for s in SETUPS) + " us a frame (paced, then back to back)",
-                  flush=True)
+                for lp in loops:
+                    for s in SETUPS:
+                        runs[lp, s, paced].append(on(lp, publish_run(url[s], venue, s, a.seconds, positions,
+                                                                     unpaced=not paced)))
+            print(f"  repeat {r + 1}: " + "; ".join(f"{lp} " + ", ".join(f"{s} {runs[lp, s, p][-1]:.0f}"
+                                                                          for s in SETUPS)
+                                                   for p in (True, False) for lp in loops)
+                  + " us a frame (paced, then back to back)", flush=True)
     message = encode_frame(1, 1, 0.0, time.time(), positions[0], None)
     hot, cold = signature_us(key, message, 3000, paced=False), signature_us(key, message, 60, paced=True)
     print(f"\nCPU per published frame, median of {a.repeats} (lowest-highest); load average "
           f"{os.getloadavg()[0]:.1f} at the end")
     for paced, how in ((True, f"paced at {FPS:g}/s, as in a show"), (False, "back to back (caches hot)")):
-        print(f"  {how}:")
-        base = statistics.median(runs["plain", paced])
-        for s in SETUPS:
-            v = runs[s, paced]
-            print(f"    {s:7s} {statistics.median(v):6.1f} us ({min(v):.1f}-{max(v):.1f}), "
-                  f"{statistics.median(v) - base:+.1f} us against plain")
+        for lp in loops:
+            print(f"  {how}, {'uvloop where installed' if lp == 'default' else 'asyncio'}:")
+            base = statistics.median(runs[lp, "plain", paced])
+            for s in SETUPS:
+                v = runs[lp, s, paced]
+                print(f"    {s:7s} {statistics.median(v):6.1f} us ({min(v):.1f}-{max(v):.1f}), "
+                      f"{statistics.median(v) - base:+.1f} us against plain")
     print(f"  one {len(message)}-byte frame, median CPU of this thread, hot (back to back) / paced (one every "
           f"1/{FPS:g} s):")
     for what, now, before in (("signed", "sign", "sign_before"), ("checked", "check", "check_before")):

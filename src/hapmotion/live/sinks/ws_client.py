@@ -55,7 +55,11 @@ class _Link:
             pong = await self.ws.ping()
             await pong
 
-        self.checks.append((now, self.written, asyncio.create_task(ping())))
+        task = asyncio.create_task(ping())
+        # a connection closed under the ping fails it; oldest_unanswered() reads that, or nothing does when the link
+        # is dropped first: retrieved here so that it is never logged as an exception nobody retrieved
+        task.add_done_callback(lambda t: t.cancelled() or t.exception())
+        self.checks.append((now, self.written, task))
 
     def oldest_unanswered(self) -> Optional[float]:
         """Take in the answered checks; return the time the oldest unanswered one was sent (None: all answered).
