@@ -106,3 +106,18 @@ def test_run_live_publishes_a_signed_show_over_tls_on_uvloop_to_a_seat_that_chec
     assert len(ks) >= 0.9 * motion.n_frames and ks == sorted(ks) and ks[-1] == motion.n_frames - 1
     warnings = [r.getMessage() for r in live_log if r.levelno >= logging.WARNING]
     assert all("waiting for the show" in w for w in warnings), warnings  # nothing dropped, nothing refused
+
+
+def test_an_endless_delay_on_the_fast_loop_waits_as_on_asyncio():
+    pytest.importorskip("uvloop")
+    import math
+
+    async def endless() -> str:  # an infinite timeout (asyncio.timeout, wait_for) never fires on either loop
+        loop = asyncio.get_running_loop()
+        loop.call_later(math.inf, lambda: None).cancel()
+        async with asyncio.timeout(math.inf):
+            await asyncio.sleep(0)
+        return await asyncio.wait_for(asyncio.sleep(0, "done"), math.inf)
+
+    assert event_loop.run(endless(), fast=False) == "done"
+    assert event_loop.run(endless()) == "done"

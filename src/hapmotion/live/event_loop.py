@@ -46,7 +46,7 @@ def _paced(base: type) -> type:
 
     class PacedLoop(base):  # type: ignore[misc, valid-type]
         def call_later(self, delay: float, callback: Callable[..., Any], *args: Any, context: Any = None):
-            if delay > 0:
+            if 0 < delay < math.inf:  # (an endless delay stays endless: math.ceil cannot take it)
                 delay = math.ceil(delay * 1000.0) / 1000.0
             return super().call_later(delay, callback, *args, context=context)
 
