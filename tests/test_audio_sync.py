@@ -556,3 +556,34 @@ def test_audio_delivered_slower_than_real_time_is_not_matched(speed):
         assert sync.faults["slow_input"] > 0
         assert sync.tracker.locks == 0
         assert made == []
+
+
+@pytest.mark.parametrize("lost_at, loop_s, count", [(12.5, 1.2, 4), (15.75, 1.2, 4), (15.5, 1.0, 5)])
+def test_a_lost_reference_batch_inside_a_short_repeat_never_moves_a_locked_seat(lost_at, loop_s, count):
+    # the song heard 2 s late throughout, a stretch of loop_s repeated count times; 0.5 s of the reference never
+    # arrives (a lost batch: NaN rows, as ReferenceStore.span gives them). The gap lowers the held delay's score
+    # while the alias one loop further, whose window misses the gap, keeps its own: that alias stood 0.10 clear
+    # and the seat jumped there and back (0.8-2 s at 0.8 or 3.2 s, confidence 0.85-1.0) with nothing heard moving
+    import math
+
+    from hapmotion.audience.seat_sync import STEP_S, WINDOW_S
+    src = np.concatenate([song(5, 12.0)] + [song(6, loop_s)] * count + [song(7, 20.0)])
+    src = 0.8 * src / np.abs(src).max()
+    heard = played(src, np.arange(int(26 * SR)) / SR - 2.0)
+    ref = dequantise(quantise(signal_levels(src, SR)))
+    ref[int(lost_at * RATE):int((lost_at + 0.5) * RATE)] = np.nan
+    stream = LevelStream(SR)
+    levels = dequantise(quantise(np.concatenate([stream.push(heard[k:k + 441]) for k in range(0, heard.size, 441)])))
+    tracker, w, step = DelayTracker(), int(WINDOW_S * RATE), int(STEP_S * RATE)
+    for end in range(int(1.5 * RATE), levels.shape[0], step):
+        n = min(end, w)
+        t_heard = (end - n) / RATE
+        first = int(math.floor((t_heard - 10.0) * RATE))
+        idx = np.arange(first, first + n + int(10.25 * RATE))
+        r = np.full((idx.size, N_BANDS), np.nan)
+        ok = (idx >= 0) & (idx < ref.shape[0])
+        r[ok] = ref[idx[ok]]
+        at = t_heard + (n - 1) / RATE
+        state = tracker.update(match(levels[end - n:end], t_heard, r, first / RATE, held=tracker.offset_at(at)), at)
+        assert state.offset_s is None or abs(state.offset_s - 2.0) < 0.03, (round(at, 2), state)
+    assert tracker.locks == 1 and tracker.jumps == 0 and tracker.state.state == "locked"

@@ -82,6 +82,10 @@ class Estimate:
     peaks: tuple[tuple[float, float], ...] = ()
     """The candidates: ``(offset_s, score)`` of the highest peaks of the score, at most :data:`N_PEAKS`, each at least
     :data:`EXCLUSION_S` from a higher one, best first (the first is ``offset_s``, ``score``)."""
+    near_whole: bool = True
+    """The reference over the ``near`` offset's window was all received (True when not asked or out of the range
+    searched): where it was not (a lost batch), the held offset's score is lowered by the gap while an alias whose
+    window misses the gap keeps its own, so the scores do not compare (the tracker takes no vote to move from it)."""
 
 
 def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
@@ -145,15 +149,17 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
     others = np.concatenate([score[:max(0, best - ex)], score[best + ex + 1:]])
     second = float(others.max()) if others.size else -1.0
     offset = t_heard - t_ref - (best + frac) / RATE
-    near_score = None
+    near_score, near_whole = None, True
     if near is not None:
         lags = np.arange(n_lags)
         dist = np.abs(t_heard - t_ref - lags / RATE - near)  # offset of lag l: t_heard - t_ref - l / RATE
         close = dist <= NEAR_S
         if close.any():
             near_score = float(score[close].max())
+            near_lags = lags[close]
+            near_whole = not bool(missing[near_lags.min():near_lags.max() + w].any())
     return Estimate(float(offset), peak, peak - second, int(active.sum()), t_heard + (w - 1) / RATE, even,
-                    near_score, _peaks(score, ex, t_heard - t_ref))
+                    near_score, _peaks(score, ex, t_heard - t_ref), near_whole)
 
 
 SHARP_MARGIN = 0.15

@@ -269,8 +269,14 @@ class DelayTracker:
             self._confirmed = at
             self._scores.append(est.near_score)
             return self._report("locked")
+        if est is not None and not est.near_whole:
+            # a lost reference batch over the held offset's window lowers its score and not an alias's whose window
+            # misses the gap: no vote to move (nor a streak) rests on such a comparison
+            unique, streak = False, None
+            self._streak.clear()
+            self._streak_from = at
         # music that repeats exactly leaves the candidates no margin at all: the prior weighs them on their scores
-        prior = prior_pick(est, float(x[0])) if (est is not None and not unique) else None
+        prior = prior_pick(est, float(x[0])) if (est is not None and not unique and est.near_whole) else None
         if unique or streak is not None or prior is not None:
             if unique:
                 self._jump.append((at, est.offset_s, est.margin if est.even else 0.0))
