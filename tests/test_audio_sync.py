@@ -27,7 +27,7 @@ from hapmotion.audience.sync_reference import (
     decode_batch,
     encode_batch,
 )
-from hapmotion.audience.sync_tracker import STREAK_S, DelayTracker, prior_pick
+from hapmotion.audience.sync_tracker import ASSUMED_CONFIDENCE, STREAK_S, DelayTracker, prior_pick
 from hapmotion.audio.inputs import FileInput, PipeInput, open_input
 from hapmotion.audio.sync_features import (
     BANDS,
@@ -241,6 +241,30 @@ def test_a_jump_inside_a_loop_relocks_on_the_alias_nearest_the_delay_held(jump_s
     assert moved and moved[0] - 20.0 <= 3.0
     assert all(abs(s.offset_s - 2.0) < 0.01 or abs(s.offset_s - (2.0 + jump_s)) < 0.01 for _, s in after)
     assert after[-1][1].jumps == 1 and after[-1][1].state == "locked"
+    if jump_s < 0:  # (after +1 s the aliases, -0.7 and 6.7 s, lie outside the delays searched: the music decides)
+        # the music never told the new offset from its alias 4.7 s (the loop plays on): the seat does not claim it did
+        assert after[-1][1].confidence <= ASSUMED_CONFIDENCE
+
+
+def test_a_jump_of_two_thirds_of_a_loop_never_claims_a_confirmed_lock_on_the_wrong_alias():
+    # a 3.7 s loop, held at 2 s, jumps 2.5 s: the aliases of the new offset 4.5 s lie at 0.8 s (1.2 s from the held
+    # offset) and 8.2 s, so the nearest is a wrong one, which the audio cannot tell (the loop plays on to the end)
+    history = jumped(looped(3.7), 2.5, 10.0)
+    elsewhere = [s for at, _, s in history if at >= 20.0 and s.state != "searching"
+                 and min(abs(s.offset_s - 2.0), abs(s.offset_s - 4.5)) > 0.01]
+    assert all(s.confidence <= ASSUMED_CONFIDENCE for s in elsewhere)
+    confirmed = [s for at, _, s in history if 8.0 < at < 20.0 and s.state == "locked"]
+    assert confirmed and min(s.confidence for s in confirmed) > 2 * ASSUMED_CONFIDENCE   # before: the music's lock
+
+
+def test_an_assumed_offset_is_confirmed_once_the_music_leaves_the_loop():
+    # the same jump back by 1 s in a loop that ends at 26.8 s of media time (music that never repeats follows), heard
+    # from 28.8 s: assumed at first (its alias 4.7 s scores the same), confirmed once the window holds the new music
+    src = np.concatenate([looped(3.7, count=4), song(7, 20.0)])
+    history = jumped(0.8 * src / np.abs(src).max(), -1.0, None)
+    at_new = [(at, s) for at, _, s in history if at >= 20.0 and s.state == "locked" and abs(s.offset_s - 1.0) < 0.01]
+    assert at_new and at_new[0][1].confidence <= ASSUMED_CONFIDENCE
+    assert at_new[-1][1].confidence > 2 * ASSUMED_CONFIDENCE and at_new[-1][0] > 27.0
 
 
 @pytest.mark.parametrize("loop_s", [1.8, 2.6])

@@ -359,8 +359,10 @@ class SeatSync:
     def _say(self, state: SyncState) -> None:
         if state.state == "locked":
             lag = self.delay_behind_edge
-            log.info("seat sync: locked, %s behind the venue (confidence %.2f)",
-                     f"{lag * 1000:.0f} ms" if lag is not None else "?", state.confidence)
+            log.info("seat sync: locked, %s behind the venue (confidence %.2f%s)",
+                     f"{lag * 1000:.0f} ms" if lag is not None else "?", state.confidence,
+                     "; the music repeats here: the place nearest the last one, not yet confirmed"
+                     if self.tracker.assumed else "")
         elif state.state == "lost":
             log.warning("seat sync: lost the music; holding the last delay")
         else:

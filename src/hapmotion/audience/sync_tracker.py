@@ -37,7 +37,9 @@ offset that is the best in every window for :data:`STREAK_S` (the later windows 
   :data:`PRIOR_FAR` times as far (a repeat one period further); a candidate that scores clearly better is never
   passed over (it is then the only candidate), and where two lie at like distances (a short repeat) none votes:
   the seat keeps the held offset and, since that no longer matches what is heard, says it lost the music after
-  :data:`LOST_AFTER_S`.
+  :data:`LOST_AFTER_S`. A jump the prior decided is a guess (a jump of two thirds of a loop or more puts a wrong
+  alias nearest): the seat reports it with :data:`ASSUMED_CONFIDENCE` at most (:attr:`DelayTracker.assumed`) until a
+  window stands :data:`UNIQUE_MARGIN` clear at the offset held.
 * **lost**: no good estimate within the gate for :data:`LOST_AFTER_S`: the seat keeps the prediction (the stream
   most likely still plays where it did) and says so; after :data:`HOLD_S` more it is searching again and plays
   the user's fallback (the manual delay, or nothing).
@@ -96,6 +98,11 @@ PRIOR_FAR = 2.0
 """The prior picks the candidate nearest the held offset only when every other candidate within
 :data:`UNIQUE_MARGIN` of the best score lies at least this many times as far from it (a repeat of the music one
 period away from a short jump lies a period further, 1.6-4 s for bars and loops of songs)."""
+ASSUMED_CONFIDENCE = 0.2
+"""The confidence a seat reports while it plays at an offset the prior chose (:func:`prior_pick`) and no window has
+yet stood :data:`UNIQUE_MARGIN` clear at it: the music itself did not tell that offset from its aliases (a jump of
+two thirds of a loop or more puts the nearest alias, a wrong one, nearest the held offset), so the seat does not claim
+what a lock the audio decided claims (the scores of those reach :data:`CLEAR_SCORE` and more)."""
 SHARP_VOTES = 3
 SHARP_AGREE_S = 0.010
 SHARP_SPAN_S = 0.2
@@ -194,6 +201,9 @@ class DelayTracker:
         self._streak: deque[tuple[float, float, float]] = deque(maxlen=16)
         self.jumps = 0
         self.locks = 0
+        self.assumed = False
+        """The offset held was chosen by the prior and the music has not yet confirmed it (:data:`ASSUMED_CONFIDENCE`)."""
+        self._unique_jump: deque[tuple[float, float]] = deque()   # (at, offset) of the jump votes that stood clear
 
     # ------------------------------------------------------------------ filter
     def _start(self, at: float, offset: float) -> None:
@@ -202,7 +212,9 @@ class DelayTracker:
         self._t = at
         self._confirmed = at
         self._jump.clear()
+        self._unique_jump.clear()
         self._streak.clear()
+        self.assumed = False
 
     def _predict(self, at: float) -> tuple[np.ndarray, np.ndarray]:
         dt = max(0.0, at - self._t)
@@ -224,6 +236,8 @@ class DelayTracker:
             self._votes.popleft()
         while self._jump and self._jump[0][0] < at - VOTE_S:
             self._jump.popleft()
+        while self._unique_jump and self._unique_jump[0][0] < at - VOTE_S:
+            self._unique_jump.popleft()
         # only a peak that stands clear of every other offset votes: a bar that repeats the rhythm of the true one
         # scores close to it (or above it), and such a pair of candidates waits for audio that tells them apart
         unique = good and est.margin >= UNIQUE_MARGIN
@@ -261,6 +275,8 @@ class DelayTracker:
             self._confirmed = at
             self._jump.clear()
             self._scores.append(est.score)
+            if unique:
+                self.assumed = False  # the music alone now tells the offset held from every other
             return self._report("locked")
         if est is not None and est.near_score is not None and est.near_score >= MIN_SCORE \
                 and est.score - est.near_score < JUMP_LEAD:
@@ -280,17 +296,25 @@ class DelayTracker:
         if unique or streak is not None or prior is not None:
             if unique:
                 self._jump.append((at, est.offset_s, est.margin if est.even else 0.0))
+                self._unique_jump.append((at, est.offset_s))
             elif prior is not None:
                 self._jump.append((at, prior, 0.0))
             size, median, span = _cluster([(a, o) for a, o, _ in self._jump], AGREE_S)
             sharp = _sharp_median(self._jump)
             if sharp is not None:  # here sharp votes win over the ordinary cluster (a jump follows them sooner)
                 size, median, span = JUMP_VOTES, sharp, JUMP_SPAN_S
+            by_music = sharp is not None
             if streak is not None and abs(streak - x[0]) > GATE_S:
                 size, median, span = JUMP_VOTES, streak, JUMP_SPAN_S
+                by_music = True
             if size >= JUMP_VOTES and span >= JUMP_SPAN_S:
+                # a jump the clear votes alone would have made is the music's; one that needed the prior's is assumed
+                clear_size, _, clear_span = _cluster([(a, o) for a, o in self._unique_jump
+                                                      if abs(o - median) <= AGREE_S], AGREE_S)
+                by_music = by_music or (clear_size >= JUMP_VOTES and clear_span >= JUMP_SPAN_S)
                 self.jumps += 1
                 self._start(at, median)
+                self.assumed = not by_music
                 self._scores.clear()
                 self._scores.append(est.score)
                 return self._report("locked")
@@ -304,6 +328,8 @@ class DelayTracker:
     def _report(self, state: str) -> SyncState:
         offset = None if state == "searching" else float(self._x[0])
         confidence = float(np.mean(self._scores)) if (self._scores and state != "searching") else 0.0
+        if self.assumed and state != "searching":
+            confidence = min(confidence, ASSUMED_CONFIDENCE)
         self.state = SyncState(state, offset, confidence, float(self._x[1]) if offset is not None else 0.0,
                                self.jumps, self.locks)
         return self.state
