@@ -195,7 +195,25 @@ def test_the_control_reads_each_write_above_the_idle_seats(capsys):
     assert out["per:full@60"] == pytest.approx(10.0)  # the windows at N = 900 only
     text = capsys.readouterr().out
     assert "a 30 Hz write costs 1.25x a 60 Hz one" in text and "takes 20 % of the difference away" in text
-    assert "compact@30: 12.50 us a write against 10.00 for full@60 (1.25x): 2x fewer messages carry 1.60x" in text and "[reported: a bound" in text
+    assert "compact@30: 12.50 us a write against 10.00 for full@60 (1.25x)" in text
+    assert "375 us a second a seat against 600: 1.60x the seats" in text and "[reported: one N" in text
+
+
+def test_the_control_counts_the_seats_on_cpu_not_on_writes_when_a_late_server_coalesces(capsys):
+    # today's 60 Hz at 10 us a write but 0.8 writes a message (the server ran late and wrote some messages in pairs):
+    # 480 us a second a seat; compact 30 Hz at 12.5 us, one write a message: 375 us. 480 / 375 = 1.28x the seats,
+    # not the 2 / 1.25 = 1.60x that the write's cost times the message rate would give
+    def window(rate: float, per_write: float, writes_a_message: float) -> dict:
+        writes = 900 * rate * writes_a_message
+        return {"cpu": 0.02 + per_write * writes, "writes": writes, "delivered": 900 * rate}
+
+    rows = {"full@60": [(900, p, window(60.0, 10e-6, 0.8)) for p in (0, 1)],
+            "compact@30": [(900, p, window(30.0, 12.5e-6, 1.0)) for p in (0, 1)]}
+    idle = {"cpu": 0.02, "writes": 0.0, "delivered": 0.0}
+    control = {"idle": [idle, idle], "30 Hz": [window(30.0, 12.5e-6, 1.0)] * 2,
+               "halves": [window(30.0, 12e-6, 1.0)] * 2, "60 Hz": [window(60.0, 10e-6, 1.0)] * 2}
+    cap.summarise_control(rows, control, 900)
+    assert "480: 1.28x the seats" in capsys.readouterr().out
 
 
 def test_the_bare_publisher_plays_its_streams_half_a_period_apart():
