@@ -43,9 +43,11 @@ def heard_file(tmp_path, music: np.ndarray) -> str:
 
 
 async def show_and_seats(url: str, heard: str, *, unsynced: tuple[str, ...] = ("delay",), seconds: float = 14.0,
-                         publisher=PublisherSecurity(unsigned=True), seat_security=REHEARSAL):
+                         publisher=PublisherSecurity(unsigned=True), seat_security=REHEARSAL, end_show: bool = False):
     """The song published as a music-only show (the venue's reference with it) and one seat listening to ``heard``
-    for each of ``unsynced`` (what it does while unlocked); returns [(play times, the seat's sync)], one a seat."""
+    for each of ``unsynced`` (what it does while unlocked); returns [(play times, the seat's sync, its source)], one a
+    seat. With ``end_show`` the publisher ends the show after ``seconds`` and the seats get 8 s to end their
+    sessions (``source.over``) before they are stopped."""
     taps = [PlayTimes() for _ in unsynced]
     session_lists: list[list] = [[] for _ in unsynced]
     # the seats wait for the show, as an audience does: they hold the reference from the show's start
@@ -60,21 +62,27 @@ async def show_and_seats(url: str, heard: str, *, unsynced: tuple[str, ...] = ("
         await wait_for(lambda: all(sessions or task.done() for sessions, task in zip(session_lists, seat_tasks)), 10)
         await asyncio.sleep(seconds)
         sources = [sessions[-1][1] for sessions in session_lists]
+        if end_show:
+            await stop(show_task)
+            try:
+                await wait_for(lambda: all(source.over for source in sources), 8)
+            except AssertionError:
+                pass  # the test says what it expected
     finally:
         for task in seat_tasks:
             await stop(task)
         await stop(show_task)
-    return [(tap, source.sync) for tap, source in zip(taps, sources)]
+    return [(tap, source.sync, source) for tap, source in zip(taps, sources)]
 
 
 async def show_and_seat(url: str, heard: str, **kwargs):
-    """:func:`show_and_seats` with one seat: (play times, the seat's sync)."""
+    """:func:`show_and_seats` with one seat: (play times, the seat's sync, its source)."""
     return (await show_and_seats(url, heard, **kwargs))[0]
 
 
 def test_a_seat_locks_on_the_heard_music_and_plays_each_frame_when_it_is_heard(nats_server, tmp_path):
     heard = heard_file(tmp_path, real_song(seconds=20.0))
-    tap, sync = run_within(show_and_seat(f"{nats_server.url}/synced", heard), 60)
+    tap, sync, _ = run_within(show_and_seat(f"{nats_server.url}/synced", heard), 60)
     truth = sync.audio.started + LEAD_S     # local time minus media time of what the seat heard
     locked = [(at, s) for at, _, s in sync.estimates if s.state == "locked"]
     assert locked, "the seat never locked"
@@ -92,7 +100,7 @@ def test_a_seat_locks_on_the_heard_music_and_plays_each_frame_when_it_is_heard(n
 
 def test_seats_hearing_another_song_never_lock_and_play_as_their_users_chose(nats_server, tmp_path):
     heard = heard_file(tmp_path, real_song("lets_go_fishin.ogg", 20.0))
-    (tap_delay, sync_delay), (tap_silent, sync_silent) = run_within(
+    (tap_delay, sync_delay, _), (tap_silent, sync_silent, _) = run_within(
         show_and_seats(f"{nats_server.url}/other", heard, unsynced=("delay", "silent"), seconds=12.0), 60)
     for sync in (sync_delay, sync_silent):
         assert sync.estimates and all(s.state == "searching" for _, _, s in sync.estimates)
@@ -106,14 +114,16 @@ def test_a_signed_show_carries_a_signed_reference_that_a_checking_seat_locks_on(
     try:
         heard = heard_file(tmp_path, real_song(seconds=14.0))
         url = f"{venue.url}/signedsync"
-        tap, sync = run_within(show_and_seat(url, heard, seconds=11.0,
-                                                publisher=venue.publisher(),
-                                                seat_security=venue.seat()), 60)
+        tap, sync, source = run_within(show_and_seat(url, heard, seconds=11.0, publisher=venue.publisher(),
+                                                     seat_security=venue.seat(), end_show=True), 60)
     finally:
         venue.__exit__()
     assert sync.faults == {}
     assert sync.tracker.locks == 1
     assert abs(sync.state.offset_s - (sync.audio.started + LEAD_S)) < 0.010
+    # the venue ended the show: once the frames the seat holds for the music 2.5 s behind have played, its session
+    # ends (its recordings are finished), as an unsynchronised seat's does
+    assert source.over
 
 
 def test_a_forged_reference_is_dropped_and_counted(tmp_path):

@@ -21,7 +21,7 @@ import itertools
 import logging
 import os
 import time
-from collections import OrderedDict, deque
+from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any, Callable, Optional, Sequence, Union
 
@@ -52,6 +52,7 @@ from .compact import COMPACT, PACKED, message_decoder, missing_joints
 from .connection import NatsAuth, connect, connect_error, parse_server_url
 from .cue_gate import CueGate
 from .descriptions import DescriptionWatch
+from .frame_inbox import LATE_S, FrameInbox
 from .interpolation import Upsampler
 from .seat_sync import SeatSync, SyncSettings
 from .seat import Seat, SeatSink, SeatStage, numbered_sinks
@@ -60,9 +61,6 @@ from .wire import KIND_FRAME, MAGIC, VERSION, ShowDescription, WireFrame, check_
 
 log = logging.getLogger("hapmotion.live")
 
-LATE_S = 0.05
-"""A frame whose play time passed more than this long ago is stale and dropped: audio-haptic asynchrony becomes
-noticeable around 50 ms (see docs/audience.md)."""
 SEQ_SLACK_S = 2.0
 """A frame's seq may run ahead of the last one by the frames of the time since it arrived plus this much (twice
 over, for a replay at double speed): a forged far-future seq cannot make every real frame count as replayed."""
@@ -99,53 +97,6 @@ class SeatSecurity:
             raise UsageError("a seat checks the venue's signature: give the venue's public key (--venue-pubkey "
                              "FILE or HAPMOTION_VENUE_PUBKEY), or --unsigned for a rehearsal without keys")
         return SeatTrust(show, self.venue_key)
-
-
-EARLY_FRAMES = 1024
-"""Frames kept while a seat session is being built (about 17 s at 60 fps; only those still due will play)."""
-
-
-class FrameInbox:
-    """A seat's one subscription to the show's frames, made before the description is read: frames that arrive
-    while a session is being built wait here with their arrival time and go to the session's source when it starts
-    (:meth:`attach`), so a seat that was waiting plays the show from its first frame."""
-
-    def __init__(self) -> None:
-        self.early: deque[tuple[float, bytes]] = deque(maxlen=EARLY_FRAMES)
-        self.target: Optional[Callable[[bytes, float], None]] = None
-        self.sub: Optional[Subscription] = None
-
-    async def start(self, nc: NatsClient, show: str, delay_s: float) -> None:
-        pending = 4 * (int(1000.0 * (delay_s + 2.0)) + 64)  # the source's queue at the highest frame rate, 4 times
-        self.sub = await nc.subscribe(subject(show, "frame"), cb=self._on_msg, pending_msgs_limit=pending,
-                                      pending_bytes_limit=8 << 20)
-
-    async def _on_msg(self, msg: Msg) -> None:
-        arrival = time.perf_counter()
-        if self.target is not None:
-            self.target(msg.data, arrival)
-        else:
-            self.early.append((arrival, msg.data))
-
-    def attach(self, target: Callable[[bytes, float], None], delay_s: float) -> None:
-        """Hand the waiting frames, then every new one, to ``target``; a frame that arrived so long ago that it can no
-        longer play (its play time is at most its arrival plus the delay) is left out, not counted."""
-        self.target = target
-        too_old = time.perf_counter() - delay_s - LATE_S
-        while self.early:
-            arrival, data = self.early.popleft()
-            if arrival >= too_old:
-                target(data, arrival)
-
-    def detach(self) -> None:
-        self.target = None
-
-    async def close(self) -> None:
-        if self.sub is not None:
-            try:
-                await self.sub.unsubscribe()
-            except Exception:  # the connection may be gone: nothing to release then
-                pass
 
 
 class AudienceSource(Source):
@@ -217,14 +168,11 @@ class AudienceSource(Source):
             if not self._heap:
                 await self._wait_arrival(None)
                 continue
-            due = self._heap[0][0]
-            if self.sync is not None:  # keyed by media time; the sync's offset moves as it tracks the music
-                due = self.sync.play_time(self._heap[0][2].media_t, self._heap[0][3])
-                if due is None:
-                    heapq.heappop(self._heap)
-                    self.engine.faults.add("unsynced", "not locked to the music: frames are not played "
-                                                       "(--unsynced silent)")
-                    continue
+            due = self._play_time(self._heap[0])  # a synchronised seat keys them by media time: its offset moves
+            if due is None:
+                heapq.heappop(self._heap)
+                self.engine.faults.add("unsynced", "not locked to the music: frames are not played (--unsynced silent)")
+                continue
             wait = due - time.perf_counter()
             if wait > 0.0005:
                 await self._wait_arrival(wait)
@@ -401,15 +349,28 @@ class AudienceSource(Source):
                 self._arrived.set()
             # once the last frame has played and the vest has faded, the session ends (its recordings are
             # finished: no rows of silence while no show plays); the seat then waits for the next show
-            last = max((entry[3] for entry in self._heap), default=time.perf_counter())
-            wait = max(0.0, last - time.perf_counter()) + self.desc.stall_ms / 1000.0 + OVER_MARGIN_S
-            self._timers.add(asyncio.get_running_loop().call_later(wait, self._show_over, self.desc.epoch))
+            self._end_after_the_last_frame(self.desc.epoch)
+
+    def _end_after_the_last_frame(self, epoch: int) -> None:
+        """Look again once the frames still waiting have played and the vest has faded (a synchronised seat plays
+        them when the music it hears says, seconds after they were due to arrive)."""
+        now = time.perf_counter()
+        last = max((self._play_time(entry) or now for entry in self._heap), default=now)
+        wait = max(0.0, last - now) + self.desc.stall_ms / 1000.0 + OVER_MARGIN_S
+        self._timers.add(asyncio.get_running_loop().call_later(wait, self._show_over, epoch))
+
+    def _play_time(self, entry: tuple) -> Optional[float]:
+        return entry[3] if self.sync is None else self.sync.play_time(entry[2].media_t, entry[3])
 
     def _show_over(self, epoch: int) -> None:
-        if epoch == self.desc.epoch and not self._heap and not self.ended.is_set():  # no next run played on
-            self.over = True
-            self.ended.set()
-            self._arrived.set()
+        if epoch != self.desc.epoch or self.ended.is_set():  # a next run plays on, or the session ended already
+            return
+        if self._heap:  # frames of this run still to play
+            self._end_after_the_last_frame(epoch)
+            return
+        self.over = True
+        self.ended.set()
+        self._arrived.set()
 
     # ------------------------------------------------------------------ another run
     def offer_description(self, desc: ShowDescription) -> None:
