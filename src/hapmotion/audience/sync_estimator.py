@@ -17,7 +17,7 @@ thresholds that decide it live in :mod:`hapmotion.audience.sync_tracker`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Optional
 
 import numpy as np
@@ -82,6 +82,10 @@ class Estimate:
     peaks: tuple[tuple[float, float], ...] = ()
     """The candidates: ``(offset_s, score)`` of the highest peaks of the score, at most :data:`N_PEAKS`, each at least
     :data:`EXCLUSION_S` from a higher one, best first (the first is ``offset_s``, ``score``)."""
+    envelopes: tuple[Optional[float], ...] = ()
+    """The band-energy score (:func:`envelope_scores`) of each of :attr:`peaks` over the window's last
+    :data:`RECENT_S` (in order; None where the reference is not whole there): filled in by :func:`match` for a
+    locked seat whose window lands away from the offset it holds (after a jump), empty otherwise."""
 
 
 def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
@@ -171,6 +175,43 @@ well (the shortest window a seat matches at all): after a jump, the full window 
 two peaks share its score for as long as both halves last, while the recent part holds the new one alone."""
 
 
+ENVELOPE_SMOOTH = 5
+"""Hops (50 ms) of each band's level averaged before the envelopes are compared: through room noise a band's level
+hop to hop is noise's, the envelope of notes and bars is not."""
+
+
+def envelope_scores(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
+                    offsets: "list[float] | tuple[float, ...]") -> tuple[Optional[float], ...]:
+    """How well the heard band levels ``(W, B)`` dB follow the reference's ``(N, B)`` at each offset (seconds, as
+    :func:`estimate` counts them): the Pearson correlation of each band's level (smoothed over
+    :data:`ENVELOPE_SMOOTH` hops), averaged over the bands whose heard level varies; -1..1, None where the reference
+    at that offset is not whole or lies outside ``ref_db``. The onset score sees only rises, so two bars with the
+    same rhythm score alike; their loudness over the bars (a chord change, a fill, a louder section) often differs,
+    which this sees. Unlike the onset score it does not whiten: by itself it peaks broadly and is no evidence of a
+    delay; it only weighs candidates the onset score already found."""
+    w = heard_db.shape[0]
+    h = uniform_filter1d(np.asarray(heard_db, dtype=np.float64), ENVELOPE_SMOOTH, axis=0, mode="nearest")
+    h = h - h.mean(axis=0)
+    h_norm = np.sqrt((h * h).sum(axis=0))
+    live = h_norm / np.sqrt(max(w, 1)) > MIN_NOVELTY_DB
+    out: list[Optional[float]] = []
+    for o in offsets:
+        lag = int(round((t_heard - t_ref - o) * RATE))
+        if not live.any() or lag < 0 or lag + w > ref_db.shape[0] or not np.isfinite(ref_db[lag:lag + w]).all():
+            out.append(None)
+            continue
+        r = uniform_filter1d(np.asarray(ref_db[lag:lag + w], dtype=np.float64), ENVELOPE_SMOOTH, axis=0,
+                             mode="nearest")
+        r = r - r.mean(axis=0)
+        r_norm = np.sqrt((r * r).sum(axis=0))
+        ok = live & (r_norm > 1e-9)
+        if not ok.any():
+            out.append(None)
+            continue
+        out.append(float(np.mean((h[:, ok] * r[:, ok]).sum(axis=0) / (h_norm[ok] * r_norm[ok]))))
+    return tuple(out)
+
+
 def match(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
           held: Optional[float] = None) -> Optional[Estimate]:
     """The estimate a seat acts on: :func:`estimate` of the whole heard window ``(W, B)`` (``held``: the offset a
@@ -184,7 +225,14 @@ def match(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float
         return est
     # hop k of the window against reference hop k + l: the same offsets t_heard - t_ref - l / RATE as above
     recent = estimate(heard_db[k:], t_heard + k / RATE, ref_db[k:], t_ref + k / RATE, near=held)
-    return recent if recent is not None and recent.margin >= SHARP_MARGIN else est
+    if recent is not None and recent.margin >= SHARP_MARGIN:
+        return recent
+    if est is None or not est.peaks:
+        return est
+    # the candidates weighed by the loudness of the audio heard since the jump (the recent part alone)
+    env = envelope_scores(heard_db[k:], t_heard + k / RATE, ref_db[k:], t_ref + k / RATE,
+                          [o for o, _ in est.peaks])
+    return replace(est, envelopes=env)
 
 
 def _peaks(score: np.ndarray, ex: int, zero: float) -> tuple[tuple[float, float], ...]:
