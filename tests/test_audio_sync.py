@@ -21,7 +21,7 @@ from hapmotion.audience.seat_sync import (
     SeatSync,
     SyncSettings,
 )
-from hapmotion.audience.sync_estimator import Estimate, envelope_scores, match
+from hapmotion.audience.sync_estimator import N_PEAKS, Estimate, envelope_scores, match
 from hapmotion.audience.sync_reference import (
     ReferencePublisher,
     SongReference,
@@ -285,7 +285,8 @@ def test_the_prior_picks_only_a_clearly_nearest_candidate_and_never_over_a_clear
     assert prior_pick(est([(6.7, 0.62), (3.0, 0.60)], near=0.55), held) is None          # the held one scores too
     assert prior_pick(est([(6.7, 0.62), (3.8, 0.60)]), held) is None                    # 1.8 s: beyond a re-sync
     assert prior_pick(est([(6.7, 0.40), (3.0, 0.38)]), held) is None                    # too weak to vote
-    assert prior_pick(est([(6.7, 0.62), (3.0, 0.61), (9.0, 0.60), (8.0, 0.60)]), held) is None  # more may follow
+    full = [(6.7, 0.62), (3.0, 0.61)] + [(8.0 + k, 0.60) for k in range(N_PEAKS - 2)]  # as many as are listed
+    assert prior_pick(est(full), held) is None                                           # more may follow
 
 
 def shaded(loop_s: float, intro_s: float = 12.0, count: int = 10) -> np.ndarray:
@@ -348,8 +349,8 @@ def test_the_band_energy_pick_breaks_only_ties_of_the_onset_score_by_a_clear_lea
     assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60)], [None, 0.9]), held) is None         # one not weighed
     assert envelope_pick(est([(3.6, 0.42), (1.0, 0.38)], [0.5, 0.9]), held) is None          # too weak to vote
     assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60)], []), held) is None                  # not weighed at all
-    assert envelope_pick(est([(3.6, 0.62), (1.0, 0.61), (9.0, 0.60), (8.0, 0.60)], [0.5, 0.9, 0.5, 0.5]),
-                         held) is None  # more candidates may follow
+    full = [(3.6, 0.62), (1.0, 0.61)] + [(8.0 + k, 0.60) for k in range(N_PEAKS - 2)]  # as many as are listed
+    assert envelope_pick(est(full, [0.5, 0.9] + [0.5] * (N_PEAKS - 2)), held) is None    # more may follow
 
 
 def test_silence_gives_no_estimate_and_never_locks():

@@ -45,9 +45,11 @@ MIN_ONSET_HOPS = 20.0
 removal spreads each onset over :data:`LOCAL_MEAN_S`, so the first 0.2 s of a song after silence passed the
 ratio above, and two different songs that start together lined up on their first onsets (score 0.77)."""
 
-N_PEAKS = 4
+N_PEAKS = 8
 """Candidates an estimate lists: music that repeats a stretch within the offsets searched puts a peak at each repeat
-(the seat's default 10 s of delays hold two or three repeats of a 3-4 s loop)."""
+(the seat's default 10 s of delays hold two or three repeats of a 3-4 s loop, and four of a 2.6 s bar with the
+peaks between bars that its rhythm adds: after synthetic-2026's jump, benchmarks/bench_sync.py, four listed
+candidates all lay within the voting margin of the best for a second, which a pick cannot decide on)."""
 
 NEAR_S = 0.045
 """How close to a held offset a peak counts as that offset (the tracker's gate)."""
@@ -218,7 +220,9 @@ def match(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float
     locked seat holds, its score asked for), or, when that does not land within :data:`NEAR_S` of ``held``, of the
     window's last :data:`RECENT_S` seconds (the same offsets searched), which says where the music is now, if that
     is sharp (:data:`SHARP_MARGIN`): a shorter window fits inside a repeated bar more easily, and music that repeats
-    within the offsets searched leaves its peak no margin, so then the whole window's estimate stands."""
+    within the offsets searched leaves its peak no margin, so then the whole window's estimate stands, its candidates
+    weighed by their band-energy scores over that recent part (:attr:`Estimate.envelopes`, :func:`envelope_scores`:
+    what was heard since a jump)."""
     est = estimate(heard_db, t_heard, ref_db, t_ref, near=held)
     k = heard_db.shape[0] - int(round(RECENT_S * RATE))
     if held is None or k <= 0 or (est is not None and abs(est.offset_s - held) <= NEAR_S):

@@ -37,7 +37,12 @@ offset that is the best in every window for :data:`STREAK_S` (the later windows 
   :data:`PRIOR_FAR` times as far (a repeat one period further); a candidate that scores clearly better is never
   passed over (it is then the only candidate), and where two lie at like distances (a short repeat) none votes:
   the seat keeps the held offset and, since that no longer matches what is heard, says it lost the music after
-  :data:`LOST_AFTER_S`.
+  :data:`LOST_AFTER_S`. Before the prior, the loudness of what was heard since the jump is asked
+  (:func:`envelope_pick`): bars that repeat a rhythm often differ in loudness (a chord, a fill, a drone), so among
+  the same ambiguous candidates the one whose band-energy score (``Estimate.envelopes``, the window's last 1.5 s)
+  stands :data:`ENVELOPE_LEAD` above every other and reaches :data:`ENVELOPE_MIN` votes for the jump the same way.
+  That score alone is no evidence of a delay (it does not whiten the music, and unrelated music reaches 0.8): it
+  only weighs candidates the onset score found, and the votes a jump needs stay the same.
 * **lost**: no good estimate within the gate for :data:`LOST_AFTER_S`: the seat keeps the prediction (the stream
   most likely still plays where it did) and says so; after :data:`HOLD_S` more it is searching again and plays
   the user's fallback (the manual delay, or nothing).
