@@ -336,9 +336,9 @@ def test_the_band_energy_score_is_1_where_the_levels_match_and_lower_where_only_
 
 
 def test_the_band_energy_pick_breaks_only_ties_of_the_onset_score_by_a_clear_lead():
-    def est(peaks, envelopes, near=0.1):
+    def est(peaks, envelopes, near=0.1, held_env=0.2):
         return Estimate(peaks[0][0], peaks[0][1], peaks[0][1] - peaks[1][1], 5, 30.0, True, near, tuple(peaks),
-                        tuple(envelopes))
+                        tuple(envelopes), held_env)
 
     held = 2.0
     assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60), (8.0, 0.3)], [0.72, 0.86, 0.1]), held) == 1.0
@@ -349,6 +349,8 @@ def test_the_band_energy_pick_breaks_only_ties_of_the_onset_score_by_a_clear_lea
     assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60)], [None, 0.9]), held) is None         # one not weighed
     assert envelope_pick(est([(3.6, 0.42), (1.0, 0.38)], [0.5, 0.9]), held) is None          # too weak to vote
     assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60)], []), held) is None                  # not weighed at all
+    assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60)], [0.5, 0.9], held_env=None), held) is None  # held not whole
+    assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60)], [0.5, 0.9], held_env=0.85), held) is None  # held as loud
     full = [(3.6, 0.62), (1.0, 0.61)] + [(8.0 + k, 0.60) for k in range(N_PEAKS - 2)]  # as many as are listed
     assert envelope_pick(est(full, [0.5, 0.9] + [0.5] * (N_PEAKS - 2)), held) is None    # more may follow
 

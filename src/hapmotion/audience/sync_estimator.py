@@ -88,6 +88,9 @@ class Estimate:
     """The band-energy score (:func:`envelope_scores`) of each of :attr:`peaks` over the window's last
     :data:`RECENT_S` (in order; None where the reference is not whole there): filled in by :func:`match` for a
     locked seat whose window lands away from the offset it holds (after a jump), empty otherwise."""
+    held_envelope: Optional[float] = None
+    """The same band-energy score at the offset the locked seat holds, None when not asked or where the reference
+    there is not whole (the music heard has run past the reference received, a gap)."""
 
 
 def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
@@ -235,8 +238,8 @@ def match(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float
         return est
     # the candidates weighed by the loudness of the audio heard since the jump (the recent part alone)
     env = envelope_scores(heard_db[k:], t_heard + k / RATE, ref_db[k:], t_ref + k / RATE,
-                          [o for o, _ in est.peaks])
-    return replace(est, envelopes=env)
+                          [o for o, _ in est.peaks] + [held])
+    return replace(est, envelopes=env[:-1], held_envelope=env[-1])
 
 
 def _peaks(score: np.ndarray, ex: int, zero: float) -> tuple[tuple[float, float], ...]:

@@ -181,9 +181,12 @@ def envelope_pick(est: Estimate, held: float) -> Optional[float]:
     within :data:`UNIQUE_MARGIN` of the best onset score, the held offset not among them (``near_score``); the one
     with the highest band-energy score is picked when it lies beyond the gate from ``held``, its onset score reaches
     :data:`MIN_SCORE`, its band-energy score :data:`ENVELOPE_MIN`, and every other ambiguous one's band-energy score
-    is known and :data:`ENVELOPE_LEAD` under it. The candidates listed running out before the ambiguous ones do
-    picks nothing."""
-    if not est.peaks or len(est.envelopes) != len(est.peaks) or (
+    is known and :data:`ENVELOPE_LEAD` under it, and so is the held offset's (``Estimate.held_envelope``). The
+    candidates listed running out before the ambiguous ones do picks nothing, and so does a held offset whose
+    reference is not whole: where the heard music runs past the reference received (the show's end, a gap), the true
+    offset cannot score and a bar that repeats earlier in the reference would win (benchmarks/bench_sync.py: a seat
+    jumped one bar off 40 s into a 40 s show)."""
+    if not est.peaks or len(est.envelopes) != len(est.peaks) or est.held_envelope is None or (
             est.near_score is not None and est.near_score > est.score - UNIQUE_MARGIN):
         return None
     close = [(e, o, s) for (o, s), e in zip(est.peaks, est.envelopes) if s > est.score - UNIQUE_MARGIN]
@@ -195,7 +198,7 @@ def envelope_pick(est: Estimate, held: float) -> Optional[float]:
     env, offset, score = close[0]
     if abs(offset - held) <= GATE_S or score < MIN_SCORE or env < ENVELOPE_MIN:
         return None
-    if close[1][0] > env - ENVELOPE_LEAD:
+    if max(close[1][0], est.held_envelope) > env - ENVELOPE_LEAD:
         return None
     return offset
 
