@@ -33,12 +33,16 @@ slower than real time (a writer that cannot keep up hands the seat audio later t
 the seat would rightly place later: the harness's error, not the seat's). All seats and the publisher share this
 process and this machine's cores with other work (a loaded machine), as the load average printed says.
 
-Figures of the last runs (docs/audience.md, "Measured", has the table and the loads): the defaults, lock median
-2.6 s, worst 3.5 s; re-lock median 2.1 s, worst 3.3 s (synthetic-2026's noisy copy, whose rhythm repeats every
-2.59 s: the aliases of its jump lie at like distances, 3.2-4.5 s over five runs); ``--seed 7``, lock median 2.1 s,
-worst 3.3 s, re-lock median 2.2 s, worst 3.1 s; no false lock (one, once, in a run of the version before under a
-load average of 6.3 with the pipe writers 233 ms behind real time, not explained). Before the prior of the delay
-held, vibe_ace's re-locks (its music loops a 3.7 s stretch) took 7-11 s; now 1.6-2.7 s.
+Figures of the last runs (docs/audience.md, "Measured", has the table and the loads), five runs of the defaults
+(two with the trace on) and three of ``--seed 7`` before the fix below: the defaults, lock median 2.7 s, worst 3.3-4.5 s; re-lock median 2.1-2.2 s, worst
+2.6-3.0 s (synthetic-2026's noisy copy, whose rhythm repeats every 2.59 s: the aliases of its jump lie at like
+distances, and the loudness heard since the jump decides among them, 2.3-3.0 s; 3.2-4.5 s before that tie-break);
+``--seed 7``, lock median 2.1-2.2 s, worst 3.2-3.3 s, re-lock median 2.1-2.3 s, worst 2.9 s (synthetic-7's noisy
+copy, 3.1-3.6 s before); two false locks, both synthetic-2027's noisy copy moving one bar off 40 s in, where
+the show's reference had ended while the stream played on and the tie-break weighed the bars before it (since
+fixed: the tie-break needs the held delay's reference whole). After the fix, one run of each: the defaults re-lock
+median 2.0 s, worst 2.9 s, lock worst 4.8 s; ``--seed 7`` median 2.1 s, worst 3.0 s (synthetic-7's noisy copy), lock worst 3.3 s; no false lock. Before the prior of the delay held,
+vibe_ace's re-locks (its music loops a 3.7 s stretch) took 7-11 s; now 2.1-2.6 s.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """What the sync thresholds rest on: the scores and margins a seat's matching gives the right music and music that is
-not the venue's (offline, no network; about 45 s of CPU). Not a timed test: figures are printed beside the
+not the venue's (offline, no network; about 2 minutes of CPU). Not a timed test: figures are printed beside the
 thresholds of :mod:`hapmotion.audience.sync_tracker` and :mod:`hapmotion.audience.sync_estimator`.
 
 ``python -m benchmarks.sync_margins [--seconds S]``
@@ -21,7 +21,13 @@ without a jump ever made the seat jump or play off the truth; and a 1 s jump 20 
 songs through the codec and with room noise, delays of 1.3-3 s): how long the seat took to re-lock, whether it played
 at an offset that was neither the old nor the new one, and for the slowest re-locks the candidates that competed 2 s
 after the jump (each one's distance from the offset held and its score under the best: aliases a period apart score
-alike, and :func:`~hapmotion.audience.sync_tracker.prior_pick` decides among them by their distances).
+alike, and :func:`~hapmotion.audience.sync_tracker.prior_pick` decides among them by their distances); and whether
+the band-energy score (:func:`~hapmotion.audience.sync_estimator.envelope_scores`, the levels of the audio heard
+since a jump) tells those aliases apart: after jumps of 0.5-1.5 s both ways in twelve songs (the shared ones, the
+harness's synthetic ones, six more) through the codec and with room noise, the truth's lead over the best alias in
+every window the onset score left ambiguous, and, over music that is not the venue's, how high a wrong candidate's
+band-energy score and lead reach and how often the pick
+(:func:`~hapmotion.audience.sync_tracker.envelope_pick`) would act on one (about 50 s more).
 """
 
 from __future__ import annotations
@@ -32,10 +38,10 @@ import math
 import numpy as np
 import soundfile as sf
 
-from hapmotion.audience.sync_estimator import NEAR_S, SHARP_MARGIN, estimate
+from hapmotion.audience.sync_estimator import NEAR_S, RECENT_S, SHARP_MARGIN, envelope_scores, estimate
 from hapmotion.audience.seat_sync import SyncSettings
-from hapmotion.audience.sync_tracker import (AGREE_S, CLEAR_MARGIN, CLEAR_SCORE, JUMP_LEAD, MIN_MARGIN, MIN_SCORE,
-                                             STREAK_S, UNIQUE_MARGIN, DelayTracker)
+from hapmotion.audience.sync_tracker import (AGREE_S, CLEAR_MARGIN, CLEAR_SCORE, ENVELOPE_LEAD, ENVELOPE_MIN,
+                                             JUMP_LEAD, MIN_MARGIN, MIN_SCORE, STREAK_S, UNIQUE_MARGIN, DelayTracker)
 from hapmotion.audio.sync_features import N_BANDS, RATE, dequantise, quantise, signal_levels
 
 from tests.support.data import AUDIO
@@ -191,7 +197,117 @@ def main(argv: list[str] | None = None) -> int:
           f"{len(lead_rows)} songs (a jump vote needs a lead of {JUMP_LEAD:.2f}); songs where one ever led: "
           f"{sum(bool((x > 0).any()) for x in lead_rows)}")
     relocks(secs)
+    envelope_margins(secs)
     return 0
+
+
+def _recent_envelopes(heard: np.ndarray, ref_levels: np.ndarray, history: list, since: float = -math.inf,
+                      until: float = math.inf) -> list:
+    """For each window of ``history`` (the seat's matching of ``heard``) ending between ``since`` and ``until``
+    whose candidates within the voting margin of the best are two or more: ``(at, [(offset, onset score, band-energy
+    score)])`` of those candidates, the band-energy score over the window's last RECENT_S as the seat weighs them."""
+    levels = dequantise(quantise(signal_levels(heard, SR)))
+    k = int(round(RECENT_S * RATE))
+    out = []
+    for at, est, _ in history:
+        if est is None or not since <= at <= until or est.score < MIN_SCORE:
+            continue
+        close = [(o, s) for o, s in est.peaks if s > est.score - UNIQUE_MARGIN]
+        end = int(round(at * RATE)) + 1
+        if len(close) < 2 or end - k < 0 or end > levels.shape[0]:
+            continue
+        env = envelope_scores(levels[end - k:end], (end - k) / RATE, ref_levels, 0.0, [o for o, _ in close])
+        out.append((at, [(o, s, e) for (o, s), e in zip(close, env)]))
+    return out
+
+
+def envelope_margins(secs: float) -> None:
+    """Does the band-energy score tell apart the candidates the onset score leaves ambiguous? After a jump (0.5, 1
+    and 1.5 s, both ways, 20 s into the music, the shared songs, the harness's synthetic ones and six more, through
+    the codec and with room noise at 10 dB SNR), over the windows from 1.5 s after the jump (the last RECENT_S all
+    heard since it) to 4 s: the band-energy score at the truth minus the best one at any other ambiguous candidate
+    (its *margin*), per scene its smallest and median; and over music that is not the venue's (two other songs and
+    speech, as above), the best band-energy score any ambiguous candidate reached and how far it stood above the
+    next one (every candidate there is wrong)."""
+    songs = [("vibe_ace", sf.read(AUDIO / "vibe_ace.ogg", dtype="float64")[0]),
+             ("lets_go_fishin", sf.read(AUDIO / "lets_go_fishin.ogg", dtype="float64")[0])]
+    songs += [(f"synthetic-{k}", scenes.synth_song(k, 2 * secs + 10.0)) for k in (2026, 2027, 7, 8, *range(100, 106))]
+    rng = np.random.default_rng(13)
+    rows = []
+    right = []
+    for i, (name, song) in enumerate(songs):
+        song = song if song.ndim == 1 else song.mean(axis=1)
+        ref = song[:int((2 * secs + 10.0) * SR)]
+        ref_levels = dequantise(quantise(signal_levels(ref, SR)))
+        coded = scenes.codec_copy(ref)
+        for kind in ("codec", "noisy"):
+            for jump in (1.0, -1.0, 0.5, -1.5):
+                delay = float(rng.uniform(1.6, 3.0))
+                jump_t = delay + 20.0
+                tau = np.arange(int((jump_t + 4.5) * SR)) / SR
+                h = scenes.heard(coded, np.where(tau < jump_t, tau - delay, tau - delay - jump))
+                if kind == "noisy":
+                    h = scenes.add_noise(h, 10.0, 40 + i)
+                history, _ = seat_matching(h, ref, max_delay_s=MAX_DELAY_S)
+                truth = delay + jump
+                margins = []
+                for _, cands in _recent_envelopes(h, ref_levels, history, jump_t + RECENT_S, jump_t + 4.0):
+                    at_truth = [e for o, _, e in cands if abs(o - truth) <= 0.04]
+                    others = [e for o, _, e in cands if abs(o - truth) > 0.04 and e is not None]
+                    if at_truth and at_truth[0] is not None and others:
+                        margins.append(at_truth[0] - max(others))
+                        right.append((at_truth[0], max(others)))
+                if margins:
+                    rows.append((name, kind, jump, len(margins), min(margins), float(np.median(margins))))
+    print("band-energy score of the ambiguous candidates after a jump (truth minus the best other; windows 1.5-4 s "
+          "after the jump with two or more candidates within the voting margin):")
+    for name, kind, jump, n, lo, med in rows:
+        print(f"  {name} {kind} {jump:+.1f} s: {n} windows, margin smallest {lo:+.2f}, median {med:+.2f}")
+    if right:
+        r = np.array(right)
+        m = r[:, 0] - r[:, 1]
+        print(f"  all: {len(m)} windows, the truth ahead in {(m > 0).mean() * 100:.0f} %, by 0.10 or more in "
+              f"{(m >= 0.10).mean() * 100:.0f} %; an alias ahead by 0.05 or more in {(m <= -0.05).sum()}, by 0.10 or "
+              f"more in {(m <= -0.10).sum()}; truth's band-energy score median {np.median(r[:, 0]):.2f}, smallest "
+              f"{r[:, 0].min():.2f}")
+    # music that is not the venue's: every candidate is wrong
+    real = [s if s.ndim == 1 else s.mean(axis=1) for _, s in songs[:2]]
+    others = real + [scenes.synth_song(100 + k, secs) for k in range(6)]
+    n = int(secs * SR)
+    tops, leads_, picks = [], [], 0
+    for i, song in enumerate(others):
+        ref = song[:int((secs + 15.0) * SR)]
+        ref_levels = dequantise(quantise(signal_levels(ref, SR)))
+        heard = []
+        for j in ((i + 1) % len(others), (i + 3) % len(others)):
+            h = scenes.codec_copy(np.concatenate([np.zeros(SR), others[j][:n]])[:n])
+            heard += [h, scenes.add_noise(h, 10.0, i)]
+        heard.append(scenes.add_noise(np.concatenate([np.zeros(SR), scenes.speech_like(i, secs)])[:n], 10.0, i + 7))
+        for h in heard:
+            history, _ = seat_matching(h, ref, max_delay_s=MAX_DELAY_S)
+            # every window, whatever its onset score (a wrong song's never reach the score a vote needs)
+            levels = dequantise(quantise(signal_levels(h, SR)))
+            k = int(round(RECENT_S * RATE))
+            for at, est, _ in history:
+                end = int(round(at * RATE)) + 1
+                if est is None or len(est.peaks) < 2 or end - k < 0 or end > levels.shape[0]:
+                    continue
+                env = sorted((e for e in envelope_scores(levels[end - k:end], (end - k) / RATE, ref_levels, 0.0,
+                                                         [o for o, _ in est.peaks]) if e is not None), reverse=True)
+                if len(env) >= 2:
+                    tops.append(env[0])
+                    leads_.append(env[0] - env[1])
+                    # what the pick needs besides: the onset score reaching MIN_SCORE with two candidates close
+                    close = sum(s > est.score - UNIQUE_MARGIN for _, s in est.peaks)
+                    picks += (est.score >= MIN_SCORE and close >= 2 and env[0] >= ENVELOPE_MIN
+                              and env[0] - env[1] >= ENVELOPE_LEAD)
+    t, ld = np.array(tops), np.array(leads_)
+    print(f"music that is not the venue's ({len(t)} windows, every candidate wrong): the best candidate's band-energy "
+          f"score at most {t.max():.2f} (99th percentile {np.percentile(t, 99):.2f}); its lead over the next one at "
+          f"most {ld.max():.2f} (99th percentile {np.percentile(ld, 99):.2f}); a lead of 0.10 or more with a score of "
+          f"0.5 or more in {int(((ld >= 0.10) & (t >= 0.5)).sum())} windows; windows the pick would act on (also an onset "
+          f"score of {MIN_SCORE:.2f} and two candidates within {UNIQUE_MARGIN:.2f}; {ENVELOPE_MIN:.2f} and a lead of "
+          f"{ENVELOPE_LEAD:.2f}): {picks} (target 0)")
 
 
 def relocks(secs: float) -> None:

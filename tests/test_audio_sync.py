@@ -11,6 +11,7 @@ import threading
 import numpy as np
 import pytest
 import soundfile as sf
+from scipy.ndimage import uniform_filter1d
 from support.sync_signals import SR, follow, noisy, played, real_song, song, speech_like
 
 from hapmotion.audience.seat_sync import (
@@ -20,14 +21,14 @@ from hapmotion.audience.seat_sync import (
     SeatSync,
     SyncSettings,
 )
-from hapmotion.audience.sync_estimator import Estimate, match
+from hapmotion.audience.sync_estimator import N_PEAKS, Estimate, envelope_scores, match
 from hapmotion.audience.sync_reference import (
     ReferencePublisher,
     SongReference,
     decode_batch,
     encode_batch,
 )
-from hapmotion.audience.sync_tracker import ASSUMED_CONFIDENCE, STREAK_S, DelayTracker, prior_pick
+from hapmotion.audience.sync_tracker import ASSUMED_CONFIDENCE, STREAK_S, DelayTracker, envelope_pick, prior_pick
 from hapmotion.audio.inputs import FileInput, PipeInput, open_input
 from hapmotion.audio.sync_features import (
     BANDS,
@@ -308,7 +309,74 @@ def test_the_prior_picks_only_a_clearly_nearest_candidate_and_never_over_a_clear
     assert prior_pick(est([(6.7, 0.62), (3.0, 0.60)], near=0.55), held) is None          # the held one scores too
     assert prior_pick(est([(6.7, 0.62), (3.8, 0.60)]), held) is None                    # 1.8 s: beyond a re-sync
     assert prior_pick(est([(6.7, 0.40), (3.0, 0.38)]), held) is None                    # too weak to vote
-    assert prior_pick(est([(6.7, 0.62), (3.0, 0.61), (9.0, 0.60), (8.0, 0.60)]), held) is None  # more may follow
+    full = [(6.7, 0.62), (3.0, 0.61)] + [(8.0 + k, 0.60) for k in range(N_PEAKS - 2)]  # as many as are listed
+    assert prior_pick(est(full), held) is None                                           # more may follow
+
+
+def shaded(loop_s: float, intro_s: float = 12.0, count: int = 10) -> np.ndarray:
+    """As :func:`looped`, with a soft 220 Hz drone under each repeat of the loop whose loudness steps through four
+    levels in an order of its own (ramps of 0.3 s: hardly an onset): the repeats share their rhythm, not their
+    loudness."""
+    rng = np.random.default_rng(9)
+    base = song(6, loop_s)
+    n = base.size
+    t = np.arange(n) / SR
+    drone = np.sin(2 * np.pi * 220 * t + 0.5 * np.sin(2 * np.pi * 3 * t))
+    parts = [song(5, intro_s)]
+    for _ in range(count):
+        steps = np.repeat(rng.choice([0.0, 0.1, 0.35], size=4), -(-n // 4))[:n]
+        parts.append(base + uniform_filter1d(steps, int(0.3 * SR), mode="nearest") * drone)
+    out = np.concatenate(parts)
+    return 0.8 * out / np.abs(out).max()
+
+
+@pytest.mark.parametrize("jump_s", [1.0, -1.0])
+@pytest.mark.parametrize("snr_db", [None, 10.0])
+def test_a_jump_in_a_loop_whose_aliases_lie_at_like_distances_relocks_on_the_loudness_heard_since(jump_s, snr_db):
+    # a 2.6 s loop: the aliases of a 1 s jump lie 1.0 and 1.6 s from the held offset (the prior picks neither) and
+    # score alike on onsets; the drone's loudness since the jump matches the truth's alone
+    history = jumped(shaded(2.6), jump_s, snr_db)
+    truth = 2.0 + jump_s
+    moved = [at for at, _, s in history if at >= 20.0 and s.state == "locked" and abs(s.offset_s - truth) < 0.01]
+    assert moved and moved[0] - 20.0 <= 3.0
+    assert all(abs(s.offset_s - 2.0) < 0.01 or abs(s.offset_s - truth) < 0.01
+               for _, _, s in history if s.state != "searching")
+    picks = [envelope_pick(e, 2.0) for at, e, _ in history if 20.0 <= at < moved[0] and e is not None]
+    assert any(p is not None and abs(p - truth) < 0.01 for p in picks)
+    assert all(p is None or abs(p - truth) < 0.01 for p in picks)
+
+
+def test_the_band_energy_score_is_1_where_the_levels_match_and_lower_where_only_the_rhythm_does():
+    rng = np.random.default_rng(4)
+    bar = rng.uniform(-60.0, -20.0, size=(100, 5))
+    swell = np.linspace(-10.0, 10.0, 100)[:, None] * np.array([1.0, -1.0, 1.0, -1.0, 1.0])[None, :]
+    ref = np.concatenate([bar, bar + swell, np.full((100, 5), np.nan)])  # the bar, then louder/softer, then a gap
+    heard = bar + swell  # heard at local time 5.0 s; reference hop 0 at media time 0: offset 5.0 - lag / 100
+    at_truth, at_alias, in_gap, beyond = envelope_scores(heard, 5.0, ref, 0.0, [4.0, 5.0, 3.5, 6.0])
+    assert at_truth == pytest.approx(1.0)
+    assert at_alias < 0.95
+    assert in_gap is None and beyond is None
+    assert envelope_scores(np.full((100, 5), -40.0), 5.0, ref, 0.0, [4.0]) == (None,)  # a steady level: no evidence
+
+
+def test_the_band_energy_pick_breaks_only_ties_of_the_onset_score_by_a_clear_lead():
+    def est(peaks, envelopes, near=0.1, held_env=0.2):
+        return Estimate(peaks[0][0], peaks[0][1], peaks[0][1] - peaks[1][1], 5, 30.0, True, near, tuple(peaks),
+                        tuple(envelopes), held_env)
+
+    held = 2.0
+    assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60), (8.0, 0.3)], [0.72, 0.86, 0.1]), held) == 1.0
+    assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60)], [0.80, 0.86]), held) is None        # lead under 0.10
+    assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60)], [0.50, 0.65]), held) is None        # too low to weigh
+    assert envelope_pick(est([(3.6, 0.75), (1.0, 0.60)], [0.50, 0.90]), held) is None        # 3.6 clearly better
+    assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60)], [0.5, 0.9], near=0.55), held) is None  # held scores too
+    assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60)], [None, 0.9]), held) is None         # one not weighed
+    assert envelope_pick(est([(3.6, 0.42), (1.0, 0.38)], [0.5, 0.9]), held) is None          # too weak to vote
+    assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60)], []), held) is None                  # not weighed at all
+    assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60)], [0.5, 0.9], held_env=None), held) is None  # held not whole
+    assert envelope_pick(est([(3.6, 0.62), (1.0, 0.60)], [0.5, 0.9], held_env=0.85), held) is None  # held as loud
+    full = [(3.6, 0.62), (1.0, 0.61)] + [(8.0 + k, 0.60) for k in range(N_PEAKS - 2)]  # as many as are listed
+    assert envelope_pick(est(full, [0.5, 0.9] + [0.5] * (N_PEAKS - 2)), held) is None    # more may follow
 
 
 def test_silence_gives_no_estimate_and_never_locks():

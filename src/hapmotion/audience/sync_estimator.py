@@ -17,7 +17,7 @@ thresholds that decide it live in :mod:`hapmotion.audience.sync_tracker`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Optional
 
 import numpy as np
@@ -45,9 +45,11 @@ MIN_ONSET_HOPS = 20.0
 removal spreads each onset over :data:`LOCAL_MEAN_S`, so the first 0.2 s of a song after silence passed the
 ratio above, and two different songs that start together lined up on their first onsets (score 0.77)."""
 
-N_PEAKS = 4
+N_PEAKS = 8
 """Candidates an estimate lists: music that repeats a stretch within the offsets searched puts a peak at each repeat
-(the seat's default 10 s of delays hold two or three repeats of a 3-4 s loop)."""
+(the seat's default 10 s of delays hold two or three repeats of a 3-4 s loop, and four of a 2.6 s bar with the
+peaks between bars that its rhythm adds: after synthetic-2026's jump, benchmarks/bench_sync.py, four listed
+candidates all lay within the voting margin of the best for a second, which a pick cannot decide on)."""
 
 NEAR_S = 0.045
 """How close to a held offset a peak counts as that offset (the tracker's gate)."""
@@ -82,6 +84,13 @@ class Estimate:
     peaks: tuple[tuple[float, float], ...] = ()
     """The candidates: ``(offset_s, score)`` of the highest peaks of the score, at most :data:`N_PEAKS`, each at least
     :data:`EXCLUSION_S` from a higher one, best first (the first is ``offset_s``, ``score``)."""
+    envelopes: tuple[Optional[float], ...] = ()
+    """The band-energy score (:func:`envelope_scores`) of each of :attr:`peaks` over the window's last
+    :data:`RECENT_S` (in order; None where the reference is not whole there): filled in by :func:`match` for a
+    locked seat whose window lands away from the offset it holds (after a jump), empty otherwise."""
+    held_envelope: Optional[float] = None
+    """The same band-energy score at the offset the locked seat holds, None when not asked or where the reference
+    there is not whole (the music heard has run past the reference received, a gap)."""
     near_whole: bool = True
     """The reference over the ``near`` offset's window was all received (True when not asked or out of the range
     searched): where it was not (a lost batch), the held offset's score is lowered by the gap while an alias whose
@@ -159,7 +168,7 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
             near_lags = lags[close]
             near_whole = not bool(missing[near_lags.min():near_lags.max() + w].any())
     return Estimate(float(offset), peak, peak - second, int(active.sum()), t_heard + (w - 1) / RATE, even,
-                    near_score, _peaks(score, ex, t_heard - t_ref), near_whole)
+                    near_score, _peaks(score, ex, t_heard - t_ref), near_whole=near_whole)
 
 
 SHARP_MARGIN = 0.15
@@ -177,20 +186,66 @@ well (the shortest window a seat matches at all): after a jump, the full window 
 two peaks share its score for as long as both halves last, while the recent part holds the new one alone."""
 
 
+ENVELOPE_SMOOTH = 5
+"""Hops (50 ms) of each band's level averaged before the envelopes are compared: through room noise a band's level
+hop to hop is noise's, the envelope of notes and bars is not."""
+
+
+def envelope_scores(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
+                    offsets: "list[float] | tuple[float, ...]") -> tuple[Optional[float], ...]:
+    """How well the heard band levels ``(W, B)`` dB follow the reference's ``(N, B)`` at each offset (seconds, as
+    :func:`estimate` counts them): the Pearson correlation of each band's level (smoothed over
+    :data:`ENVELOPE_SMOOTH` hops), averaged over the bands whose heard level varies; -1..1, None where the reference
+    at that offset is not whole or lies outside ``ref_db``. The onset score sees only rises, so two bars with the
+    same rhythm score alike; their loudness over the bars (a chord change, a fill, a louder section) often differs,
+    which this sees. Unlike the onset score it does not whiten: by itself it peaks broadly and is no evidence of a
+    delay; it only weighs candidates the onset score already found."""
+    w = heard_db.shape[0]
+    h = uniform_filter1d(np.asarray(heard_db, dtype=np.float64), ENVELOPE_SMOOTH, axis=0, mode="nearest")
+    h = h - h.mean(axis=0)
+    h_norm = np.sqrt((h * h).sum(axis=0))
+    live = h_norm / np.sqrt(max(w, 1)) > MIN_NOVELTY_DB
+    out: list[Optional[float]] = []
+    for o in offsets:
+        lag = int(round((t_heard - t_ref - o) * RATE))
+        if not live.any() or lag < 0 or lag + w > ref_db.shape[0] or not np.isfinite(ref_db[lag:lag + w]).all():
+            out.append(None)
+            continue
+        r = uniform_filter1d(np.asarray(ref_db[lag:lag + w], dtype=np.float64), ENVELOPE_SMOOTH, axis=0,
+                             mode="nearest")
+        r = r - r.mean(axis=0)
+        r_norm = np.sqrt((r * r).sum(axis=0))
+        ok = live & (r_norm > 1e-9)
+        if not ok.any():
+            out.append(None)
+            continue
+        out.append(float(np.mean((h[:, ok] * r[:, ok]).sum(axis=0) / (h_norm[ok] * r_norm[ok]))))
+    return tuple(out)
+
+
 def match(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
           held: Optional[float] = None) -> Optional[Estimate]:
     """The estimate a seat acts on: :func:`estimate` of the whole heard window ``(W, B)`` (``held``: the offset a
     locked seat holds, its score asked for), or, when that does not land within :data:`NEAR_S` of ``held``, of the
     window's last :data:`RECENT_S` seconds (the same offsets searched), which says where the music is now, if that
     is sharp (:data:`SHARP_MARGIN`): a shorter window fits inside a repeated bar more easily, and music that repeats
-    within the offsets searched leaves its peak no margin, so then the whole window's estimate stands."""
+    within the offsets searched leaves its peak no margin, so then the whole window's estimate stands, its candidates
+    weighed by their band-energy scores over that recent part (:attr:`Estimate.envelopes`, :func:`envelope_scores`:
+    what was heard since a jump)."""
     est = estimate(heard_db, t_heard, ref_db, t_ref, near=held)
     k = heard_db.shape[0] - int(round(RECENT_S * RATE))
     if held is None or k <= 0 or (est is not None and abs(est.offset_s - held) <= NEAR_S):
         return est
     # hop k of the window against reference hop k + l: the same offsets t_heard - t_ref - l / RATE as above
     recent = estimate(heard_db[k:], t_heard + k / RATE, ref_db[k:], t_ref + k / RATE, near=held)
-    return recent if recent is not None and recent.margin >= SHARP_MARGIN else est
+    if recent is not None and recent.margin >= SHARP_MARGIN:
+        return recent
+    if est is None or not est.peaks:
+        return est
+    # the candidates weighed by the loudness of the audio heard since the jump (the recent part alone)
+    env = envelope_scores(heard_db[k:], t_heard + k / RATE, ref_db[k:], t_ref + k / RATE,
+                          [o for o, _ in est.peaks] + [held])
+    return replace(est, envelopes=env[:-1], held_envelope=env[-1])
 
 
 def _peaks(score: np.ndarray, ex: int, zero: float) -> tuple[tuple[float, float], ...]:

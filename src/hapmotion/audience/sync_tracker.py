@@ -37,9 +37,15 @@ offset that is the best in every window for :data:`STREAK_S` (the later windows 
   :data:`PRIOR_FAR` times as far (a repeat one period further); a candidate that scores clearly better is never
   passed over (it is then the only candidate), and where two lie at like distances (a short repeat) none votes:
   the seat keeps the held offset and, since that no longer matches what is heard, says it lost the music after
-  :data:`LOST_AFTER_S`. A jump the prior decided is a guess (a jump of two thirds of a loop or more puts a wrong
-  alias nearest): the seat reports it with :data:`ASSUMED_CONFIDENCE` at most (:attr:`DelayTracker.assumed`) until a
-  window stands :data:`UNIQUE_MARGIN` clear at the offset held.
+  :data:`LOST_AFTER_S`. Before the prior, the loudness of what was heard since the jump is asked
+  (:func:`envelope_pick`): bars that repeat a rhythm often differ in loudness (a chord, a fill, a drone), so among
+  the same ambiguous candidates the one whose band-energy score (``Estimate.envelopes``, the window's last 1.5 s)
+  stands :data:`ENVELOPE_LEAD` above every other and reaches :data:`ENVELOPE_MIN` votes for the jump the same way.
+  That score alone is no evidence of a delay (it does not whiten the music, and unrelated music reaches 0.8): it
+  only weighs candidates the onset score found, and the votes a jump needs stay the same. A jump the prior alone
+  decided is a guess (a jump of two thirds of a loop or more puts a wrong alias nearest): the seat reports it with
+  :data:`ASSUMED_CONFIDENCE` at most (:attr:`DelayTracker.assumed`) until a window stands :data:`UNIQUE_MARGIN`
+  clear at the offset held.
 * **lost**: no good estimate within the gate for :data:`LOST_AFTER_S`: the seat keeps the prediction (the stream
   most likely still plays where it did) and says so; after :data:`HOLD_S` more it is searching again and plays
   the user's fallback (the manual delay, or nothing).
@@ -103,6 +109,17 @@ ASSUMED_CONFIDENCE = 0.2
 yet stood :data:`UNIQUE_MARGIN` clear at it: the music itself did not tell that offset from its aliases (a jump of
 two thirds of a loop or more puts the nearest alias, a wrong one, nearest the held offset), so the seat does not claim
 what a lock the audio decided claims (the scores of those reach :data:`CLEAR_SCORE` and more)."""
+ENVELOPE_LEAD = 0.10
+"""How far one ambiguous candidate's band-energy score must stand above every other's for :func:`envelope_pick` to
+pick it. After a jump (0.5-1.5 s both ways, twelve songs through the codec and with room noise at 10 dB SNR,
+benchmarks/sync_margins.py), over 621 windows whose onset candidates were ambiguous the truth's band-energy score was
+ahead of every alias's in all of them, by 0.10 or more in 70 % (the synthetic songs' smallest lead 0.06, median
+0.11-1.2; vibe_ace's loop, which repeats its loudness too, 0.00-0.08: the prior decides there)."""
+ENVELOPE_MIN = 0.70
+"""Band-energy score the picked candidate must reach: the truth's was 0.74 at least in those windows (median 0.87);
+music that is not the venue's reached 0.64 at its 99th percentile and 0.83 at most, standing up to 0.70 above the
+next candidate: no evidence by itself, but over 9238 such windows none had the onset score (:data:`MIN_SCORE`, two
+candidates within :data:`UNIQUE_MARGIN`) the pick needs first."""
 SHARP_VOTES = 3
 SHARP_AGREE_S = 0.010
 SHARP_SPAN_S = 0.2
@@ -162,6 +179,34 @@ def prior_pick(est: Estimate, held: float) -> Optional[float]:
     if not (GATE_S < dist <= PRIOR_MAX_S) or score < MIN_SCORE:
         return None
     if any(d < PRIOR_FAR * dist for d, _, _ in close[1:]):
+        return None
+    return offset
+
+
+def envelope_pick(est: Estimate, held: float) -> Optional[float]:
+    """The candidate of ``est`` whose band-energy score (``Estimate.envelopes``, the audio heard since a jump)
+    stands out among the candidates the onset score leaves ambiguous (module docstring), or None: the candidates
+    within :data:`UNIQUE_MARGIN` of the best onset score, the held offset not among them (``near_score``); the one
+    with the highest band-energy score is picked when it lies beyond the gate from ``held``, its onset score reaches
+    :data:`MIN_SCORE`, its band-energy score :data:`ENVELOPE_MIN`, and every other ambiguous one's band-energy score
+    is known and :data:`ENVELOPE_LEAD` under it, and so is the held offset's (``Estimate.held_envelope``). The
+    candidates listed running out before the ambiguous ones do picks nothing, and so does a held offset whose
+    reference is not whole: where the heard music runs past the reference received (the show's end, a gap), the true
+    offset cannot score and a bar that repeats earlier in the reference would win (benchmarks/bench_sync.py: a seat
+    jumped one bar off 40 s into a 40 s show)."""
+    if not est.peaks or len(est.envelopes) != len(est.peaks) or est.held_envelope is None or (
+            est.near_score is not None and est.near_score > est.score - UNIQUE_MARGIN):
+        return None
+    close = [(e, o, s) for (o, s), e in zip(est.peaks, est.envelopes) if s > est.score - UNIQUE_MARGIN]
+    if len(close) < 2 or (len(close) == len(est.peaks) and len(close) >= N_PEAKS):
+        return None
+    if any(e is None for e, _, _ in close):
+        return None
+    close.sort(reverse=True)
+    env, offset, score = close[0]
+    if abs(offset - held) <= GATE_S or score < MIN_SCORE or env < ENVELOPE_MIN:
+        return None
+    if max(close[1][0], est.held_envelope) > env - ENVELOPE_LEAD:
         return None
     return offset
 
@@ -291,14 +336,20 @@ class DelayTracker:
             unique, streak = False, None
             self._streak.clear()
             self._streak_from = at
-        # music that repeats exactly leaves the candidates no margin at all: the prior weighs them on their scores
-        prior = prior_pick(est, float(x[0])) if (est is not None and not unique and est.near_whole) else None
+        # music that repeats its rhythm leaves the candidates no margin: the loudness of what was heard since the jump
+        # tells them apart where it differs, else the prior weighs them on their distances
+        prior = envelope = None
+        if est is not None and not unique and est.near_whole:
+            envelope = envelope_pick(est, float(x[0]))
+            prior = envelope if envelope is not None else prior_pick(est, float(x[0]))
         if unique or streak is not None or prior is not None:
             if unique:
                 self._jump.append((at, est.offset_s, est.margin if est.even else 0.0))
                 self._unique_jump.append((at, est.offset_s))
             elif prior is not None:
                 self._jump.append((at, prior, 0.0))
+                if envelope is not None:  # the loudness heard told the candidates apart: the music's evidence
+                    self._unique_jump.append((at, prior))
             size, median, span = _cluster([(a, o) for a, o, _ in self._jump], AGREE_S)
             sharp = _sharp_median(self._jump)
             if sharp is not None:  # here sharp votes win over the ordinary cluster (a jump follows them sooner)
