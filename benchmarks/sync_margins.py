@@ -41,7 +41,7 @@ import soundfile as sf
 from hapmotion.audience.sync_estimator import NEAR_S, RECENT_S, SHARP_MARGIN, envelope_scores, estimate
 from hapmotion.audience.seat_sync import SyncSettings
 from hapmotion.audience.sync_tracker import (AGREE_S, CLEAR_MARGIN, CLEAR_SCORE, ENVELOPE_LEAD, ENVELOPE_MIN,
-                                             JUMP_LEAD, MIN_MARGIN, MIN_SCORE, STREAK_S, UNIQUE_MARGIN, DelayTracker)
+                                             JUMP_LEAD, MIN_MARGIN, MIN_SCORE, STREAK_S, UNIQUE_MARGIN)
 from hapmotion.audio.sync_features import N_BANDS, RATE, dequantise, quantise, signal_levels
 
 from tests.support.data import AUDIO
@@ -51,6 +51,20 @@ from . import sync_scenes as scenes
 
 SR = scenes.SR
 MAX_DELAY_S = SyncSettings().max_delay_s  # the seat's default range (--sync-max-delay)
+
+
+def _jumped(coded: np.ndarray, ref: np.ndarray, delay: float, jump: float, after_s: float, kind: str,
+            seed: int) -> tuple[float, np.ndarray, list]:
+    """``coded`` heard ``delay`` s late, jumping by ``jump`` s 20 s into the music (as in the harness: vibe_ace is in
+    its loop then), for ``after_s`` more, with room noise at 10 dB SNR when ``kind`` is ``noisy``; the seat's matching
+    against ``ref``: (the jump's local time, the heard signal, [(local time, Estimate, SyncState)])."""
+    jump_t = delay + 20.0
+    tau = np.arange(int((jump_t + after_s) * SR)) / SR
+    h = scenes.heard(coded, np.where(tau < jump_t, tau - delay, tau - delay - jump))
+    if kind == "noisy":
+        h = scenes.add_noise(h, 10.0, seed)
+    history, _ = seat_matching(h, ref, max_delay_s=MAX_DELAY_S)
+    return jump_t, h, history
 
 
 def follow(heard: np.ndarray, source: np.ndarray, states: bool = False) -> tuple:
@@ -243,12 +257,7 @@ def envelope_margins(secs: float) -> None:
         for kind in ("codec", "noisy"):
             for jump in (1.0, -1.0, 0.5, -1.5):
                 delay = float(rng.uniform(1.6, 3.0))
-                jump_t = delay + 20.0
-                tau = np.arange(int((jump_t + 4.5) * SR)) / SR
-                h = scenes.heard(coded, np.where(tau < jump_t, tau - delay, tau - delay - jump))
-                if kind == "noisy":
-                    h = scenes.add_noise(h, 10.0, 40 + i)
-                history, _ = seat_matching(h, ref, max_delay_s=MAX_DELAY_S)
+                jump_t, h, history = _jumped(coded, ref, delay, jump, 4.5, kind, 40 + i)
                 truth = delay + jump
                 margins = []
                 for _, cands in _recent_envelopes(h, ref_levels, history, jump_t + RECENT_S, jump_t + 4.0):
@@ -326,12 +335,7 @@ def relocks(secs: float) -> None:
         for kind in ("codec", "noisy"):
             for jump in (1.0, -1.0):
                 delay = float(rng.uniform(1.3, 3.0))
-                jump_t = delay + 20.0  # 20 s into the music, as in the harness (vibe_ace is in its loop then)
-                tau = np.arange(int((jump_t + 8.0) * SR)) / SR
-                h = scenes.heard(coded, np.where(tau < jump_t, tau - delay, tau - delay - jump))
-                if kind == "noisy":
-                    h = scenes.add_noise(h, 10.0, 20 + i)
-                history, _ = seat_matching(h, ref, max_delay_s=MAX_DELAY_S)
+                jump_t, h, history = _jumped(coded, ref, delay, jump, 8.0, kind, 20 + i)
                 truth = delay + jump
                 t = [at - jump_t for at, _, st in history if at >= jump_t and st.state == "locked"
                      and abs(st.offset_s - truth) <= 0.04]
