@@ -346,6 +346,35 @@ def test_a_jump_in_a_loop_whose_aliases_lie_at_like_distances_relocks_on_the_lou
     assert all(p is None or abs(p - truth) < 0.01 for p in picks)
 
 
+def risen(loop_s: float = 2.6, intro_s: float = 12.0, count: int = 10, riser_at: float = 19.8) -> np.ndarray:
+    """As :func:`looped`, with a riser over the repeat from ``riser_at`` (media time): noise swelling from silence to
+    the music's RMS over the repeat, no onsets (a build's)."""
+    out = np.concatenate([song(5, intro_s)] + [song(6, loop_s)] * count)
+    m = np.arange(out.size) / SR
+    noise = np.convolve(np.random.default_rng(11).normal(size=out.size), np.ones(4) / 4, mode="same")
+    rise = np.where((m >= riser_at) & (m < riser_at + loop_s), (m - riser_at) / loop_s, 0.0) ** 2
+    out = out + rise * noise / noise.std() * np.sqrt(np.mean(out * out))
+    return 0.8 * out / np.abs(out).max()
+
+
+def test_a_jump_the_loudness_chose_is_reported_as_a_guess():
+    # a 2.6 s loop held at 2 s jumps 1 s (the aliases 0.4 and 5.6 s of the new 3 s: the prior picks none) while room
+    # noise swells over 1.5 s: the heard levels rise as the riser in the next repeat (alias 0.4) does, and the
+    # loudness tie-break once moved the seat there for 1 s at a confidence of 0.7 (louder noise, 0 dB SNR, moves the
+    # onset score itself there: a window 0.11 clear at 0.4, which no loudness rule decides)
+    snr_db = 5.0
+    src = risen()
+    tau = np.arange(int(30 * SR)) / SR
+    heard = played(src, np.where(tau < 20.0, tau - 2.0, tau - 3.0))
+    noise = np.convolve(np.random.default_rng(4).normal(size=heard.size), np.ones(8) / 8, mode="same")
+    swell = np.clip((tau - 20.0) / 1.5, 0.0, 1.0) * np.sqrt(np.mean(heard * heard)) / 10 ** (snr_db / 20)
+    history, tracker = follow(heard + swell * noise / noise.std(), src)
+    wrong = [s for at, _, s in history if at >= 20.0 and s.state != "searching"
+             and min(abs(s.offset_s - 2.0), abs(s.offset_s - 3.0)) > 0.01]
+    assert all(s.confidence <= ASSUMED_CONFIDENCE for s in wrong)
+    assert history[-1][2].state == "locked" and abs(history[-1][2].offset_s - 3.0) < 0.01
+
+
 def test_the_band_energy_score_is_1_where_the_levels_match_and_lower_where_only_the_rhythm_does():
     rng = np.random.default_rng(4)
     bar = rng.uniform(-60.0, -20.0, size=(100, 5))

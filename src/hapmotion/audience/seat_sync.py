@@ -361,7 +361,7 @@ class SeatSync:
             lag = self.delay_behind_edge
             log.info("seat sync: locked, %s behind the venue (confidence %.2f%s)",
                      f"{lag * 1000:.0f} ms" if lag is not None else "?", state.confidence,
-                     "; the music repeats here: the place nearest the last one, not yet confirmed"
+                     "; the music repeats here: a place its loudness or the last one suggests, not yet confirmed"
                      if self.tracker.assumed else "")
         elif state.state == "lost":
             log.warning("seat sync: lost the music; holding the last delay")

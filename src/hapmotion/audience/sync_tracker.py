@@ -42,9 +42,10 @@ offset that is the best in every window for :data:`STREAK_S` (the later windows 
   the same ambiguous candidates the one whose band-energy score (``Estimate.envelopes``, the window's last 1.5 s)
   stands :data:`ENVELOPE_LEAD` above every other and reaches :data:`ENVELOPE_MIN` votes for the jump the same way.
   That score alone is no evidence of a delay (it does not whiten the music, and unrelated music reaches 0.8): it
-  only weighs candidates the onset score found, and the votes a jump needs stay the same. A jump the prior alone
-  decided is a guess (a jump of two thirds of a loop or more puts a wrong alias nearest): the seat reports it with
-  :data:`ASSUMED_CONFIDENCE` at most (:attr:`DelayTracker.assumed`) until a window stands :data:`UNIQUE_MARGIN`
+  only weighs candidates the onset score found, and the votes a jump needs stay the same. A jump the prior or the
+  loudness decided is a guess (a jump of two thirds of a loop or more puts a wrong alias nearest; room noise that
+  swells after a jump matches a riser in the next repeat better than the flat repeat heard): the seat reports it
+  with :data:`ASSUMED_CONFIDENCE` at most (:attr:`DelayTracker.assumed`) until a window stands :data:`UNIQUE_MARGIN`
   clear at the offset held.
 * **lost**: no good estimate within the gate for :data:`LOST_AFTER_S`: the seat keeps the prediction (the stream
   most likely still plays where it did) and says so; after :data:`HOLD_S` more it is searching again and plays
@@ -247,7 +248,8 @@ class DelayTracker:
         self.jumps = 0
         self.locks = 0
         self.assumed = False
-        """The offset held was chosen by the prior and the music has not yet confirmed it (:data:`ASSUMED_CONFIDENCE`)."""
+        """The offset held was chosen by the prior or the loudness tie-break and the music has not yet confirmed it
+        (:data:`ASSUMED_CONFIDENCE`)."""
         self._unique_jump: deque[tuple[float, float]] = deque()   # (at, offset) of the jump votes that stood clear
 
     # ------------------------------------------------------------------ filter
@@ -347,9 +349,10 @@ class DelayTracker:
                 self._jump.append((at, est.offset_s, est.margin if est.even else 0.0))
                 self._unique_jump.append((at, est.offset_s))
             elif prior is not None:
+                # the loudness or the distance picked among candidates the onsets could not tell apart: a guess
+                # either way (the heard copy's loudness, room noise that swells over it, is not the
+                # reference's), so a jump it decides is assumed until a window stands clear at it
                 self._jump.append((at, prior, 0.0))
-                if envelope is not None:  # the loudness heard told the candidates apart: the music's evidence
-                    self._unique_jump.append((at, prior))
             size, median, span = _cluster([(a, o) for a, o, _ in self._jump], AGREE_S)
             sharp = _sharp_median(self._jump)
             if sharp is not None:  # here sharp votes win over the ordinary cluster (a jump follows them sooner)
