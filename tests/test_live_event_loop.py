@@ -105,7 +105,9 @@ def test_run_live_publishes_a_signed_show_over_tls_on_uvloop_to_a_seat_that_chec
     ks = [round(f.t * motion.fps) for _, f in tap.rendered()]
     assert len(ks) >= 0.9 * motion.n_frames and ks == sorted(ks) and ks[-1] == motion.n_frames - 1
     warnings = [r.getMessage() for r in live_log if r.levelno >= logging.WARNING]
-    assert all("waiting for the show" in w for w in warnings), warnings  # nothing dropped, nothing refused
+    # nothing dropped, nothing refused: at most the seat's line while it waits for the show (its wording says whether
+    # the description's bucket existed yet when the seat looked, which depends on who was quicker)
+    assert all(w.endswith("waiting") or w.endswith("waiting for the show") for w in warnings), warnings
 
 
 def test_an_endless_delay_on_the_fast_loop_waits_as_on_asyncio():
