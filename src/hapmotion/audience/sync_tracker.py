@@ -106,7 +106,8 @@ PRIOR_FAR = 2.0
 :data:`UNIQUE_MARGIN` of the best score lies at least this many times as far from it (a repeat of the music one
 period away from a short jump lies a period further, 1.6-4 s for bars and loops of songs)."""
 ASSUMED_CONFIDENCE = 0.2
-"""The confidence a seat reports while it plays at an offset the prior chose (:func:`prior_pick`) and no window has
+"""The confidence a seat reports while it plays at an offset the prior or the loudness chose (:func:`prior_pick`,
+:func:`envelope_pick`) and no window has
 yet stood :data:`UNIQUE_MARGIN` clear at it: the music itself did not tell that offset from its aliases (a jump of
 two thirds of a loop or more puts the nearest alias, a wrong one, nearest the held offset), so the seat does not claim
 what a lock the audio decided claims (the scores of those reach :data:`CLEAR_SCORE` and more)."""
@@ -235,7 +236,8 @@ class DelayTracker:
     def __init__(self) -> None:
         self.state = SyncState("searching", None, 0.0)
         self._votes: deque[tuple[float, float, float, float]] = deque()  # (at, offset, score, margin), good ones
-        self._jump: deque[tuple[float, float, float]] = deque()   # (at, offset, margin)
+        # (at, offset, margin, clear): votes for a jump; clear ones stood UNIQUE_MARGIN clear, the others are picks
+        self._jump: deque[tuple[float, float, float, bool]] = deque()
         self._x = np.zeros(2)     # offset at _t, drift
         self._p = np.eye(2)
         self._t = 0.0
@@ -250,7 +252,6 @@ class DelayTracker:
         self.assumed = False
         """The offset held was chosen by the prior or the loudness tie-break and the music has not yet confirmed it
         (:data:`ASSUMED_CONFIDENCE`)."""
-        self._unique_jump: deque[tuple[float, float]] = deque()   # (at, offset) of the jump votes that stood clear
 
     # ------------------------------------------------------------------ filter
     def _start(self, at: float, offset: float) -> None:
@@ -259,7 +260,6 @@ class DelayTracker:
         self._t = at
         self._confirmed = at
         self._jump.clear()
-        self._unique_jump.clear()
         self._streak.clear()
         self.assumed = False
 
@@ -283,8 +283,6 @@ class DelayTracker:
             self._votes.popleft()
         while self._jump and self._jump[0][0] < at - VOTE_S:
             self._jump.popleft()
-        while self._unique_jump and self._unique_jump[0][0] < at - VOTE_S:
-            self._unique_jump.popleft()
         # only a peak that stands clear of every other offset votes: a bar that repeats the rhythm of the true one
         # scores close to it (or above it), and such a pair of candidates waits for audio that tells them apart
         unique = good and est.margin >= UNIQUE_MARGIN
@@ -340,21 +338,21 @@ class DelayTracker:
             self._streak_from = at
         # music that repeats its rhythm leaves the candidates no margin: the loudness of what was heard since the jump
         # tells them apart where it differs, else the prior weighs them on their distances
-        prior = envelope = None
+        prior = None
         if est is not None and not unique and est.near_whole:
-            envelope = envelope_pick(est, float(x[0]))
-            prior = envelope if envelope is not None else prior_pick(est, float(x[0]))
+            prior = envelope_pick(est, float(x[0]))
+            if prior is None:
+                prior = prior_pick(est, float(x[0]))
         if unique or streak is not None or prior is not None:
             if unique:
-                self._jump.append((at, est.offset_s, est.margin if est.even else 0.0))
-                self._unique_jump.append((at, est.offset_s))
+                self._jump.append((at, est.offset_s, est.margin if est.even else 0.0, True))
             elif prior is not None:
                 # the loudness or the distance picked among candidates the onsets could not tell apart: a guess
                 # either way (the heard copy's loudness, room noise that swells over it, is not the
                 # reference's), so a jump it decides is assumed until a window stands clear at it
-                self._jump.append((at, prior, 0.0))
-            size, median, span = _cluster([(a, o) for a, o, _ in self._jump], AGREE_S)
-            sharp = _sharp_median(self._jump)
+                self._jump.append((at, prior, 0.0, False))
+            size, median, span = _cluster([(a, o) for a, o, _, _ in self._jump], AGREE_S)
+            sharp = _sharp_median([(a, o, m) for a, o, m, _ in self._jump])
             if sharp is not None:  # here sharp votes win over the ordinary cluster (a jump follows them sooner)
                 size, median, span = JUMP_VOTES, sharp, JUMP_SPAN_S
             by_music = sharp is not None
@@ -363,8 +361,8 @@ class DelayTracker:
                 by_music = True
             if size >= JUMP_VOTES and span >= JUMP_SPAN_S:
                 # a jump the clear votes alone would have made is the music's; one that needed the prior's is assumed
-                clear_size, _, clear_span = _cluster([(a, o) for a, o in self._unique_jump
-                                                      if abs(o - median) <= AGREE_S], AGREE_S)
+                clear_size, _, clear_span = _cluster([(a, o) for a, o, _, clear in self._jump
+                                                      if clear and abs(o - median) <= AGREE_S], AGREE_S)
                 by_music = by_music or (clear_size >= JUMP_VOTES and clear_span >= JUMP_SPAN_S)
                 self.jumps += 1
                 self._start(at, median)

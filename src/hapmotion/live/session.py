@@ -32,7 +32,7 @@ from .engine import LiveEngine, RenderedSkeleton, StepRenderer, Upstream
 from .sinks import Sink
 from .sources import ClockSource, ReplaySource, Source
 from .stats import LiveStats
-from .kinds import build_sink, build_source
+from .kinds import SINK_KINDS, build_sink, build_source
 from .urls import parse_sink, parse_source
 
 log = logging.getLogger("hapmotion.live")
@@ -201,4 +201,5 @@ def run_live(*args: Any, **kwargs: Any) -> LiveStats:
 
 def publishes(sinks: Sequence[SinkSpec]) -> bool:
     """Whether any of ``sinks`` is a ``nats://`` SINK string (an audience publisher)."""
-    return any(isinstance(s, str) and s.strip().startswith("nats:") for s in sinks)
+    scheme = SINK_KINDS["nats"].scheme + ":"
+    return any(isinstance(s, str) and s.strip().startswith(scheme) for s in sinks)
