@@ -41,11 +41,13 @@ import soundfile as sf
 from hapmotion.audience.sync_estimator import NEAR_S, RECENT_S, SHARP_MARGIN, envelope_scores, estimate
 from hapmotion.audience.seat_sync import SyncSettings
 from hapmotion.audience.sync_tracker import (AGREE_S, CLEAR_MARGIN, CLEAR_SCORE, ENVELOPE_LEAD, ENVELOPE_MIN,
-                                             JUMP_LEAD, MIN_MARGIN, MIN_SCORE, STREAK_S, UNIQUE_MARGIN)
+                                             HEARD_LEAD, JUMP_LEAD, MIN_MARGIN, MIN_SCORE, STREAK_S,
+                                             UNIQUE_MARGIN, heard_tells)
 from hapmotion.audio.sync_features import N_BANDS, RATE, dequantise, quantise, signal_levels
 
 from tests.support.data import AUDIO
 from tests.support.sync_signals import follow as seat_matching
+from tests.support.sync_signals import riser_loop
 
 from . import sync_scenes as scenes
 
@@ -187,6 +189,15 @@ def main(argv: list[str] | None = None) -> int:
               f"lock or jump vote), {r_sharp[ok].mean() * 100:.0f} % are sharp; at a wrong delay {int(wrong.sum())} "
               f"reach the score, their margin at most {top} (a vote needs {UNIQUE_MARGIN:.2f}), "
               f"{int((wrong & (r[:, 1] >= UNIQUE_MARGIN)).sum())} reach it")
+        votes = [e for (e, good, k) in right if k == kind and good and e.score >= MIN_SCORE
+                 and e.margin >= UNIQUE_MARGIN]
+        kept = sum(heard_tells(e) for e in votes)
+        rivals = [e.rival_lead for e in votes if e.rival_lead is not None]
+        print(f"  of those votes at the right delay {kept / max(len(votes), 1) * 100:.1f} % have the band levels as "
+              f"heard favouring them over their closest rival by {HEARD_LEAD:.2f} or more (a vote needs it; "
+              f"{len(rivals)} had a rival): the least lead {min(rivals, default=math.nan):.3f}, 5th percentile "
+              f"{np.percentile(rivals, 5) if rivals else math.nan:.3f}, median "
+              f"{np.median(rivals) if rivals else math.nan:.3f}")
         low = (r[:, 2] > 0) & (r[:, 0] >= CLEAR_SCORE) & (r[:, 0] < MIN_SCORE) & (r[:, 1] >= CLEAR_MARGIN)
         print(f"  under the score {MIN_SCORE:.2f} but from {CLEAR_SCORE:.2f}, {CLEAR_MARGIN:.2f} clear with onsets in "
               f"both halves: {int((low & ok).sum())} at the right delay, {int((low & ~ok).sum())} at a wrong one; at a "
@@ -211,8 +222,34 @@ def main(argv: list[str] | None = None) -> int:
           f"{len(lead_rows)} songs (a jump vote needs a lead of {JUMP_LEAD:.2f}); songs where one ever led: "
           f"{sum(bool((x > 0).any()) for x in lead_rows)}")
     relocks(secs)
+    risers()
     envelope_margins(secs)
     return 0
+
+
+def risers() -> None:
+    """A loop under a noise riser heard through room noise (:func:`tests.support.sync_signals.riser_loop`, heard 2 s
+    late): how far the onset score put a wrong loop ahead of the truth, how far the band levels as heard favoured it
+    (its lead over the offset held, or over its rival while searching), and where the seat played."""
+    worst_margin, worst_lead, wrong, windows = 0.0, -math.inf, 0, 0
+    cases = [(1.8, -6.0, 10.0), (1.8, -3.0, 20.0), (1.8, 0.0, 5.0), (2.6, -12.0, 10.0), (2.6, -3.0, 10.0),
+             (2.6, -6.0, 5.0), (3.7, -3.0, 10.0)]
+    for loop_s, riser_db, snr_db in cases:
+        src = riser_loop(loop_s, riser_db)
+        heard = scenes.add_noise(scenes.heard(src, np.arange(int(52 * SR)) / SR - 2.0), snr_db, 3)
+        history, _ = seat_matching(heard, src)
+        for _, est, state in history:
+            wrong += state.offset_s is not None and abs(state.offset_s - 2.0) > 0.02
+            if est is None or abs(est.offset_s - 2.0) <= 0.04 or est.score < MIN_SCORE:
+                continue
+            windows += 1
+            worst_margin = max(worst_margin, est.margin)
+            leads = [est.rival_lead] + [ld for (o, _), ld in zip(est.peaks[:1], est.held_leads[:1])]
+            worst_lead = max([worst_lead] + [ld for ld in leads if ld is not None])
+    print(f"a loop under a noise riser through room noise ({len(cases)} runs: loops of 1.8-3.7 s, the riser 12-0 dB "
+          f"under the music, 5-20 dB SNR): {windows} windows whose best offset was a wrong loop, standing up to "
+          f"{worst_margin:.2f} clear of the rest; the band levels as heard favoured it by {worst_lead:.3f} at most "
+          f"(a vote needs {HEARD_LEAD:.2f}); windows played off the truth: {wrong} (target 0)")
 
 
 def _recent_envelopes(heard: np.ndarray, ref_levels: np.ndarray, history: list, since: float = -math.inf,
@@ -327,7 +364,7 @@ def relocks(secs: float) -> None:
              ("lets_go_fishin", sf.read(AUDIO / "lets_go_fishin.ogg", dtype="float64")[0])]
     songs += [(f"synthetic-{k}", scenes.synth_song(k, 2 * secs + 10.0)) for k in (2026, 2027, 7, 8)]
     rng = np.random.default_rng(11)
-    rows, wrong = [], 0
+    rows, wrong, moved_leads = [], 0, []
     for i, (name, song) in enumerate(songs):
         song = song if song.ndim == 1 else song.mean(axis=1)
         ref = song[:int((2 * secs + 10.0) * SR)]
@@ -341,6 +378,12 @@ def relocks(secs: float) -> None:
                      and abs(st.offset_s - truth) <= 0.04]
                 wrong += sum(st.state != "searching" and min(abs(st.offset_s - delay), abs(st.offset_s - truth)) > 0.04
                              for _, _, st in history)
+                # how far the band levels as heard favoured the new offset over the held one when the seat moved
+                moved = next((e for at, e, st in history if at >= jump_t and st.state == "locked"
+                              and abs(st.offset_s - truth) <= 0.04), None)
+                if moved is not None:
+                    moved_leads += [ld for (o, _), ld in zip(moved.peaks, moved.held_leads)
+                                    if abs(o - truth) <= 0.04 and ld is not None][:1]
                 # the candidates within the voting margin of the best, 2 s after the jump (the held offset's distance)
                 est = next((e for at, e, _ in history if at >= jump_t + 2.0 and e is not None), None)
                 near = "" if est is None else " ".join(
@@ -353,6 +396,10 @@ def relocks(secs: float) -> None:
           f"the jump (offset from the one held, score under the best):")
     for t, name, kind, delay, jump, near in sorted(rows, key=lambda r: -r[0])[:4]:
         print(f"  {name} {kind} {delay * 1000:.0f} ms {jump:+.0f} s: {t:.1f} s; {near}")
+    print(f"  the band levels as heard favoured the new offset over the one held, in the window the seat moved: by "
+          f"{min(moved_leads, default=math.nan):.3f} at least, median "
+          f"{np.median(moved_leads) if moved_leads else math.nan:.3f} ({len(moved_leads)} of the runs; a move needs "
+          f"{HEARD_LEAD:.2f})")
 
 
 if __name__ == "__main__":

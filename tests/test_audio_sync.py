@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import soundfile as sf
 from scipy.ndimage import uniform_filter1d
-from support.sync_signals import SR, follow, noisy, played, real_song, song, speech_like
+from support.sync_signals import SR, follow, noisy, played, real_song, riser_loop, song, speech_like
 
 from hapmotion.audience.seat_sync import (
     UNSTEADY_S,
@@ -21,14 +21,21 @@ from hapmotion.audience.seat_sync import (
     SeatSync,
     SyncSettings,
 )
-from hapmotion.audience.sync_estimator import N_PEAKS, Estimate, envelope_scores, match
+from hapmotion.audience.sync_estimator import N_PEAKS, Estimate, as_heard, envelope_scores, match
 from hapmotion.audience.sync_reference import (
     ReferencePublisher,
     SongReference,
     decode_batch,
     encode_batch,
 )
-from hapmotion.audience.sync_tracker import ASSUMED_CONFIDENCE, STREAK_S, DelayTracker, envelope_pick, prior_pick
+from hapmotion.audience.sync_tracker import (
+    ASSUMED_CONFIDENCE,
+    HEARD_LEAD,
+    STREAK_S,
+    DelayTracker,
+    envelope_pick,
+    prior_pick,
+)
 from hapmotion.audio.inputs import FileInput, PipeInput, open_input
 from hapmotion.audio.sync_features import (
     BANDS,
@@ -708,3 +715,62 @@ def test_a_lost_reference_batch_inside_a_short_repeat_never_moves_a_locked_seat(
         state = tracker.update(match(levels[end - n:end], t_heard, r, first / RATE, held=tracker.offset_at(at)), at)
         assert state.offset_s is None or abs(state.offset_s - 2.0) < 0.03, (round(at, 2), state)
     assert tracker.locks == 1 and tracker.jumps == 0 and tracker.state.state == "locked"
+
+
+def test_the_reference_as_heard_carries_the_heard_floor_to_the_references_scale():
+    # heard: a band at -20 dB loud with a floor at -50 dB (its 5th percentile); the reference plays 10 dB quieter
+    # (loud -30 dB) and holds digital silence between its notes: as heard, that silence sits at -60 dB, the floor
+    # 30 dB under the loud level as in the heard copy, and a level well above the floor is left as it was
+    heard = np.concatenate([np.full((10, 1), -50.0), np.full((90, 1), -20.0)])
+    ref = np.concatenate([np.full((10, 1), -100.0), np.full((90, 1), -30.0)])
+    out = as_heard(heard, ref)
+    assert out[0, 0] == pytest.approx(10 * np.log10(1e-10 + 1e-6), abs=1e-9)     # -100 dB + -60 dB in power
+    assert out[50, 0] == pytest.approx(10 * np.log10(1e-3 + 1e-6), abs=1e-9)     # -30 dB + -60 dB
+    # a clean heard copy (digital silence, the floor) adds nothing above it; a row not received stays NaN
+    clean = np.concatenate([np.full((10, 1), -100.0), np.full((90, 1), -20.0)])
+    gap = ref.copy()
+    gap[3] = np.nan
+    out = as_heard(clean, gap)
+    assert out[50, 0] == pytest.approx(-30.0, abs=1e-6) and np.isnan(out[3, 0])
+
+
+def test_a_vote_counts_only_where_the_levels_as_heard_do_not_favour_the_rival_or_the_offset_held():
+    def est(at, offset, margin, rival_lead=None, held_leads=()):
+        peaks = ((offset, 0.7), (offset + 2.6, 0.7 - margin))
+        return Estimate(offset, 0.7, margin, 5, at, True, None, peaks, rival_lead=rival_lead, held_leads=held_leads)
+    # unique windows whose rival a loop away the levels as heard favour as much never lock
+    tracker = DelayTracker()
+    for i in range(60):
+        tracker.update(est(i * 0.1, 2.0, 0.13, rival_lead=HEARD_LEAD / 2), i * 0.1)
+    assert tracker.state.state == "searching" and tracker.locks == 0
+    # the same windows with the levels favouring the peak lock
+    for i in range(60, 80):
+        tracker.update(est(i * 0.1, 2.0, 0.13, rival_lead=2 * HEARD_LEAD), i * 0.1)
+    assert tracker.state.state == "locked" and tracker.state.offset_s == pytest.approx(2.0, abs=1e-3)
+    # locked at 2.0: clear windows one loop away whose lead over the held offset falls short never move the seat,
+    # nor does a streak of them, however long
+    for i in range(80, 200):
+        tracker.update(est(i * 0.1, 4.6, 0.13, rival_lead=2 * HEARD_LEAD, held_leads=(HEARD_LEAD / 2, None)), i * 0.1)
+    assert tracker.jumps == 0 and tracker.state.offset_s == pytest.approx(2.0, abs=1e-3)
+    # a lead that reaches HEARD_LEAD does
+    for i in range(200, 230):
+        tracker.update(est(i * 0.1, 4.6, 0.13, rival_lead=2 * HEARD_LEAD, held_leads=(2 * HEARD_LEAD, None)), i * 0.1)
+    assert tracker.jumps == 1 and tracker.state.offset_s == pytest.approx(4.6, abs=1e-3)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("loop_s, riser_db, snr_db, start_s", [(2.6, -3.0, 10.0, 0.0), (2.6, -3.0, 10.0, 31.0),
+                                                             (2.6, -3.0, 10.0, 32.5), (1.8, -6.0, 10.0, 0.0),
+                                                             (1.8, -3.0, 20.0, 0.0), (2.6, -6.0, 5.0, 0.0)])
+def test_a_riser_over_a_loop_heard_through_room_noise_never_puts_a_seat_a_loop_off(loop_s, riser_db, snr_db, start_s):
+    # heard 2 s late through room noise: the noise's rises, coming and going with the loop's notes, look to the onset
+    # score like the riser's in the reference, so one loop off (where the riser is loudest) scored 0.1-0.3 clear of
+    # the truth. Seats locked since the intro moved there (confidence 0.7-0.9, for 10-30 s), and seats that started
+    # listening in the loop locked there; the levels as heard never favour it, and no seat now goes there
+    src = riser_loop(loop_s, riser_db)
+    heard = noisy(played(src, np.arange(int(55 * SR)) / SR - 2.0), snr_db, 3)[int(start_s * SR):]
+    history, tracker = follow(heard, src, start_s=start_s)
+    assert all(s.offset_s is None or abs(s.offset_s - 2.0) < 0.02 for _, _, s in history), \
+        [(round(at, 1), s) for at, _, s in history if s.offset_s is not None and abs(s.offset_s - 2.0) >= 0.02][:3]
+    if start_s == 0.0:
+        assert tracker.locks == 1 and tracker.jumps == 0

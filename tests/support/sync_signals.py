@@ -48,6 +48,20 @@ def song(seed: int, seconds: float, sr: int = SR) -> np.ndarray:
     return 0.8 * out / np.abs(out).max()
 
 
+def riser_loop(loop_s: float, riser_db: float, seconds: float = 52.0, sr: int = SR) -> np.ndarray:
+    """12 s of :func:`song` that never repeats, then one ``loop_s`` of notes played over and over to ``seconds``, with
+    a riser over six of its repeats from 14.6 s: broadband noise swelling as the square of time to ``riser_db`` under
+    the music's RMS, no onsets (an electronic build). ``(n,)`` float64, peak 0.8."""
+    out = np.concatenate([song(5, 12.0, sr)] + [song(6, loop_s, sr)] * int(math.ceil((seconds - 12.0) / loop_s)))
+    rng = np.random.default_rng(11)
+    m = np.arange(out.size) / sr
+    noise = np.convolve(rng.normal(size=out.size), np.ones(4) / 4, mode="same")
+    start, length = 14.6, 6 * loop_s
+    swell = np.where((m >= start) & (m < start + length), (m - start) / length, 0.0) ** 2
+    out = out + swell * noise / noise.std() * np.sqrt(np.mean(out * out)) * 10 ** (riser_db / 20)
+    return 0.8 * out / np.abs(out).max()
+
+
 def speech_like(seed: int, seconds: float, sr: int = SR) -> np.ndarray:
     """Voiced syllables of 0.1-0.3 s with a wandering pitch and pauses, the rhythm of speech."""
     rng = np.random.default_rng(seed)

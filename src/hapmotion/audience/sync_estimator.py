@@ -91,6 +91,13 @@ class Estimate:
     held_envelope: Optional[float] = None
     """The same band-energy score at the offset the locked seat holds, None when not asked or where the reference
     there is not whole (the music heard has run past the reference received, a gap)."""
+    rival_lead: Optional[float] = None
+    """How far the best offset's band-energy score *as heard* (:func:`heard_envelope_scores`) stands above that of
+    its closest rival, the best of the candidates scoring within :data:`RIVAL` of it; None where there is none or a
+    score is unknown."""
+    held_leads: tuple[Optional[float], ...] = ()
+    """The same lead of each of :attr:`peaks` over the ``near`` offset (in order; empty when not asked or out of
+    the range searched, None where a score is unknown)."""
     near_whole: bool = True
     """The reference over the ``near`` offset's window was all received (True when not asked or out of the range
     searched): where it was not (a lost batch), the held offset's score is lowered by the gap while an alias whose
@@ -158,6 +165,7 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
     others = np.concatenate([score[:max(0, best - ex)], score[best + ex + 1:]])
     second = float(others.max()) if others.size else -1.0
     offset = t_heard - t_ref - (best + frac) / RATE
+    peaks = _peaks(score, ex, t_heard - t_ref)
     near_score, near_whole = None, True
     if near is not None:
         lags = np.arange(n_lags)
@@ -167,8 +175,74 @@ def estimate(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: fl
             near_score = float(score[close].max())
             near_lags = lags[close]
             near_whole = not bool(missing[near_lags.min():near_lags.max() + w].any())
+    moving = near_score is not None and abs(offset - near) > NEAR_S
+    rival_lead, held_leads = _heard_leads(heard_db, t_heard, ref_db, t_ref, peaks, near if moving else None)
     return Estimate(float(offset), peak, peak - second, int(active.sum()), t_heard + (w - 1) / RATE, even,
-                    near_score, _peaks(score, ex, t_heard - t_ref), near_whole=near_whole)
+                    near_score, peaks, rival_lead=rival_lead, held_leads=held_leads, near_whole=near_whole)
+
+
+def _heard_leads(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
+                 peaks: tuple[tuple[float, float], ...], held: Optional[float]
+                 ) -> tuple[Optional[float], tuple[Optional[float], ...]]:
+    """:attr:`Estimate.rival_lead` and :attr:`Estimate.held_leads` of ``peaks`` (best first): the band-energy scores
+    as heard (:func:`heard_envelope_scores`) of the best against its rivals and, given ``held`` (a locked seat whose
+    best lies elsewhere: a move to weigh), of every candidate against the offset held."""
+    best, score = peaks[0]
+    rivals = [o for o, s in peaks[1:] if s >= score - RIVAL]
+    others = [o for o, _ in peaks[1:]] + [held] if held is not None else rivals
+    if not others:
+        return None, ()
+    env = heard_envelope_scores(heard_db, t_heard, ref_db, t_ref, [best] + others)
+    known = [e for o, e in zip(others, env[1:]) if o in rivals and e is not None]
+    rival_lead = env[0] - max(known) if env[0] is not None and known else None
+    if held is None:
+        return rival_lead, ()
+    at_held = env[-1]
+    return rival_lead, tuple(None if e is None or at_held is None else e - at_held for e in env[:-1])
+
+
+RIVAL = 0.25
+"""Candidates scoring within this of the best are its rivals (:attr:`Estimate.rival_lead`)."""
+FLOOR_PERCENTILE = 5.0
+"""The heard copy's noise floor in a band: this percentile of its level over the window (the quiet between notes,
+where a room's or a codec's noise shows)."""
+LOUD_PERCENTILE = 95.0
+"""Each side's loud level in a band; their difference carries the heard floor to the reference's scale (the
+stream's volume and equalisation are unknown)."""
+_NEPER = np.log(10.0) / 10.0
+"""dB to the natural logarithm of a power."""
+
+
+def as_heard(heard_db: np.ndarray, ref_db: np.ndarray) -> np.ndarray:
+    """The reference levels ``ref_db`` ``(N, B)`` dB (NaN rows: not received) as a seat hears them: with the noise
+    floor of the heard levels ``heard_db`` ``(W, B)`` added in power, each band's floor (:data:`FLOOR_PERCENTILE`)
+    carried to the reference's scale by the difference of the two sides' loud levels (:data:`LOUD_PERCENTILE`).
+    ``(N, B)`` dB, NaN rows kept. A clean copy (a loopback's digital silence between notes) adds nothing."""
+    hd = np.asarray(heard_db, dtype=np.float64)
+    rd = np.asarray(ref_db, dtype=np.float64)
+    heard_rows = hd[np.isfinite(hd).all(axis=1)]
+    ref_rows = rd[np.isfinite(rd).all(axis=1)]
+    if not (heard_rows.size and ref_rows.size):
+        return rd
+    quiet, loud = np.percentile(heard_rows, [FLOOR_PERCENTILE, LOUD_PERCENTILE], axis=0)
+    floor = quiet - (loud - np.percentile(ref_rows, LOUD_PERCENTILE, axis=0))
+    with np.errstate(invalid="ignore"):  # NaN rows stay NaN
+        return np.logaddexp(rd * _NEPER, floor * _NEPER) / _NEPER
+
+
+def heard_envelope_scores(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref: float,
+                          offsets: "list[float]") -> tuple[Optional[float], ...]:
+    """:func:`envelope_scores` of the heard levels ``(W, B)`` against the reference ``(N, B)`` as heard
+    (:func:`as_heard`) at each offset (seconds).
+
+    The onset score of an offset depends on all of its reference window, including what the heard copy shows only
+    as noise: where a band's notes poke through a noise floor, the noise's rises come and go with the music, and a
+    reference with noise of its own (a riser swelling under a loop) shows the same pattern, which the score takes
+    for a match. A loop under a riser, heard through room noise, thus scored one loop off (where the riser is
+    loudest) 0.1-0.3 clear of the truth for seconds. The band levels of the reference under the heard copy's own
+    floor compare like with like: there the truth's levels never trailed the wrong loop's by more than 0.002, while
+    the true offset led a rival by 0.04 and more (benchmarks/sync_margins.py)."""
+    return envelope_scores(heard_db, t_heard, as_heard(heard_db, ref_db), t_ref, offsets)
 
 
 SHARP_MARGIN = 0.15

@@ -12,6 +12,11 @@ jump: its margin (the score minus the best score at any other offset searched) r
 that repeats its rhythm bar to bar puts a second peak a bar away, close to the true one and through noise sometimes
 above it; such a close pair waits for audio that tells them apart: either a window where one stands clear, or one
 offset that is the best in every window for :data:`STREAK_S` (the later windows hold audio the first did not).
+Nor does a window vote for its best offset, alone or in a streak, where the band levels of the reference *as the seat
+hears them* (under the heard copy's own noise floor: :func:`~hapmotion.audience.sync_estimator.heard_envelope_scores`)
+do not favour it over its closest rival by :data:`HEARD_LEAD` (:func:`heard_tells`), and a locked seat moves to a
+candidate only where they favour it over the offset it holds (:func:`favours`): through room noise the onset score
+takes noise in the reference (a riser under a loop) for a match, which the levels as heard do not.
 
 * **searching**: voting estimates of the last :data:`VOTE_S` seconds; when :data:`LOCK_VOTES` of them agree
   within :data:`AGREE_S` and span at least :data:`LOCK_SPAN_S` (so they do not all come from one stretch of
@@ -122,6 +127,13 @@ ENVELOPE_MIN = 0.70
 music that is not the venue's reached 0.64 at its 99th percentile and 0.83 at most, standing up to 0.70 above the
 next candidate: no evidence by itself, but over 9238 such windows none had the onset score (:data:`MIN_SCORE`, two
 candidates within :data:`UNIQUE_MARGIN`) the pick needs first."""
+HEARD_LEAD = 0.02
+"""How far the band-energy score as heard (:func:`~hapmotion.audience.sync_estimator.heard_envelope_scores`) must
+favour an offset over its rival, or over the offset a locked seat holds, for an estimate to vote for it. A loop under
+a noise riser heard through room noise (loops of 1.8 and 2.6 s, the riser 12 to 0 dB under the music, 5 to 20 dB SNR)
+put the onset score one loop off 0.1-0.3 clear of the truth, where this score never favoured it by more than 0.002;
+over the right music (eight synthetic songs through the codec, with and without room noise) the true offset led
+every rival by 0.04 at least, by 0.15 in 95 % of the windows (benchmarks/sync_margins.py)."""
 SHARP_VOTES = 3
 SHARP_AGREE_S = 0.010
 SHARP_SPAN_S = 0.2
@@ -213,6 +225,24 @@ def envelope_pick(est: Estimate, held: float) -> Optional[float]:
     return offset
 
 
+def heard_tells(est: Estimate) -> bool:
+    """The band levels as the seat hears them favour ``est``'s best offset over its closest rival by
+    :data:`HEARD_LEAD` (``Estimate.rival_lead``; True where it has none): only then may the estimate vote for it,
+    alone or in a streak."""
+    return est.rival_lead is None or est.rival_lead >= HEARD_LEAD
+
+
+def favours(est: Estimate, offset: float) -> bool:
+    """The band levels as the seat hears them favour candidate ``offset`` of ``est`` over the offset a locked seat
+    holds by :data:`HEARD_LEAD` (``Estimate.held_leads``): only then may the seat move there. True where that is
+    unknown (the held offset not asked or outside the range searched, a reference not whole) or ``offset`` is no
+    candidate."""
+    for (o, _), lead in zip(est.peaks, est.held_leads):
+        if abs(o - offset) <= AGREE_S:
+            return lead is None or lead >= HEARD_LEAD
+    return True
+
+
 def _cluster(points: list[tuple[float, float]], agree: float) -> tuple[int, float, float]:
     """The largest group of ``(at, offset)`` within ``agree`` of one member's offset: (size, median offset, span of
     their times)."""
@@ -285,15 +315,17 @@ class DelayTracker:
             self._jump.popleft()
         # only a peak that stands clear of every other offset votes: a bar that repeats the rhythm of the true one
         # scores close to it (or above it), and such a pair of candidates waits for audio that tells them apart
-        unique = good and est.margin >= UNIQUE_MARGIN
+        # the band levels as the seat hears them must not favour a rival: else the onset score's lead rests on noise
+        told = good and heard_tells(est)
+        unique = told and est.margin >= UNIQUE_MARGIN
         if unique:
             self._votes.append((at, est.offset_s, est.score, est.margin if est.even else 0.0))
         # a close pair of candidates is told apart by more audio: the same offset best in every window for
         # STREAK_S, each window holding audio the first did not, is a vote of its own
-        if not (good and self._streak and abs(est.offset_s - self._streak[-1][1]) <= AGREE_S):
+        if not (told and self._streak and abs(est.offset_s - self._streak[-1][1]) <= AGREE_S):
             self._streak.clear()
             self._streak_from = at
-        if good:
+        if told:
             self._streak.append((at, est.offset_s, est.score))
         streak = (float(np.median([o for _, o, _ in self._streak]))
                   if self._streak and at - self._streak_from >= STREAK_S else None)
@@ -330,7 +362,7 @@ class DelayTracker:
             self._confirmed = at
             self._scores.append(est.near_score)
             return self._report("locked")
-        if est is not None and not est.near_whole:
+        if est is not None and not (est.near_whole and favours(est, est.offset_s)):
             # a lost reference batch over the held offset's window lowers its score and not an alias's whose window
             # misses the gap: no vote to move (nor a streak) rests on such a comparison
             unique, streak = False, None
@@ -343,6 +375,8 @@ class DelayTracker:
             prior = envelope_pick(est, float(x[0]))
             if prior is None:
                 prior = prior_pick(est, float(x[0]))
+            if prior is not None and not favours(est, prior):
+                prior = None
         if unique or streak is not None or prior is not None:
             if unique:
                 self._jump.append((at, est.offset_s, est.margin if est.even else 0.0, True))
