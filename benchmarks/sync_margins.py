@@ -21,8 +21,11 @@ without a jump ever made the seat jump or play off the truth; and a 1 s jump 20 
 songs through the codec and with room noise, delays of 1.3-3 s): how long the seat took to re-lock, whether it played
 at an offset that was neither the old nor the new one, and for the slowest re-locks the candidates that competed 2 s
 after the jump (each one's distance from the offset held and its score under the best: aliases a period apart score
-alike, and :func:`~hapmotion.audience.sync_tracker.prior_pick` decides among them by their distances); and whether
-the band-energy score (:func:`~hapmotion.audience.sync_estimator.envelope_scores`, the levels of the audio heard
+alike, and :func:`~hapmotion.audience.sync_tracker.prior_pick` decides among them by their distances); how far the
+band levels as heard (:func:`~hapmotion.audience.sync_estimator.heard_envelope_scores`) favoured each vote at the
+right delay over its rival and each followed jump over the delay held, and how far they ever favoured a wrong loop
+that the onset score put first in music that loops under a noise riser, heard through room noise (seven runs); and
+whether the band-energy score (:func:`~hapmotion.audience.sync_estimator.envelope_scores`, the levels of the audio heard
 since a jump) tells those aliases apart: after jumps of 0.5-1.5 s both ways in twelve songs (the shared ones, the
 harness's synthetic ones, six more) through the codec and with room noise, the truth's lead over the best alias in
 every window the onset score left ambiguous, and, over music that is not the venue's, how high a wrong candidate's
