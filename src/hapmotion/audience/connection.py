@@ -242,17 +242,19 @@ def _is_tls(nc: NatsClient) -> bool:
 
 
 def connect_error(what: str, exc: BaseException) -> UsageError:
-    """The one-line error for a failed first connection: a refusal or an absent server."""
+    """The one-line error for a failed first connection: a refusal, a server certificate this client cannot verify
+    (a server was there: it is not "cannot reach"), or an absent server."""
+    detail = f"{exc.__class__.__name__}: {exc}"
     if isinstance(exc, AuthRefused):
         return UsageError(f"{what}: {exc}")
     if _name_mismatch(exc):
-        hint = (" (the server's certificate names another host or address: give one of its names with "
-                "--nats-tls-name NAME)")
-    elif _unverified(exc):
-        hint = " (give the venue's CA with --nats-ca FILE)"
-    else:
-        hint = ""
-    return UsageError(f"{what}: cannot reach the NATS server ({exc.__class__.__name__}: {exc}){hint}")
+        return UsageError(f"{what}: the NATS server's TLS certificate did not verify ({detail}) (the server's "
+                          "certificate names another host or address: give one of its names with --nats-tls-name "
+                          "NAME)")
+    if _unverified(exc):
+        return UsageError(f"{what}: the NATS server's TLS certificate did not verify ({detail}) (give the venue's CA "
+                          "with --nats-ca FILE)")
+    return UsageError(f"{what}: cannot reach the NATS server ({detail})")
 
 
 def _chain(exc: Optional[BaseException]):
