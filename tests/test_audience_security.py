@@ -554,6 +554,7 @@ def test_a_certificate_that_does_not_verify_is_named_in_the_one_line_error(tmp_p
     assert code == 2 and err.count("\n") == 1 and "CERTIFICATE_VERIFY_FAILED" in err, err
     assert err.rstrip().endswith("(give the venue's CA with --nats-ca FILE)"), err
     assert "TLS certificate did not verify" in err and "cannot reach" not in err, err   # a server did answer
+    assert "no NATS server answered" not in err, err
 
 
 def test_a_tls_seat_without_the_venues_ca_is_told_to_give_it(tmp_path, capsys):
@@ -601,3 +602,6 @@ def test_the_publishers_startup_line_names_its_frames_and_rate(motion):
     full = NatsPublisherSink("nats://127.0.0.1:4222", describe_show("concert", **common), security=rehearsal)
     assert "frames=compact, published at 30/s of 60" in compact.describe(), compact.describe()
     assert "frames=full, published at 60/s of 60" in full.describe(), full.describe()
+    packed = NatsPublisherSink("nats://127.0.0.1:4222", describe_show("concert", frames="compact", pack=2, **common),
+                               security=rehearsal)
+    assert "frames=compact, 2 a message, published at 30/s of 60" in packed.describe(), packed.describe()

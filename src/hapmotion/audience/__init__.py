@@ -21,8 +21,9 @@ from .connection import NatsAuth
 from .listener import AudienceSource, SeatSecurity, listen, parse_show_url, run_listen
 from .publisher import NatsPublisherSink, PublisherSecurity, describe_show, publishing
 from .seat import Seat, SeatSink, SeatStage
+from .signing import load_private_key, load_public_key
 from .wire import ShowDescription, decode_frame, encode_frame, parse_description
 
-__all__ = ["AudienceSource", "NatsAuth", "NatsPublisherSink", "PublisherSecurity", "Seat", "SeatSecurity", "SeatSink", "SeatStage", "ShowDescription",
+__all__ = ["load_private_key", "load_public_key", "AudienceSource", "NatsAuth", "NatsPublisherSink", "PublisherSecurity", "Seat", "SeatSecurity", "SeatSink", "SeatStage", "ShowDescription",
            "decode_frame", "describe_show", "encode_frame", "listen", "parse_description", "parse_show_url",
            "publishing", "run_listen"]

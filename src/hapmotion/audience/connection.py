@@ -245,6 +245,8 @@ def connect_error(what: str, exc: BaseException) -> UsageError:
     """The one-line error for a failed first connection: a refusal, a server certificate this client cannot verify
     (a server was there: it is not "cannot reach"), or an absent server."""
     detail = f"{exc.__class__.__name__}: {exc}"
+    if _unverified(exc) and "; last error " in str(exc):
+        detail = str(exc).split("; last error ", 1)[1]  # the certificate's own error, not the wait that ended on it
     if isinstance(exc, AuthRefused):
         return UsageError(f"{what}: {exc}")
     if _name_mismatch(exc):

@@ -237,7 +237,7 @@ class NatsPublisherSink(Sink):
                 self.warn_once("description", "could not check the stored show description (%s)", exc)
 
     def describe(self) -> str:
-        frames = "compact" if self.description.frame_version == 2 else "full"
+        frames = {1: "full", 2: "compact"}.get(self.description.frame_version, f"compact, {self._pack} a message")
         return (f"{self.name} ({self.signer.describe()}; frames={frames}, published at "
                 f"{self.description.frame_rate:g}/s of {self.description.fps:g})")
 
