@@ -240,8 +240,8 @@ def heard_envelope_scores(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarr
     reference with noise of its own (a riser swelling under a loop) shows the same pattern, which the score takes
     for a match. A loop under a riser, heard through room noise, thus scored one loop off (where the riser is
     loudest) 0.1-0.3 clear of the truth for seconds. The band levels of the reference under the heard copy's own
-    floor compare like with like: there the truth's levels never trailed the wrong loop's by more than 0.002, while
-    the true offset led a rival by 0.04 and more (benchmarks/sync_margins.py)."""
+    floor compare like with like: there the wrong loop never led the truth (by 0.000 at most), while the true offset
+    led its rivals by 0.07 and more through the codec and room noise (benchmarks/sync_margins.py)."""
     return envelope_scores(heard_db, t_heard, as_heard(heard_db, ref_db), t_ref, offsets)
 
 
