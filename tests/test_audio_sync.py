@@ -487,6 +487,9 @@ def test_the_tracker_loses_a_song_that_stops_and_holds_then_searches():
     states = {s.state for at, _, s in history if 10 < at < 20}
     assert states == {"locked"}
     assert any(s.state == "lost" and abs(s.offset_s - 1.0) < 0.01 for at, _, s in history if 26 < at < 44)
+    # lost, the held delay is no longer what the music confirms: its confidence is a guess's at most
+    assert all(s.confidence <= ASSUMED_CONFIDENCE for _, _, s in history if s.state == "lost")
+    assert min(s.confidence for at, _, s in history if 10 < at < 20) > 2 * ASSUMED_CONFIDENCE
     assert history[-1][2].state == "searching"  # held 5 + 20 s, then searching again (the fallback plays)
 
 

@@ -153,7 +153,8 @@ DRIFT_WALK = 2e-5
 class SyncState:
     """What the seat reports: ``state`` ``searching`` | ``locked`` | ``lost``; ``offset_s`` the offset it plays at
     (local time minus media time of the heard music; None while searching), ``confidence`` 0..1 (the recent good
-    estimates' mean score; 0 while searching), ``drift`` (seconds per second), ``jumps`` and ``locks`` counted."""
+    estimates' mean score; 0 while searching, :data:`ASSUMED_CONFIDENCE` at most while lost or at a guessed offset),
+    ``drift`` (seconds per second), ``jumps`` and ``locks`` counted."""
 
     state: str
     offset_s: Optional[float]
@@ -417,7 +418,8 @@ class DelayTracker:
     def _report(self, state: str) -> SyncState:
         offset = None if state == "searching" else float(self._x[0])
         confidence = float(np.mean(self._scores)) if (self._scores and state != "searching") else 0.0
-        if self.assumed and state != "searching":
+        if (self.assumed and state != "searching") or state == "lost":
+            # a guess, or a delay no match has confirmed for LOST_AFTER_S: not what the music decided
             confidence = min(confidence, ASSUMED_CONFIDENCE)
         self.state = SyncState(state, offset, confidence, float(self._x[1]) if offset is not None else 0.0,
                                self.jumps, self.locks)
