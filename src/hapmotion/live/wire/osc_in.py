@@ -126,7 +126,8 @@ class OscSkeletonDecoder:
             return None
         if len(dgram) != args + 4 * 3 * N_JOINTS:
             return None
-        pos = np.frombuffer(dgram, dtype=">f4", count=3 * N_JOINTS, offset=args).astype(np.float64)
+        with np.errstate(invalid="ignore"):  # a signalling NaN sent as a joint: non-finite joints are refused later
+            pos = np.frombuffer(dgram, dtype=">f4", count=3 * N_JOINTS, offset=args).astype(np.float64)
         return SkeletonFrame(pos.reshape(N_JOINTS, 3), seq, t, received)
 
     def _joint(self, name: str, params: list[Any], received: float, out: list[SkeletonFrame]) -> None:
