@@ -146,8 +146,9 @@ def seat_sync_options(command: Callable) -> Callable:
                           "venue's reference; --delay is then a fine offset on top."),
         click.option("--audio-input", metavar="SPEC", default=None,
                      help="What --sync audio listens to: loopback (the default output's loopback/monitor; the "
-                          "default), mic, device:NAME, file:PATH, wav:PATH|-, raw:PATH|-?rate=R&channels=C "
-                          "(--list-audio-inputs)."),
+                          "default), mic, device:NAME, file:PATH, wav:PATH|-, "
+                          "raw:PATH|-?rate=R&channels=C&format=s16|f32 (raw without them: 48000 Hz, 2 channels, "
+                          "s16) (--list-audio-inputs)."),
         click.option("--unsynced", type=click.Choice(["delay", "silent"]), default=None,
                      help="While --sync audio is not locked: play at the manual --delay (delay, the default) or "
                           "not at all (silent)."),
