@@ -244,18 +244,15 @@ def _is_tls(nc: NatsClient) -> bool:
 def connect_error(what: str, exc: BaseException) -> UsageError:
     """The one-line error for a failed first connection: a refusal, a server certificate this client cannot verify
     (a server was there: it is not "cannot reach"), or an absent server."""
-    detail = f"{exc.__class__.__name__}: {exc}"
-    if _unverified(exc) and "; last error " in str(exc):
-        detail = str(exc).split("; last error ", 1)[1]  # the certificate's own error, not the wait that ended on it
     if isinstance(exc, AuthRefused):
         return UsageError(f"{what}: {exc}")
-    if _name_mismatch(exc):
-        return UsageError(f"{what}: the NATS server's TLS certificate did not verify ({detail}) (the server's "
-                          "certificate names another host or address: give one of its names with --nats-tls-name "
-                          "NAME)")
-    if _unverified(exc):
-        return UsageError(f"{what}: the NATS server's TLS certificate did not verify ({detail}) (give the venue's CA "
-                          "with --nats-ca FILE)")
+    detail = f"{exc.__class__.__name__}: {exc}"
+    if _unverified(exc):  # (a name mismatch is one too: the CA was right, the name is not)
+        if "; last error " in str(exc):
+            detail = str(exc).split("; last error ", 1)[1]  # the certificate's own error, not the wait it ended
+        hint = ("the server's certificate names another host or address: give one of its names with "
+                "--nats-tls-name NAME" if _name_mismatch(exc) else "give the venue's CA with --nats-ca FILE")
+        return UsageError(f"{what}: the NATS server's TLS certificate did not verify ({detail}) ({hint})")
     return UsageError(f"{what}: cannot reach the NATS server ({detail})")
 
 

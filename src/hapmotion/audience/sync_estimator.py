@@ -187,19 +187,20 @@ def _heard_leads(heard_db: np.ndarray, t_heard: float, ref_db: np.ndarray, t_ref
     """:attr:`Estimate.rival_lead` and :attr:`Estimate.held_leads` of ``peaks`` (best first): the band-energy scores
     as heard (:func:`heard_envelope_scores`) of the best against its rivals and, given ``held`` (a locked seat whose
     best lies elsewhere: a move to weigh), of every candidate against the offset held."""
-    best, score = peaks[0]
-    rivals = [o for o, s in peaks[1:] if s >= score - RIVAL]
-    others = [o for o, _ in peaks[1:]] + [held] if held is not None else rivals
-    if not others:
+    best, best_score = peaks[0]
+    rivals = [i for i, (_, s) in enumerate(peaks) if i and s >= best_score - RIVAL]  # indices into peaks
+    asked = list(range(1, len(peaks))) if held is not None else rivals  # a move to weigh: every candidate
+    if not asked:
         return None, ()
-    env = heard_envelope_scores(heard_db, t_heard, ref_db, t_ref, [best] + others)
-    known = [e for o, e in zip(others, env[1:]) if o in rivals and e is not None]
+    env = heard_envelope_scores(heard_db, t_heard, ref_db, t_ref,
+                                [best] + [peaks[i][0] for i in asked] + ([held] if held is not None else []))
+    by_peak = dict(zip(asked, env[1:]))
+    known = [by_peak[i] for i in rivals if by_peak[i] is not None]
     rival_lead = env[0] - max(known) if env[0] is not None and known else None
     if held is None:
         return rival_lead, ()
     at_held = env[-1]
-    return rival_lead, tuple(None if e is None or at_held is None else e - at_held for e in env[:-1])
-
+    return rival_lead, tuple(None if e is None or at_held is None else e - at_held for e in env[:len(peaks)])
 
 RIVAL = 0.25
 """Candidates scoring within this of the best are its rivals (:attr:`Estimate.rival_lead`)."""
