@@ -29,11 +29,14 @@ class LightConnection(asyncio.Protocol):
     shared machine has for thousands of 60 Hz subscribers; what is measured here is the server's fan-out and
     delivery, so the load generator speaks the NATS text protocol itself (CONNECT, SUB, PONG: docs.nats.io,
     "Client Protocol") and counts delivered messages by their ``MSG`` line in each chunk, at C speed; the frame
-    age is read from the last complete frame of each chunk (the newest copy the chunk delivered). ``connect`` is
-    the CONNECT object's credentials (a seat's NKey and the signature of the server's nonce, for ``--secure``);
-    the TLS, when there is any, is the transport's (:func:`open_light_connection`)."""
+    age is read from the newest frame of each chunk (a frame split across reads, by TLS records or the socket,
+    is read when its end arrives). ``connect`` is the CONNECT object's credentials (a seat's NKey and the
+    signature of the server's nonce, for ``--secure``); the TLS, when there is any, is the transport's
+    (:func:`open_light_connection`)."""
 
     TOKEN = b"\r\nMSG "
+    MAX_KEPT = 1 << 16
+    """Bytes of a message split across reads kept for the next one (a frame is far smaller)."""
 
     def __init__(self, subject_name: str, n: int, ages: list, marks: dict, connect: str = ""):
         self.subject_name, self.n, self.ages, self.marks = subject_name, n, ages, marks
@@ -70,24 +73,25 @@ class LightConnection(asyncio.Protocol):
                 self.ready.set_result(True)
         if b"PING\r\n" in data:
             self.transport.write(b"PONG\r\n")
-        self.count += chunk.count(self.TOKEN)
+        self.count += chunk.count(self.TOKEN) - self.tail.count(self.TOKEN)  # (a kept message was counted)
         self.tail = chunk[-(len(self.TOKEN) - 1):]
         at = chunk.rfind(self.TOKEN)
         if at >= 0:  # "MSG <subject> <sid> <bytes>\r\n<payload>\r\n"
             eol = chunk.find(b"\r\n", at + 2)
-            if eol > 0:
-                size = int(chunk[at + 2:eol].split()[-1])
-                payload = chunk[eol + 2:eol + 2 + size]
-                if len(payload) == size:
-                    if self.marks.get("on"):  # (a packed show's last message, after the window, holds one frame)
-                        self.marks["bytes"] = size
-                    offset = PREFIX_BYTES if payload.startswith(ENVELOPE) else 0  # a signed frame's envelope
-                    header = HEADER.unpack_from(payload, offset)  # the same 32-byte header in every frame version
-                    seq, wall = header[6], header[8]
-                    if self.marks.get("on"):
-                        self.ages.append(now - wall)
-                        self.marks.setdefault("first", seq)
-                        self.marks["last"] = seq
+            size = int(chunk[at + 2:eol].split()[-1]) if eol > 0 else -1
+            payload = chunk[eol + 2:eol + 2 + size] if eol > 0 else b""
+            if len(payload) != size and len(chunk) - at < self.MAX_KEPT:
+                self.tail = chunk[at:]  # the newest message goes on in the next read (a TLS record, a socket read)
+            elif len(payload) == size:
+                if self.marks.get("on"):  # (a packed show's last message, after the window, holds one frame)
+                    self.marks["bytes"] = size
+                offset = PREFIX_BYTES if payload.startswith(ENVELOPE) else 0  # a signed frame's envelope
+                header = HEADER.unpack_from(payload, offset)  # the same 32-byte header in every frame version
+                seq, wall = header[6], header[8]
+                if self.marks.get("on"):
+                    self.ages.append(now - wall)
+                    self.marks.setdefault("first", seq)
+                    self.marks["last"] = seq
 
 
 async def read_info(sock: socket.socket) -> dict:

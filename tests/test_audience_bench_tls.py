@@ -103,3 +103,32 @@ def test_the_load_generator_refuses_a_server_certificate_of_another_ca(venue, tm
 
     with pytest.raises(ssl.SSLCertVerificationError):
         run_within(attempt(), 30)
+
+
+class _Transport:
+    def write(self, data: bytes) -> None:
+        pass
+
+
+@pytest.mark.parametrize("cut", [2, 4, 10, 25, 60])
+def test_the_load_generator_reads_a_frame_split_across_reads(cut):
+    """Two copies of one signed frame (two subscriptions) arrive in reads cut anywhere, as TLS records and socket
+    reads cut them: both are counted once, and the newest is read whole (its size, its sequence number)."""
+    async def scenario():
+        ages, marks = [], {"on": True}
+        conn = load.LightConnection(subject(load.SHOW, "frame"), 2, ages, marks)
+        conn.transport = _Transport()
+        conn.ready.set_result(True)
+        payload = encode_frame(7, 5, 0.05, 1.0e9, np.zeros((32, 3)), None)
+        stream = b"".join(b"MSG x.frame %d %d\r\n" % (sid, len(payload)) + payload + b"\r\n" for sid in (1, 2))
+        stream = b"PONG\r\n" + stream
+        end_of_first = len(stream) // 2 + 3
+        cut_at = end_of_first + cut  # inside the second message: its "MSG " (cut < 4), its line, or its payload
+        conn.data_received(stream[:cut_at])
+        assert conn.count == (1 if cut < 4 else 2)
+        conn.data_received(stream[cut_at:])
+        return conn, marks, len(payload)
+
+    conn, marks, size = asyncio.run(scenario())
+    assert conn.count == 2
+    assert marks["bytes"] == size and marks["last"] == 5
