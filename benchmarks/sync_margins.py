@@ -44,7 +44,7 @@ import soundfile as sf
 from hapmotion.audience.sync_estimator import NEAR_S, RECENT_S, SHARP_MARGIN, envelope_scores, estimate
 from hapmotion.audience.seat_sync import SyncSettings
 from hapmotion.audience.sync_tracker import (AGREE_S, CLEAR_MARGIN, CLEAR_SCORE, ENVELOPE_LEAD, ENVELOPE_MIN,
-                                             HEARD_LEAD, JUMP_LEAD, MIN_MARGIN, MIN_SCORE, STREAK_S,
+                                             HEARD_LEAD, HELD_LEAD, JUMP_LEAD, MIN_MARGIN, MIN_SCORE, STREAK_S,
                                              UNIQUE_MARGIN, heard_tells)
 from hapmotion.audio.sync_features import N_BANDS, RATE, dequantise, quantise, signal_levels
 
@@ -402,7 +402,7 @@ def relocks(secs: float) -> None:
     print(f"  the band levels as heard favoured the new offset over the one held, in the window the seat moved: by "
           f"{min(moved_leads, default=math.nan):.3f} at least, median "
           f"{np.median(moved_leads) if moved_leads else math.nan:.3f} ({len(moved_leads)} of the runs; a move needs "
-          f"{HEARD_LEAD:.2f})")
+          f"{HELD_LEAD:.2f})")
 
 
 if __name__ == "__main__":

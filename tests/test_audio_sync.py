@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import soundfile as sf
 from scipy.ndimage import uniform_filter1d
-from support.sync_signals import SR, follow, noisy, played, real_song, riser_loop, song, speech_like
+from support.sync_signals import SR, changing_room, follow, noisy, played, real_song, riser_loop, song, speech_like
 
 from hapmotion.audience.seat_sync import (
     UNSTEADY_S,
@@ -31,6 +31,7 @@ from hapmotion.audience.sync_reference import (
 from hapmotion.audience.sync_tracker import (
     ASSUMED_CONFIDENCE,
     HEARD_LEAD,
+    HELD_LEAD,
     STREAK_S,
     DelayTracker,
     envelope_pick,
@@ -750,14 +751,16 @@ def test_a_vote_counts_only_where_the_levels_as_heard_do_not_favour_the_rival_or
     for i in range(60, 80):
         tracker.update(est(i * 0.1, 2.0, 0.13, rival_lead=2 * HEARD_LEAD), i * 0.1)
     assert tracker.state.state == "locked" and tracker.state.offset_s == pytest.approx(2.0, abs=1e-3)
-    # locked at 2.0: clear windows one loop away whose lead over the held offset falls short never move the seat,
-    # nor does a streak of them, however long
+    # locked at 2.0: clear windows one loop away whose lead over the held offset falls short of HELD_LEAD never move
+    # the seat, nor does a streak of them, however long (a lead that would have voted for a lock, over a rival)
+    assert HELD_LEAD - 0.01 >= 2 * HEARD_LEAD
     for i in range(80, 200):
-        tracker.update(est(i * 0.1, 4.6, 0.13, rival_lead=2 * HEARD_LEAD, held_leads=(HEARD_LEAD / 2, None)), i * 0.1)
+        tracker.update(est(i * 0.1, 4.6, 0.13, rival_lead=2 * HEARD_LEAD, held_leads=(HELD_LEAD - 0.01, None)),
+                       i * 0.1)
     assert tracker.jumps == 0 and tracker.state.offset_s == pytest.approx(2.0, abs=1e-3)
-    # a lead that reaches HEARD_LEAD does
+    # a lead that reaches HELD_LEAD does
     for i in range(200, 230):
-        tracker.update(est(i * 0.1, 4.6, 0.13, rival_lead=2 * HEARD_LEAD, held_leads=(2 * HEARD_LEAD, None)), i * 0.1)
+        tracker.update(est(i * 0.1, 4.6, 0.13, rival_lead=2 * HEARD_LEAD, held_leads=(HELD_LEAD, None)), i * 0.1)
     assert tracker.jumps == 1 and tracker.state.offset_s == pytest.approx(4.6, abs=1e-3)
 
 
@@ -777,3 +780,24 @@ def test_a_riser_over_a_loop_heard_through_room_noise_never_puts_a_seat_a_loop_o
         [(round(at, 1), s) for at, _, s in history if s.offset_s is not None and abs(s.offset_s - 2.0) >= 0.02][:3]
     if start_s == 0.0:
         assert tracker.locks == 1 and tracker.jumps == 0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("loop_s, riser_db, kind, snr_db, seed", [(1.8, 12.0, "switching", 3.0, 6),
+                                                                 (1.8, 12.0, "swelling", 3.0, 6),
+                                                                 (1.8, 12.0, "applause", 0.0, 6),
+                                                                 (2.2, 12.0, "applause", 0.0, 6)])
+def test_room_sound_that_changes_over_a_riser_loop_never_moves_a_locked_seat_a_loop_off(loop_s, riser_db, kind,
+                                                                                       snr_db, seed):
+    # the stream's low-quality copy, heard 2 s late with room noise at 10 dB SNR and room sound that changes within
+    # the window (a fan switching, noise swelling, applause) over a loop with a riser louder than the music: the
+    # levels as heard favoured the alias one loop off by 0.03-0.06 over the truth the seat held, and a vote needed
+    # 0.02; seats moved there for 2-5 s at confidence 0.5-0.6. A move now needs HELD_LEAD, which every real jump
+    # the benchmarks followed passed by twice or more
+    src = riser_loop(loop_s, riser_db, seconds=36.0)
+    coded = sync_scenes.codec_copy(played(src, np.arange(int(34 * SR)) / SR - 2.0))[:int(34 * SR)]
+    heard = sync_scenes.add_noise(changing_room(coded, kind, snr_db, seed), 10.0, 7)
+    history, tracker = follow(heard, src)
+    assert tracker.locks == 1 and tracker.jumps == 0
+    assert all(s.offset_s is None or abs(s.offset_s - 2.0) < 0.02 for _, _, s in history), \
+        [(round(at, 1), s) for at, _, s in history if s.offset_s is not None and abs(s.offset_s - 2.0) >= 0.02][:3]

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import soundfile as sf
+from scipy.signal import lfilter
 
 from hapmotion.audience.seat_sync import STEP_S, WINDOW_S
 from hapmotion.audience.sync_estimator import match
@@ -60,6 +61,32 @@ def riser_loop(loop_s: float, riser_db: float, seconds: float = 52.0, sr: int = 
     swell = np.where((m >= start) & (m < start + length), (m - start) / length, 0.0) ** 2
     out = out + swell * noise / noise.std() * np.sqrt(np.mean(out * out)) * 10 ** (riser_db / 20)
     return 0.8 * out / np.abs(out).max()
+
+
+def changing_room(x: np.ndarray, kind: str, snr_db: float, seed: int, sr: int = SR) -> np.ndarray:
+    """``x`` plus room sound whose level changes within a 3 s window: ``switching`` (a fan on for 2 s, off for 2 s),
+    ``swelling`` (noise rising as the square of time over every 2.5 s to twice ``snr_db`` under the music's RMS and
+    falling back at once) or ``applause`` (bursts of 0.3-1.5 s, 0.5-3 s apart); noise tilted to the low frequencies as
+    a room's, its edges smoothed over about 25 ms, ``snr_db`` the music's RMS over the noise's while it sounds."""
+    rng = np.random.default_rng(seed)
+    noise = lfilter([1.0], [1.0, -0.9], rng.normal(size=x.size))  # one pole at 0.9: falling with frequency
+    noise /= noise.std()
+    t = np.arange(x.size) / sr
+    if kind == "switching":
+        gate = ((t % 4.0) < 2.0).astype(float)
+    elif kind == "swelling":
+        gate = 2.0 * ((t % 2.5) / 2.5) ** 2
+    elif kind == "applause":
+        gate, at = np.zeros(x.size), 1.0
+        while at < t[-1]:
+            length = rng.uniform(0.3, 1.5)
+            gate[int(at * sr):int((at + length) * sr)] = 1.0
+            at += length + rng.uniform(0.5, 3.0)
+    else:
+        raise ValueError(kind)
+    smooth = lfilter([0.002], [1.0, -0.998], gate)  # a one-pole smoother of about 25 ms at 22.05 kHz
+    rms = np.sqrt(np.mean(x * x))
+    return x + noise * smooth * rms / 10 ** (snr_db / 20)
 
 
 def speech_like(seed: int, seconds: float, sr: int = SR) -> np.ndarray:
