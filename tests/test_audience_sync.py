@@ -96,6 +96,13 @@ def test_a_seat_locks_on_the_heard_music_and_plays_each_frame_when_it_is_heard(n
     # the engine hands a frame on as it becomes due; a loaded machine can hold the loop up now and then
     assert abs(np.median(skew)) < 0.015
     assert np.percentile(np.abs(skew), 90) < 0.050
+    # the lock moved the frames later by the delay found: the frames of that last stretch, played before at the
+    # manual delay (0), play again in step, so the vest goes on instead of pausing for the delay
+    assert sync.delay_behind_edge > 0.5
+    around = np.array([(w, t) for w, t in tap.frames if locked[0][0] - 0.5 < w < locked[0][0] + 2.0])
+    assert np.diff(around[:, 0]).max() < 0.2  # (1.4 s, the delay found, when the played frames were gone)
+    after = np.array([t for w, t in tap.frames if w > locked[0][0] + 0.1])
+    assert after[0] < locked[0][0] + 0.1 - truth + 0.1  # the first frame after the lock is the one due then
 
 
 def test_seats_hearing_another_song_never_lock_and_play_as_their_users_chose(nats_server, tmp_path):

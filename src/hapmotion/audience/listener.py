@@ -54,6 +54,7 @@ from .cue_gate import CueGate
 from .descriptions import DescriptionWatch
 from .frame_inbox import LATE_S, FrameInbox
 from .interpolation import Upsampler
+from .played_frames import PlayedFrames
 from .seat_sync import SeatSync, SyncSettings
 from .seat import Seat, SeatSink, SeatStage, numbered_sinks
 from .signing import BadSignature, SeatTrust, Unsigned
@@ -132,6 +133,8 @@ class AudienceSource(Source):
         self.max_pending = max_pending or int(desc.fps * (wait_s + 2.0)) + 64
         self._wait_s = wait_s
         self._heap: list[tuple[float, int, WireFrame, float]] = []
+        self.played: PlayedFrames[tuple[float, int, WireFrame, float]] = PlayedFrames(self.max_pending)
+        """A synchronised seat's frames of the last ``--sync-max-delay``, played again when its delay moves later."""
         self._count = itertools.count()
         self._arrived = asyncio.Event()
         self._last_seq: Optional[int] = None
@@ -165,19 +168,24 @@ class AudienceSource(Source):
 
     async def run(self) -> None:
         while not self.ended.is_set():
+            if self.sync is not None and self.played.moved(self.sync.placement):
+                self._play_again()
             if not self._heap:
                 await self._wait_arrival(None)
                 continue
             due = self._play_time(self._heap[0])  # a synchronised seat keys them by media time: its offset moves
             if due is None:
-                heapq.heappop(self._heap)
+                self.played.keep(heapq.heappop(self._heap))
                 self.engine.faults.add("unsynced", "not locked to the music: frames are not played (--unsynced silent)")
                 continue
             wait = due - time.perf_counter()
             if wait > 0.0005:
                 await self._wait_arrival(wait)
                 continue
-            _, _, wf, _ = heapq.heappop(self._heap)
+            entry = heapq.heappop(self._heap)
+            if self.sync is not None:
+                self.played.keep(entry)
+            wf = entry[2]
             now = time.perf_counter()
             if now - due > LATE_S:
                 self.engine.faults.add("stale", f"frame at media time {wf.media_t:.3f} s would play "
@@ -186,6 +194,17 @@ class AudienceSource(Source):
                 self.engine.stats.frames_in += 1
                 continue
             self._submit(wf, now)
+
+    def _play_again(self) -> None:
+        """The synchronised delay moved (a lock, a jump): the frames played whose time under it is still to come go
+        back in the queue, and the renderer starts afresh (the frames jump in time, as after a stall)."""
+        again = self.played.again(self._play_time, time.perf_counter())
+        for entry in again:
+            heapq.heappush(self._heap, entry)
+        self.engine.restart()
+        if again:
+            log.info("%s: the delay moved to %.3f s; %d frames played again from media time %.2f s", self.name,
+                     self.sync.placement or 0.0, len(again), again[0][2].media_t)
 
     async def _wait_arrival(self, timeout: Optional[float]) -> None:
         self._arrived.clear()

@@ -286,6 +286,11 @@ class SeatSync:
         return media_t + offset + drift * (now - t0) + self.delay_s
 
     @property
+    def placement(self) -> Optional[float]:
+        """The offset the seat plays at now (local time minus media time, seconds), None while searching."""
+        return self._snapshot[0]
+
+    @property
     def delay_behind_edge(self) -> Optional[float]:
         """The locked stream's lag behind the live edge, seconds (None while searching)."""
         offset = self._snapshot[0]

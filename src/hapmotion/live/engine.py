@@ -214,6 +214,14 @@ class LiveEngine:
         self.stats.frames_in += count
         self.stats.superseded += count
 
+    def restart(self) -> None:
+        """The source's frames jump in time: the renderer, the frame order and the rate clock start afresh (as after
+        a stall; the rows already sent stand)."""
+        if self.upstream is not None:
+            self.upstream.reset()
+        self.order.reset()
+        self.clock.reset()
+
     def submit(self, frame: SkeletonFrame) -> None:
         """Take a decoded frame: clean it, drop it if it is older than the last one, measure the stream's rate,
         and render it at once (or, over the render cap, when the cap allows, unless a newer frame replaces it)."""

@@ -63,6 +63,10 @@ class FrameInlet(Protocol):
     def note_skipped(self, count: int) -> None:
         """Count ``count`` frames a paced source skipped because they were already overdue."""
 
+    def restart(self) -> None:
+        """The source's frames jump in time (a synchronised seat moved to another delay): the next frame starts the
+        renderer afresh, as after a stall."""
+
 
 @dataclass(slots=True)
 class OutFrame:
