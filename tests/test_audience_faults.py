@@ -247,6 +247,27 @@ def test_publisher_announces_cues_to_the_seat(nats_server, motion):
     assert heard[0]["name"] == "pyro" and heard[0]["t"] == 12.5 and heard[0]["gain"] == 1.2
 
 
+def test_the_publisher_counts_its_connections_for_the_summary():
+    async def scenario(server):
+        layout = load_layout()
+        sink = NatsPublisherSink(server.url, describe_show(
+            "count", show=Show(), stage=OutputStage.for_show(Show(), "motion", layout=layout, fps=30.0),
+            layout=layout, body=None, stall_ms=250.0, mirror=True), security=PublisherSecurity(unsigned=True))
+        await sink.start()
+        first = sink.stats.connects
+        server.stop()
+        await wait_for(lambda: not sink.nc.is_connected, 10)
+        server.start()
+        await wait_for(lambda: sink.nc.is_connected, 10)
+        await wait_for(lambda: sink.stats.connects == 2, 5)
+        await sink.shutdown()
+        return first, sink.stats.connects
+
+    with LocalNatsServer() as server:
+        first, total = run_within(scenario(server), 40)
+    assert (first, total) == (1, 2)
+
+
 def test_listen_command_usage_errors():
     from hapmotion.cli.listen import command
 

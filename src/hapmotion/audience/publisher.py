@@ -190,6 +190,7 @@ class NatsPublisherSink(Sink):
             raise
         except Exception as exc:
             raise connect_error(f"--sink {self.name}", exc) from None
+        self.stats.connects += 1
         try:
             self.kv = await description_bucket(self.nc)
             await self._put()
@@ -255,6 +256,8 @@ class NatsPublisherSink(Sink):
             return
         if self._closing:
             return
+        if state == "reconnected":
+            self.stats.connects += 1
         if state == "reconnected" and self.kv is not None:
             # the server may have restarted and lost its in-memory bucket: store the description again
             self._republish = asyncio.ensure_future(self._store_again())
