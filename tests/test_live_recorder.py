@@ -313,3 +313,23 @@ def test_recovering_an_hour_long_journal_keeps_every_row_in_its_place(tmp_path):
     assert track.n_frames == n and track.fps == pytest.approx(60.0, abs=1e-4) and track.meta["missing_rows"] == 1800
     np.testing.assert_array_equal(np.flatnonzero(track.intensities[:, 0]),
                                   [k for k in range(0, n, 600) if not 100_000 <= k < 101_800])
+
+
+def test_a_tact_take_names_every_file_it_wrote(tmp_path, caplog):
+    """A ``.tact`` take of a layout with sleeves is one file per device; the log line at stop names them all."""
+    rec = RecorderSink(tmp_path / "take.tact", ACTUATORS, fps=FPS)
+    engine = LiveEngine(hapmotion.Renderer(fps=FPS), [rec], n_actuators=N, fps=FPS, handle_signals=False)
+    source = ScriptSource(waving(n=20), then="wait")
+
+    async def scenario():
+        task = asyncio.create_task(engine.run(source))
+        await source.done.wait()
+        engine.request_stop("test over")
+        await task
+
+    with caplog.at_level(logging.INFO, logger="hapmotion.live"):
+        run_within(scenario(), 30)
+    assert len(rec.written) > 1 and rec.written[0] == tmp_path / "take.tact"
+    assert all(p.is_file() for p in rec.written)
+    line = next(r.getMessage() for r in caplog.records if "written" in r.getMessage())
+    assert all(str(p) in line for p in rec.written), line

@@ -118,6 +118,8 @@ class RecorderSink(Sink):
         self._last = np.zeros(len(self.actuators), dtype=np.float32)
         self._journal: Optional[TrackJournal] = None
         self.saved: Optional[Path] = None
+        self.written: list[Path] = []
+        """Every file the take was written to (a `.tact` take: one per sleeve too), after :meth:`shutdown`."""
         self.error: Optional[str] = None  # why the file could not be written at stop
 
     def _check_no_journal(self) -> None:
@@ -220,7 +222,7 @@ class RecorderSink(Sink):
         try:
             track = HapticTrack(intensities=self.rows(), fps=self.fps, actuators=self.actuators, layout=self.layout,
                                 meta={**self.meta, "live": True})
-            await asyncio.to_thread(save_track, track, self.path)
+            written = await asyncio.to_thread(save_track, track, self.path)
         except Exception as exc:  # the show is over; say so loudly rather than lose the take silently
             self.error = str(exc) or exc.__class__.__name__
             kept = ""
@@ -233,7 +235,10 @@ class RecorderSink(Sink):
         if journal is not None:
             journal.remove()
         self.saved = self.path
-        log.info("%s: %d rows (%.1f s) written", self.name, track.n_frames, track.duration)
+        self.written = [Path(p) for p in written]
+        others = [str(p) for p in self.written if Path(p) != Path(self.path)]
+        log.info("%s: %d rows (%.1f s) written%s", self.name, track.n_frames, track.duration,
+                 f" (and {', '.join(others)})" if others else "")
         if journal is not None and journal.lost:
             log.warning("%s: the journal missed %d rows (%s) while the disk was full; the file written at stop has "
                         "every row", self.name, journal.lost_rows, self.lost_spans(journal.lost))
