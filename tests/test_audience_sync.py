@@ -129,8 +129,8 @@ def test_a_signed_show_carries_a_signed_reference_that_a_checking_seat_locks_on(
     assert sync.tracker.locks == 1
     assert abs(sync.state.offset_s - (sync.audio.started + LEAD_S)) < 0.010
     # the venue ended the show: once the frames the seat holds for the music 2.5 s behind have played, its session
-    # ends (its recordings are finished), as an unsynchronised seat's does
-    assert source.over
+    # ends (its recordings are finished), as an unsynchronised seat's does, and says why
+    assert source.over and source.engine.stats.stop_reason == "the show ended"
 
 
 def test_a_forged_reference_is_dropped_and_counted(tmp_path):

@@ -378,6 +378,11 @@ class AudienceSource(Source):
         wait = max(0.0, last - now) + self.desc.stall_ms / 1000.0 + OVER_MARGIN_S
         self._timers.add(asyncio.get_running_loop().call_later(wait, self._show_over, epoch))
 
+    def end_reason(self) -> str:
+        if self.over:
+            return "the show ended"
+        return "the show's description changed" if self.changed is not None else "source ended"
+
     def _play_time(self, entry: tuple) -> Optional[float]:
         return entry[3] if self.sync is None else self.sync.play_time(entry[2].media_t, entry[3])
 

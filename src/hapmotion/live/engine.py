@@ -320,7 +320,7 @@ class LiveEngine:
                     error = exc
                     self.request_stop(f"source failed ({exc.__class__.__name__}: {exc})")
                 else:
-                    self.request_stop("source ended")
+                    self.request_stop(source.end_reason())
             elif render_task in done:
                 error = render_task.exception() or RuntimeError("render loop ended")
                 self.request_stop(f"error ({error.__class__.__name__}: {error})")

@@ -14,6 +14,10 @@ class Source:
     name = "source"
     engine: FrameInlet
 
+    def end_reason(self) -> str:
+        """Why :meth:`run` returned, for the engine's ``stopping: ...`` line (a show over, not a fault)."""
+        return "source ended"
+
     async def start(self, engine: FrameInlet) -> None:
         self.engine = engine
 
