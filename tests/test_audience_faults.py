@@ -13,12 +13,13 @@ import pytest
 from click.testing import CliRunner
 from support.bounded import run_within
 from support.live_fakes import BVH, FakePlayerSdk1, start_session, wait_for
-from support.audience import REHEARSAL, DelayedReplay, LoopWatch, Tap, reference_rows, start_seat, stop
+from support.audience import (REHEARSAL, DelayedReplay, LoopWatch, Tap, reference_rows, start_seat, stop,
+                              unsigned_motion_sink)
 from support.audience import rehearsal  # noqa: F401 (the fixture every test here uses)
 
 import hapmotion
-from hapmotion.audience import PublisherSecurity, Seat, listen
-from hapmotion.audience.publisher import NatsPublisherSink, connect, describe_show, description_bucket
+from hapmotion.audience import Seat, listen
+from hapmotion.audience.publisher import connect, describe_show, description_bucket
 from hapmotion.audience.server import LocalNatsServer
 from hapmotion.audience.wire import encode_frame, subject
 from hapmotion.layout import load_layout
@@ -230,10 +231,7 @@ def test_lost_server_fades_to_zero_and_the_show_comes_back(motion):
 def test_publisher_announces_cues_to_the_seat(nats_server, motion):
     async def scenario():
         tap, heard = Tap(), []
-        layout = load_layout()
-        sink = NatsPublisherSink(nats_server.url, describe_show(
-            "cues", show=Show(), stage=OutputStage.for_show(Show(), "motion", layout=layout, fps=30.0),
-            layout=layout, body=None, stall_ms=250.0, mirror=True), security=PublisherSecurity(unsigned=True))
+        sink = unsigned_motion_sink(nats_server.url, "cues")
         await sink.start()
         task, sessions = await start_seat(f"{nats_server.url}/cues", [lambda d, f: tap], Seat(delay_s=0.05),
                                           on_cue=lambda event, due: heard.append(event))
@@ -249,10 +247,7 @@ def test_publisher_announces_cues_to_the_seat(nats_server, motion):
 
 def test_the_publisher_counts_its_connections_for_the_summary():
     async def scenario(server):
-        layout = load_layout()
-        sink = NatsPublisherSink(server.url, describe_show(
-            "count", show=Show(), stage=OutputStage.for_show(Show(), "motion", layout=layout, fps=30.0),
-            layout=layout, body=None, stall_ms=250.0, mirror=True), security=PublisherSecurity(unsigned=True))
+        sink = unsigned_motion_sink(server.url, "count")
         await sink.start()
         first = sink.stats.connects
         server.stop()

@@ -14,7 +14,8 @@ import time
 
 import numpy as np
 import pytest
-from support.audience import REHEARSAL, Tap, Venue, reference_rows, start_seat, stop
+from support.audience import (REHEARSAL, Tap, Venue, reference_rows, start_seat, stop,
+                              unsigned_motion_sink)
 from support.bounded import run_within
 from support.live_fakes import BVH, start_session, wait_for
 
@@ -345,10 +346,7 @@ def test_a_bucket_made_with_a_tiny_value_limit_is_a_clear_error(motion):
         nc = await connect(server.url, name="squatter")
         await nc.jetstream().create_key_value(bucket=BUCKET, max_value_size=16)
         await nc.close()
-        layout = load_layout()
-        sink = NatsPublisherSink(server.url, describe_show(
-            "tiny", show=Show(), stage=OutputStage.for_show(Show(), "motion", layout=layout, fps=30.0),
-            layout=layout, body=None, stall_ms=250.0, mirror=True), security=PublisherSecurity(unsigned=True))
+        sink = unsigned_motion_sink(server.url, "tiny")
         await sink.start()
 
     with LocalNatsServer() as server:
@@ -506,10 +504,7 @@ def test_a_description_stored_while_the_seat_did_not_hear_it_is_read_when_its_fr
 
 def test_the_publisher_stores_its_description_again_when_it_is_deleted_or_replaced(motion):
     async def scenario(server):
-        layout = load_layout()
-        sink = NatsPublisherSink(server.url, describe_show(
-            "kept", show=Show(), stage=OutputStage.for_show(Show(), "motion", layout=layout, fps=30.0),
-            layout=layout, body=None, stall_ms=250.0, mirror=True), security=PublisherSecurity(unsigned=True))
+        sink = unsigned_motion_sink(server.url, "kept")
         await sink.start()
         nc = await connect(server.url, name="vandal")
 

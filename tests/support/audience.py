@@ -10,10 +10,12 @@ import numpy as np
 import pytest
 
 from hapmotion.audience import PublisherSecurity, Seat, SeatSecurity, listen, publishing
+from hapmotion.audience.publisher import NatsPublisherSink, describe_show
 from hapmotion.body.model import BodyModel
+from hapmotion.layout import load_layout
 from hapmotion.live import ReplaySource
 from hapmotion.live.sinks import Sink
-from hapmotion.show import Show
+from hapmotion.show import OutputStage, Show
 
 from .certificates import make_tls  # noqa: F401  (the tests import it from here too)
 from .data import AUDIO
@@ -112,6 +114,14 @@ def rehearsal():
     """``nats://`` sinks built in the test publish unsigned (a rehearsal, chosen explicitly)."""
     with publishing(PublisherSecurity(unsigned=True)) as security:
         yield security
+
+
+def unsigned_motion_sink(url: str, show: str) -> NatsPublisherSink:
+    """An unsigned ``nats://`` publisher sink of a motion show on the default layout at 30 fps (not started)."""
+    layout = load_layout()
+    return NatsPublisherSink(url, describe_show(
+        show, show=Show(), stage=OutputStage.for_show(Show(), "motion", layout=layout, fps=30.0), layout=layout,
+        body=None, stall_ms=250.0, mirror=True), security=PublisherSecurity(unsigned=True))
 
 
 async def start_seat(url: str, sinks: list, seat: Seat, security: SeatSecurity = REHEARSAL, **kwargs):
