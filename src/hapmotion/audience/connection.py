@@ -181,9 +181,11 @@ async def connect(url: str, *, name: str, auth: NatsAuth = NatsAuth(),
     """A NATS connection that reconnects for ever (0.25 s apart) once it has been made, and keeps nothing buffered
     while it is down beyond a small buffer; ``on_state(text)`` hears about disconnects, reconnects and errors after
     the first connection (each error text once). :class:`AuthRefused` when the server refuses the credentials;
-    ConnectionError when no server answers within ``first_try_s`` seconds."""
+    ConnectionError at once when the server's certificate does not verify, and when no server answers within
+    ``first_try_s`` seconds."""
     connected = False
     refused = asyncio.Event()
+    unverified = asyncio.Event()
     said: set[str] = set()
     last_error: list[str] = []
 
@@ -198,6 +200,8 @@ async def connect(url: str, *, name: str, auth: NatsAuth = NatsAuth(),
     async def error(exc: Exception) -> None:
         if isinstance(exc, AuthorizationError) or "authorization violation" in str(exc).lower():
             refused.set()
+        elif not connected and _unverified(exc):
+            unverified.set()  # a certificate that did not verify will not verify on the next try either
         text = f"error: {exc.__class__.__name__}: {exc}"
         last_error[:] = [f"{exc.__class__.__name__}: {exc}"[:200]]
         if on_state and connected and text not in said:  # before the first connection the caller reports once
@@ -212,11 +216,12 @@ async def connect(url: str, *, name: str, auth: NatsAuth = NatsAuth(),
         servers=[url], name=name, allow_reconnect=True, max_reconnect_attempts=-1, reconnect_time_wait=0.25,
         connect_timeout=connect_timeout, disconnected_cb=disconnected, reconnected_cb=reconnected, error_cb=error,
         pending_size=64 * 1024, **kwargs))
-    watch = asyncio.ensure_future(refused.wait())
+    watches = {asyncio.ensure_future(refused.wait()), asyncio.ensure_future(unverified.wait())}
     try:
-        done, _ = await asyncio.wait({attempt, watch}, timeout=first_try_s, return_when=asyncio.FIRST_COMPLETED)
+        done, _ = await asyncio.wait({attempt, *watches}, timeout=first_try_s, return_when=asyncio.FIRST_COMPLETED)
     finally:
-        watch.cancel()
+        for watch in watches:
+            watch.cancel()
     if attempt in done:
         nc = attempt.result()
         if auth.wants_tls(url) and not _is_tls(nc):
@@ -230,6 +235,8 @@ async def connect(url: str, *, name: str, auth: NatsAuth = NatsAuth(),
     if refused.is_set():
         raise AuthRefused(f"the NATS server refused the credentials ({auth.describe()})")
     # the last error tells a certificate that does not verify from a server that is not there
+    if unverified.is_set():
+        raise ConnectionError(f"the NATS server answered; last error {last_error[0]}")
     raise ConnectionError(f"no NATS server answered within {first_try_s:g} s"
                           + (f"; last error {last_error[0]}" if last_error else ""))
 
