@@ -5,10 +5,14 @@ there; a seat hearing another song never locks and plays at the manual delay or 
 from __future__ import annotations
 
 import asyncio
+import logging
 import math
 import os
+import signal
 import subprocess
 import sys
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -80,9 +84,10 @@ async def show_and_seat(url: str, heard: str, **kwargs):
     return (await show_and_seats(url, heard, **kwargs))[0]
 
 
-def test_a_seat_locks_on_the_heard_music_and_plays_each_frame_when_it_is_heard(nats_server, tmp_path):
+def test_a_seat_locks_on_the_heard_music_and_plays_each_frame_when_it_is_heard(nats_server, tmp_path, caplog):
     heard = heard_file(tmp_path, real_song(seconds=20.0))
-    tap, sync, _ = run_within(show_and_seat(f"{nats_server.url}/synced", heard), 60)
+    with caplog.at_level(logging.INFO, logger="hapmotion.live"):
+        tap, sync, _ = run_within(show_and_seat(f"{nats_server.url}/synced", heard), 60)
     truth = sync.audio.started + LEAD_S     # local time minus media time of what the seat heard
     locked = [(at, s) for at, _, s in sync.estimates if s.state == "locked"]
     assert locked, "the seat never locked"
@@ -103,6 +108,9 @@ def test_a_seat_locks_on_the_heard_music_and_plays_each_frame_when_it_is_heard(n
     assert np.diff(around[:, 0]).max() < 0.2  # (1.4 s, the delay found, when the played frames were gone)
     after = np.array([t for w, t in tap.frames if w > locked[0][0] + 0.1])
     assert after[0] < locked[0][0] + 0.1 - truth + 0.1  # the first frame after the lock is the one due then
+    said = [m for m in caplog.messages if "frames played again" in m]
+    behind = [float(m.split("now ")[1].split(" ms")[0]) for m in said]
+    assert behind and abs(behind[0] - sync.delay_behind_edge * 1000) < 50, said   # the delay the seat locked on
 
 
 def test_seats_hearing_another_song_never_lock_and_play_as_their_users_chose(nats_server, tmp_path):
@@ -236,3 +244,31 @@ def test_the_live_edge_keeps_a_bounded_number_of_arrivals(tmp_path):
         sync.receive(encode_batch(1, k, k * 0.001, k, np.zeros((1, 5), dtype=np.uint8)), 100.0 + k * 0.002)
     assert len(sync._edges) <= MAX_EDGES
     assert sync._edge is not None and math.isfinite(sync._edge)
+
+
+@pytest.mark.skipif(os.name == "nt", reason="named pipes and signals as on POSIX")
+def test_a_seat_on_a_named_pipe_whose_writer_has_not_started_runs_and_stops_on_ctrl_c(nats_server, tmp_path):
+    # the writer starts with the show, after the seat: the seat does not wait for it to connect and say so, and
+    # Ctrl-C stops it (it sat blocked on the pipe, deaf to Ctrl-C, saying nothing)
+    fifo = tmp_path / "heard.fifo"
+    os.mkfifo(fifo)
+    proc = subprocess.Popen([sys.executable, "-c", "import sys; from hapmotion.cli import main; "
+                             "sys.exit(main(sys.argv[1:]))", "listen", f"{nats_server.url}/later", "--unsigned",
+                             "--sink", f"record:{tmp_path / 'seat.csv'}", "--sync", "audio", "--audio-input",
+                             f"wav:{fifo}"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    lines: list[str] = []
+    reader = threading.Thread(target=lambda: lines.extend(iter(proc.stderr.readline, "")), daemon=True)
+    reader.start()
+    try:
+        wait_until = time.monotonic() + 30
+        while not any("listening to wav stream" in line for line in lines):
+            assert time.monotonic() < wait_until and proc.poll() is None, f"no start-up line: {lines}"
+            time.sleep(0.05)
+        assert any("waiting for its writer to start" in line for line in lines), lines
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=20)
+        reader.join(5)
+    finally:
+        proc.kill()
+    assert proc.returncode in (0, 130), (proc.returncode, lines)
+    assert not any("Traceback" in line for line in lines), lines

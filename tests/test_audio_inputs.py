@@ -92,11 +92,12 @@ def test_a_wav_stream_with_a_real_data_size_ends_there_and_skips_other_chunks():
 
 
 @pytest.mark.parametrize("blob,said", [
-    (b"", "ended in the RIFF header"),
+    (b"", "ended before sending anything"),
+    (b"RIFF", "ended in the RIFF header"),
     (b"hello world!" * 3, "RIFF ... WAVE"),
     (wav_header(8000, 1, 0, bits=8), "found format 1 with 8-bit samples"),
     (b"RIFF\xff\xff\xff\xffWAVELIST" + struct.pack("<I", 200_000_000) + b"x" * 100, "at most 1048576 bytes"),
-    (wav_header(1, 2, 0), "expected a rate of 4000..768000 Hz and 1..32 channels, found 1 Hz and 2"),
+    (wav_header(1, 2, 0), "expected a rate of 4000..768000 Hz and 1..32 channels, found 1 Hz and 2 channels"),
 ])
 def test_bad_wav_streams_are_one_line_errors(blob, said):
     r, where = from_pipe(blob)
@@ -104,6 +105,7 @@ def test_bad_wav_streams_are_one_line_errors(blob, said):
         open_input(f"wav:{where}")
     os.close(r)
     assert said in str(info.value) and "\n" not in str(info.value)
+    assert str(info.value).startswith(f"--audio-input wav:{where}: ")  # the option named, as for every input
 
 
 # ---------------------------------------------------------------------------------------------------- raw:
@@ -131,7 +133,7 @@ def test_a_pipe_faster_than_real_time_is_held_to_real_time_at_little_cpu(monkeyp
     monkeypatch.setattr(inputs, "AHEAD_S", 0.2)
     inp = open_input("raw:/dev/zero?rate=8000&channels=2")
     t0, cpu0, n = time.perf_counter(), time.thread_time(), 0
-    with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
+    with caplog.at_level(logging.INFO, logger="hapmotion.live"):
         while n < int(1.2 * 8000):
             block, _ = inp.read()
             n += block.size
@@ -140,7 +142,8 @@ def test_a_pipe_faster_than_real_time_is_held_to_real_time_at_little_cpu(monkeyp
     assert wall >= n / 8000 - 0.2 - 0.03                         # the sample clock, less the allowance and a block
     assert cpu < 0.5 * wall                                      # unpaced, the loop is all CPU
     assert inp.faults["too_fast"] > 0
-    assert sum("faster than real time" in m for m in caplog.messages) == 1
+    said = [r for r in caplog.records if "faster than real time" in r.getMessage()]
+    assert len(said) == 1 and said[0].levelno == logging.INFO   # a file piped in does so by design: no warning
 
 
 def test_a_writer_within_the_allowance_is_not_held_back():
@@ -175,3 +178,74 @@ def test_sync_max_delay_without_sync_audio_is_refused(args):
 def test_sync_max_delay_with_sync_audio_is_taken():
     assert CliRunner().invoke(_listen, ["--sync", "audio", "--sync-max-delay", "5000"]).output == "max_delay_s=5.0\n"
     assert CliRunner().invoke(_listen, []).output == "max_delay_s=None\n"
+
+
+# ---------------------------------------------------------------------------------------------------- a late writer
+def _late_writer(path, payload: bytes, after_s: float) -> threading.Thread:
+    """A writer that opens the named pipe ``path`` ``after_s`` seconds from now, sends ``payload`` and closes."""
+    def write() -> None:
+        time.sleep(after_s)
+        with open(path, "wb") as f:
+            f.write(payload)
+
+    thread = threading.Thread(target=write, daemon=True)
+    thread.start()
+    return thread
+
+
+@pytest.mark.skipif(os.name == "nt", reason="named pipes are POSIX here")
+def test_a_named_pipe_whose_writer_starts_later_is_opened_at_once_and_read_when_it_comes(tmp_path, monkeypatch,
+                                                                                         caplog):
+    # a seat started before the show whose writer starts with it: opening the input neither blocks nor fails (the
+    # seat can join its show and stop on Ctrl-C meanwhile); the first read waits for the writer, then reads on
+    monkeypatch.setattr(inputs, "PIPE_WAIT_S", 0.1)
+    fifo = tmp_path / "heard.fifo"
+    os.mkfifo(fifo)
+    pcm = (np.arange(800, dtype="<i2") * 8).tobytes()
+    writer = _late_writer(fifo, wav_header(8000, 1, len(pcm)) + pcm, after_s=0.6)
+    t0 = time.perf_counter()
+    with caplog.at_level(logging.INFO, logger="hapmotion.live"):
+        inp = open_input(f"wav:{fifo}")
+    assert time.perf_counter() - t0 < 0.5                        # not blocked on the writer (0.6 s away)
+    assert any("waiting for its writer" in m for m in caplog.messages)
+    x = read_all(inp)                                            # waits for the writer, reads to the end
+    writer.join(5)
+    inp.close()
+    assert inp.sample_rate == 8000 and x.size == 800
+    assert np.allclose(x[:3], np.array([0, 8, 16]) / 32768)
+
+
+@pytest.mark.skipif(os.name == "nt", reason="named pipes are POSIX here")
+def test_a_late_writer_that_sends_no_wav_is_one_line_at_the_first_read(tmp_path, monkeypatch):
+    monkeypatch.setattr(inputs, "PIPE_WAIT_S", 0.1)
+    fifo = tmp_path / "heard.fifo"
+    os.mkfifo(fifo)
+    writer = _late_writer(fifo, b"hello world!" * 3, after_s=0.4)
+    inp = open_input(f"wav:{fifo}")
+    with pytest.raises(InputError) as info:
+        inp.read()
+    writer.join(5)
+    inp.close()
+    assert str(info.value) == f"--audio-input wav:{fifo}: header: expected a WAV stream (RIFF ... WAVE)"
+
+
+@pytest.mark.skipif(os.name == "nt", reason="named pipes are POSIX here")
+def test_an_input_closed_while_it_waits_for_its_writer_stops_its_reader(tmp_path, monkeypatch):
+    monkeypatch.setattr(inputs, "PIPE_WAIT_S", 0.1)
+    fifo = tmp_path / "heard.fifo"
+    os.mkfifo(fifo)
+    inp = open_input(f"raw:{fifo}?rate=8000&channels=1")
+    failed: list = []
+
+    def reader() -> None:
+        try:
+            inp.read()
+        except Exception as exc:  # the seat's thread ends on it, quietly when the seat is stopping
+            failed.append(exc)
+
+    thread = threading.Thread(target=reader, daemon=True)
+    thread.start()
+    time.sleep(0.3)
+    inp.close()
+    thread.join(5)
+    assert not thread.is_alive() and failed

@@ -738,6 +738,24 @@ def test_the_reference_as_heard_carries_the_heard_floor_to_the_references_scale(
     assert out[50, 0] == pytest.approx(-30.0, abs=1e-6) and np.isnan(out[3, 0])
 
 
+def test_the_confidence_follows_the_held_offset_down_when_the_music_heard_stops_confirming_it():
+    def est(at, offset, score, margin, near):
+        return Estimate(offset, score, margin, 5, at, True, near, ((offset, score),))
+    tracker = DelayTracker()
+    for i in range(10):                                   # locked on 2.0 at 0.8
+        tracker.update(est(i * 0.1, 2.0, 0.8, 0.3, 0.8), i * 0.1)
+    assert tracker.state.state == "locked" and tracker.state.confidence == pytest.approx(0.8)
+    for i in range(10, 20):                               # silence: nothing heard, nothing said against it
+        tracker.update(None, i * 0.1)
+    assert tracker.state.confidence == pytest.approx(0.8)
+    # another song: its best offset is elsewhere and not clear (no vote), the held offset scores 0.1
+    for i in range(20, 28):
+        tracker.update(est(i * 0.1, 4.6, 0.45, 0.05, 0.1), i * 0.1)
+    assert tracker.state.state == "locked"                # (lost only after LOST_AFTER_S without a confirmation)
+    assert tracker.state.confidence == pytest.approx(0.1)  # the last eight windows' scores of the held offset
+    assert tracker.jumps == 0 and tracker.state.offset_s == pytest.approx(2.0, abs=1e-3)
+
+
 def test_a_vote_counts_only_where_the_levels_as_heard_do_not_favour_the_rival_or_the_offset_held():
     def est(at, offset, margin, rival_lead=None, held_leads=()):
         peaks = ((offset, 0.7), (offset + 2.6, 0.7 - margin))

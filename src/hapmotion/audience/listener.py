@@ -202,9 +202,10 @@ class AudienceSource(Source):
         for entry in again:
             heapq.heappush(self._heap, entry)
         self.engine.restart()
-        if again:
-            log.info("%s: the delay moved to %.3f s; %d frames played again from media time %.2f s", self.name,
-                     self.sync.placement or 0.0, len(again), again[0][2].media_t)
+        behind = self.sync.delay_behind_edge
+        if again and behind is not None:
+            log.info("%s: now %.0f ms behind the venue; %d frames played again from media time %.2f s", self.name,
+                     behind * 1000, len(again), again[0][2].media_t)
 
     async def _wait_arrival(self, timeout: Optional[float]) -> None:
         self._arrived.clear()
@@ -381,7 +382,9 @@ class AudienceSource(Source):
     def end_reason(self) -> str:
         if self.over:
             return "the show ended"
-        return "the show's description changed" if self.changed is not None else "source ended"
+        if self.changed is not None:
+            return "the show's description changed; going on with the new one"
+        return "source ended"
 
     def _play_time(self, entry: tuple) -> Optional[float]:
         return entry[3] if self.sync is None else self.sync.play_time(entry[2].media_t, entry[3])

@@ -34,7 +34,7 @@ from nats.aio.subscription import Subscription
 
 from ..audio.inputs import AudioInput, open_input
 from ..audio.sync_features import N_BANDS, RATE, LevelStream, dequantise
-from ..errors import UsageError
+from ..errors import HapMotionError, UsageError
 from .signing import BadSignature, SeatTrust, Unsigned
 from .sync_estimator import match
 from .sync_reference import BATCH_S, decode_batch
@@ -299,6 +299,9 @@ class SeatSync:
     # ------------------------------------------------------------------ the worker thread
     def _listen(self) -> None:
         try:
+            # the first read opens a pipe and reads a WAV stream's header (its writer may start with the show):
+            # the sample rate is known from then on
+            read: Optional[tuple] = self.audio.read()
             levels = LevelStream(self.audio.sample_rate)
             clock = HeardClock(self.audio.sample_rate)
             size = int(WINDOW_S * RATE)
@@ -306,7 +309,8 @@ class SeatSync:
             filled = 0
             next_step = int(MIN_WINDOW_S * RATE)
             while not self._stop.is_set():
-                block, arrival = self.audio.read()
+                block, arrival = read if read is not None else self.audio.read()
+                read = None
                 if block is None:
                     log.info("seat sync: %s ended", self.audio.describe())
                     return
@@ -331,7 +335,11 @@ class SeatSync:
         except Exception as exc:  # a device that went away, a pipe that broke: the seat plays on unsynced
             if self._stop.is_set():
                 return  # closed under the read while the seat stops
-            log.warning("seat sync: the audio input failed (%s: %s); playing unsynced", exc.__class__.__name__, exc)
+            if isinstance(exc, HapMotionError):  # a stream that was not what it should be: the user's to mend
+                log.warning("seat sync: %s; playing unsynced", exc)
+            else:
+                log.warning("seat sync: the audio input failed (%s: %s); playing unsynced", exc.__class__.__name__,
+                            exc)
             self._snapshot = (None, 0.0, 0.0)
 
     def _step(self, heard_db: np.ndarray, t_heard: float, steady: bool = True) -> None:

@@ -163,8 +163,9 @@ DRIFT_WALK = 2e-5
 @dataclass(frozen=True)
 class SyncState:
     """What the seat reports: ``state`` ``searching`` | ``locked`` | ``lost``; ``offset_s`` the offset it plays at
-    (local time minus media time of the heard music; None while searching), ``confidence`` 0..1 (the recent good
-    estimates' mean score; 0 while searching, :data:`ASSUMED_CONFIDENCE` at most while lost or at a guessed offset),
+    (local time minus media time of the heard music; None while searching), ``confidence`` 0..1 (the mean score of
+    the held offset over the last windows that heard music, those that confirmed it and those that did not; 0 while
+    searching, :data:`ASSUMED_CONFIDENCE` at most while lost or at a guessed offset),
     ``drift`` (seconds per second), ``jumps`` and ``locks`` counted."""
 
     state: str
@@ -424,6 +425,10 @@ class DelayTracker:
             self._votes.clear()
             self._scores.clear()
             return self._report("searching")
+        if est is not None and est.near_score is not None:
+            # music heard that does not confirm the held offset (another song, a jump not followed yet): the
+            # confidence follows the held offset's own score down (silence, no estimate, leaves it as it was)
+            self._scores.append(max(0.0, est.near_score))
         return self._report("lost" if silent_for > LOST_AFTER_S else mode)
 
     def _report(self, state: str) -> SyncState:

@@ -31,6 +31,8 @@ from __future__ import annotations
 
 import logging
 import os
+import select
+import stat
 import sys
 import time
 from dataclasses import dataclass
@@ -51,6 +53,9 @@ BLOCK_S = 0.02
 DEVICE_RATE = 48000
 MAX_CHANNELS = 32
 """Most channels an input may have (a header claiming thousands would make every block that many times larger)."""
+PIPE_WAIT_S = 1.0
+"""How long a seat starting on a pipe waits for its first bytes before it goes on and waits for them while it runs
+(a writer already running, ``cat song.wav |``, sends them at once)."""
 AHEAD_S = 1.0
 """How far a pipe may run ahead of real time before it is held back, seconds: room for what a writer buffered
 before the seat started reading (a 64 KiB pipe holds 0.34 s of 48 kHz stereo s16) and for its bursts."""
@@ -66,11 +71,11 @@ class AudioInput:
     faults: dict[str, int]
     """What was wrong with the audio, counted per kind (``non_finite`` samples, ``too_fast`` blocks held back)."""
 
-    def _fault(self, kind: str, count: int, text: str) -> None:
-        """Count ``count`` faults of ``kind``; log ``text`` the first time."""
+    def _fault(self, kind: str, count: int, text: str, level: int = logging.WARNING) -> None:
+        """Count ``count`` faults of ``kind``; log ``text`` the first time (at ``level``)."""
         faults = self.__dict__.setdefault("faults", {})
         if kind not in faults:
-            log.warning("seat sync: %s: %s (counted; logged once)", self.name, text)
+            log.log(level, "seat sync: %s: %s (counted; logged once)", self.name, text)
         faults[kind] = faults.get(kind, 0) + count
 
     def _clean(self, x: np.ndarray, scale: float = 1.0) -> np.ndarray:
@@ -143,24 +148,47 @@ def _open_stream(where: str, spec: str) -> BinaryIO:
         raise UsageError(f"--audio-input {spec}: cannot read {where} ({exc.strerror})") from None
 
 
+def _pipe_descriptor(where: str) -> Optional[int]:
+    """A descriptor of standard input (``-``) or of the named pipe ``where``, opened without waiting for its writer
+    (a plain open blocks until one comes), to wait on with ``select``; None for a regular file, on Windows (whose
+    pipes ``select`` cannot wait on) and where standard input is no file (an embedding program's)."""
+    if os.name == "nt":
+        return None
+    if where == "-":
+        try:
+            return sys.stdin.fileno()
+        except (AttributeError, OSError, ValueError):  # (io.UnsupportedOperation is an OSError)
+            return None
+    if not stat.S_ISFIFO(os.stat(where).st_mode):
+        return None
+    return os.open(where, os.O_RDONLY | os.O_NONBLOCK)
+
+
 class PipeInput(AudioInput):
     """Raw PCM or a WAV stream from a pipe or standard input, each block stamped on arrival; held back to real time
-    once it runs :data:`AHEAD_S` ahead (module docstring)."""
+    once it runs :data:`AHEAD_S` ahead (module docstring).
+
+    A pipe (standard input, a named pipe) whose writer has not started yet (it may start with the show) is waited for
+    :data:`PIPE_WAIT_S` here and then by the first :meth:`read` (the seat's listening thread): a seat blocked on it
+    could neither join its show nor stop on Ctrl-C. What arrives in time is checked here (a WAV header that is not
+    one stops the seat at once); what arrives later, there (said once, the seat playing unsynced). Windows, whose
+    pipes cannot be waited on this way, opens and checks at once."""
 
     def __init__(self, spec: str, kind: str, rest: str):
         where, _, query = rest.partition("?")
         self.name = f"{kind} stream {where}"
         self.faults = {}
-        self._stream = _open_stream(where, spec)
+        self._spec, self._where, self._kind = spec, where, kind
+        self._closed = False
         self._left: Optional[int] = None
         """Bytes of samples the WAV header announced that are still to come (None: until the stream ends)."""
-        if kind == "wav":
-            header = read_header(self._stream, where)
-            self.sample_rate = float(header.sample_rate)
-            self.channels = header.channels
-            self._dtype = header.dtype
-            self._left = header.data_bytes
-        else:
+        self._carry = b""
+        self._started: Optional[float] = None
+        self._frames = 0
+        self._stream: Optional[BinaryIO] = None
+        self._pending: Optional[int] = None
+        """The descriptor of a pipe whose writer has not sent anything yet (opened, not yet read)."""
+        if kind == "raw":  # the options first: a mistake in them is said before anything is opened
             q = {k: v[-1] for k, v in parse_qs(query).items()}
             unknown = set(q) - {"rate", "channels", "format"}
             if unknown:
@@ -175,14 +203,49 @@ class PipeInput(AudioInput):
             if fmt not in ("s16", "f32"):
                 raise UsageError(f"--audio-input {spec}: format s16 or f32, not {fmt!r}")
             self._dtype = np.dtype("<i2") if fmt == "s16" else np.dtype("<f4")
+            self._check_format()
+        if where != "-" and not os.path.exists(where):
+            raise UsageError(f"--audio-input {spec}: no such file or pipe {where}")
+        fd = _pipe_descriptor(where)
+        if fd is not None:
+            if select.select([fd], [], [], PIPE_WAIT_S)[0]:
+                self._stream = self._from_fd(fd)
+            else:
+                self._pending = fd
+                log.info("seat sync: %s: waiting for its writer to start", self.name)
+        else:
+            self._stream = _open_stream(where, spec)
+        if kind == "wav" and self._stream is not None:
+            self._open()
+
+    def _from_fd(self, fd: int) -> BinaryIO:
+        if self._where == "-":
+            return sys.stdin.buffer
+        os.set_blocking(fd, True)
+        return os.fdopen(fd, "rb", buffering=0)
+
+    def _open(self) -> None:
+        """Wait for a pipe's writer (it may only now start) and read a WAV stream's header."""
+        while self._stream is None and self._pending is not None and not self._closed:
+            if select.select([self._pending], [], [], 0.25)[0]:
+                self._stream, self._pending = self._from_fd(self._pending), None
+        if self._stream is None:
+            raise UsageError(f"--audio-input {self._spec}: closed before its writer started")
+        if self._kind == "wav" and not hasattr(self, "_dtype"):
+            header = read_header(self._stream, f"--audio-input {self._spec}")
+            self.sample_rate = float(header.sample_rate)
+            self.channels = header.channels
+            self._dtype = header.dtype
+            self._left = header.data_bytes
+            self._check_format()
+
+    def _check_format(self) -> None:
         if not (MIN_SAMPLE_RATE <= self.sample_rate <= MAX_SAMPLE_RATE and 1 <= self.channels <= MAX_CHANNELS):
-            raise UsageError(f"--audio-input {spec}: expected a rate of {MIN_SAMPLE_RATE}..{MAX_SAMPLE_RATE} Hz and "
-                             f"1..{MAX_CHANNELS} channels, found {self.sample_rate:g} Hz and {self.channels}")
+            raise UsageError(f"--audio-input {self._spec}: expected a rate of {MIN_SAMPLE_RATE}..{MAX_SAMPLE_RATE} "
+                             f"Hz and 1..{MAX_CHANNELS} channels, found {self.sample_rate:g} Hz and {self.channels} "
+                             f"channels")
         self._frame_bytes = self._dtype.itemsize * self.channels
         self._max = max(1, int(BLOCK_S * self.sample_rate)) * self._frame_bytes
-        self._carry = b""
-        self._started: Optional[float] = None
-        self._frames = 0
 
     def _chunk(self) -> bytes:
         want = self._max if self._left is None else min(self._max, self._left)
@@ -192,6 +255,7 @@ class PipeInput(AudioInput):
         return chunk
 
     def read(self) -> tuple[Optional[np.ndarray], float]:
+        self._open()
         while True:
             chunk = self._chunk()
             now = time.perf_counter()
@@ -211,15 +275,21 @@ class PipeInput(AudioInput):
         # (the writer then blocks on a full pipe, costing nothing).
         due = self._started + self._frames / self.sample_rate - AHEAD_S
         if due > now:
-            self._fault("too_fast", 1, "the input delivers audio faster than real time; reading it at real time")
+            # a file piped in (a rehearsal) does so by design: said, not warned about
+            self._fault("too_fast", 1, "the input delivers audio faster than real time (a file piped in?); reading "
+                                       "it at real time", logging.INFO)
             time.sleep(due - now)
             now = time.perf_counter()
         scale = 1.0 if self._dtype.kind == "f" else 1.0 / float(np.iinfo(self._dtype).max + 1)
         return self._clean(x, scale), now
 
     def close(self) -> None:
-        if self._stream is not sys.stdin.buffer:
+        self._closed = True
+        if self._stream is not None and self._stream is not sys.stdin.buffer:
             self._stream.close()
+        elif self._pending is not None and self._where != "-":
+            os.close(self._pending)
+            self._pending = None
 
 
 def _soundcard():

@@ -46,7 +46,9 @@ def _exactly(stream: BinaryIO, n: int, where: str, what: str) -> bytes:
     while got < n:
         part = stream.read(n - got)
         if not part:
-            raise InputError(where, "header", f"expected a WAV stream, it ended in the {what}")
+            ended = "it ended before sending anything" if not parts and what == "RIFF header" else \
+                f"it ended in the {what}"
+            raise InputError(where, "header", f"expected a WAV stream, {ended}")
         parts.append(part)
         got += len(part)
     return b"".join(parts)
