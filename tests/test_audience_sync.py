@@ -27,7 +27,8 @@ from support.sync_signals import SR, real_song
 
 import hapmotion
 from hapmotion.audience import PublisherSecurity, Seat, listen, publishing
-from hapmotion.audience.seat_sync import MAX_EDGES, SeatSync, SyncSettings
+from hapmotion.audience.seat_sync import HINT_S, MAX_EDGES, STEP_S, SeatSync, SyncSettings
+from hapmotion.audio.sync_features import LevelStream
 from hapmotion.audience.signing import SeatTrust, VenueSigner
 from hapmotion.audience.sync_reference import encode_batch
 from hapmotion.cli.listen import command
@@ -272,3 +273,20 @@ def test_a_seat_on_a_named_pipe_whose_writer_has_not_started_runs_and_stops_on_c
         proc.kill()
     assert proc.returncode in (0, 130), (proc.returncode, lines)
     assert not any("Traceback" in line for line in lines), lines
+
+
+@pytest.mark.parametrize("heard, kind", [("silence", "silent_input"), ("tone", "no_onsets")])
+def test_a_seat_that_hears_nothing_to_match_says_so_once(tmp_path, caplog, heard, kind):
+    # a seat holding the venue's music that hears silence (a muted stream, the wrong device) or a steady tone (a raw
+    # stream read in the wrong format sounds as flat) searches for ever: after HINT_S of it, it says which, once
+    sync = _rehearsal_sync(tmp_path)
+    _real_batches(sync, 1, 40, 100.0, 0.2)
+    t = np.arange(int(3.0 * SR)) / SR
+    audio = np.zeros(t.size) if heard == "silence" else 0.3 * np.sin(2 * np.pi * 440 * t)
+    levels = LevelStream(SR).push(audio)
+    with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
+        for k in range(int(HINT_S / STEP_S) + 20):
+            sync._step(levels, 110.0 + k * STEP_S)
+    assert sync.faults == {kind: 20 + 1}
+    said = [m for m in caplog.messages if kind.replace("_", " ") in m or "silent for" in m or "nothing to match" in m]
+    assert len(said) == 1 and ("silent for 10 s" if heard == "silence" else "&format=") in said[0], said

@@ -73,6 +73,12 @@ UNSTEADY_S = 0.04
 clock, than the earliest of the last 2 s by more than this (the skew target): an input that delivers audio slower
 than real time (a writer that falls behind, a stalled capture) has stamps that slide later and later, and a match
 of that audio would lock on a delay that is not the viewer's. Such audio is not matched (counted, logged once)."""
+HINT_S = 10.0
+"""Seconds of windows matched against the venue's music without any estimate (the heard input silent, or holding no
+onsets) before the seat says so once (counted as ``silent_input`` or ``no_onsets``)."""
+SILENT_DB = -90.0
+"""A window whose loudest band level stays at or under this (dB of full scale, over 40 ms) is silent: the levels'
+floor is -100 dB, and music even at -40 dBFS reaches -70 dB or more."""
 FALLBACKS = ("delay", "silent")
 
 
@@ -178,6 +184,7 @@ class SeatSync:
         self._sub: Optional[Subscription] = None
         self.trust: Optional[SeatTrust] = None
         self._said: set[str] = set()
+        self._unmatched = 0     # windows in a row matched against the reference that gave no estimate
         self.cpu_s = 0.0        # the worker thread's CPU, seconds
         self.loop_cpu_s = 0.0   # the event loop's CPU in :meth:`receive` (checking and storing the reference)
 
@@ -359,6 +366,7 @@ class SeatSync:
                 # part of the range was never received (the seat joined a running show): a repeat of the music
                 # (the bar before) could win over the true delay, which may lie in the part not received yet
                 est = None
+        self._hint(est, heard_db, self._edge is not None and steady)
         before = self.tracker.state.state
         state = self.tracker.update(est, at)
         offset = self.tracker.offset_at(at)
@@ -368,6 +376,21 @@ class SeatSync:
         if state.state != before or (state.state == "locked" and state.jumps != getattr(self, "_jumps", 0)):
             self._jumps = state.jumps
             self._say(state)
+
+    def _hint(self, est, heard_db: np.ndarray, asked: bool) -> None:
+        """Say once when :data:`HINT_S` of windows matched against the venue's music gave no estimate at all: the
+        input is silent, or holds nothing with onsets (steady noise, a tone; a raw stream read in the wrong format
+        sounds like that), which a seat searching for ever would not say otherwise."""
+        self._unmatched = 0 if (est is not None or not asked) else self._unmatched + 1
+        if self._unmatched * STEP_S < HINT_S:
+            return
+        if float(heard_db.max()) <= SILENT_DB:
+            self._fault("silent_input", f"{self.audio.describe()} has been silent for {HINT_S:g} s: is the stream "
+                                        f"playing there, its volume up?")
+        else:
+            self._fault("no_onsets", f"{self.audio.describe()} has held nothing to match for {HINT_S:g} s (steady "
+                                     f"noise or a tone; a raw stream read with the wrong &format= or &channels= "
+                                     f"sounds like that)")
 
     def _say(self, state: SyncState) -> None:
         if state.state == "locked":
