@@ -52,7 +52,7 @@ async def show_and_seats(url: str, heard: str, *, unsynced: tuple[str, ...] = ("
     """The song published as a music-only show (the venue's reference with it) and one seat listening to ``heard``
     for each of ``unsynced`` (what it does while unlocked); returns [(play times, the seat's sync, its source)], one a
     seat. With ``end_show`` the publisher ends the show after ``seconds`` and the seats get 8 s to end their
-    sessions (``source.over``) before they are stopped."""
+    sessions (``source.over``, the engine stopped by itself) before they are stopped."""
     taps = [PlayTimes() for _ in unsynced]
     session_lists: list[list] = [[] for _ in unsynced]
     # the seats wait for the show, as an audience does: they hold the reference from the show's start
@@ -70,7 +70,8 @@ async def show_and_seats(url: str, heard: str, *, unsynced: tuple[str, ...] = ("
         if end_show:
             await stop(show_task)
             try:
-                await wait_for(lambda: all(source.over for source in sources), 8)
+                # the show over and each session ended by itself (stopped after that, it would say it was cancelled)
+                await wait_for(lambda: all(source.over and source.engine.stats.stop_reason for source in sources), 8)
             except AssertionError:
                 pass  # the test says what it expected
     finally:
