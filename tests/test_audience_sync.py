@@ -107,7 +107,7 @@ def test_a_seat_locks_on_the_heard_music_and_plays_each_frame_when_it_is_heard(n
     # manual delay (0), play again in step, so the vest goes on instead of pausing for the delay
     assert sync.delay_behind_edge > 0.5
     around = np.array([(w, t) for w, t in tap.frames if locked[0][0] - 0.5 < w < locked[0][0] + 2.0])
-    assert np.diff(around[:, 0]).max() < 0.2  # (1.4 s, the delay found, when the played frames were gone)
+    assert np.diff(around[:, 0]).max() < 0.5  # (1.4 s, the delay found, when the played frames were gone)
     after = np.array([t for w, t in tap.frames if w > locked[0][0] + 0.1])
     assert after[0] < locked[0][0] + 0.1 - truth + 0.1  # the first frame after the lock is the one due then
     said = [m for m in caplog.messages if "frames played again" in m]

@@ -181,16 +181,18 @@ def test_sync_max_delay_with_sync_audio_is_taken():
 
 
 # ---------------------------------------------------------------------------------------------------- a late writer
-def _late_writer(path, payload: bytes, after_s: float) -> threading.Thread:
-    """A writer that opens the named pipe ``path`` ``after_s`` seconds from now, sends ``payload`` and closes."""
+def _late_writer(path, payload: bytes) -> tuple[threading.Thread, threading.Event]:
+    """A writer that opens the named pipe ``path`` once told to (the event), sends ``payload`` and closes."""
+    go = threading.Event()
+
     def write() -> None:
-        time.sleep(after_s)
+        go.wait(30)
         with open(path, "wb") as f:
             f.write(payload)
 
     thread = threading.Thread(target=write, daemon=True)
     thread.start()
-    return thread
+    return thread, go
 
 
 @pytest.mark.skipif(os.name == "nt", reason="named pipes are POSIX here")
@@ -202,12 +204,11 @@ def test_a_named_pipe_whose_writer_starts_later_is_opened_at_once_and_read_when_
     fifo = tmp_path / "heard.fifo"
     os.mkfifo(fifo)
     pcm = (np.arange(800, dtype="<i2") * 8).tobytes()
-    writer = _late_writer(fifo, wav_header(8000, 1, len(pcm)) + pcm, after_s=0.6)
-    t0 = time.perf_counter()
+    writer, go = _late_writer(fifo, wav_header(8000, 1, len(pcm)) + pcm)
     with caplog.at_level(logging.INFO, logger="hapmotion.live"):
-        inp = open_input(f"wav:{fifo}")
-    assert time.perf_counter() - t0 < 0.5                        # not blocked on the writer (0.6 s away)
+        inp = open_input(f"wav:{fifo}")                          # returns before the writer even opens the pipe
     assert any("waiting for its writer" in m for m in caplog.messages)
+    go.set()
     x = read_all(inp)                                            # waits for the writer, reads to the end
     writer.join(5)
     inp.close()
@@ -220,8 +221,9 @@ def test_a_late_writer_that_sends_no_wav_is_one_line_at_the_first_read(tmp_path,
     monkeypatch.setattr(inputs, "PIPE_WAIT_S", 0.1)
     fifo = tmp_path / "heard.fifo"
     os.mkfifo(fifo)
-    writer = _late_writer(fifo, b"hello world!" * 3, after_s=0.4)
+    writer, go = _late_writer(fifo, b"hello world!" * 3)
     inp = open_input(f"wav:{fifo}")
+    go.set()
     with pytest.raises(InputError) as info:
         inp.read()
     writer.join(5)
