@@ -30,6 +30,7 @@ from hapmotion.audience import PublisherSecurity, Seat, listen, publishing
 from hapmotion.audience.seat_sync import HINT_S, MAX_EDGES, STEP_S, SeatSync, SyncSettings
 from hapmotion.audio.sync_features import LevelStream
 from hapmotion.audience.signing import SeatTrust, VenueSigner
+from hapmotion.audience.sync_tracker import ASSUMED_CONFIDENCE, SyncState
 from hapmotion.audience.sync_reference import encode_batch
 from hapmotion.cli.listen import command
 
@@ -291,3 +292,15 @@ def test_a_seat_that_hears_nothing_to_match_says_so_once(tmp_path, caplog, heard
     assert sync.faults == {kind: 20 + 1}
     said = [m for m in caplog.messages if kind.replace("_", " ") in m or "silent for" in m or "nothing to match" in m]
     assert len(said) == 1 and ("silent for 10 s" if heard == "silence" else "&format=") in said[0], said
+
+
+def test_a_seat_whose_input_ends_stops_saying_it_hears_the_music(tmp_path, caplog):
+    # a locked seat whose pipe or file ends keeps the delay it held (the stream most likely plays on) but says it
+    # lost the music, at a guess's confidence, instead of reporting the lock for ever
+    sf.write(tmp_path / "short.wav", np.zeros(SR // 2), SR)     # half a second: it ends before a window is full
+    sync = SeatSync(SyncSettings(input=f"file:{tmp_path / 'short.wav'}"))
+    sync.state = SyncState("locked", 2.0, 0.8)
+    with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
+        sync._listen()                                   # reads the file to its end in this thread
+    assert sync.state.state == "lost" and sync.state.offset_s == 2.0 and sync.state.confidence <= ASSUMED_CONFIDENCE
+    assert sum("no more audio to follow (holding the last delay)" in m for m in caplog.messages) == 1

@@ -24,7 +24,7 @@ import math
 import threading
 import time
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Optional
 
 import numpy as np
@@ -38,7 +38,7 @@ from ..errors import HapMotionError, UsageError
 from .signing import BadSignature, SeatTrust, Unsigned
 from .sync_estimator import match
 from .sync_reference import BATCH_S, decode_batch
-from .sync_tracker import DelayTracker, SyncState
+from .sync_tracker import ASSUMED_CONFIDENCE, DelayTracker, SyncState
 from .wire import subject
 
 log = logging.getLogger("hapmotion.live")
@@ -319,7 +319,13 @@ class SeatSync:
                 block, arrival = read if read is not None else self.audio.read()
                 read = None
                 if block is None:
-                    log.info("seat sync: %s ended", self.audio.describe())
+                    # nothing more to follow: the delay held stays (the stream most likely plays on), but the seat no
+                    # longer claims to hear it
+                    if self.state.state != "searching":
+                        self.state = replace(self.state, state="lost",
+                                             confidence=min(self.state.confidence, ASSUMED_CONFIDENCE))
+                    log.warning("seat sync: %s ended: no more audio to follow (%s)", self.audio.describe(),
+                                "holding the last delay" if self.state.state == "lost" else self._fallback_text())
                     return
                 cpu0 = time.thread_time()
                 t_zero = clock.push(block.size, arrival)
