@@ -31,6 +31,7 @@ from nats.aio.client import Client as NatsClient
 from nats.aio.msg import Msg
 from nats.aio.subscription import Subscription
 
+from ..audio.inputs import open_input
 from ..body.model import BodyModel
 from ..errors import InputError, UsageError
 from ..layout import Layout
@@ -508,7 +509,9 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
     # a zone this seat's vest does not have, or a layout that cannot be read, is a usage error before connecting
     SeatStage(seat, Show(layout=seat.layout).load_layout())
     Renderer().step(np.full((32, 3), np.nan))  # the compiled loop loaded before a show: its session starts sooner
-    seat_sync = SeatSync(sync, seat.delay_s) if sync is not None else None  # a missing device fails here, first
+    # a missing device fails here, first; a pipe is waited on up to a second for its first bytes, off the event loop
+    seat_sync = (SeatSync(sync, seat.delay_s, audio=await asyncio.to_thread(open_input, sync.input))
+                 if sync is not None else None)
     watch: Optional[DescriptionWatch] = None
 
     def on_state(state: str) -> None:

@@ -53,9 +53,10 @@ BLOCK_S = 0.02
 DEVICE_RATE = 48000
 MAX_CHANNELS = 32
 """Most channels an input may have (a header claiming thousands would make every block that many times larger)."""
-PIPE_WAIT_S = 1.0
-"""How long a seat starting on a pipe waits for its first bytes before it goes on and waits for them while it runs
-(a writer already running, ``cat song.wav |``, sends them at once)."""
+PIPE_WAIT_S = 0.1
+"""How long a seat starting on a pipe waits for its first bytes before it goes on and waits for them while it runs:
+a writer already running (``cat song.wav |``, started with the seat) has sent them by the time the seat has started;
+one that starts with the show must not hold the seat up (it would join its show late)."""
 AHEAD_S = 1.0
 """How far a pipe may run ahead of real time before it is held back, seconds: room for what a writer buffered
 before the seat started reading (a 64 KiB pipe holds 0.34 s of 48 kHz stereo s16) and for its bursts."""
