@@ -24,6 +24,6 @@ from .seat import Seat, SeatSink, SeatStage
 from .signing import load_private_key, load_public_key
 from .wire import ShowDescription, decode_frame, encode_frame, parse_description
 
-__all__ = ["load_private_key", "load_public_key", "AudienceSource", "NatsAuth", "NatsPublisherSink", "PublisherSecurity", "Seat", "SeatSecurity", "SeatSink", "SeatStage", "ShowDescription",
-           "decode_frame", "describe_show", "encode_frame", "listen", "parse_description", "parse_show_url",
-           "publishing", "run_listen"]
+__all__ = ["AudienceSource", "NatsAuth", "NatsPublisherSink", "PublisherSecurity", "Seat", "SeatSecurity", "SeatSink",
+           "SeatStage", "ShowDescription", "decode_frame", "describe_show", "encode_frame", "listen",
+           "load_private_key", "load_public_key", "parse_description", "parse_show_url", "publishing", "run_listen"]

@@ -509,7 +509,7 @@ async def listen(url: str, sinks: Sequence[SinkSpec], *, seat: Seat = Seat(),
     # a zone this seat's vest does not have, or a layout that cannot be read, is a usage error before connecting
     SeatStage(seat, Show(layout=seat.layout).load_layout())
     Renderer().step(np.full((32, 3), np.nan))  # the compiled loop loaded before a show: its session starts sooner
-    # a missing device fails here, first; a pipe is waited on up to a second for its first bytes, off the event loop
+    # a missing device fails here, first; a pipe's first bytes are waited for briefly, off the event loop
     seat_sync = (SeatSync(sync, seat.delay_s, audio=await asyncio.to_thread(open_input, sync.input))
                  if sync is not None else None)
     watch: Optional[DescriptionWatch] = None

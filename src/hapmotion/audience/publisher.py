@@ -258,9 +258,9 @@ class NatsPublisherSink(Sink):
             return
         if state == "reconnected":
             self.stats.connects += 1
-        if state == "reconnected" and self.kv is not None:
-            # the server may have restarted and lost its in-memory bucket: store the description again
-            self._republish = asyncio.ensure_future(self._store_again())
+            if self.kv is not None:
+                # the server may have restarted and lost its in-memory bucket: store the description again
+                self._republish = asyncio.ensure_future(self._store_again())
         elif state == "disconnected":
             self.warn_once("disconnected", "lost the NATS server; frames are dropped until it is back")
 

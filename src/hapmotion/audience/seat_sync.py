@@ -308,7 +308,7 @@ class SeatSync:
         try:
             # the first read opens a pipe and reads a WAV stream's header (its writer may start with the show):
             # the sample rate is known from then on
-            read: Optional[tuple] = self.audio.read()
+            block, arrival = self.audio.read()
             levels = LevelStream(self.audio.sample_rate)
             clock = HeardClock(self.audio.sample_rate)
             size = int(WINDOW_S * RATE)
@@ -316,8 +316,6 @@ class SeatSync:
             filled = 0
             next_step = int(MIN_WINDOW_S * RATE)
             while not self._stop.is_set():
-                block, arrival = read if read is not None else self.audio.read()
-                read = None
                 if block is None:
                     # nothing more to follow: the delay held stays (the stream most likely plays on), but the seat no
                     # longer claims to hear it
@@ -345,6 +343,7 @@ class SeatSync:
                         first = levels.next_hop - n          # hop index (stream) of the window's first row
                         self._step(heard[-n:], t_zero + first / RATE, clock.unsteady <= UNSTEADY_S)
                 self.cpu_s += time.thread_time() - cpu0
+                block, arrival = self.audio.read()
         except Exception as exc:  # a device that went away, a pipe that broke: the seat plays on unsynced
             if self._stop.is_set():
                 return  # closed under the read while the seat stops

@@ -141,8 +141,6 @@ class FileInput(AudioInput):
 def _open_stream(where: str, spec: str) -> BinaryIO:
     if where == "-":
         return sys.stdin.buffer
-    if not os.path.exists(where):
-        raise UsageError(f"--audio-input {spec}: no such file or pipe {where}")
     try:
         return open(where, "rb", buffering=0)
     except OSError as exc:  # a directory, no permission: the user's mistake, in one line

@@ -215,8 +215,8 @@ class LiveEngine:
         self.stats.superseded += count
 
     def restart(self) -> None:
-        """The source's frames jump in time: the renderer, the frame order and the rate clock start afresh (as after
-        a stall; the rows already sent stand)."""
+        """The source's frames jump in time (or stalled): the renderer, the frame order and the rate clock start
+        afresh (the rows already sent stand)."""
         if self.upstream is not None:
             self.upstream.reset()
         self.order.reset()
@@ -538,10 +538,7 @@ class LiveEngine:
             self._faded = True
             self.stats.stalls += 1
             log.info("source stalled for %.0f ms: all actuators off; waiting for frames", since * 1e3)
-            if self.upstream is not None:
-                self.upstream.reset()
-            self.order.reset()
-            self.clock.reset()
+            self.restart()
             self._emit(np.zeros(self.n), None, None, None, "off")
             return
         gain = (self.stall_s - since) / (self.stall_s - grace)

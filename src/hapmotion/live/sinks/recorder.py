@@ -235,10 +235,9 @@ class RecorderSink(Sink):
         if journal is not None:
             journal.remove()
         self.saved = self.path
-        self.written = [Path(p) for p in written]
-        others = [str(p) for p in self.written if Path(p) != Path(self.path)]
+        self.written = written  # (the asked path first, then a .tact take's sleeve files)
         log.info("%s: %d rows (%.1f s) written%s", self.name, track.n_frames, track.duration,
-                 f" (and {', '.join(others)})" if others else "")
+                 f" (and {', '.join(map(str, written[1:]))})" if written[1:] else "")
         if journal is not None and journal.lost:
             log.warning("%s: the journal missed %d rows (%s) while the disk was full; the file written at stop has "
                         "every row", self.name, journal.lost_rows, self.lost_spans(journal.lost))
