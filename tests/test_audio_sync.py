@@ -5,6 +5,7 @@ reference batches and the audio inputs."""
 
 from __future__ import annotations
 
+import logging
 import os
 import threading
 
@@ -12,7 +13,18 @@ import numpy as np
 import pytest
 import soundfile as sf
 from scipy.ndimage import uniform_filter1d
-from support.sync_signals import SR, changing_room, follow, noisy, played, real_song, riser_loop, song, speech_like
+from support.sync_signals import (
+    SR,
+    changing_room,
+    follow,
+    noisy,
+    played,
+    real_song,
+    reference_rows,
+    riser_loop,
+    song,
+    speech_like,
+)
 
 from hapmotion.audience.seat_sync import (
     UNSTEADY_S,
@@ -22,6 +34,7 @@ from hapmotion.audience.seat_sync import (
     SyncSettings,
 )
 from hapmotion.audience.sync_estimator import N_PEAKS, Estimate, as_heard, envelope_scores, match
+from hapmotion.audience.sync_limit import past_limit
 from hapmotion.audience.sync_reference import (
     ReferencePublisher,
     SongReference,
@@ -819,3 +832,50 @@ def test_room_sound_that_changes_over_a_riser_loop_never_moves_a_locked_seat_a_l
     assert tracker.locks == 1 and tracker.jumps == 0
     assert all(s.offset_s is None or abs(s.offset_s - 2.0) < 0.02 for _, _, s in history), \
         [(round(at, 1), s) for at, _, s in history if s.offset_s is not None and abs(s.offset_s - 2.0) >= 0.02][:3]
+
+
+def test_past_limit_finds_music_heard_further_behind_than_the_limit():
+    # a song that never repeats, heard 3.0 s behind: with a 2 s limit the sure match past it is at 3.0 s; it is not
+    # reported when the best match within the limit scores higher, nor with a 3.5 s limit (the song lies inside it,
+    # and matches nothing at 3.5-7.5 s)
+    src = song(4, 14.0)
+    heard = played(src, np.arange(int(14 * SR)) / SR - 3.0)
+    levels = dequantise(quantise(LevelStream(SR).push(heard)))[-300:]
+    ref = dequantise(quantise(signal_levels(src, SR)))
+    t_heard = 14.0 - 3.0
+    rows = reference_rows(ref)
+    far = past_limit(levels, t_heard, rows, 2.0, None)
+    assert far is not None and far.offset_s == pytest.approx(3.0, abs=0.015) and far.score > 0.8
+    assert past_limit(levels, t_heard, rows, 2.0, Estimate(1.0, far.score + 0.01, 0.1, 5, 14.0)) is None
+    assert past_limit(levels, t_heard, rows, 3.5, None) is None
+
+
+@pytest.mark.parametrize("behind_s, max_delay_s, locks_at", [(11.5, 10.0, None), (12.7, 10.0, None),
+                                                             (9.6, 10.0, 9.6)])
+def test_a_stream_further_behind_than_the_seat_accepts_never_locks_a_loop_early(caplog, behind_s, max_delay_s,
+                                                                                locks_at):
+    # house music (a two-bar loop of 3.7 s) heard through a low-quality stream in a noisy room, 11.5 or 12.7 s
+    # behind the venue while the seat accepts 10 s: the loop one or two repeats earlier lies inside the range and
+    # matched well enough to lock there (7.8 and 9.0 s, confidence 0.68 and 0.67) when the seat searched no further;
+    # it now searches past its limit, finds the music there, stays unlocked and says to raise --sync-max-delay. A
+    # stream 9.6 s behind still locks where it is
+    from hapmotion.audience.seat_sync import STEP_S
+
+    src = real_song("vibe_ace.ogg")
+    start = 28.0
+    heard = sync_scenes.add_noise(sync_scenes.codec_copy(src[int(start * SR):int((start + 30.0) * SR)]), 10, 7)
+    sync = SeatSync(SyncSettings(input="none", max_delay_s=max_delay_s),
+                    audio=StampedBlocks(heard, 1000.0 + start + behind_s, 1.0))
+    sync.store = ReferenceStore(src.size / SR + 1.0)   # the whole song at once (a seat holds the last 19 s)
+    sync.store.put(0, quantise(signal_levels(src, SR)))
+    sync._edge = 1000.0                       # media time m reaches the seat at local 1000 + m
+    with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
+        sync._listen()
+    offsets = [s.offset_s - 1000.0 for _, _, s in sync.estimates if s.state == "locked"]
+    said = [m for m in caplog.messages if "past --sync-max-delay" in m]
+    if locks_at is None:
+        assert offsets == [] and sync.tracker.locks == 0
+        assert len(said) == 1 and f"about {behind_s:.0f} s behind it" in said[0], said
+    else:
+        assert offsets and all(abs(o - locks_at) < 0.04 for o in offsets), sorted(set(np.round(offsets, 2)))
+        assert said == [] and len(offsets) * STEP_S > 10.0

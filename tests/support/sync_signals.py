@@ -11,9 +11,9 @@ from scipy.signal import lfilter
 
 from hapmotion.audience.seat_sync import STEP_S, WINDOW_S
 from hapmotion.audience.sync_estimator import match
+from hapmotion.audience.sync_limit import past_limit
 from hapmotion.audience.sync_tracker import DelayTracker
 from hapmotion.audio.sync_features import (
-    N_BANDS,
     RATE,
     LevelStream,
     dequantise,
@@ -125,12 +125,25 @@ def noisy(x: np.ndarray, snr_db: float, seed: int) -> np.ndarray:
     return x + noise / noise.std() * rms / 10 ** (snr_db / 20)
 
 
+def reference_rows(ref: np.ndarray):
+    """``span(first_hop, n)``: rows ``first_hop ..`` of the reference levels ``ref`` ``(N, B)`` dB, NaN outside it,
+    as :meth:`hapmotion.audience.seat_sync.ReferenceStore.span` gives them."""
+    def span(first: int, n: int) -> np.ndarray:
+        idx = np.arange(first, first + n)
+        out = np.full((n, ref.shape[1]), np.nan)
+        ok = (idx >= 0) & (idx < ref.shape[0])
+        out[ok] = ref[idx[ok]]
+        return out
+    return span
+
+
 def follow(heard: np.ndarray, source: np.ndarray, step_s: float = STEP_S, window_s: float = WINDOW_S,
            start_s: float = 0.0, max_delay_s: float = 5.0):
     """Run the seat's matching over ``heard`` (local time = its own sample time + ``start_s``: a seat that starts
     listening then) against the reference levels of ``source`` (media time = its sample time), as the seat does:
     levels streamed in 20 ms blocks, a 3 s window every ``step_s`` (asking for the score at the held offset), offsets
-    from -0.25 s to ``max_delay_s``. Returns [(local time, Estimate or None, SyncState)]."""
+    from -0.25 s to ``max_delay_s`` (while searching, a window whose sure match past that limit scores higher is
+    not acted on: :func:`~hapmotion.audience.sync_limit.past_limit`). Returns [(local time, Estimate or None, SyncState)]."""
     ref = dequantise(quantise(signal_levels(source, SR)))
     stream = LevelStream(SR)
     heard_levels = np.concatenate([stream.push(heard[k:k + 441]) for k in range(0, heard.size, 441)])
@@ -138,16 +151,18 @@ def follow(heard: np.ndarray, source: np.ndarray, step_s: float = STEP_S, window
     tracker = DelayTracker()
     out = []
     w, step = int(window_s * RATE), int(step_s * RATE)
+    rows = reference_rows(ref)
+
     for end in range(int(1.5 * RATE), heard_levels.shape[0], step):
         n = min(end, w)
         t_heard = start_s + (end - n) / RATE
         first = int(math.floor((t_heard - max_delay_s) * RATE))
-        span = n + int((max_delay_s + 0.25) * RATE)
-        idx = np.arange(first, first + span)
-        r = np.full((span, N_BANDS), np.nan)
-        ok = (idx >= 0) & (idx < ref.shape[0])
-        r[ok] = ref[idx[ok]]
+        heard_window = heard_levels[end - n:end]
         at = t_heard + (n - 1) / RATE
-        est = match(heard_levels[end - n:end], t_heard, r, first / RATE, held=tracker.offset_at(at))
+        est = match(heard_window, t_heard, rows(first, n + int((max_delay_s + 0.25) * RATE)), first / RATE,
+                    held=tracker.offset_at(at))
+        if tracker.state.state == "searching" and past_limit(heard_window, t_heard, rows, max_delay_s,
+                                                             est) is not None:
+            est = None
         out.append((at, est, tracker.update(est, at)))
     return out, tracker

@@ -36,9 +36,10 @@ from ..audio.inputs import AudioInput, open_input
 from ..audio.sync_features import N_BANDS, RATE, LevelStream, dequantise
 from ..errors import HapMotionError, UsageError
 from .signing import BadSignature, SeatTrust, Unsigned
-from .sync_estimator import match
+from .sync_estimator import Estimate, match
+from .sync_limit import BEYOND_S, past_limit
 from .sync_reference import BATCH_S, decode_batch
-from .sync_tracker import ASSUMED_CONFIDENCE, DelayTracker, SyncState
+from .sync_tracker import AGREE_S, ASSUMED_CONFIDENCE, DelayTracker, SyncState
 from .wire import subject
 
 log = logging.getLogger("hapmotion.live")
@@ -57,6 +58,9 @@ frames' arrival)."""
 MAX_EDGES = 64
 """Most arrivals the live edge keeps (its window holds 20 batches at two a second; the seq bound below lets through
 at most a few more a second): a flood of batches cannot grow it."""
+BEYOND_HINT_S = 2.0
+"""A searching seat says the stream is further behind than it accepts once sure matches past that limit
+(:func:`~hapmotion.audience.sync_limit.past_limit`) have held one delay this long (one window's can be noise's)."""
 SEQ_SLACK_S = 2.0
 """A batch's seq may run ahead of the last accepted one by the batches of the time since it arrived plus this much,
 twice over (the publisher sends two a second, a few at once when it starts or restarts after a seek), and its
@@ -169,7 +173,7 @@ class SeatSync:
         self.settings = settings
         self.delay_s = float(delay_s)
         self.audio = audio if audio is not None else open_input(settings.input)
-        self.store = ReferenceStore(settings.max_delay_s + WINDOW_S + 5.0)
+        self.store = ReferenceStore(settings.max_delay_s + BEYOND_S + WINDOW_S + 2.0)
         self.tracker = DelayTracker()
         self.state: SyncState = self.tracker.state
         self.epoch: Optional[int] = None
@@ -185,6 +189,7 @@ class SeatSync:
         self.trust: Optional[SeatTrust] = None
         self._said: set[str] = set()
         self._unmatched = 0     # windows in a row matched against the reference that gave no estimate
+        self._beyond = (0, 0.0)  # windows in a row with a sure match past --sync-max-delay; its last offset
         self.cpu_s = 0.0        # the worker thread's CPU, seconds
         self.loop_cpu_s = 0.0   # the event loop's CPU in :meth:`receive` (checking and storing the reference)
 
@@ -358,20 +363,22 @@ class SeatSync:
         """Match the heard window ``(W, B)`` dB whose first hop was heard at local time ``t_heard`` (not when its
         stamps are not ``steady``: the tracker then sees no estimate) and update the tracker."""
         at = t_heard + (heard_db.shape[0] - 1) / RATE
-        est = None
+        est = found = None
         if self._edge is not None and steady:
             lo, hi = self._edge - EARLY_S, self._edge + self.settings.max_delay_s
             first = int(math.floor((t_heard - hi) * RATE))
             n = heard_db.shape[0] + int(math.ceil((hi - lo) * RATE))
             ref = self.store.span(first, n)
-            est = match(heard_db, t_heard, ref, first / RATE, held=self.tracker.offset_at(at))
+            est = found = match(heard_db, t_heard, ref, first / RATE, held=self.tracker.offset_at(at))
+            if self.tracker.state.state == "searching":
+                est = self._unless_past_limit(est, heard_db, t_heard, hi)
             media = (first + np.arange(n)) / RATE
             if est is not None and self.tracker.state.state == "searching" \
                     and not np.isfinite(ref[media >= 0.0]).all():
                 # part of the range was never received (the seat joined a running show): a repeat of the music
                 # (the bar before) could win over the true delay, which may lie in the part not received yet
                 est = None
-        self._hint(est, heard_db, self._edge is not None and steady)
+        self._hint(found, heard_db, self._edge is not None and steady)  # music heard, wherever it matched
         before = self.tracker.state.state
         state = self.tracker.update(est, at)
         offset = self.tracker.offset_at(at)
@@ -381,6 +388,22 @@ class SeatSync:
         if state.state != before or (state.state == "locked" and state.jumps != getattr(self, "_jumps", 0)):
             self._jumps = state.jumps
             self._say(state)
+
+    def _unless_past_limit(self, est: Optional[Estimate], heard_db: np.ndarray, t_heard: float,
+                           limit: float) -> Optional[Estimate]:
+        """``est`` (the best match within the seat's limit, local time ``limit``), or None when a sure match past
+        the limit scores above it; said once such matches have held one delay for :data:`BEYOND_HINT_S`."""
+        far = past_limit(heard_db, t_heard, self.store.span, limit, est)
+        if far is None:
+            self._beyond = (0, 0.0)
+            return est
+        same = self._beyond[0] > 0 and abs(far.offset_s - self._beyond[1]) <= AGREE_S
+        self._beyond = (self._beyond[0] + 1 if same else 1, far.offset_s)
+        if self._beyond[0] * STEP_S >= BEYOND_HINT_S:
+            self._fault("beyond", f"the music heard matches the venue's about {far.offset_s - self._edge:.0f} s "
+                                  f"behind it, past --sync-max-delay ({self.settings.max_delay_s * 1000:g} ms): raise "
+                                  f"it to follow this stream")
+        return None
 
     def _hint(self, est, heard_db: np.ndarray, asked: bool) -> None:
         """Say once when :data:`HINT_S` of windows matched against the venue's music gave no estimate at all: the

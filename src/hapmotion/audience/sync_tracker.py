@@ -274,6 +274,13 @@ def _cluster(points: list[tuple[float, float]], agree: float) -> tuple[int, floa
     return best
 
 
+def is_good(est: Optional[Estimate]) -> bool:
+    """An estimate sure enough to count towards a lock: a high score with any margin, or a clear margin over a
+    window with onsets throughout."""
+    return est is not None and ((est.score >= MIN_SCORE and est.margin >= MIN_MARGIN)
+                                or (est.even and est.score >= CLEAR_SCORE and est.margin >= CLEAR_MARGIN))
+
+
 class DelayTracker:
     """Feed :meth:`update` every estimate (or None) with its time; read :attr:`state` (a :class:`SyncState`) and
     :meth:`offset_at` (the offset to play at, local time ``t``)."""
@@ -322,8 +329,7 @@ class DelayTracker:
 
     # ------------------------------------------------------------------ update
     def update(self, est: Optional[Estimate], at: float) -> SyncState:
-        good = est is not None and ((est.score >= MIN_SCORE and est.margin >= MIN_MARGIN)
-                                    or (est.even and est.score >= CLEAR_SCORE and est.margin >= CLEAR_MARGIN))
+        good = is_good(est)
         while self._votes and self._votes[0][0] < at - VOTE_S:
             self._votes.popleft()
         while self._jump and self._jump[0][0] < at - VOTE_S:
