@@ -132,23 +132,55 @@ def test_inf_and_nan_samples_read_as_0_and_are_counted_and_logged_once(caplog):
     assert levels.shape[0] > 0 and np.isfinite(levels).all()
 
 
-def test_a_pipe_faster_than_real_time_is_held_to_real_time_at_little_cpu(monkeypatch, caplog):
-    """raw:/dev/zero delivers as fast as it is read: past AHEAD_S ahead it is held to the sample clock (load can
-    only make the wall time longer, never shorter), logged once, and the reading costs a fraction of a core."""
-    monkeypatch.setattr(inputs, "AHEAD_S", 0.2)
-    inp = open_input("raw:/dev/zero?rate=8000&channels=2")
+def test_an_endless_source_read_at_once_is_played_in_real_time_at_little_cpu(caplog):
+    """raw:/dev/zero hands over as much as is asked at once: a file's audio, played in real time from the first read
+    (load can only make the wall time longer, never shorter), said once, and the reading costs a fraction of a
+    core."""
     t0, cpu0, n = time.perf_counter(), time.thread_time(), 0
     with caplog.at_level(logging.INFO, logger="hapmotion.live"):
+        inp = open_input("raw:/dev/zero?rate=8000&channels=2")
         while n < int(1.2 * 8000):
             block, _ = inp.read()
             n += block.size
     wall, cpu = time.perf_counter() - t0, time.thread_time() - cpu0
     inp.close()
-    assert wall >= n / 8000 - 0.2 - 0.03                         # the sample clock, less the allowance and a block
+    assert inp.paced is True
+    assert wall >= n / 8000 - 0.001                              # the sample clock from the first read
     assert cpu < 0.5 * wall                                      # unpaced, the loop is all CPU
+    said = [r for r in caplog.records if "a file's audio" in r.getMessage()]
+    assert len(said) == 1 and said[0].levelno == logging.INFO   # a file piped in does so by design: no warning
+
+
+def test_a_live_writer_that_runs_ahead_later_is_held_to_real_time(monkeypatch, caplog):
+    """A writer live at the first read (20 ms every 20 ms) that then dumps 3 s at once is held back to the sample
+    clock once AHEAD_S ahead, said once at info level and counted."""
+    monkeypatch.setattr(inputs, "AHEAD_S", 0.2)
+    r, w = os.pipe()
+    block = np.zeros(160 * 2, dtype="<i2").tobytes()          # 20 ms of 8 kHz stereo
+
+    def write() -> None:
+        with os.fdopen(w, "wb") as f:
+            start = time.perf_counter()
+            for k in range(40):                                # 0.8 s live, past the first read's look
+                time.sleep(max(0.0, start + k * 0.02 - time.perf_counter()))
+                f.write(block)
+                f.flush()
+            f.write(block * 150)                               # then 3 s at once
+
+    writer = threading.Thread(target=write)
+    writer.start()
+    t0 = time.perf_counter()
+    with caplog.at_level(logging.INFO, logger="hapmotion.live"):
+        inp = open_input(f"raw:/dev/fd/{r}?rate=8000&channels=2")
+        x = read_all(inp)
+    wall = time.perf_counter() - t0
+    writer.join(5)
+    os.close(r)
+    assert inp.paced is False and x.size == 190 * 160
+    assert wall >= 3.8 - 0.2 - 0.03                              # the sample clock, less the allowance and a block
     assert inp.faults["too_fast"] > 0
     said = [r for r in caplog.records if "faster than real time" in r.getMessage()]
-    assert len(said) == 1 and said[0].levelno == logging.INFO   # a file piped in does so by design: no warning
+    assert len(said) == 1 and said[0].levelno == logging.INFO
 
 
 def test_a_writer_within_the_allowance_is_not_held_back():

@@ -16,9 +16,16 @@ or a file or pipe, all as blocks of mono samples stamped with the local time the
 
 Every input has a rate of ``MIN_SAMPLE_RATE..MAX_SAMPLE_RATE`` (:mod:`hapmotion.audio.io`) and 1..32 channels.
 Samples that are not finite (a float stream's inf or NaN) become 0 and float samples are clipped to -1..1, so the
-levels stay finite. A pipe is read no faster than real time: a writer that runs ahead (``raw:/dev/zero``, a file
-on standard input) is held back to the sample clock once it is :data:`AHEAD_S` ahead, at the cost of no CPU.
-Both are counted in :attr:`AudioInput.faults` and logged once per kind.
+levels stay finite. A pipe is read no faster than real time: a writer that runs ahead (``raw:/dev/zero``) is held
+back to the sample clock once it is :data:`AHEAD_S` ahead, at the cost of no CPU. Both are counted in
+:attr:`AudioInput.faults` and logged once per kind.
+
+When was a sample heard? A live writer's (a capture program's) as it arrives, minus what it had queued: the seat
+takes the earliest arrival relative to the sample clock (``seat_sync.HeardClock``), as no captured sample arrives
+before it was heard. A file has no such moment; ``file:PATH`` plays it in real time from the seat's first read, and
+so do ``wav:``/``raw:`` on a regular file and on a pipe whose writer hands over far more than a live writer could
+have queued (:data:`FAST_S` past the pipe's capacity, at once: ``cat song.wav |``). Stamped as they arrived, such a
+file's first second (read at once, up to :data:`AHEAD_S` ahead) would put the whole file a second early.
 
 Devices are read with SoundCard (PyPI ``soundcard``), which captures the output's loopback on Windows (WASAPI) and
 Linux (PulseAudio and PipeWire's pulse server) with no driver to install, where PortAudio (``sounddevice``) has no
@@ -38,6 +45,11 @@ import time
 from dataclasses import dataclass
 from typing import BinaryIO, Optional
 from urllib.parse import parse_qs
+
+try:
+    import fcntl   # a pipe's capacity (Linux); not on Windows, whose pipes are not looked at
+except ImportError:  # pragma: no cover - Windows
+    fcntl = None
 
 import numpy as np
 import soundfile as sf
@@ -60,6 +72,14 @@ one that starts with the show must not hold the seat up (it would join its show 
 AHEAD_S = 1.0
 """How far a pipe may run ahead of real time before it is held back, seconds: room for what a writer buffered
 before the seat started reading (a 64 KiB pipe holds 0.34 s of 48 kHz stereo s16) and for its bursts."""
+FAST_S = 5.0
+"""A pipe whose writer hands over more than its capacity plus this much audio at once is a file being copied in, not
+a live capture: a capture program queues what the seat has not yet read, a second or two while the seat starts, not
+five (the pipe itself holds 0.34 s of 48 kHz stereo s16 on Linux, 1.5 s of 22 kHz mono)."""
+FAST_LOOK_S = 0.5
+"""How long a pipe's first read keeps taking what its writer hands over at once (it stops sooner at a pause of
+:data:`FAST_GAP_S`): a file is copied in far faster, a live writer adds this much at most."""
+FAST_GAP_S = 0.1
 SPECS = "loopback, mic, device:NAME, file:PATH, wav:PATH|-, raw:PATH|-?rate=R&channels=C&format=s16|f32"
 
 
@@ -147,6 +167,14 @@ def _open_stream(where: str, spec: str) -> BinaryIO:
         raise UsageError(f"--audio-input {spec}: cannot read {where} ({exc.strerror})") from None
 
 
+def _pipe_capacity(fd: int) -> int:
+    """Bytes the pipe ``fd`` holds (Linux says; 64 KiB, the most other systems give one, elsewhere)."""
+    try:
+        return int(fcntl.fcntl(fd, fcntl.F_GETPIPE_SZ))
+    except (AttributeError, OSError):
+        return 1 << 16
+
+
 def _pipe_descriptor(where: str) -> Optional[int]:
     """A descriptor of standard input (``-``) or of the named pipe ``where``, opened without waiting for its writer
     (a plain open blocks until one comes), to wait on with ``select``; None for a regular file, on Windows (whose
@@ -184,6 +212,11 @@ class PipeInput(AudioInput):
         self._carry = b""
         self._started: Optional[float] = None
         self._frames = 0
+        self.paced: Optional[bool] = None
+        """True when the stream is a file's audio played in real time from the first read (a regular file, a file
+        copied into the pipe); False for a live writer's, stamped as it arrives; None before the first read."""
+        self._ahead = bytearray()
+        """What the first read took from a pipe at once (:meth:`_first_look`), handed over before the stream's own."""
         self._stream: Optional[BinaryIO] = None
         self._pending: Optional[int] = None
         """The descriptor of a pipe whose writer has not sent anything yet (opened, not yet read)."""
@@ -218,10 +251,9 @@ class PipeInput(AudioInput):
             self._open()
 
     def _from_fd(self, fd: int) -> BinaryIO:
-        if self._where == "-":
-            return sys.stdin.buffer
         os.set_blocking(fd, True)
-        return os.fdopen(fd, "rb", buffering=0)
+        # unbuffered, standard input too: what select says is there is what a read returns
+        return os.fdopen(fd, "rb", buffering=0, closefd=self._where != "-")
 
     def _open(self) -> None:
         """Wait for a pipe's writer (it may only now start) and read a WAV stream's header."""
@@ -248,18 +280,58 @@ class PipeInput(AudioInput):
 
     def _chunk(self) -> bytes:
         want = self._max if self._left is None else min(self._max, self._left)
-        chunk = self._stream.read(want) if want else b""
+        if self._ahead:
+            chunk = bytes(self._ahead[:want])
+            del self._ahead[:want]
+        else:
+            chunk = self._stream.read(want) if want else b""
         if self._left is not None:
             self._left -= len(chunk)
         return chunk
 
+    def _first_look(self) -> None:
+        """Decide :attr:`paced` (module docstring): a regular file is; a pipe is when its writer hands over more
+        than the pipe's capacity plus :data:`FAST_S` of audio within :data:`FAST_LOOK_S`, or its whole stream,
+        longer than the pipe holds (kept in :attr:`_ahead`). Where select cannot wait on the stream (Windows), a
+        pipe is a live writer's."""
+        self.paced = False
+        try:
+            fd = self._stream.fileno()
+            if stat.S_ISREG(os.fstat(fd).st_mode):
+                self.paced = True
+                return
+        except (AttributeError, OSError, ValueError):
+            return
+        if os.name == "nt":
+            return
+        per_s = self.sample_rate * self._frame_bytes
+        capacity = _pipe_capacity(fd)
+        limit = int(capacity + FAST_S * per_s)
+        allowed = limit if self._left is None else min(limit, self._left)
+        deadline = time.perf_counter() + FAST_LOOK_S
+        ended = False
+        while len(self._ahead) < allowed and time.perf_counter() < deadline:
+            if not select.select([fd], [], [], FAST_GAP_S)[0]:
+                break
+            chunk = self._stream.read(min(1 << 16, allowed - len(self._ahead)))
+            if not chunk:
+                ended = True
+                break
+            self._ahead += chunk
+        ended = ended or len(self._ahead) == self._left
+        self.paced = len(self._ahead) >= limit or (ended and len(self._ahead) > capacity + FAST_LOOK_S * per_s)
+        if self.paced:
+            log.info("seat sync: %s: a file's audio (handed over at once): played in real time from now, as "
+                     "file: would", self.name)
+
     def read(self) -> tuple[Optional[np.ndarray], float]:
         self._open()
+        if self.paced is None:
+            self._started = time.perf_counter()   # a file's audio is heard from the first read, as file: plays it
+            self._first_look()
         while True:
             chunk = self._chunk()
             now = time.perf_counter()
-            if self._started is None:
-                self._started = now
             if not chunk:
                 return None, now
             data = self._carry + chunk
@@ -269,6 +341,12 @@ class PipeInput(AudioInput):
                 break
         x = np.frombuffer(data[:usable], dtype=self._dtype).reshape(-1, self.channels)
         self._frames += x.shape[0]
+        scale = 1.0 if self._dtype.kind == "f" else 1.0 / float(np.iinfo(self._dtype).max + 1)
+        if self.paced:   # a file's audio: heard in real time from the first read, as FileInput plays it
+            due = self._started + self._frames / self.sample_rate
+            if due > now:
+                time.sleep(due - now)
+            return self._clean(x, scale), due
         # A writer faster than real time (raw:/dev/zero) would be read, analysed and matched as fast as a core
         # allows, and its stamps would say the music runs fast: hold the block until the sample clock is due
         # (the writer then blocks on a full pipe, costing nothing).
@@ -279,13 +357,12 @@ class PipeInput(AudioInput):
                                        "it at real time", logging.INFO)
             time.sleep(due - now)
             now = time.perf_counter()
-        scale = 1.0 if self._dtype.kind == "f" else 1.0 / float(np.iinfo(self._dtype).max + 1)
         return self._clean(x, scale), now
 
     def close(self) -> None:
         self._closed = True
         if self._stream is not None and self._stream is not sys.stdin.buffer:
-            self._stream.close()
+            self._stream.close()   # (standard input's descriptor stays open: not closefd)
         elif self._pending is not None and self._where != "-":
             os.close(self._pending)
             self._pending = None

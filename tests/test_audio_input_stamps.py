@@ -1,0 +1,133 @@
+"""When a pipe's audio was heard: a live writer's as it arrives, a file's (a regular file, a file copied into a pipe)
+in real time from the seat's first read, as ``file:`` plays it; and what a seat locks on either way."""
+
+from __future__ import annotations
+
+import io
+import os
+import threading
+import time
+
+import numpy as np
+import pytest
+import soundfile as sf
+from support.sync_signals import SR, song
+
+from hapmotion.audio.inputs import FAST_S, PipeInput
+
+
+def wav_bytes(x: np.ndarray, sr: int = SR) -> bytes:
+    buf = io.BytesIO()
+    sf.write(buf, x, sr, format="WAV", subtype="PCM_16")
+    return buf.getvalue()
+
+
+def read_all(inp: PipeInput, limit_s: float = 30.0) -> tuple[list[int], list[float], float]:
+    """Every block's size and stamp, and the perf_counter() just before the first read."""
+    t0, sizes, stamps = time.perf_counter(), [], []
+    while time.perf_counter() - t0 < limit_s:
+        block, t = inp.read()
+        if block is None:
+            break
+        sizes.append(block.size)
+        stamps.append(t)
+    return sizes, stamps, t0
+
+
+def assert_played_from_first_read(inp: PipeInput, sizes: list[int], stamps: list[float], t0: float) -> None:
+    """Each block stamped when its last sample plays, the file played from the first read (as file: does)."""
+    assert inp.paced is True
+    ends = np.cumsum(sizes) / inp.sample_rate
+    assert np.allclose(np.array(stamps) - ends, stamps[0] - ends[0], atol=1e-9)   # one clock: the sample clock
+    assert 0.0 <= stamps[0] - ends[0] - t0 < 0.05                                # started at the first read
+
+
+def test_a_wav_file_named_as_a_stream_plays_from_the_first_read_like_file(tmp_path):
+    # wav:PATH on a regular file read as a pipe was stamped as it arrived: its first second, read at once, put the
+    # whole file a second early (a seat locked 1 s short of the delay file: found)
+    path = tmp_path / "heard.wav"
+    path.write_bytes(wav_bytes(0.3 * song(3, 1.5)))
+    inp = PipeInput(f"wav:{path}", "wav", str(path))
+    sizes, stamps, t0 = read_all(inp)
+    inp.close()
+    assert sum(sizes) == int(1.5 * SR)
+    assert_played_from_first_read(inp, sizes, stamps, t0)
+    assert time.perf_counter() - t0 >= 1.45          # read in real time, not at once
+
+
+def test_a_file_copied_into_a_pipe_plays_from_the_first_read(tmp_path):
+    # `cat heard.wav | hapmotion listen ... wav:-` (here a named pipe and a thread as cat): the writer hands over the
+    # pipe's capacity plus FAST_S of audio at once, which no live capture has queued: a file's audio
+    fifo = tmp_path / "heard.fifo"
+    os.mkfifo(fifo)
+    data = wav_bytes(0.3 * song(4, FAST_S + 3.0))
+
+    def cat() -> None:
+        with open(fifo, "wb") as f:
+            f.write(data)
+
+    writer = threading.Thread(target=cat)
+    writer.start()
+    inp = PipeInput(f"wav:{fifo}", "wav", str(fifo))
+    sizes, stamps, t0 = read_all(inp)
+    inp.close()
+    writer.join(5)
+    assert sum(sizes) == int((FAST_S + 3.0) * SR)
+    assert_played_from_first_read(inp, sizes, stamps, t0)
+
+
+def test_a_live_writer_with_a_queue_is_stamped_as_it_arrives(tmp_path):
+    # a capture program started before the seat read (0.4 s queued in the pipe), then writing 20 ms every 20 ms:
+    # its audio is stamped as it arrives (the seat's clock takes the earliest arrival), not played from the first read
+    fifo = tmp_path / "live.fifo"
+    os.mkfifo(fifo)
+    x = 0.3 * song(5, 2.4)
+    pcm = (x * 32767).astype("<i2").tobytes()
+    block = int(0.02 * SR) * 2
+    stop = threading.Event()
+
+    def capture() -> None:
+        with open(fifo, "wb", buffering=0) as f:
+            queued = int(0.4 * SR) * 2
+            f.write(pcm[:queued])
+            start = time.perf_counter()
+            for k, at in enumerate(range(queued, len(pcm), block)):
+                if stop.is_set():
+                    return
+                time.sleep(max(0.0, start + (k + 1) * 0.02 - time.perf_counter()))
+                f.write(pcm[at:at + block])
+
+    writer = threading.Thread(target=capture)
+    writer.start()
+    inp = PipeInput(f"raw:{fifo}?rate={SR}&channels=1", "raw", f"{fifo}?rate={SR}&channels=1")
+    try:
+        sizes, stamps, t0 = read_all(inp)
+    finally:
+        stop.set()
+        inp.close()
+        writer.join(5)
+    assert inp.paced is False
+    assert sum(sizes) == len(pcm) // 2
+    # the queued 0.4 s arrived at once: stamped before the sample clock from the first read would have them
+    lag = np.array(stamps) - (t0 + np.cumsum(sizes) / SR)
+    assert lag.min() < -0.25
+
+
+def test_a_short_file_copied_into_a_pipe_is_a_file_too(tmp_path):
+    # the whole stream, longer than the pipe holds, handed over at once and ended: a file, however short
+    fifo = tmp_path / "short.fifo"
+    os.mkfifo(fifo)
+    data = wav_bytes(0.3 * song(6, 3.0))
+
+    def cat() -> None:
+        with open(fifo, "wb") as f:
+            f.write(data)
+
+    writer = threading.Thread(target=cat)
+    writer.start()
+    inp = PipeInput(f"wav:{fifo}", "wav", str(fifo))
+    sizes, stamps, t0 = read_all(inp)
+    inp.close()
+    writer.join(5)
+    assert sum(sizes) == 3 * SR
+    assert_played_from_first_read(inp, sizes, stamps, t0)
