@@ -9,7 +9,6 @@ import threading
 import time
 
 import numpy as np
-import pytest
 import soundfile as sf
 from support.sync_signals import SR, song
 
