@@ -13,6 +13,13 @@ by a parabola through the peak), its score (-1..1), and its *margin*: the score 
 :data:`EXCLUSION_S` away. Music repeats itself (beats, bars), so a second peak one beat away is normal; what tells
 a real match from chance is a score well above what unrelated signals reach over that many lags and bands. The
 thresholds that decide it live in :mod:`hapmotion.audience.sync_tracker`.
+
+The onsets carry rhythm, not pitch: given both sides' chroma (:class:`Chroma`), :func:`match` adds what the notes
+say of its candidates (:func:`chroma_scores`): how far the best one's notes line up better than the others'
+(:attr:`Estimate.chroma_lead`: a different song at the venue's tempo lines up its onsets, not its notes), and, for a
+locked seat whose held offset scores among the best, every candidate's chroma and band-energy scores over the
+window's last :data:`RECENT_S` (:attr:`Estimate.recent`: after a jump, an alias of the held offset a beat or a bar
+from the new one scores as well on onsets, not on notes).
 """
 
 from __future__ import annotations

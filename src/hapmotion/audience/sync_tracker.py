@@ -53,6 +53,13 @@ not, or by less than any real jump did.
   swells after a jump matches a riser in the next repeat better than the flat repeat heard): the seat reports it
   with :data:`ASSUMED_CONFIDENCE` at most (:attr:`DelayTracker.assumed`) until a window stands :data:`UNIQUE_MARGIN`
   clear at the offset held.
+* **the notes** (chroma, ``Estimate.chroma_lead`` and ``Estimate.recent``): no estimate votes for a lock or a jump
+  unless its offset's chroma score stands :data:`CHROMA_LEAD` above the median of the other candidates'
+  (:func:`chroma_tells`: a different song at the venue's tempo lines its onsets up, not its notes); and a locked seat
+  whose held offset the onsets cannot tell from the best (an alias of it a beat or a bar from the new offset after a
+  jump: a 1 s re-buffer at 124 bpm is two beats and 32 ms) votes for the candidate whose notes and levels heard over
+  the last 1.5 s lead the held offset's and every other candidate's (:func:`tonal_pick`), instead of confirming the
+  held one.
 * **lost**: no good estimate within the gate for :data:`LOST_AFTER_S`: the seat keeps the prediction (the stream
   most likely still plays where it did) and says so; after :data:`HOLD_S` more it is searching again and plays
   the user's fallback (the manual delay, or nothing).
