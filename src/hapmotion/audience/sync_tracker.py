@@ -153,7 +153,9 @@ riser (noise switching on and off, swelling every 2.5 s, bursts of applause, a c
 loops of 1.8-2.2 s, the riser 6-12 dB over the music, the low-quality codec) moved seats holding the truth one loop
 off for 2-17 s at confidence 0.45-0.76, with leads of 0.03-0.06 in the window they moved
 (tests/test_audio_sync.py holds such cases). One scene still passes (a riser 18 dB over the music heard under
-applause led by 0.21: docs/audience.md)."""
+applause led by 0.21: docs/audience.md). A move the notes decide (:func:`tonal_pick`) asks the same lead of the
+levels over the window's last 1.5 s; over the whole window, which still holds audio from before the jump, its lead
+can be lower (0.03 in the least of 22 runs of benchmarks/sync_margins.py since)."""
 CHROMA_LEAD = 0.20
 """How far the chroma score of an estimate's best offset must stand above the median of its other candidates'
 (``Estimate.chroma_lead``, the whole window) for it to vote for a lock or a jump (:func:`chroma_tells`). A different
