@@ -30,7 +30,10 @@ since a jump) tells those aliases apart: after jumps of 0.5-1.5 s both ways in t
 harness's synthetic ones, six more) through the codec and with room noise, the truth's lead over the best alias in
 every window the onset score left ambiguous, and, over music that is not the venue's, how high a wrong candidate's
 band-energy score and lead reach and how often the pick
-(:func:`~hapmotion.audience.sync_tracker.envelope_pick`) would act on one (about 50 s more).
+(:func:`~hapmotion.audience.sync_tracker.envelope_pick`) would act on one (about 50 s more). For the wrong signals'
+windows with a good score and the right music's votes, the chroma lead a vote needs
+(:data:`~hapmotion.audience.sync_tracker.CHROMA_LEAD`: how far the best offset's chroma score stands above the
+median of the other candidates').
 """
 
 from __future__ import annotations
@@ -43,9 +46,9 @@ import soundfile as sf
 
 from hapmotion.audience.sync_estimator import NEAR_S, RECENT_S, SHARP_MARGIN, envelope_scores, estimate
 from hapmotion.audience.seat_sync import SyncSettings
-from hapmotion.audience.sync_tracker import (AGREE_S, CLEAR_MARGIN, CLEAR_SCORE, ENVELOPE_LEAD, ENVELOPE_MIN,
-                                             HEARD_LEAD, HELD_LEAD, JUMP_LEAD, MIN_MARGIN, MIN_SCORE, STREAK_S,
-                                             UNIQUE_MARGIN, heard_tells)
+from hapmotion.audience.sync_tracker import (AGREE_S, CHROMA_LEAD, CLEAR_MARGIN, CLEAR_SCORE, ENVELOPE_LEAD,
+                                             ENVELOPE_MIN, HEARD_LEAD, HELD_LEAD, JUMP_LEAD, MIN_MARGIN, MIN_SCORE,
+                                             STREAK_S, UNIQUE_MARGIN, heard_tells)
 from hapmotion.audio.sync_features import N_BANDS, RATE, dequantise, quantise, signal_levels
 
 from tests.support.data import AUDIO
@@ -174,6 +177,13 @@ def main(argv: list[str] | None = None) -> int:
           f"above it {int((w[:, 0] >= MIN_SCORE).sum())}")
     print(f"  highest margin with onsets in both halves {w[even, 1].max():.2f} (sharp: {SHARP_MARGIN:.2f}); "
           f"99.9th percentile {np.percentile(w[even, 1], 99.9):.2f}; sharp windows {int(sharp.sum())}")
+    good_wrong = [e.chroma_lead for e in wrong if e.score >= MIN_SCORE and e.margin >= MIN_MARGIN
+                  and e.chroma_lead is not None]
+    print(f"  chroma lead (the best offset's chroma score over the other candidates' median) of the {len(good_wrong)} "
+          f"windows with a good score: {CHROMA_LEAD:.2f} or more in "
+          f"{np.mean(np.array(good_wrong) >= CHROMA_LEAD) * 100 if good_wrong else 0.0:.1f} % (a vote needs it), "
+          f"95th percentile {np.percentile(good_wrong, 95) if good_wrong else math.nan:.2f}, highest "
+          f"{max(good_wrong, default=math.nan):.2f}")
     clear = even & (w[:, 0] >= CLEAR_SCORE) & (w[:, 1] >= CLEAR_MARGIN)
     print(f"  windows with onsets in both halves, a score of {CLEAR_SCORE:.2f} or more and {CLEAR_MARGIN:.2f} clear "
           f"(good under the score {MIN_SCORE:.2f}): {int(clear.sum())} (target 0)")
@@ -201,6 +211,11 @@ def main(argv: list[str] | None = None) -> int:
               f"{len(rivals)} had a rival): the least lead {min(rivals, default=math.nan):.3f}, 5th percentile "
               f"{np.percentile(rivals, 5) if rivals else math.nan:.3f}, median "
               f"{np.median(rivals) if rivals else math.nan:.3f}")
+        tonal = [e.chroma_lead for e in votes if e.chroma_lead is not None]
+        print(f"  their chroma lead over the other candidates: {CHROMA_LEAD:.2f} or more in "
+              f"{np.mean(np.array(tonal) >= CHROMA_LEAD) * 100 if tonal else 0.0:.1f} % of {len(tonal)} (a vote needs "
+              f"it), 5th percentile {np.percentile(tonal, 5) if tonal else math.nan:.2f}, median "
+              f"{np.median(tonal) if tonal else math.nan:.2f}")
         low = (r[:, 2] > 0) & (r[:, 0] >= CLEAR_SCORE) & (r[:, 0] < MIN_SCORE) & (r[:, 1] >= CLEAR_MARGIN)
         print(f"  under the score {MIN_SCORE:.2f} but from {CLEAR_SCORE:.2f}, {CLEAR_MARGIN:.2f} clear with onsets in "
               f"both halves: {int((low & ok).sum())} at the right delay, {int((low & ~ok).sum())} at a wrong one; at a "

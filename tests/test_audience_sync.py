@@ -162,6 +162,20 @@ def test_a_forged_reference_is_dropped_and_counted(tmp_path):
     assert np.isfinite(sync.store.span(0, 50)).all()
 
 
+def test_a_publisher_of_the_levels_only_version_is_refused_in_one_line_logged_once(tmp_path, caplog):
+    sync = _rehearsal_sync(tmp_path)
+    old = encode_batch(1, 1, 0.0, 0, np.full((50, 5), 100, dtype=np.uint8))[:32 + 250]
+    old = old[:2] + bytes([1]) + old[3:]   # version 1: the levels alone, as publishers before the chroma sent them
+    with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
+        for k in range(3):
+            sync.receive(old[:8] + bytes([k + 1]) + old[9:], 100.0 + k)
+    sync.audio.close()
+    assert sync.faults == {"version": 3} and not np.isfinite(sync.store.span(0, 50)).any()
+    said = [r.getMessage() for r in caplog.records if "version" in r.getMessage()]
+    assert len(said) == 1 and "\n" not in said[0]
+    assert "version 1" in said[0] and "version 2" in said[0] and "older hapmotion" in said[0]
+
+
 def test_list_audio_inputs_works_without_a_show_or_a_sound_card():
     result = CliRunner().invoke(command, ["--list-audio-inputs"])
     assert result.exit_code == 0, result.output

@@ -7,17 +7,22 @@ import math
 
 import numpy as np
 import soundfile as sf
-from scipy.signal import lfilter
+from scipy.signal import butter, hilbert, lfilter
 
 from hapmotion.audience.seat_sync import STEP_S, WINDOW_S
-from hapmotion.audience.sync_estimator import match
+from hapmotion.audience.sync_estimator import Chroma, match
 from hapmotion.audience.sync_limit import past_limit
 from hapmotion.audience.sync_tracker import DelayTracker
 from hapmotion.audio.sync_features import (
+    CHROMA_RATE,
+    N_CLASSES,
     RATE,
+    ChromaAnalyser,
     LevelStream,
     dequantise,
+    dequantise_chroma,
     quantise,
+    quantise_chroma,
     signal_levels,
 )
 
@@ -61,6 +66,78 @@ def riser_loop(loop_s: float, riser_db: float, seconds: float = 52.0, sr: int = 
     swell = np.where((m >= start) & (m < start + length), (m - start) / length, 0.0) ** 2
     out = out + swell * noise / noise.std() * np.sqrt(np.mean(out * out)) * 10 ** (riser_db / 20)
     return 0.8 * out / np.abs(out).max()
+
+
+def house(seed: int, seconds: float, bpm: float = 124.0, sr: int = SR, notes: bool = True) -> np.ndarray:
+    """A house track ``(n,)`` float64, peak 0.7, exactly on the grid: a kick on every beat, claps on 2 and 4, hats
+    on the off-beats (the same kit in every track, as house tracks share their drum machines), a bass line of 16
+    eighths repeating every two bars, a chord a bar over an 8-bar cycle and a melody, their notes drawn from
+    ``seed`` in a minor key (``notes=False``: the drums alone). A 1 s jump at 124 bpm lands 32 ms from two beats off,
+    which the drums alone cannot tell from the truth."""
+    rng = np.random.default_rng(seed)
+    beat = 60.0 / bpm
+    n = int(seconds * sr)
+    out = np.zeros(n + sr)
+
+    def env(m: int, attack: int, decay_s: float) -> np.ndarray:
+        e = np.exp(-np.arange(m) / sr / decay_s)
+        e[:attack] *= np.linspace(0.0, 1.0, attack)
+        return e
+
+    def add(at: float, sound: np.ndarray, gain: float) -> None:
+        i = int(at * sr)
+        if i < n:
+            m = min(sound.size, out.size - i)
+            out[i:i + m] += gain * sound[:m]
+
+    kit = np.random.default_rng(100)
+    kick = np.sin(2 * np.pi * np.cumsum(np.linspace(150, 45, int(0.25 * sr))) / sr) * env(int(0.25 * sr), 20, 0.1)
+    clap = lfilter(*butter(2, [900, 3000], "bandpass", fs=sr), kit.normal(size=int(0.15 * sr))) \
+        * env(int(0.15 * sr), 10, 0.04)
+    hat = lfilter(*butter(2, 7000, "highpass", fs=sr), kit.normal(size=int(0.05 * sr))) * env(int(0.05 * sr), 5, 0.015)
+    root = rng.uniform(36, 48)
+    scale = (0, 2, 3, 5, 7, 8, 10)
+
+    def freq(step: int, octave: int = 0) -> float:
+        return 440.0 * 2 ** ((root + scale[step % 7] + 12 * (step // 7 + octave) - 69) / 12)
+
+    n_beats = int(seconds / beat) + 1
+    for b in range(n_beats):
+        add(b * beat, kick, 0.6)
+        if b % 4 in (1, 3):
+            add(b * beat, clap, 0.5)
+        add(b * beat + beat / 2, hat, 0.15)
+    bass = rng.integers(0, 7, 16)
+    eighth = int(beat / 2 * sr)
+    if not notes:
+        return 0.7 * out[:n] / np.abs(out[:n]).max()
+    tt = np.arange(eighth) / sr
+    for k in range(n_beats * 2):
+        if k % 16 in (0, 3, 4, 6, 8, 11, 12, 14):
+            add(k * beat / 2, np.tanh(2 * np.sin(2 * np.pi * freq(int(bass[k % 16]), -1) * tt)) * env(eighth, 30, 0.15),
+                0.25)
+    chords = rng.integers(0, 7, 8)
+    for b in range(n_beats // 4 + 1):
+        for s8 in range(8):
+            if s8 % 2 == 0 or s8 == 3:
+                pad = sum(np.sin(2 * np.pi * freq(int(chords[b % 8]) + i, 1) * tt) for i in (0, 2, 4))
+                add(b * 4 * beat + s8 * beat / 2, pad * env(eighth, 50, 0.15), 0.05)
+    at = 0.0
+    while at < seconds:
+        length = beat * rng.choice([0.5, 1.0, 1.5])
+        m = int(length * sr)
+        if rng.random() < 0.7:
+            add(at, np.sin(2 * np.pi * freq(int(rng.integers(0, 10)), 1) * np.arange(m) / sr) * env(m, 100, 0.3), 0.1)
+        at += length
+    out = out[:n]
+    return 0.7 * out / np.abs(out).max()
+
+
+def shifted(x: np.ndarray, hz: float, sr: int = SR) -> np.ndarray:
+    """``x`` with every frequency moved up by ``hz`` (single-sideband modulation of its analytic signal): each onset
+    where it was, as loud, in about the same bands, but the partials no longer at the notes' pitches (a song with the
+    same rhythm and other notes)."""
+    return np.real(hilbert(x) * np.exp(2j * np.pi * hz * np.arange(x.size) / sr))
 
 
 def changing_room(x: np.ndarray, kind: str, snr_db: float, seed: int, sr: int = SR) -> np.ndarray:
@@ -145,23 +222,35 @@ def follow(heard: np.ndarray, source: np.ndarray, step_s: float = STEP_S, window
     from -0.25 s to ``max_delay_s`` (while searching, a window whose sure match past that limit scores higher is
     not acted on: :func:`~hapmotion.audience.sync_limit.past_limit`). Returns [(local time, Estimate or None, SyncState)]."""
     ref = dequantise(quantise(signal_levels(source, SR)))
+    ref_ch = dequantise_chroma(quantise_chroma(signal_levels(source, SR, analyser=ChromaAnalyser)))
     stream = LevelStream(SR)
     heard_levels = np.concatenate([stream.push(heard[k:k + 441]) for k in range(0, heard.size, 441)])
     heard_levels = dequantise(quantise(heard_levels))
+    # the seat's chroma is its own (never sent): not quantised; streamed in the same blocks (hop c ends its window
+    # 0.09 s after its centre: by level hop `end` the chroma hops whose window is complete)
+    ch_stream = LevelStream(SR, ChromaAnalyser)
+    pushed = [(k + 441, ch_stream.push(heard[k:k + 441])) for k in range(0, heard.size, 441)]
+    heard_ch = np.concatenate([rows for _, rows in pushed]) if pushed else np.zeros((0, N_CLASSES))
+    ch_done = np.cumsum([rows.shape[0] for _, rows in pushed])  # chroma hops complete after each 20 ms block
     tracker = DelayTracker()
     out = []
     w, step = int(window_s * RATE), int(step_s * RATE)
-    rows = reference_rows(ref)
-
+    level_rows, chroma_rows = reference_rows(ref), reference_rows(ref_ch)
     for end in range(int(1.5 * RATE), heard_levels.shape[0], step):
         n = min(end, w)
         t_heard = start_s + (end - n) / RATE
         first = int(math.floor((t_heard - max_delay_s) * RATE))
         heard_window = heard_levels[end - n:end]
         at = t_heard + (n - 1) / RATE
-        est = match(heard_window, t_heard, rows(first, n + int((max_delay_s + 0.25) * RATE)), first / RATE,
-                    held=tracker.offset_at(at))
-        if tracker.state.state == "searching" and past_limit(heard_window, t_heard, rows, max_delay_s,
+        c_end = int(ch_done[min(max(1, end * 441 // 882), ch_done.size) - 1]) if ch_done.size else 0  # 2 hops a block
+        c_start = max(0, min(c_end, int(math.floor((end - n) * CHROMA_RATE / RATE))))
+        c_first = int(math.floor((t_heard - max_delay_s) * CHROMA_RATE))
+        c_span = (c_end - c_start) + int((max_delay_s + 0.25) * CHROMA_RATE) + 2
+        ch = Chroma(heard_ch[c_start:c_end], start_s + c_start / CHROMA_RATE, chroma_rows(c_first, c_span),
+                    c_first / CHROMA_RATE)
+        est = match(heard_window, t_heard, level_rows(first, n + int((max_delay_s + 0.25) * RATE)), first / RATE,
+                    held=tracker.offset_at(at), chroma=ch)
+        if tracker.state.state == "searching" and past_limit(heard_window, t_heard, level_rows, max_delay_s,
                                                              est) is not None:
             est = None
         out.append((at, est, tracker.update(est, at)))

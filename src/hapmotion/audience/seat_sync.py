@@ -33,12 +33,13 @@ from nats.aio.msg import Msg
 from nats.aio.subscription import Subscription
 
 from ..audio.inputs import AudioInput, open_input
-from ..audio.sync_features import N_BANDS, RATE, LevelStream, dequantise
+from ..audio.sync_features import (CHROMA_RATE, N_BANDS, N_CLASSES, RATE, ChromaAnalyser, LevelStream, dequantise,
+                                   dequantise_chroma)
 from ..errors import HapMotionError, UsageError
 from .signing import BadSignature, SeatTrust, Unsigned
-from .sync_estimator import Estimate, match
+from .sync_estimator import Chroma, Estimate, match
 from .sync_limit import BEYOND_S, past_limit
-from .sync_reference import BATCH_S, decode_batch
+from .sync_reference import BATCH_S, VersionMismatch, decode_batch
 from .sync_tracker import AGREE_S, ASSUMED_CONFIDENCE, DelayTracker, SyncState
 from .wire import subject
 
@@ -104,31 +105,58 @@ class SyncSettings:
             raise UsageError(f"--sync-max-delay must be 1000..60000 ms, not {self.max_delay_s * 1000:g}")
 
 
+class _Ring:
+    """Rows by hop index, the last ``size`` of them (not thread-safe: :class:`ReferenceStore` locks)."""
+
+    def __init__(self, size: int, width: int):
+        self.size = size
+        self.rows = np.zeros((size, width), dtype=np.uint8)
+        self.hops = np.full(size, np.iinfo(np.int64).min, dtype=np.int64)
+
+    def put(self, first: int, rows: np.ndarray) -> None:
+        idx = np.arange(first, first + rows.shape[0])
+        self.rows[idx % self.size] = rows
+        self.hops[idx % self.size] = idx
+
+    def get(self, first: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+        idx = np.arange(first, first + n)
+        return self.rows[idx % self.size], self.hops[idx % self.size] == idx
+
+
 class ReferenceStore:
-    """The venue's reference levels by hop, the last ``seconds`` of hops (a ring; thread-safe)."""
+    """The venue's reference levels and chroma by hop, the last ``seconds`` of hops (rings; thread-safe)."""
 
     def __init__(self, seconds: float):
         self.size = int(seconds * RATE)
-        self.levels = np.zeros((self.size, N_BANDS), dtype=np.uint8)
-        self.hops = np.full(self.size, np.iinfo(np.int64).min, dtype=np.int64)
+        self._levels = _Ring(self.size, N_BANDS)
+        self._chroma = _Ring(int(seconds * CHROMA_RATE), N_CLASSES)
         self.lock = threading.Lock()
 
-    def put(self, first_hop: int, levels: np.ndarray) -> None:
-        idx = np.arange(first_hop, first_hop + levels.shape[0])
+    def put(self, first_hop: int, levels: np.ndarray, first_chroma: int = 0,
+            chroma: Optional[np.ndarray] = None) -> None:
         with self.lock:
-            self.levels[idx % self.size] = levels
-            self.hops[idx % self.size] = idx
+            self._levels.put(first_hop, levels)
+            if chroma is not None:
+                self._chroma.put(first_chroma, chroma)
 
     def clear(self) -> None:
         with self.lock:
-            self.hops[:] = np.iinfo(np.int64).min
+            self._levels.hops[:] = np.iinfo(np.int64).min
+            self._chroma.hops[:] = np.iinfo(np.int64).min
 
     def span(self, first_hop: int, n: int) -> np.ndarray:
         """``(n, B)`` levels in dB of hops ``first_hop ..``, NaN where none was received."""
-        idx = np.arange(first_hop, first_hop + n)
         with self.lock:
-            have = self.hops[idx % self.size] == idx
-            rows = dequantise(self.levels[idx % self.size])
+            q, have = self._levels.get(first_hop, n)
+        rows = dequantise(q)
+        rows[~have] = np.nan
+        return rows
+
+    def chroma_span(self, first: int, n: int) -> np.ndarray:
+        """``(n, 12)`` chroma in dB of chroma hops ``first ..``, NaN where none was received."""
+        with self.lock:
+            q, have = self._chroma.get(first, n)
+        rows = dequantise_chroma(q)
         rows[~have] = np.nan
         return rows
 
@@ -241,6 +269,9 @@ class SeatSync:
         except (Unsigned, BadSignature) as exc:
             self._fault("bad_signature", f"reference {exc}")
             return
+        except VersionMismatch as exc:
+            self._fault("version", f"{exc}; playing unsynced")
+            return
         except ValueError as exc:
             self._fault("malformed", f"reference batch: {exc}")
             return
@@ -260,7 +291,7 @@ class SeatSync:
             # the arrivals measured on the old timeline say nothing of the new one
             self._edges.clear()
         self._last = (batch.seq, batch.sent_t, arrival)
-        self.store.put(batch.first_hop, batch.levels)
+        self.store.put(batch.first_hop, batch.levels, batch.first_chroma, batch.chroma)
         lag = arrival - batch.sent_t
         while self._edges and self._edges[-1][1] >= lag:
             self._edges.pop()
@@ -315,9 +346,11 @@ class SeatSync:
             # the sample rate is known from then on
             block, arrival = self.audio.read()
             levels = LevelStream(self.audio.sample_rate)
+            chroma = LevelStream(self.audio.sample_rate, ChromaAnalyser)
             clock = HeardClock(self.audio.sample_rate)
             size = int(WINDOW_S * RATE)
             heard = np.zeros((size * 2, N_BANDS))
+            heard_chroma = np.zeros((int(WINDOW_S * CHROMA_RATE) * 2, N_CLASSES))
             filled = 0
             next_step = int(MIN_WINDOW_S * RATE)
             while not self._stop.is_set():
@@ -337,6 +370,11 @@ class SeatSync:
                                               f"arrivals slid {clock.unsteady * 1000:.0f} ms late); not matched "
                                               f"while it does")
                 rows = levels.push(block)
+                crows = chroma.push(block)
+                if crows.shape[0]:
+                    keep = min(crows.shape[0], heard_chroma.shape[0])
+                    heard_chroma = np.roll(heard_chroma, -keep, axis=0)
+                    heard_chroma[-keep:] = crows[-keep:]
                 if rows.shape[0]:
                     keep = min(rows.shape[0], heard.shape[0])
                     heard = np.roll(heard, -keep, axis=0)
@@ -346,7 +384,13 @@ class SeatSync:
                         next_step = filled + int(STEP_S * RATE)
                         n = min(filled, size)
                         first = levels.next_hop - n          # hop index (stream) of the window's first row
-                        self._step(heard[-n:], t_zero + first / RATE, clock.unsteady <= UNSTEADY_S)
+                        # the chroma hops heard over the same window (its last hops still wait for their window)
+                        nc = max(0, min(chroma.next_hop, chroma.next_hop - int(math.floor(first * CHROMA_RATE
+                                                                                            / RATE))))
+                        nc = min(nc, heard_chroma.shape[0])
+                        heard_ch = (heard_chroma[heard_chroma.shape[0] - nc:],
+                                    t_zero + (chroma.next_hop - nc) / CHROMA_RATE)
+                        self._step(heard[-n:], t_zero + first / RATE, clock.unsteady <= UNSTEADY_S, heard_ch)
                 self.cpu_s += time.thread_time() - cpu0
                 block, arrival = self.audio.read()
         except Exception as exc:  # a device that went away, a pipe that broke: the seat plays on unsynced
@@ -359,9 +403,11 @@ class SeatSync:
                             exc)
             self._snapshot = (None, 0.0, 0.0)
 
-    def _step(self, heard_db: np.ndarray, t_heard: float, steady: bool = True) -> None:
+    def _step(self, heard_db: np.ndarray, t_heard: float, steady: bool = True,
+              heard_chroma: Optional[tuple[np.ndarray, float]] = None) -> None:
         """Match the heard window ``(W, B)`` dB whose first hop was heard at local time ``t_heard`` (not when its
-        stamps are not ``steady``: the tracker then sees no estimate) and update the tracker."""
+        stamps are not ``steady``: the tracker then sees no estimate) and update the tracker; ``heard_chroma``: the
+        chroma ``(Wc, 12)`` dB heard over the window and the local time of its first hop."""
         at = t_heard + (heard_db.shape[0] - 1) / RATE
         est = found = None
         if self._edge is not None and steady:
@@ -369,7 +415,13 @@ class SeatSync:
             first = int(math.floor((t_heard - hi) * RATE))
             n = heard_db.shape[0] + int(math.ceil((hi - lo) * RATE))
             ref = self.store.span(first, n)
-            est = found = match(heard_db, t_heard, ref, first / RATE, held=self.tracker.offset_at(at))
+            ch = None
+            if heard_chroma is not None and heard_chroma[0].shape[0]:
+                ch_db, t_ch = heard_chroma
+                c_first = int(math.floor((t_ch - hi) * CHROMA_RATE))
+                c_n = ch_db.shape[0] + int(math.ceil((hi - lo) * CHROMA_RATE)) + 1
+                ch = Chroma(ch_db, t_ch, self.store.chroma_span(c_first, c_n), c_first / CHROMA_RATE)
+            est = found = match(heard_db, t_heard, ref, first / RATE, held=self.tracker.offset_at(at), chroma=ch)
             if self.tracker.state.state == "searching":
                 est = self._unless_past_limit(est, heard_db, t_heard, hi)
             media = (first + np.arange(n)) / RATE

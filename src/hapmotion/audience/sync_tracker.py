@@ -53,6 +53,13 @@ not, or by less than any real jump did.
   swells after a jump matches a riser in the next repeat better than the flat repeat heard): the seat reports it
   with :data:`ASSUMED_CONFIDENCE` at most (:attr:`DelayTracker.assumed`) until a window stands :data:`UNIQUE_MARGIN`
   clear at the offset held.
+* **the notes** (chroma, ``Estimate.chroma_lead`` and ``Estimate.recent``): no estimate votes for a lock or a jump
+  unless its offset's chroma score stands :data:`CHROMA_LEAD` above the median of the other candidates'
+  (:func:`chroma_tells`: a different song at the venue's tempo lines its onsets up, not its notes); and a locked seat
+  whose held offset the onsets cannot tell from the best (an alias of it a beat or a bar from the new offset after a
+  jump: a 1 s re-buffer at 124 bpm is two beats and 32 ms) votes for the candidate whose notes and levels heard over
+  the last 1.5 s lead the held offset's and every other candidate's (:func:`tonal_pick`), instead of confirming the
+  held one.
 * **lost**: no good estimate within the gate for :data:`LOST_AFTER_S`: the seat keeps the prediction (the stream
   most likely still plays where it did) and says so; after :data:`HOLD_S` more it is searching again and plays
   the user's fallback (the manual delay, or nothing).
@@ -146,7 +153,29 @@ riser (noise switching on and off, swelling every 2.5 s, bursts of applause, a c
 loops of 1.8-2.2 s, the riser 6-12 dB over the music, the low-quality codec) moved seats holding the truth one loop
 off for 2-17 s at confidence 0.45-0.76, with leads of 0.03-0.06 in the window they moved
 (tests/test_audio_sync.py holds such cases). One scene still passes (a riser 18 dB over the music heard under
-applause led by 0.21: docs/audience.md)."""
+applause led by 0.21: docs/audience.md). A move the notes decide (:func:`tonal_pick`) asks the same lead of the
+levels over the window's last 1.5 s; over the whole window, which still holds audio from before the jump, its lead
+can be lower (0.03 in the least of 22 runs of benchmarks/sync_margins.py since)."""
+CHROMA_LEAD = 0.20
+"""How far the chroma score of an estimate's best offset must stand above the median of its other candidates'
+(``Estimate.chroma_lead``, the whole window) for it to vote for a lock or a jump (:func:`chroma_tells`). A different
+song at the venue's tempo lines its onsets up with the reference, not its notes: over the attack scenes (synthetic
+songs and house tracks at one tempo, through the low-quality codec and room noise at 10 dB SNR) the windows good by
+the onset score reached 0.20 in 1.7 % (synthetic) and 0.7 % (house) of them, never four agreeing, while the right
+song did in 99-100 % of them (real songs, synthetic ones, house through laptop speakers: its 5th percentile 0.24)
+(study behind docs/audience.md). The absolute chroma score does not decide it: laptop speakers' distortion lowered
+the truth's to 0.44 (median), under a different house track's 0.59."""
+CHROMA_HELD_LEAD = 0.15
+"""How far a candidate's chroma score over the window's last 1.5 s must stand above the held offset's for a locked
+seat to move there although the onset score does not tell them apart (:func:`tonal_pick`): after a 1 s jump in house
+music the held offset lies within the gate of an alias two beats from the new offset, whose onsets score alike; 1-1.5
+s after the jump the true offset's chroma led the held one's by 0.30 (median), 1.5-2 s after by 0.12 at the least
+(house tracks through the codec, room noise, laptop speakers)."""
+CHROMA_RIVAL_LEAD = 0.10
+"""How far that candidate's chroma score must stand above every other candidate's (median lead of the truth over
+every wrong candidate 1-2 s after a jump: 0.18-0.19 on house tracks, 0.45 on synthetic songs). Every candidate the
+onsets found is a rival, also those beyond :data:`PRIOR_MAX_S`: in a loop that repeats exactly, the new offset and
+its alias a loop away hold the same notes, and a pick among them would be the prior's guess by another name."""
 SHARP_VOTES = 3
 SHARP_AGREE_S = 0.010
 SHARP_SPAN_S = 0.2
@@ -247,6 +276,37 @@ def heard_tells(est: Estimate) -> bool:
     return est.rival_lead is None or est.rival_lead >= HEARD_LEAD
 
 
+def chroma_tells(est: Estimate) -> bool:
+    """The chroma does not say that ``est``'s best offset lines up the onsets of another song: its lead over the other
+    candidates (``Estimate.chroma_lead``) reaches :data:`CHROMA_LEAD` (True where unknown)."""
+    return est.chroma_lead is None or est.chroma_lead >= CHROMA_LEAD
+
+
+def tonal_pick(est: Estimate, held: float) -> Optional[float]:
+    """The candidate of ``est`` a locked seat moves to although the onset score leaves it ambiguous with the offset
+    held (``Estimate.recent``, the window's last 1.5 s), or None: the one with the best chroma score, beyond the
+    gate from ``held``, leading the held offset's chroma by :data:`CHROMA_HELD_LEAD`, every other candidate's by
+    :data:`CHROMA_RIVAL_LEAD` (every candidate the onsets found, not only the ambiguous ones: two speakers 0.25 s
+    apart, equally loud, moved a seat to the second one's copy while the first's scored under the ambiguous ones), and
+    the held offset's band-energy score as heard by :data:`HELD_LEAD`, and lying within :data:`PRIOR_MAX_S` of the
+    held offset (a re-buffer or a player's re-sync, the prior's range: a loop's next repeat holding a noise riser,
+    heard through room noise that swells after a jump, put that repeat 0.10-0.14 ahead of the truth's chroma, 1.6 s
+    from the held offset, as it does the band levels; tests/test_audio_sync.py)."""
+    if len(est.recent) < 2:
+        return None
+    *cands, (_, env_held, ch_held) = est.recent
+    known = sorted(((c, e, o) for o, e, c in cands if c is not None), key=lambda k: k[0], reverse=True)
+    if not known or ch_held is None or env_held is None:
+        return None
+    ch, env, offset = known[0]
+    if not GATE_S < abs(offset - held) <= PRIOR_MAX_S or env is None or ch < ch_held + CHROMA_HELD_LEAD \
+            or env < env_held + HELD_LEAD:
+        return None
+    if len(known) > 1 and known[1][0] > ch - CHROMA_RIVAL_LEAD:
+        return None
+    return offset
+
+
 def favours(est: Estimate, offset: float) -> bool:
     """The band levels as the seat hears them favour candidate ``offset`` of ``est`` over the offset a locked seat
     holds by :data:`HELD_LEAD` (``Estimate.held_leads``): only then may the seat move there. True where that is
@@ -337,7 +397,7 @@ class DelayTracker:
         # only a peak that stands clear of every other offset votes: a bar that repeats the rhythm of the true one
         # scores close to it (or above it), and such a pair of candidates waits for audio that tells them apart
         # the band levels as the seat hears them must not favour a rival: else the onset score's lead rests on noise
-        told = good and heard_tells(est)
+        told = good and heard_tells(est) and chroma_tells(est)
         unique = told and est.margin >= UNIQUE_MARGIN
         if unique:
             self._votes.append((at, est.offset_s, est.score, est.margin if est.even else 0.0))
@@ -364,7 +424,9 @@ class DelayTracker:
                 return self._report("locked")
             return self._report("searching")
         x, p = self._predict(at)
-        if good and abs(est.offset_s - x[0]) <= GATE_S:
+        # the notes heard since a jump tell the new offset from an alias of the held one that the onsets cannot
+        tonal = tonal_pick(est, float(x[0])) if est is not None and est.near_whole else None
+        if good and tonal is None and abs(est.offset_s - x[0]) <= GATE_S:
             s = p[0, 0] + MEASUREMENT_S ** 2
             k = p[:, 0] / s
             self._x = x + k * (est.offset_s - x[0])
@@ -376,7 +438,7 @@ class DelayTracker:
             if unique:
                 self.assumed = False  # the music alone now tells the offset held from every other
             return self._report("locked")
-        if est is not None and est.near_score is not None and est.near_score >= MIN_SCORE \
+        if tonal is None and est is not None and est.near_score is not None and est.near_score >= MIN_SCORE \
                 and est.score - est.near_score < JUMP_LEAD:
             # the held offset scores as well as the best one (a repeated section): still the music played here, and
             # the vest in step with what is heard; the confidence follows the held offset's own score
@@ -393,13 +455,16 @@ class DelayTracker:
         # music that repeats its rhythm leaves the candidates no margin: the loudness of what was heard since the jump
         # tells them apart where it differs, else the prior weighs them on their distances
         prior = None
-        if est is not None and not unique and est.near_whole:
+        if tonal is not None:
+            unique = False
+            self._jump.append((at, tonal, 0.0, True))  # the music's own evidence: a clear vote
+        elif est is not None and not unique and est.near_whole:
             prior = envelope_pick(est, float(x[0]))
             if prior is None:
                 prior = prior_pick(est, float(x[0]))
             if prior is not None and not favours(est, prior):
                 prior = None
-        if unique or streak is not None or prior is not None:
+        if unique or streak is not None or prior is not None or tonal is not None:
             if unique:
                 self._jump.append((at, est.offset_s, est.margin if est.even else 0.0, True))
             elif prior is not None:
