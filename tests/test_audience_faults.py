@@ -273,6 +273,11 @@ def test_listen_command_usage_errors():
     # a seat does not publish a show of its own: refused before connecting (nothing listens on port 1)
     r = CliRunner().invoke(command, ["nats://127.0.0.1:1/show", "--sink", "nats://127.0.0.1:1/again", "--unsigned"])
     assert r.exit_code != 0 and "only 'hapmotion live' publishes one" in str(r.exception or r.output)
+    # a preset the seat cannot apply is said at once, as render says it (it waited for a show to blame it on)
+    t0 = time.perf_counter()
+    r = CliRunner().invoke(command, ["nats://127.0.0.1:1/show", "--sink", "player", "--unsigned", "--preset", "fellt"])
+    assert r.exit_code != 0 and time.perf_counter() - t0 < 2.0
+    assert "--preset: unknown preset 'fellt' (did you mean felt?)" in str(r.exception or r.output)
 
 
 def test_no_nats_server_is_a_one_line_error_not_a_hang(tmp_path, capsys):

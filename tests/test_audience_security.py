@@ -439,6 +439,23 @@ def test_credentials_from_files_and_the_environment_never_shown(tmp_path):
         NatsAuth.from_env({}, token_file=str(tmp_path / "empty"))
 
 
+def test_a_file_that_is_no_nkey_seed_is_named_before_anything_connects(tmp_path):
+    # a wrong file given as --nats-nkey failed inside the connection ("cannot reach the NATS server (ErrInvalidSeed
+    # ...)"); it is now one line naming the file, never its contents. A real seed (one line, a newline after it)
+    # passes
+    import nkeys
+
+    wrong = tmp_path / "venue.key"
+    wrong.write_text("-----BEGIN PRIVATE KEY-----\nMC4CAQAwBQYDK2VwBCIEIsecretsecret\n-----END PRIVATE KEY-----\n")
+    with pytest.raises(UsageError) as info:
+        NatsAuth.from_env({"HAPMOTION_NATS_NKEY": str(wrong)})
+    text = str(info.value)
+    assert text.startswith(f"NKey seed {wrong}: not an NKey seed") and "secret" not in text and "\n" not in text
+    seed = tmp_path / "seat.nk"
+    seed.write_bytes(nkeys.encode_seed(bytes(32), nkeys.PREFIX_BYTE_USER) + b"\n")
+    assert NatsAuth.from_env({}, nkey=str(seed)).nkey == str(seed)
+
+
 @pytest.mark.parametrize("server_args, good, bad", [
     (("--user", "venue", "--pass", "right-pw"), NatsAuth(user="venue", password="right-pw"),
      NatsAuth(user="venue", password="wrong-pw")),

@@ -28,6 +28,7 @@ from support.sync_signals import (
 )
 
 from hapmotion.audience.seat_sync import (
+    STEP_S,
     UNSTEADY_S,
     HeardClock,
     ReferenceStore,
@@ -744,7 +745,7 @@ def test_a_lost_reference_batch_inside_a_short_repeat_never_moves_a_locked_seat(
     # and the seat jumped there and back (0.8-2 s at 0.8 or 3.2 s, confidence 0.85-1.0) with nothing heard moving
     import math
 
-    from hapmotion.audience.seat_sync import STEP_S, WINDOW_S
+    from hapmotion.audience.seat_sync import WINDOW_S
     src = np.concatenate([song(5, 12.0)] + [song(6, loop_s)] * count + [song(7, 20.0)])
     src = 0.8 * src / np.abs(src).max()
     heard = played(src, np.arange(int(26 * SR)) / SR - 2.0)
@@ -892,8 +893,6 @@ def test_a_stream_further_behind_than_the_seat_accepts_never_locks_a_loop_early(
     # matched well enough to lock there (7.8 and 9.0 s, confidence 0.68 and 0.67) when the seat searched no further;
     # it now searches past its limit, finds the music there, stays unlocked and says to raise --sync-max-delay. A
     # stream 9.6 s behind still locks where it is
-    from hapmotion.audience.seat_sync import STEP_S
-
     src = real_song("vibe_ace.ogg")
     start = 28.0
     heard = sync_scenes.add_noise(sync_scenes.codec_copy(src[int(start * SR):int((start + 30.0) * SR)]), 10, 7)
@@ -1035,3 +1034,43 @@ def test_a_house_loop_relocks_within_3_s_after_a_1_s_jump(seed):
     relock = next(at for at, _, s in history if at > 34.0 and s.state == "locked" and abs(s.offset_s - 0.5) <= 0.04)
     assert relock - 34.0 <= 3.0
     assert _wrong([h for h in history if h[0] > relock], 0.5) == []
+
+
+def test_a_seat_that_joins_a_running_show_says_when_matching_starts(caplog):
+    # the venue's music from 20 s in (what a seat joining then receives), heard 1 s behind: the seat waits until it
+    # holds the music for every delay it searches (5 + 3 s), says so once with the wait, then locks at 1 s
+    src = song(8, 40.0)
+    sync = SeatSync(SyncSettings(input="none", max_delay_s=5.0),
+                    audio=StampedBlocks(src[20 * SR:], 1000.0 + 20.0 + 1.0, 1.0))
+    sync.store = ReferenceStore(40.0)
+    sync.store.put(2000, quantise(signal_levels(src, SR))[2000:])
+    sync._edge = 1000.0
+    with caplog.at_level(logging.INFO, logger="hapmotion.live"):
+        sync._listen()
+    said = [m for m in caplog.messages if "joined a running show" in m]
+    assert len(said) == 1 and "--sync-max-delay + 3 s" in said[0], said
+    wait = int(said[0].split("in about ")[1].split(" s")[0])
+    assert 4 <= wait <= 8
+    locked = [at - 1000.0 for at, _, s in sync.estimates if s.state == "locked"]
+    assert locked and 27.0 <= locked[0] <= 32.0 and sync.state.offset_s - 1000.0 == pytest.approx(1.0, abs=0.02)
+
+
+def test_music_after_a_silence_gets_its_own_time_before_a_hint(tmp_path, caplog):
+    # 12 s of silence says "silent" once; music that then matches nothing is given its own 10 s before the seat says
+    # it holds nothing to match (it said so at once, as if the silence had been that)
+    sync = SeatSync(SyncSettings(input="none"), audio=StampedBlocks(np.zeros(SR), 0.0, 1.0))
+    sync._edge = 100.0
+    sync.store.put(0, np.full((2000, 5), 100, dtype=np.uint8))
+    t = np.arange(int(3.0 * SR)) / SR
+    silence = LevelStream(SR).push(np.zeros(t.size))
+    tone = LevelStream(SR).push(0.3 * np.sin(2 * np.pi * 440 * t))
+    with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
+        for k in range(120):
+            sync._step(silence, 110.0 + k * STEP_S)
+        assert set(sync.faults) == {"silent_input"}
+        for k in range(95):
+            sync._step(tone, 122.0 + k * STEP_S)
+        assert "no_onsets" not in sync.faults
+        for k in range(10):
+            sync._step(tone, 131.5 + k * STEP_S)
+    assert "no_onsets" in sync.faults

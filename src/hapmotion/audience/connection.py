@@ -26,6 +26,7 @@ from typing import Any, Callable, Mapping, Optional
 from urllib.parse import urlsplit
 
 import nats
+import nkeys
 from nats.aio.client import Client as NatsClient
 from nats.errors import AuthorizationError
 from nats.js.api import StorageType
@@ -75,6 +76,22 @@ def _readable(path: Optional[str], what: str) -> Optional[str]:
     return path
 
 
+def _nkey_seed(path: Optional[str]) -> Optional[str]:
+    """``path`` when it holds an NKey seed as nats-py reads it (the file's bytes), else UsageError naming the file
+    (the seed itself is never said): a wrong file would otherwise fail inside the connection and read as an absent
+    server."""
+    if _readable(path, "NKey seed") is None:
+        return None
+    try:
+        nkeys.from_seed(bytearray(Path(path).read_bytes().strip())).wipe()   # as nats-py reads it
+    except OSError as exc:
+        raise UsageError(f"NKey seed {path}: cannot read it ({exc.strerror})") from None
+    except Exception:  # nkeys' ErrInvalidSeed and the decoding errors under it
+        raise UsageError(f"NKey seed {path}: not an NKey seed (a file of one line starting SU..., as hapmotion "
+                         f"venue-setup writes)") from None
+    return path
+
+
 @dataclass(frozen=True, repr=False)
 class NatsAuth:
     """How to authenticate to the server and whether to use TLS. Paths name files; ``password`` and ``token`` are
@@ -104,7 +121,7 @@ class NatsAuth:
                    password=_secret_file(password_file, "--nats-password-file") or env.get(ENV["password"]) or None,
                    token=_secret_file(token_file, "--nats-token-file") or env.get(ENV["token"]) or None,
                    creds=_readable(files.get("creds") or env.get(ENV["creds"]) or None, "NATS credentials"),
-                   nkey=_readable(files.get("nkey") or env.get(ENV["nkey"]) or None, "NKey seed"),
+                   nkey=_nkey_seed(files.get("nkey") or env.get(ENV["nkey"]) or None),
                    ca=_readable(files.get("ca"), "--nats-ca"), cert=_readable(files.get("cert"), "--nats-cert"),
                    key=_readable(files.get("key"), "--nats-key"), tls_name=files.get("tls_name"))
         if (auth.cert is None) != (auth.key is None):

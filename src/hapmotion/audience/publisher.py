@@ -244,7 +244,8 @@ class NatsPublisherSink(Sink):
 
     def _denied_text(self) -> str:
         return (f"the NATS server refused these credentials' messages ({self._denied}): they may not publish the "
-                f"show ({self.security.auth.describe()}: the seat's key instead of the venue's venue.nk?)")
+                f"show {self.name} ({self.security.auth.describe()}: the seat's key instead of the venue's "
+                f"venue.nk, or a show the server's permissions do not name: hapmotion venue-setup --show)")
 
     def _on_state(self, state: str) -> None:
         if PERMISSIONS_VIOLATION in state.lower():

@@ -216,7 +216,7 @@ class SeatSync:
         self._sub: Optional[Subscription] = None
         self.trust: Optional[SeatTrust] = None
         self._said: set[str] = set()
-        self._unmatched = 0     # windows in a row matched against the reference that gave no estimate
+        self._unmatched = (0, "")  # windows in a row matched that gave no estimate, and their kind (_hint)
         self._beyond = (0, 0.0)  # windows in a row with a sure match past --sync-max-delay; its last offset
         self.cpu_s = 0.0        # the worker thread's CPU, seconds
         self.loop_cpu_s = 0.0   # the event loop's CPU in :meth:`receive` (checking and storing the reference)
@@ -430,6 +430,12 @@ class SeatSync:
                 # part of the range was never received (the seat joined a running show): a repeat of the music
                 # (the bar before) could win over the true delay, which may lie in the part not received yet
                 est = None
+                if "joined" not in self._said:
+                    self._said.add("joined")
+                    missing = np.count_nonzero(~np.isfinite(ref[media >= 0.0]).all(axis=1)) / RATE
+                    log.info("seat sync: joined a running show: matching starts once the venue's music has come for "
+                             "every delay searched, in about %.0f s (--sync-max-delay + 3 s after joining; a lower "
+                             "--sync-max-delay starts sooner)", missing)
         self._hint(found, heard_db, self._edge is not None and steady)  # music heard, wherever it matched
         before = self.tracker.state.state
         state = self.tracker.update(est, at)
@@ -461,10 +467,14 @@ class SeatSync:
         """Say once when :data:`HINT_S` of windows matched against the venue's music gave no estimate at all: the
         input is silent, or holds nothing with onsets (steady noise, a tone; a raw stream read in the wrong format
         sounds like that), which a seat searching for ever would not say otherwise."""
-        self._unmatched = 0 if (est is not None or not asked) else self._unmatched + 1
-        if self._unmatched * STEP_S < HINT_S:
+        kind = "silent_input" if float(heard_db.max()) <= SILENT_DB else "no_onsets"
+        if est is not None or not asked:
+            self._unmatched = (0, kind)
+        else:   # counted per kind: music starting after a silence gets its own HINT_S before a hint
+            self._unmatched = (self._unmatched[0] + 1 if self._unmatched[1] == kind else 1, kind)
+        if self._unmatched[0] * STEP_S < HINT_S:
             return
-        if float(heard_db.max()) <= SILENT_DB:
+        if kind == "silent_input":
             self._fault("silent_input", f"{self.audio.describe()} has been silent for {HINT_S:g} s: is the stream "
                                         f"playing there, its volume up?")
         else:

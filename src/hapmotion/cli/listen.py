@@ -9,7 +9,8 @@ import click
 
 from ..show.comfort import Comfort
 from .audience_options import seat_security_options, seat_sync_options
-from .show_options import (comfort_options, cues_option, layout_option, method_option, mirror_option, mode_option,
+from .show_options import (check_preset, comfort_options, cues_option, layout_option, method_option, mirror_option,
+                           mode_option,
                            param_option, parse_param_overrides, preset_option, read_cues, rig_line, rig_of,
                            rig_option, split_values)
 
@@ -71,6 +72,7 @@ def command(show_url: str, sinks: tuple[str, ...], delay_ms: float, mirror: Opti
 
     setup_logging("listen", quiet)
     parse_show_url(show_url)  # a usage error before anything connects
+    check_preset(preset)      # (the seat applies it only when the show's description comes)
     layout = layout_file
     if rig is not None:  # the seat's own wearables; the energy split unless the seat asks for the paper preset
         from ..layout import load_layout

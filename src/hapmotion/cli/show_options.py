@@ -38,6 +38,15 @@ def preset_option(default: Optional[str] = DEFAULT_PRESET, help_suffix: str = ""
                         help=PRESET_HELP + help_suffix)
 
 
+def check_preset(preset: Optional[str]) -> None:
+    """``--preset`` checked as a show checks it (UsageError naming the option and the closest preset; None passes)."""
+    if preset is not None:
+        try:
+            Show(preset=preset)
+        except UsageError as exc:
+            raise UsageError(f"--preset: {exc}") from None
+
+
 mirror_option = click.option(
     "--mirror/--no-mirror", default=None,
     help="Mirror the performer left/right, as when facing them: the performer's right hand is felt on the "
@@ -163,12 +172,8 @@ def _build_show(given: dict[str, Any], comfort: Comfort, limits: Optional[Sequen
     overrides = fields.get("overrides", {})
     if "mirror" in overrides and fields.get("mirror") is not None and overrides["mirror"] != fields["mirror"]:
         raise UsageError("--param mirror=... and --mirror/--no-mirror disagree: give one of them")
-    try:
-        show = Show(**fields)
-    except UsageError as exc:
-        if str(exc).startswith("unknown preset"):
-            raise UsageError(f"--preset: {exc}") from None
-        raise
+    check_preset(fields.get("preset"))
+    show = Show(**fields)
     return with_rig(show, given.get("rig"), given.get("credentials", (None, None)))
 
 
