@@ -3,6 +3,7 @@ in real time from the seat's first read, as ``file:`` plays it; and what a seat 
 
 from __future__ import annotations
 
+import contextlib
 import io
 import os
 import threading
@@ -22,10 +23,11 @@ def wav_bytes(x: np.ndarray, sr: int = SR) -> bytes:
     return buf.getvalue()
 
 
-def read_all(inp: PipeInput, limit_s: float = 30.0) -> tuple[list[int], list[float], float]:
-    """Every block's size and stamp, and the perf_counter() just before the first read."""
+def read_all(inp: PipeInput, audio_s: float = 30.0) -> tuple[list[int], list[float], float]:
+    """Each block's size and stamp to the end or to ``audio_s`` of audio, and the perf_counter() just before the
+    first read."""
     t0, sizes, stamps = time.perf_counter(), [], []
-    while time.perf_counter() - t0 < limit_s:
+    while sum(sizes) < audio_s * inp.sample_rate and time.perf_counter() - t0 < audio_s + 30.0:
         block, t = inp.read()
         if block is None:
             break
@@ -46,13 +48,13 @@ def test_a_wav_file_named_as_a_stream_plays_from_the_first_read_like_file(tmp_pa
     # wav:PATH on a regular file read as a pipe was stamped as it arrived: its first second, read at once, put the
     # whole file a second early (a seat locked 1 s short of the delay file: found)
     path = tmp_path / "heard.wav"
-    path.write_bytes(wav_bytes(0.3 * song(3, 1.5)))
+    path.write_bytes(wav_bytes(0.3 * song(3, 1.0)))
     inp = PipeInput(f"wav:{path}", "wav", str(path))
     sizes, stamps, t0 = read_all(inp)
     inp.close()
-    assert sum(sizes) == int(1.5 * SR)
+    assert sum(sizes) == SR
     assert_played_from_first_read(inp, sizes, stamps, t0)
-    assert time.perf_counter() - t0 >= 1.45          # read in real time, not at once
+    assert time.perf_counter() - t0 >= 0.98          # read in real time, not at once
 
 
 @pytest.mark.parametrize("seconds", [FAST_S + 3.0, 3.0])
@@ -65,16 +67,16 @@ def test_a_file_copied_into_a_pipe_plays_from_the_first_read(tmp_path, seconds):
     data = wav_bytes(0.3 * song(4, seconds))
 
     def cat() -> None:
-        with open(fifo, "wb") as f:
+        with contextlib.suppress(BrokenPipeError), open(fifo, "wb") as f:   # (the reader stops after 1 s)
             f.write(data)
 
     writer = threading.Thread(target=cat)
     writer.start()
     inp = PipeInput(f"wav:{fifo}", "wav", str(fifo))
-    sizes, stamps, t0 = read_all(inp)
+    sizes, stamps, t0 = read_all(inp, 1.0)   # the first second tells (read in real time: a second of the suite's)
     inp.close()
     writer.join(5)
-    assert sum(sizes) == int(seconds * SR)
+    assert sum(sizes) >= SR
     assert_played_from_first_read(inp, sizes, stamps, t0)
 
 
