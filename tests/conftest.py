@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import signal
 
 import hypothesis  # noqa: F401  (imported before any test; see below)
 import numpy as np
@@ -15,6 +16,14 @@ from support.data import AUDIO, MOTION
 # Python 3.11.7 can refuse to compile a module ("SystemError: AST constructor recursion depth mismatch", a CPython
 # bug seen in threaded programs, python/cpython#106905, fixed in 3.11.8), and the plugin's late import then failed
 # a run whose tests had all passed.
+
+# A suite started in the background by a shell without job control (`make test &` in a script) inherits SIGINT and
+# SIGQUIT ignored, and so would every command the tests start and then stop with those signals (Python installs its
+# Ctrl-C handler only where SIGINT is not ignored): the tests' commands get the dispositions a terminal gives them.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+if signal.getsignal(signal.SIGQUIT) is signal.SIG_IGN:
+    signal.signal(signal.SIGQUIT, signal.SIG_DFL)
 
 
 @pytest.fixture(scope="session")

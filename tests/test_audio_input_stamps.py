@@ -14,6 +14,7 @@ import pytest
 import soundfile as sf
 from support.sync_signals import SR, song
 
+from hapmotion.audience.seat_sync import HeardClock
 from hapmotion.audio.inputs import FAST_S, PipeInput
 
 
@@ -116,3 +117,64 @@ def test_a_live_writer_with_a_queue_is_stamped_as_it_arrives(tmp_path):
     lag = np.array(stamps) - (t0 + np.cumsum(sizes) / SR)
     assert lag.min() < -0.25
 
+
+
+def test_a_file_whose_writer_pauses_at_its_start_is_still_a_file(tmp_path):
+    # a decoder or a network stream starting: 0.05 s of audio, a 0.15 s pause, then the rest at once (the first read
+    # used to end at the first pause of 0.1 s and take the file for a live writer: a second early)
+    fifo = tmp_path / "paused.fifo"
+    os.mkfifo(fifo)
+    data = wav_bytes(0.3 * song(7, FAST_S + 4.0))
+    head = 44 + int(0.05 * SR) * 2
+
+    def decoder() -> None:
+        with contextlib.suppress(BrokenPipeError), open(fifo, "wb", buffering=0) as f:
+            f.write(data[:head])
+            time.sleep(0.15)
+            f.write(data[head:])
+
+    writer = threading.Thread(target=decoder)
+    writer.start()
+    inp = PipeInput(f"wav:{fifo}", "wav", str(fifo))
+    sizes, stamps, t0 = read_all(inp, 1.0)
+    inp.close()
+    writer.join(5)
+    assert_played_from_first_read(inp, sizes, stamps, t0)
+
+
+def test_a_live_writer_s_long_queue_is_heard_when_it_was_recorded(tmp_path):
+    # a capture program that had recorded 2 s before the seat's first read (8 kHz mono: a 64 KiB pipe holds 4 s)
+    # hands them over at once, then writes in real time: the seat's clock (the earliest arrival) puts its first
+    # sample 2 s before the writer started, as it was heard. Holding such a queue back to real time after 1 s (as a
+    # runaway writer is held) put everything it sent a second late, for good
+    fifo = tmp_path / "queued.fifo"
+    os.mkfifo(fifo)
+    sr, queued_s = 8000, 2.0
+    pcm = (0.3 * song(9, 4.0, sr) * 32767).astype("<i2").tobytes()
+    block = int(0.02 * sr) * 2
+    started = []
+
+    def capture() -> None:
+        with contextlib.suppress(BrokenPipeError), open(fifo, "wb", buffering=0) as f:
+            queued = int(queued_s * sr) * 2
+            started.append(time.perf_counter())
+            f.write(pcm[:queued])
+            for k, at in enumerate(range(queued, len(pcm), block)):
+                time.sleep(max(0.0, started[0] + (k + 1) * 0.02 - time.perf_counter()))
+                f.write(pcm[at:at + block])
+
+    writer = threading.Thread(target=capture)
+    writer.start()
+    inp = PipeInput(f"raw:{fifo}?rate={sr}&channels=1", "raw", f"{fifo}?rate={sr}&channels=1")
+    clock = HeardClock(sr)
+    try:
+        while True:
+            block_x, t = inp.read()
+            if block_x is None:
+                break
+            zero = clock.push(block_x.size, t)
+    finally:
+        inp.close()
+        writer.join(5)
+    assert inp.paced is False
+    assert zero == pytest.approx(started[0] - queued_s, abs=0.03)

@@ -62,6 +62,9 @@ at most a few more a second): a flood of batches cannot grow it."""
 BEYOND_HINT_S = 2.0
 """A searching seat says the stream is further behind than it accepts once sure matches past that limit
 (:func:`~hapmotion.audience.sync_limit.past_limit`) have held one delay this long (one window's can be noise's)."""
+BEYOND_SAY_LEAD = 0.03
+"""...and led the best match within the limit by this much (median of the run): a stream further behind led by
+0.05-0.08 (median, a house track, the closest case measured) to 0.45; a loop repeated exactly ties (0.00)."""
 SEQ_SLACK_S = 2.0
 """A batch's seq may run ahead of the last accepted one by the batches of the time since it arrived plus this much,
 twice over (the publisher sends two a second, a few at once when it starts or restarts after a seek), and its
@@ -216,8 +219,8 @@ class SeatSync:
         self._sub: Optional[Subscription] = None
         self.trust: Optional[SeatTrust] = None
         self._said: set[str] = set()
-        self._unmatched = (0, "")  # windows in a row matched that gave no estimate, and their kind (_hint)
-        self._beyond = (0, 0.0)  # windows in a row with a sure match past --sync-max-delay; its last offset
+        self._unmatched: dict[str, int] = {}  # windows of each kind matched with no estimate since one (_hint)
+        self._beyond: tuple[float, list] = (0.0, [])  # a run of sure matches past the limit: offset, leads
         self.cpu_s = 0.0        # the worker thread's CPU, seconds
         self.loop_cpu_s = 0.0   # the event loop's CPU in :meth:`receive` (checking and storing the reference)
 
@@ -430,12 +433,7 @@ class SeatSync:
                 # part of the range was never received (the seat joined a running show): a repeat of the music
                 # (the bar before) could win over the true delay, which may lie in the part not received yet
                 est = None
-                if "joined" not in self._said:
-                    self._said.add("joined")
-                    missing = np.count_nonzero(~np.isfinite(ref[media >= 0.0]).all(axis=1)) / RATE
-                    log.info("seat sync: joined a running show: matching starts once the venue's music has come for "
-                             "every delay searched, in about %.0f s (--sync-max-delay + 3 s after joining; a lower "
-                             "--sync-max-delay starts sooner)", missing)
+                self._say_waiting(~np.isfinite(ref[media >= 0.0]).all(axis=1))
         self._hint(found, heard_db, self._edge is not None and steady)  # music heard, wherever it matched
         before = self.tracker.state.state
         state = self.tracker.update(est, at)
@@ -450,18 +448,38 @@ class SeatSync:
     def _unless_past_limit(self, est: Optional[Estimate], heard_db: np.ndarray, t_heard: float,
                            limit: float) -> Optional[Estimate]:
         """``est`` (the best match within the seat's limit, local time ``limit``), or None when a sure match past
-        the limit scores above it; said once such matches have held one delay for :data:`BEYOND_HINT_S`."""
+        the limit scores above it; said once such matches have held one delay for :data:`BEYOND_HINT_S` leading the
+        best within the limit by :data:`BEYOND_SAY_LEAD` (median): music repeated exactly a loop later scores as
+        well there as at its true delay inside the limit, which is no reason to raise it."""
         far = past_limit(heard_db, t_heard, self.store.span, limit, est)
         if far is None:
-            self._beyond = (0, 0.0)
+            self._beyond = (0.0, [])
             return est
-        same = self._beyond[0] > 0 and abs(far.offset_s - self._beyond[1]) <= AGREE_S
-        self._beyond = (self._beyond[0] + 1 if same else 1, far.offset_s)
-        if self._beyond[0] * STEP_S >= BEYOND_HINT_S:
+        lead = far.score - (est.score if est is not None else 0.0)
+        if not (self._beyond[1] and abs(far.offset_s - self._beyond[0]) <= AGREE_S):
+            self._beyond = (far.offset_s, [])
+        self._beyond = (far.offset_s, self._beyond[1] + [lead])
+        if len(self._beyond[1]) * STEP_S >= BEYOND_HINT_S and float(np.median(self._beyond[1])) >= BEYOND_SAY_LEAD:
             self._fault("beyond", f"the music heard matches the venue's about {far.offset_s - self._edge:.0f} s "
                                   f"behind it, past --sync-max-delay ({self.settings.max_delay_s * 1000:g} ms): raise "
                                   f"it to follow this stream")
         return None
+
+    def _say_waiting(self, missing: np.ndarray) -> None:
+        """Say once why a searching seat that hears music does not match yet: the reference rows ``(n,)`` of the
+        delays searched that never came (True), all at their start (the seat joined a running show) or inside (a
+        lost batch); the wait is until the last of them has left the delays searched."""
+        kind = "joined" if missing[0] else "gap"
+        if {"joined", "gap"} & self._said or not missing.any():
+            return   # (once: a gap sliding out of the delays searched reaches their start, as a late join's rows)
+        self._said.add(kind)
+        wait = int(np.flatnonzero(missing)[-1] + 1) / RATE + 1.0   # (and a vote's worth after)
+        why = ("joined a running show: matching starts once the venue's music has come for every delay searched" if
+               kind == "joined" else "part of the venue's reference was lost (a batch that never came): matching "
+                                     "starts once it has passed the delays searched")
+        log.info("seat sync: %s, in about %.0f s%s", why, wait,
+                 " (--sync-max-delay + 3 s after joining; a lower --sync-max-delay starts sooner)"
+                 if kind == "joined" else "")
 
     def _hint(self, est, heard_db: np.ndarray, asked: bool) -> None:
         """Say once when :data:`HINT_S` of windows matched against the venue's music gave no estimate at all: the
@@ -469,10 +487,10 @@ class SeatSync:
         sounds like that), which a seat searching for ever would not say otherwise."""
         kind = "silent_input" if float(heard_db.max()) <= SILENT_DB else "no_onsets"
         if est is not None or not asked:
-            self._unmatched = (0, kind)
+            self._unmatched.clear()
         else:   # counted per kind: music starting after a silence gets its own HINT_S before a hint
-            self._unmatched = (self._unmatched[0] + 1 if self._unmatched[1] == kind else 1, kind)
-        if self._unmatched[0] * STEP_S < HINT_S:
+            self._unmatched[kind] = self._unmatched.get(kind, 0) + 1
+        if self._unmatched.get(kind, 0) * STEP_S < HINT_S:
             return
         if kind == "silent_input":
             self._fault("silent_input", f"{self.audio.describe()} has been silent for {HINT_S:g} s: is the stream "

@@ -16,16 +16,17 @@ or a file or pipe, all as blocks of mono samples stamped with the local time the
 
 Every input has a rate of ``MIN_SAMPLE_RATE..MAX_SAMPLE_RATE`` (:mod:`hapmotion.audio.io`) and 1..32 channels.
 Samples that are not finite (a float stream's inf or NaN) become 0 and float samples are clipped to -1..1, so the
-levels stay finite. A pipe is read no faster than real time: a writer that runs ahead (``raw:/dev/zero``) is held
-back to the sample clock once it is :data:`AHEAD_S` ahead, at the cost of no CPU. Both are counted in
-:attr:`AudioInput.faults` and logged once per kind.
+levels stay finite. A pipe is read no faster than real time: a live writer that runs further ahead than it could
+have queued (its pipe's capacity plus :data:`FAST_S`) is held back to the sample clock, at the cost of no CPU. Both
+are counted in :attr:`AudioInput.faults` and logged once per kind.
 
 When was a sample heard? A live writer's (a capture program's) as it arrives, minus what it had queued: the seat
 takes the earliest arrival relative to the sample clock (``seat_sync.HeardClock``), as no captured sample arrives
 before it was heard. A file has no such moment; ``file:PATH`` plays it in real time from the seat's first read, and
 so do ``wav:``/``raw:`` on a regular file and on a pipe whose writer hands over far more than a live writer could
-have queued (:data:`FAST_S` past the pipe's capacity, at once: ``cat song.wav |``). Stamped as they arrived, such a
-file's first second (read at once, up to :data:`AHEAD_S` ahead) would put the whole file a second early.
+have queued (:data:`FAST_S` past the pipe's capacity, within :data:`FAST_LOOK_S`: ``cat song.wav |``). Stamped as
+they arrived, such a file's first seconds (read at once) would put the whole file that much early; held back as a
+runaway writer is, a live writer's queue would put all it sends that much late.
 
 Devices are read with SoundCard (PyPI ``soundcard``), which captures the output's loopback on Windows (WASAPI) and
 Linux (PulseAudio and PipeWire's pulse server) with no driver to install, where PortAudio (``sounddevice``) has no
@@ -69,17 +70,16 @@ PIPE_WAIT_S = 0.1
 """How long a seat starting on a pipe waits for its first bytes before it goes on and waits for them while it runs:
 a writer already running (``cat song.wav |``, started with the seat) has sent them by the time the seat has started;
 one that starts with the show must not hold the seat up (it would join its show late)."""
-AHEAD_S = 1.0
-"""How far a pipe may run ahead of real time before it is held back, seconds: room for what a writer buffered
-before the seat started reading (a 64 KiB pipe holds 0.34 s of 48 kHz stereo s16) and for its bursts."""
 FAST_S = 5.0
 """A pipe whose writer hands over more than its capacity plus this much audio at once is a file being copied in, not
 a live capture: a capture program queues what the seat has not yet read, a second or two while the seat starts, not
 five (the pipe itself holds 0.34 s of 48 kHz stereo s16 on Linux, 1.5 s of 22 kHz mono)."""
-FAST_LOOK_S = 0.5
-"""How long a pipe's first read keeps taking what its writer hands over at once (it stops sooner at a pause of
-:data:`FAST_GAP_S`): a file is copied in far faster, a live writer adds this much at most."""
-FAST_GAP_S = 0.1
+FAST_LOOK_S = 1.0
+"""How long a pipe's first read keeps taking what its writer hands over (pauses included: a decoder starting, a
+network stream's first bytes): a file is copied in far faster, a live writer adds this much at most."""
+LOOK_MAX_BYTES = 32 << 20
+"""The most a pipe's first read takes (what it holds until it plays): 5 s of 192 kHz 8-channel float is 31 MB; a
+format larger still is judged on this many bytes."""
 SPECS = "loopback, mic, device:NAME, file:PATH, wav:PATH|-, raw:PATH|-?rate=R&channels=C&format=s16|f32"
 
 
@@ -192,8 +192,9 @@ def _pipe_descriptor(where: str) -> Optional[int]:
 
 
 class PipeInput(AudioInput):
-    """Raw PCM or a WAV stream from a pipe or standard input, each block stamped on arrival; held back to real time
-    once it runs :data:`AHEAD_S` ahead (module docstring).
+    """Raw PCM or a WAV stream from a pipe or standard input: a file's audio played in real time from the first read,
+    a live writer's stamped on arrival and held back once it runs further ahead than it could have queued (module
+    docstring).
 
     A pipe (standard input, a named pipe) whose writer has not started yet (it may start with the show) is waited for
     :data:`PIPE_WAIT_S` here and then by the first :meth:`read` (the seat's listening thread): a seat blocked on it
@@ -217,6 +218,8 @@ class PipeInput(AudioInput):
         copied into the pipe); False for a live writer's, stamped as it arrives; None before the first read."""
         self._ahead = bytearray()
         """What the first read took from a pipe at once (:meth:`_first_look`), handed over before the stream's own."""
+        self._hold_s = FAST_S
+        """How far ahead of the sample clock a live writer is read before it is held back, seconds."""
         self._stream: Optional[BinaryIO] = None
         self._pending: Optional[int] = None
         """The descriptor of a pipe whose writer has not sent anything yet (opened, not yet read)."""
@@ -293,25 +296,25 @@ class PipeInput(AudioInput):
         """Decide :attr:`paced` (module docstring): a regular file is; a pipe is when its writer hands over more
         than the pipe's capacity plus :data:`FAST_S` of audio within :data:`FAST_LOOK_S`, or its whole stream,
         longer than the pipe holds (kept in :attr:`_ahead`). Where select cannot wait on the stream (Windows), a
-        pipe is a live writer's."""
-        self.paced = False
+        pipe is a live writer's. Sets :attr:`_hold_s`, how far a live writer may run ahead."""
         try:
-            fd = self._stream.fileno()
-            if stat.S_ISREG(os.fstat(fd).st_mode):
-                self.paced = True
-                return
-        except (AttributeError, OSError, ValueError):
-            return
-        if os.name == "nt":
-            return
+            fd: Optional[int] = self._stream.fileno()
+            regular = stat.S_ISREG(os.fstat(fd).st_mode)
+        except (AttributeError, OSError, ValueError):  # a stream without a descriptor (an embedding program's)
+            fd, regular = None, False
         per_s = self.sample_rate * self._frame_bytes
-        capacity = _pipe_capacity(fd)
-        limit = int(capacity + FAST_S * per_s)
+        capacity = _pipe_capacity(fd) if fd is not None else 1 << 16
+        limit = int(min(capacity + FAST_S * per_s, LOOK_MAX_BYTES))
+        self._hold_s = limit / per_s
+        self.paced = regular
+        if regular or fd is None or os.name == "nt":
+            return
         allowed = limit if self._left is None else min(limit, self._left)
         deadline = time.perf_counter() + FAST_LOOK_S
         ended = False
-        while len(self._ahead) < allowed and time.perf_counter() < deadline:
-            if not select.select([fd], [], [], FAST_GAP_S)[0]:
+        while len(self._ahead) < allowed and not self._closed:
+            wait = deadline - time.perf_counter()
+            if wait <= 0 or not select.select([fd], [], [], wait)[0]:
                 break
             chunk = self._stream.read(min(1 << 16, allowed - len(self._ahead)))
             if not chunk:
@@ -350,7 +353,7 @@ class PipeInput(AudioInput):
         # A writer faster than real time (raw:/dev/zero) would be read, analysed and matched as fast as a core
         # allows, and its stamps would say the music runs fast: hold the block until the sample clock is due
         # (the writer then blocks on a full pipe, costing nothing).
-        due = self._started + self._frames / self.sample_rate - AHEAD_S
+        due = self._started + self._frames / self.sample_rate - self._hold_s
         if due > now:
             # a file piped in (a rehearsal) does so by design: said, not warned about
             self._fault("too_fast", 1, "the input delivers audio faster than real time (a file piped in?); reading "
