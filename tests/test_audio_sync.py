@@ -1055,15 +1055,19 @@ def test_a_seat_that_joins_a_running_show_says_when_matching_starts(caplog):
     assert locked and 27.0 <= locked[0] <= 32.0 and sync.state.offset_s - 1000.0 == pytest.approx(1.0, abs=0.02)
 
 
-def test_music_after_a_silence_gets_its_own_time_before_a_hint(tmp_path, caplog):
-    # 12 s of silence says "silent" once; music that then matches nothing is given its own 10 s before the seat says
-    # it holds nothing to match (it said so at once, as if the silence had been that)
+def _unmatched_seat() -> tuple:
+    """A seat holding a reference that nothing heard matches, and 3 s windows of silence and of a tone (dB levels)."""
     sync = SeatSync(SyncSettings(input="none"), audio=StampedBlocks(np.zeros(SR), 0.0, 1.0))
     sync._edge = 100.0
     sync.store.put(0, np.full((2000, 5), 100, dtype=np.uint8))
     t = np.arange(int(3.0 * SR)) / SR
-    silence = LevelStream(SR).push(np.zeros(t.size))
-    tone = LevelStream(SR).push(0.3 * np.sin(2 * np.pi * 440 * t))
+    return sync, LevelStream(SR).push(np.zeros(t.size)), LevelStream(SR).push(0.3 * np.sin(2 * np.pi * 440 * t))
+
+
+def test_music_after_a_silence_gets_its_own_time_before_a_hint(tmp_path, caplog):
+    # 12 s of silence says "silent" once; music that then matches nothing is given its own 10 s before the seat says
+    # it holds nothing to match (it said so at once, as if the silence had been that)
+    sync, silence, tone = _unmatched_seat()
     with caplog.at_level(logging.WARNING, logger="hapmotion.live"):
         for k in range(120):
             sync._step(silence, 110.0 + k * STEP_S)
@@ -1116,12 +1120,7 @@ def test_an_exact_loop_repeated_past_the_limit_is_no_reason_to_say_raise_it(capl
 def test_input_alternating_silence_and_music_that_matches_nothing_is_said(caplog):
     # 4 s of silence and 6 s of a tone, again and again: neither alone lasts 10 s, together they add up, and the seat
     # says what the tone is (it used to start its count again at every change, and said nothing)
-    sync = SeatSync(SyncSettings(input="none"), audio=StampedBlocks(np.zeros(SR), 0.0, 1.0))
-    sync._edge = 100.0
-    sync.store.put(0, np.full((2000, 5), 100, dtype=np.uint8))
-    t = np.arange(int(3.0 * SR)) / SR
-    silence = LevelStream(SR).push(np.zeros(t.size))
-    tone = LevelStream(SR).push(0.3 * np.sin(2 * np.pi * 440 * t))
+    sync, silence, tone = _unmatched_seat()
     at = 110.0
     for _ in range(3):
         for levels, seconds in ((silence, 4.0), (tone, 6.0)):
