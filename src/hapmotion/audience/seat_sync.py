@@ -220,7 +220,7 @@ class SeatSync:
         self.trust: Optional[SeatTrust] = None
         self._said: set[str] = set()
         self._unmatched: dict[str, int] = {}  # windows of each kind matched with no estimate since one (_hint)
-        self._beyond: tuple[float, list] = (0.0, [])  # a run of sure matches past the limit: offset, leads
+        self._beyond: tuple[float, deque] = (0.0, deque())  # a run of sure matches past the limit: offset, leads
         self.cpu_s = 0.0        # the worker thread's CPU, seconds
         self.loop_cpu_s = 0.0   # the event loop's CPU in :meth:`receive` (checking and storing the reference)
 
@@ -427,13 +427,13 @@ class SeatSync:
             est = found = match(heard_db, t_heard, ref, first / RATE, held=self.tracker.offset_at(at), chroma=ch)
             if self.tracker.state.state == "searching":
                 est = self._unless_past_limit(est, heard_db, t_heard, hi)
-            media = (first + np.arange(n)) / RATE
-            if est is not None and self.tracker.state.state == "searching" \
-                    and not np.isfinite(ref[media >= 0.0]).all():
-                # part of the range was never received (the seat joined a running show): a repeat of the music
-                # (the bar before) could win over the true delay, which may lie in the part not received yet
-                est = None
-                self._say_waiting(~np.isfinite(ref[media >= 0.0]).all(axis=1))
+            if est is not None and self.tracker.state.state == "searching":
+                missing = ~np.isfinite(ref[(first + np.arange(n)) / RATE >= 0.0]).all(axis=1)
+                if missing.any():
+                    # part of the range was never received (the seat joined a running show): a repeat of the music
+                    # (the bar before) could win over the true delay, which may lie in the part not received yet
+                    est = None
+                    self._say_waiting(missing)
         self._hint(found, heard_db, self._edge is not None and steady)  # music heard, wherever it matched
         before = self.tracker.state.state
         state = self.tracker.update(est, at)
@@ -452,14 +452,15 @@ class SeatSync:
         best within the limit by :data:`BEYOND_SAY_LEAD` (median): music repeated exactly a loop later scores as
         well there as at its true delay inside the limit, which is no reason to raise it."""
         far = past_limit(heard_db, t_heard, self.store.span, limit, est)
+        leads = self._beyond[1]
+        if far is None or not (leads and abs(far.offset_s - self._beyond[0]) <= AGREE_S):
+            leads = deque(maxlen=int(round(BEYOND_HINT_S / STEP_S)))   # a new run (the last BEYOND_HINT_S of it)
         if far is None:
-            self._beyond = (0.0, [])
+            self._beyond = (0.0, leads)
             return est
-        lead = far.score - (est.score if est is not None else 0.0)
-        if not (self._beyond[1] and abs(far.offset_s - self._beyond[0]) <= AGREE_S):
-            self._beyond = (far.offset_s, [])
-        self._beyond = (far.offset_s, self._beyond[1] + [lead])
-        if len(self._beyond[1]) * STEP_S >= BEYOND_HINT_S and float(np.median(self._beyond[1])) >= BEYOND_SAY_LEAD:
+        leads.append(far.score - (est.score if est is not None else 0.0))
+        self._beyond = (far.offset_s, leads)
+        if len(leads) == leads.maxlen and float(np.median(leads)) >= BEYOND_SAY_LEAD:
             self._fault("beyond", f"the music heard matches the venue's about {far.offset_s - self._edge:.0f} s "
                                   f"behind it, past --sync-max-delay ({self.settings.max_delay_s * 1000:g} ms): raise "
                                   f"it to follow this stream")
