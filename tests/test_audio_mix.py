@@ -116,6 +116,20 @@ def test_mix_works_per_frame_and_on_whole_tracks():
         mix(m, a[:, :40])
 
 
+def test_a_live_row_mixes_bit_for_bit_as_the_same_row_of_a_whole_track():
+    # one row (live) takes the locus from all motors at once, a whole track motor by motor: the same numbers
+    layout = hapmotion.load_layout()
+    pos, n = layout.positions(), layout.n_actuators
+    rng = np.random.default_rng(7)
+    m = rng.uniform(-20, 130, (40, n)) * (rng.random((40, n)) < 0.3)   # mostly still motors, some out of range
+    a = rng.uniform(-20, 130, (40, n))
+    m[3, 5], m[4, 6], a[5, 7], a[6, 8] = np.nan, np.inf, -np.inf, np.nan
+    for rule in ("duck", "paper", "energy"):
+        whole = mix(m, a, rule=rule, positions=pos, power_limit=30.0)
+        rows = np.stack([mix(m[t], a[t], rule=rule, positions=pos, power_limit=30.0) for t in range(40)])
+        assert np.array_equal(whole, rows) and np.isfinite(whole).all()
+
+
 def test_power_limit_scales_a_frame_uniformly():
     rows = np.array([[100.0] * 52, [10.0] * 52])
     out = limit_power(rows, 26.0)
