@@ -1,7 +1,7 @@
 """What the venue's security costs the audience publisher: the audience benchmark plain and secure, interleaved.
 
-    python -m benchmarks.bench_audience_secure                # 4 pairs of each show, N = 300, 10 s each: 6 minutes
-    python -m benchmarks.bench_audience_secure --shows music  # the show with its music only: 3 minutes
+    python -m benchmarks.bench_audience_secure                # 4 pairs of each show, N = 300, 10 s each: 8 minutes
+    python -m benchmarks.bench_audience_secure --shows music  # the show with its music only: 4 minutes
     python -m benchmarks.bench_audience_secure --loop both    # also on asyncio's loop: twice as long
 
 Each pair is two runs of :func:`benchmarks.bench_audience.run` back to back, the same show, the same code, N light

@@ -180,7 +180,7 @@ def mix(motion_rows: np.ndarray, audio_rows: np.ndarray, ratio: "tuple[float, fl
 
 def _clean(rows: np.ndarray) -> np.ndarray:
     """A float64 copy of ``rows`` with non-finite values 0, clipped to 0..100 (``np.nan_to_num`` then ``np.clip``,
-    in a fifth of their time on a live row)."""
+    in under half their time on a live row)."""
     x = np.array(rows, dtype=np.float64)
     x[~np.isfinite(x)] = 0.0
     return np.clip(x, 0.0, 100.0, out=x)
