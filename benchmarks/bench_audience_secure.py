@@ -1,8 +1,10 @@
 """What the venue's security costs the audience publisher: the audience benchmark plain and secure, interleaved.
 
-    python -m benchmarks.bench_audience_secure                # 4 pairs of each show, N = 300, 10 s each: 8 minutes
-    python -m benchmarks.bench_audience_secure --shows music  # the show with its music only: 4 minutes
-    python -m benchmarks.bench_audience_secure --loop both    # also on asyncio's loop: twice as long
+    python -m benchmarks.bench_audience_secure                  # 4 pairs of each show, N = 300, 10 s each: 8 minutes
+    python -m benchmarks.bench_audience_secure --shows music    # the show with its music only: 4 minutes
+    python -m benchmarks.bench_audience_secure --loop both      # also on asyncio's loop: twice as long
+    python -m benchmarks.bench_audience_secure --frames packed  # two frames a message: half the signatures
+    python -m benchmarks.bench_audience_secure --pin            # the publisher alone on CPU 0, the rest on CPU 1
 
 Each pair is two runs of :func:`benchmarks.bench_audience.run` back to back, the same show, the same code, N light
 subscribers and 4 full seats, once as a rehearsal (unsigned, plain TCP, no authentication) and once as a venue
@@ -33,8 +35,10 @@ medians, +5.6 % the median of the pairs (+0.8 to +24.9 %) [target <= +10 %: met,
 show with music: +5.1, +6.4 and +4.5 % (before the live mix was made faster, a publisher of 690-820 us a frame);
 motion only +20.6 and +10.1 %. Frame age p99 secure 8.4 ms at the light subscribers and 25.3 ms at the full seats'
 Players (worst run 26.0) [target < 50 ms: met]; server 9.0 against 11.7 us a seat-frame; 624 against 692 bytes a
-frame with music. The extra, one signature and one TLS record a frame paid with caches gone cold between frames,
-stays at 30-100 us whatever the publisher does; where it goes: ``benchmarks.bench_audience_publish``.
+frame with music. The extra was 31-52 us a frame with music and 48-103 us motion only over these runs; ``--frames
+packed`` (half the signatures and TLS records: +42 and +87 us) and ``--pin`` (+177 and +63 us) did not bring it
+down, so it is not only the signature and the record (docs/audience.md); the publish path alone:
+``benchmarks.bench_audience_publish``.
 """
 
 from __future__ import annotations
@@ -44,6 +48,8 @@ import contextlib
 import os
 import statistics
 import tempfile
+import threading
+import time
 from pathlib import Path
 
 from benchmarks.bench_audience import LOOPS, P99_TARGET_MS, run, secure_venue, summary
@@ -51,13 +57,18 @@ from benchmarks.bench_audience import LOOPS, P99_TARGET_MS, run, secure_venue, s
 PUBLISHER_TARGET = 0.10
 """The secure deployment may cost the publisher at most 10 % more CPU than the rehearsal (same show, same code)."""
 FPS = 60.0
+PACK = 2
+"""Rendered frames a message with ``--frames packed`` (``?frames=compact&pack=2``: one signature and one TLS record
+per two frames, the seats playing each frame one frame period later)."""
 SETUPS = ("plain", "secure")
 
 
-def one_run(setup: str, n: int, k: int, seconds: float, loop: str = "default", music: bool = True) -> dict:
+def one_run(setup: str, n: int, k: int, seconds: float, loop: str = "default", music: bool = True,
+            frames: str = "full") -> dict:
     """One measurement of ``setup`` on a server started for it, the publisher on event loop ``loop``
-    (:data:`~benchmarks.bench_audience.LOOPS`) playing the show with its ``music`` or motion only: the publisher's
-    CPU and writes, ages, server cost, bytes."""
+    (:data:`~benchmarks.bench_audience.LOOPS`) playing the show with its ``music`` or motion only, as ``frames``
+    (``full``: one frame a message at 60 Hz; ``packed``: :data:`PACK` rendered frames a message): the publisher's
+    CPU per rendered frame, ages, server cost, bytes."""
     from hapmotion.audience.server import LocalNatsServer
 
     with contextlib.ExitStack() as stack:
@@ -69,16 +80,47 @@ def one_run(setup: str, n: int, k: int, seconds: float, loop: str = "default", m
         else:
             server = stack.enter_context(LocalNatsServer())
         load = os.getloadavg()[0]
-        r = run(n, k, seconds, [server], FPS, 1, venue, "full", music=music, loop=loop)
-    s = summary(r, n, FPS)
+        per_message = 1 if frames == "full" else PACK
+        r = run(n, k, seconds, [server], FPS / per_message, 1, venue, frames, music=music, loop=loop)
+    s = summary(r, n, FPS / per_message)
     p, light, seats = r["publisher"], r["subscribers"][0], r["seats"]
-    return {"setup": setup, "load": load, "cpu": p["cpu_per_s"], "us_per_frame": p["cpu_per_frame"] * 1e6,
+    return {"setup": setup, "load": load, "cpu": p["cpu_per_s"],
+            "us_per_frame": p["cpu_per_frame"] * 1e6 / per_message,
             "loop": p["loop"],
             "published": p["published"], "rendered": p["rendered"], "skipped": p["skipped"], "errors": p["errors"],
             "light_p50": light["age_p50_ms"], "light_p99": light["age_p99_ms"], "loss": light["loss"],
             "seat_p50": seats["age_p50_ms"], "seat_p99": seats["age_p99_ms"], "stale": seats["stale"],
             "server_us": s["per_frame_us"], "bytes": s["bytes"], "tls": light["tls_connections"],
             "connections": light["connections"]}
+
+
+def pin_roles() -> None:
+    """Keep the publisher's process on CPU 0 and every other process of the benchmark (this harness, the server,
+    the seats, the subscribers) on CPU 1, every thread of each, for as long as this process runs (``--pin``): the
+    venue's publisher as if on a machine of its own. Looks for them in /proc every 0.2 s (Linux)."""
+    me = os.getpid()
+
+    def scan() -> None:
+        while True:
+            for entry in os.listdir("/proc"):
+                if not entry.isdigit():
+                    continue
+                try:
+                    cmd = Path(f"/proc/{entry}/cmdline").read_bytes().replace(b"\0", b" ")
+                    if b"--role publisher" in cmd:
+                        cpus = {0}
+                    elif b"benchmarks.bench_audience " in cmd + b" " or b"nats-server" in cmd or int(entry) == me:
+                        cpus = {1}
+                    else:
+                        continue
+                    for thread in os.listdir(f"/proc/{entry}/task"):
+                        if os.sched_getaffinity(int(thread)) != cpus:
+                            os.sched_setaffinity(int(thread), cpus)
+                except OSError:  # gone meanwhile
+                    continue
+            time.sleep(0.2)
+
+    threading.Thread(target=scan, daemon=True, name="pin-roles").start()
 
 
 def spread(values: list[float], scale: float = 1.0, fmt: str = ".2f") -> str:
@@ -100,29 +142,41 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=10.0, help="measured seconds per run")
     ap.add_argument("--loop", choices=(*LOOPS, "both"), default="default",
                     help="the publisher's event loop: as `hapmotion live` runs it (default: uvloop where installed), "
-                         "asyncio's, or both in turn (four runs a pair)")
+                         "asyncio's, or both in turn (twice the runs a pair)")
     ap.add_argument("--shows", choices=(*SHOWS, "both"), default="both",
                     help="the show with its music, motion only, or both in turn (default)")
+    ap.add_argument("--pin", action="store_true",
+                    help="the publisher alone on CPU 0, everything else on CPU 1 (an experiment: a venue's publisher "
+                         "on a machine of its own)")
+    ap.add_argument("--frames", choices=("full", "packed"), default="full",
+                    help=f"today's full frames, one a message (default), or compact frames packed {PACK} a message")
     a = ap.parse_args()
     loops = LOOPS if a.loop == "both" else (a.loop,)
     shows = tuple(SHOWS) if a.shows == "both" else (a.shows,)
+    if a.pin:
+        if (os.cpu_count() or 1) < 2 or not hasattr(os, "sched_setaffinity"):
+            ap.error("--pin needs two CPUs and Linux's sched_setaffinity")
+        pin_roles()
+    how = ("full frames, one a message" if a.frames == "full" else
+           f"compact frames packed {PACK} a message at {FPS / PACK:g} Hz (CPU per rendered frame, server per message)")
     print(f"publisher CPU, rehearsal (plain) against venue (TLS, NKeys, permissions, signed): {a.pairs} pairs "
-          f"interleaved, {a.seconds:g} s each, N = {a.light} + {a.k} full seats, {FPS:g} Hz full frames, shows: "
+          f"interleaved, {a.seconds:g} s each, N = {a.light} + {a.k} full seats, {FPS:g} fps as {how}; shows: "
           f"{'; '.join(SHOWS[s] for s in shows)}; publisher loop {' and '.join(loops)}; {os.cpu_count()} cores "
-          f"shared with other work, load average {os.getloadavg()[0]:.1f} at the start", flush=True)
+          f"shared with other work{' (publisher pinned to CPU 0, the rest to CPU 1)' if a.pin else ''}, load average "
+          f"{os.getloadavg()[0]:.1f} at the start", flush=True)
     kinds = [(show, lp) for show in shows for lp in loops]
     runs: dict[tuple[str, str, str], list[dict]] = {(show, lp, s): [] for show, lp in kinds for s in SETUPS}
     for i in range(a.pairs):
         order = [(show, lp, s) for show, lp in kinds for s in SETUPS]
         for show, loop, setup in (order if i % 2 == 0 else order[::-1]):
-            r = one_run(setup, a.light, a.k, a.seconds, loop, show == "music")
+            r = one_run(setup, a.light, a.k, a.seconds, loop, show == "music", a.frames)
             runs[show, loop, setup].append(r)
             print(f"  pair {i + 1} {show:6s} {setup:6s} on {r['loop']} (load {r['load']:.1f}): publisher "
                   f"{r['cpu'] * 100:.2f} % of a core ({r['us_per_frame']:.0f} us a frame; "
-                  f"{r['published']} of {r['rendered']} frames published, {r['skipped']} skipped, {r['errors']} "
-                  f"errors); frame age p50/p99 light {r['light_p50']:.1f} / {r['light_p99']:.1f} ms (loss "
-                  f"{r['loss'] * 100:.2f} %), seats {r['seat_p50']:.1f} / {r['seat_p99']:.1f} ms ({r['stale']} "
-                  f"stale); server {r['server_us']:.1f} us a seat-frame; {r['bytes']} bytes a frame; {r['tls']} of "
+                  f"{r['rendered']} frames rendered, {r['published']} messages published, {r['skipped']} skipped, "
+                  f"{r['errors']} errors); frame age p50/p99 light {r['light_p50']:.1f} / {r['light_p99']:.1f} ms "
+                  f"(loss {r['loss'] * 100:.2f} %), seats {r['seat_p50']:.1f} / {r['seat_p99']:.1f} ms ({r['stale']} "
+                  f"stale); server {r['server_us']:.1f} us a seat-message; {r['bytes']} bytes a message; {r['tls']} of "
                   f"{r['connections']} subscriber connections TLS", flush=True)
     print(f"\nsummary, median (lowest-highest) of {a.pairs} runs each; load average {os.getloadavg()[0]:.1f} at the "
           "end")
@@ -135,7 +189,8 @@ def main() -> None:
                   f"{spread([r['seat_p99'] for r in rs], 1, '.1f')} ms [target < {P99_TARGET_MS:g} ms]; p50 light "
                   f"{spread([r['light_p50'] for r in rs], 1, '.1f')} ms, seats "
                   f"{spread([r['seat_p50'] for r in rs], 1, '.1f')} ms; server "
-                  f"{spread([r['server_us'] for r in rs], 1, '.1f')} us a seat-frame; {rs[0]['bytes']} bytes a frame")
+                  f"{spread([r['server_us'] for r in rs], 1, '.1f')} us a seat-message; {rs[0]['bytes']} bytes a "
+                  "message")
     for show, loop in kinds:
         plain, secure = ([r["us_per_frame"] for r in runs[show, loop, s]] for s in SETUPS)
         extra = statistics.median(secure) / statistics.median(plain) - 1

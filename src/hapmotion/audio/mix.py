@@ -128,7 +128,7 @@ def duck_mix(motion: np.ndarray, audio: np.ndarray, audio_share: float, kernel: 
     power = np.sum((motion / 100.0) ** 2, axis=-1, keepdims=True)
     bed = bed * (1.0 - p.duck_motion_depth * np.minimum(power / p.duck_reference_power, 1.0))
     running = np.minimum(motion / floor, 1.0) if floor > 0 else (motion > 0).astype(np.float64)
-    if motion.ndim == 1:  # one live row: the (N, N) products at once (a call per motor cost 50 times more)
+    if motion.ndim == 1:  # one live row: its (N, N) products at once (a NumPy call per motor took most of a mix)
         locus = np.max(running * kernel, axis=-1, initial=0.0)
     else:
         locus = np.zeros_like(motion)
