@@ -37,8 +37,8 @@ motion only +20.6 and +10.1 %. Frame age p99 secure 8.4 ms at the light subscrib
 Players (worst run 26.0) [target < 50 ms: met]; server 9.0 against 11.7 us a seat-frame; 624 against 692 bytes a
 frame with music. The extra was 31-52 us a frame with music and 48-103 us motion only over these runs; ``--frames
 packed`` (half the signatures and TLS records: +42 and +87 us) and ``--pin`` (+177 and +63 us) did not bring it
-down, so it is not only the signature and the record (docs/audience.md); the publish path alone:
-``benchmarks.bench_audience_publish``.
+down in their runs (one pair spreads by tens of us); function by function: ``benchmarks.profile_publisher``; the
+publish path alone: ``benchmarks.bench_audience_publish``.
 """
 
 from __future__ import annotations
