@@ -4,7 +4,7 @@
     python -m benchmarks.bench_audience_secure --shows music    # the show with its music only: 4 minutes
     python -m benchmarks.bench_audience_secure --loop both      # also on asyncio's loop: twice as long
     python -m benchmarks.bench_audience_secure --frames packed  # two frames a message: half the signatures
-    python -m benchmarks.bench_audience_secure --pin            # the publisher alone on CPU 0, the rest on CPU 1
+    python -m benchmarks.bench_audience_secure --pin            # the publisher alone on one CPU, the rest on others
 
 Each pair is two runs of :func:`benchmarks.bench_audience.run` back to back, the same show, the same code, N light
 subscribers and 4 full seats, once as a rehearsal (unsigned, plain TCP, no authentication) and once as a venue
@@ -19,13 +19,14 @@ live`` gives a ``nats://`` sink (uvloop where it is installed: ``hapmotion.live.
 puts it on asyncio's own loop (what it ran on before), ``--loop both`` takes the two in turn within each pair.
 
 Publisher CPU is the publisher process's CPU time (user + system, every thread: ``time.process_time``) over the
-measured window, as a share of one core and per frame published in the window (the figure compared: a loaded
-machine makes the engine skip frames, which lowers the share of a core without making a frame any cheaper).
+measured window, as a share of one core and per rendered frame published in the window (``--frames packed``: its
+messages' CPU shared among the frames each holds; the figure compared: a loaded machine makes the engine skip
+frames, which lowers the share of a core without making a frame any cheaper).
 Reported per show: each set-up's median over the pairs with its spread (lowest to highest), the secure one's extra
 per frame over the plain median in microseconds and in per cent, and the median of the pairs' own ratios (each
 secure run against the plain run beside it, which cancels the machine's slower drifts), beside the target: at most
 10 % more publisher CPU. Also the frame age p50 / p99 (light subscribers and full seats; target p99 < 50 ms), the
-server's CPU per seat-frame and the bytes per frame. The load average is printed before every run: on a shared
+server's CPU per seat-message and the bytes per message. The load average is printed before every run: on a shared
 machine the figures are only as steady as that.
 
 Measured with ``--pairs 6`` on a shared 2-core machine (load average 0.3 to 1.4), the publisher on uvloop: with
@@ -94,33 +95,46 @@ def one_run(setup: str, n: int, k: int, seconds: float, loop: str = "default", m
             "connections": light["connections"]}
 
 
-def pin_roles() -> None:
-    """Keep the publisher's process on CPU 0 and every other process of the benchmark (this harness, the server,
-    the seats, the subscribers) on CPU 1, every thread of each, for as long as this process runs (``--pin``): the
-    venue's publisher as if on a machine of its own. Looks for them in /proc every 0.2 s (Linux)."""
+def pin_roles() -> tuple[int, set[int]]:
+    """Keep the publisher's process on the first CPU this process may use and every other process this harness
+    started (the server, the seats, the subscribers, and the harness itself) on the others, every thread of each,
+    for as long as the harness runs (``--pin``: the venue's publisher as if on a machine of its own). Looks for them
+    in /proc every 0.2 s (Linux). Returns (the publisher's CPU, the others')."""
+    allowed = sorted(os.sched_getaffinity(0))
+    mine, theirs = allowed[0], set(allowed[1:])
     me = os.getpid()
+
+    def parent(pid: int) -> int:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+        return int(stat[stat.rindex(")") + 2:].split()[1])  # the fields after the command's name: state, ppid
+
+    def ours(pid: int) -> bool:
+        while pid > 1:
+            if pid == me:
+                return True
+            pid = parent(pid)
+        return False
 
     def scan() -> None:
         while True:
             for entry in os.listdir("/proc"):
                 if not entry.isdigit():
                     continue
+                pid = int(entry)
                 try:
-                    cmd = Path(f"/proc/{entry}/cmdline").read_bytes().replace(b"\0", b" ")
-                    if b"--role publisher" in cmd:
-                        cpus = {0}
-                    elif b"benchmarks.bench_audience " in cmd + b" " or b"nats-server" in cmd or int(entry) == me:
-                        cpus = {1}
-                    else:
+                    if not ours(pid):
                         continue
-                    for thread in os.listdir(f"/proc/{entry}/task"):
+                    publisher = b"--role publisher" in Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ")
+                    cpus = {mine} if publisher else theirs
+                    for thread in os.listdir(f"/proc/{pid}/task"):
                         if os.sched_getaffinity(int(thread)) != cpus:
                             os.sched_setaffinity(int(thread), cpus)
-                except OSError:  # gone meanwhile
+                except (FileNotFoundError, ProcessLookupError, ValueError):  # gone meanwhile
                     continue
             time.sleep(0.2)
 
     threading.Thread(target=scan, daemon=True, name="pin-roles").start()
+    return mine, theirs
 
 
 def spread(values: list[float], scale: float = 1.0, fmt: str = ".2f") -> str:
@@ -146,23 +160,25 @@ def main() -> None:
     ap.add_argument("--shows", choices=(*SHOWS, "both"), default="both",
                     help="the show with its music, motion only, or both in turn (default)")
     ap.add_argument("--pin", action="store_true",
-                    help="the publisher alone on CPU 0, everything else on CPU 1 (an experiment: a venue's publisher "
-                         "on a machine of its own)")
+                    help="the publisher alone on one CPU, everything else on the others (a venue's publisher on a "
+                         "machine of its own)")
     ap.add_argument("--frames", choices=("full", "packed"), default="full",
                     help=f"today's full frames, one a message (default), or compact frames packed {PACK} a message")
     a = ap.parse_args()
     loops = LOOPS if a.loop == "both" else (a.loop,)
     shows = tuple(SHOWS) if a.shows == "both" else (a.shows,)
+    pinned = ""
     if a.pin:
-        if (os.cpu_count() or 1) < 2 or not hasattr(os, "sched_setaffinity"):
-            ap.error("--pin needs two CPUs and Linux's sched_setaffinity")
-        pin_roles()
+        if not hasattr(os, "sched_setaffinity") or len(os.sched_getaffinity(0)) < 2:
+            ap.error("--pin needs two CPUs this process may use and Linux's sched_setaffinity")
+        mine, theirs = pin_roles()
+        pinned = f" (publisher pinned to CPU {mine}, the rest to CPU {','.join(map(str, sorted(theirs)))})"
     how = ("full frames, one a message" if a.frames == "full" else
            f"compact frames packed {PACK} a message at {FPS / PACK:g} Hz (CPU per rendered frame, server per message)")
     print(f"publisher CPU, rehearsal (plain) against venue (TLS, NKeys, permissions, signed): {a.pairs} pairs "
           f"interleaved, {a.seconds:g} s each, N = {a.light} + {a.k} full seats, {FPS:g} fps as {how}; shows: "
           f"{'; '.join(SHOWS[s] for s in shows)}; publisher loop {' and '.join(loops)}; {os.cpu_count()} cores "
-          f"shared with other work{' (publisher pinned to CPU 0, the rest to CPU 1)' if a.pin else ''}, load average "
+          f"shared with other work{pinned}, load average "
           f"{os.getloadavg()[0]:.1f} at the start", flush=True)
     kinds = [(show, lp) for show in shows for lp in loops]
     runs: dict[tuple[str, str, str], list[dict]] = {(show, lp, s): [] for show, lp in kinds for s in SETUPS}

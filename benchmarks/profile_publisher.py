@@ -9,14 +9,16 @@ subscribers: as a rehearsal (unsigned, plain TCP) and as a venue deploys it (``h
 configuration: TLS, NKeys, permissions; every frame signed), taken in turn. After 3 s, 15 s of it run under cProfile.
 
 Printed per run, in microseconds a frame: every function profiled, split into the code the security does not touch
-(the engine, the renderer, the stage and its mix: everything under ``hapmotion`` outside ``hapmotion.audience``; the
-numba kernel among it), the audience sink, nats-py, asyncio's Python (the stream writer), the signature with its
-PyNaCl wrapper, the TLS writes and the rest.
+(everything in the ``hapmotion`` package outside ``hapmotion.audience``: the engine, the renderer, the stage and its
+mix; the numba kernel among it), the audience sink, nats-py, the writes to the socket (asyncio's stream writer: its
+own time holds uvloop's compiled transport and, when secure, the TLS record's encryption, which cProfile cannot see
+apart), the signature (PyNaCl's wrapper, its cffi calls, libsodium), Python's ``ssl`` layer and the rest.
 
-Measured (two runs each, 2 shared cores, idle; cProfile's own cost inflates every figure): every function 340 and
-439 us a frame plain against 480 and 505 secure, +103 us on average: the signature with its wrapper 37-40 us, the TLS
-writes 19-20, the sink 5.5 more (the envelope), asyncio's stream writer 15 more (its writes go through TLS), the
-code the security does not touch +29 and -9 (noise), nats-py +1, the rest +14.
+Measured (two runs each, 2 shared cores, load average 0.1-0.2; cProfile's own cost inflates every figure): every
+function 494 and 359 us a frame plain, 490 and 538 secure: the machine's state moves the whole figure by more than
+the security (the numba kernel alone 9.5-18 us). In the secure process the signature costs 41-44 us (libsodium's call
+27-28 in an earlier split, PyNaCl's wrapper and its cffi calls the rest), Python's ``ssl`` write 21-23, and the
+socket writes under asyncio's stream writer (TLS inside uvloop's transport) 47-52 us against 32-46 plain.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ import contextlib
 import cProfile
 import io
 import logging
+import os
 import pstats
 import tempfile
 from pathlib import Path
@@ -58,27 +61,34 @@ async def profiled(url: str, venue: str | None) -> pstats.Stats:
     return pstats.Stats(prof, stream=io.StringIO())
 
 
+OURS = str(Path(hapmotion.__file__).resolve().parent)
+"""The package's own source folder: a function's file under it is hapmotion's (a clone's path may hold "hapmotion"
+anywhere above it)."""
+
+
 def shares(stats: pstats.Stats) -> dict[str, float]:
     """Seconds (own time) of: every function, the code the security does not touch (and the numba kernel in it),
-    the audience sink, nats-py, the event loop's Python (asyncio), the signature with its PyNaCl wrapper, the TLS
-    writes, and the rest."""
-    out = dict.fromkeys(("all", "untouched", "kernel", "sink", "nats", "asyncio", "signature", "tls", "rest"), 0.0)
+    the audience sink, nats-py, the writes to the socket (asyncio's stream writer, whose own time holds uvloop's
+    compiled transport under it and, when secure, its TLS), the signature (PyNaCl's wrapper, its cffi calls and
+    libsodium), Python's ``ssl`` layer, and the rest."""
+    out = dict.fromkeys(("all", "untouched", "kernel", "sink", "nats", "writes", "signature", "tls", "rest"), 0.0)
     for (path, _, name), (_, _, own, _, _) in stats.stats.items():
         out["all"] += own
-        if "/hapmotion/" in path and "/hapmotion/audience/" not in path:
+        ours = str(Path(path).resolve()).startswith(OURS) if path != "~" else False
+        if ours and "/audience/" not in path:
             out["untouched"] += own
             if name == "render_frames":
                 out["kernel"] += own
-        elif "/hapmotion/audience/" in path:
+        elif ours:
             out["sink"] += own
-        elif "/nacl/" in path or name == "<built-in method _sodium.crypto_sign>":
+        elif "/nacl/" in path or "_sodium" in name or "_cffi_backend" in name:
             out["signature"] += own
-        elif name == "<method 'write' of '_ssl._SSLSocket' objects>":
+        elif path.endswith("/ssl.py") or "_ssl." in name:
             out["tls"] += own
         elif "/nats/" in path:
             out["nats"] += own
-        elif "/asyncio/" in path:
-            out["asyncio"] += own
+        elif path.endswith("/asyncio/streams.py"):
+            out["writes"] += own
         else:
             out["rest"] += own
     return out
@@ -106,10 +116,11 @@ def main() -> None:
                     server = stack.enter_context(LocalNatsServer())
                 stats = event_loop.run(profiled(server.url, venue), fast=True)
             s = {k: v / frames * 1e6 for k, v in shares(stats).items()}
-            print(f"  repeat {r + 1} {setup:6s}: every function {s['all']:6.1f} us = code the security does not "
-                  f"touch {s['untouched']:.1f} (numba kernel {s['kernel']:.1f}) + audience sink {s['sink']:.1f} + "
-                  f"nats-py {s['nats']:.1f} + asyncio {s['asyncio']:.1f} + signature {s['signature']:.1f} + TLS "
-                  f"writes {s['tls']:.1f} + the rest {s['rest']:.1f}", flush=True)
+            print(f"  repeat {r + 1} {setup:6s} (load {os.getloadavg()[0]:.1f}): every function {s['all']:6.1f} us "
+                  f"= code the security does not touch {s['untouched']:.1f} (numba kernel {s['kernel']:.1f}) + "
+                  f"audience sink {s['sink']:.1f} + nats-py {s['nats']:.1f} + writes to the socket "
+                  f"{s['writes']:.1f} + signature {s['signature']:.1f} + ssl {s['tls']:.1f} + the rest "
+                  f"{s['rest']:.1f}", flush=True)
             if a.top:
                 out = io.StringIO()
                 stats.stream = out
