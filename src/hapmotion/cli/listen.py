@@ -10,9 +10,8 @@ import click
 from ..show.comfort import Comfort
 from .audience_options import seat_security_options, seat_sync_options
 from .show_options import (check_preset, comfort_options, cues_option, layout_option, method_option, mirror_option,
-                           mode_option,
-                           param_option, parse_param_overrides, preset_option, read_cues, rig_line, rig_of,
-                           rig_option, split_values)
+                           mode_option, param_option, parse_param_overrides, preset_option, read_cues, rig_line,
+                           rig_of, rig_option, split_values)
 
 HELP = """Render a show published with `hapmotion live ... --sink nats://HOST:PORT/SHOW` on this seat's vest.
 
