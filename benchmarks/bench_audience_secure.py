@@ -1,45 +1,50 @@
-"""What the venue's security costs the audience publisher: the audience benchmark plain and secure, interleaved.
+"""What the venue's security costs the audience publisher: the audience benchmark's show plain and secure, at once.
 
-    python -m benchmarks.bench_audience_secure                  # 4 pairs of each show, N = 300, 10 s each: 8 minutes
-    python -m benchmarks.bench_audience_secure --shows music    # the show with its music only: 4 minutes
+    python -m benchmarks.bench_audience_secure                  # 4 pairs of each show at once, 10 s each: 3 minutes
+    python -m benchmarks.bench_audience_secure --shows music    # the show with its music only: 2 minutes or less
+    python -m benchmarks.bench_audience_secure --against signed,tls   # each part of the security alone
+    python -m benchmarks.bench_audience_secure --in-turn        # one after the other, the whole audience each
     python -m benchmarks.bench_audience_secure --loop both      # also on asyncio's loop: twice as long
     python -m benchmarks.bench_audience_secure --frames packed  # two frames a message: half the signatures
-    python -m benchmarks.bench_audience_secure --pin            # the publisher alone on one CPU, the rest on others
+    python -m benchmarks.bench_audience_secure --pin            # the publishers alone on one CPU, the rest on others
 
-Each pair is two runs of :func:`benchmarks.bench_audience.run` back to back, the same show, the same code, N light
-subscribers and 4 full seats, once as a rehearsal (unsigned, plain TCP, no authentication) and once as a venue
-deploys it (``--secure``: the server configuration of ``hapmotion venue-setup`` with TLS required, NKeys and
-per-subject permissions, every frame signed by the publisher and checked by every full seat). Two shows, taken in
-turn within each pair (``--shows``): the publisher replaying dataset-1_byebye_happy_001.bvh at 60 fps with the song
-vibe_ace.ogg, today's full frames (``bench_audience --light N --k 4 --servers 1 --rates 60 --frames full``, as a
-concert plays it), and the same motion without music (``--no-music``: the publisher's least work a frame, so the
-largest share for the security). The order alternates from pair to pair so that no set-up always runs on a warmer
-machine, and each run has a server of its own started for it. The publisher runs on the event loop ``hapmotion
-live`` gives a ``nats://`` sink (uvloop where it is installed: ``hapmotion.live.event_loop``); ``--loop asyncio``
-puts it on asyncio's own loop (what it ran on before), ``--loop both`` takes the two in turn within each pair.
+The same show, the same code, as a rehearsal (unsigned, plain TCP, no authentication) and as a venue deploys it
+(the server configuration of ``hapmotion venue-setup`` with TLS required, NKeys and per-subject permissions, every
+frame signed by the publisher and checked by every full seat). Two shows, taken in turn (``--shows``): the publisher
+replaying dataset-1_byebye_happy_001.bvh at 60 fps with the song vibe_ace.ogg, today's full frames (as
+``bench_audience`` plays it, as a concert does), and the same motion without music (``--no-music``: the publisher's
+least work a frame). The publisher runs on the event loop ``hapmotion live`` gives a ``nats://`` sink (uvloop where
+it is installed: ``hapmotion.live.event_loop``); ``--loop asyncio`` puts it on asyncio's own loop, ``--loop both``
+takes the two in turn.
+
+By default each pair runs the plain show and the secure one **at once** (:func:`at_once`), each on a server of its
+own with half the audience (``--light`` / 2 light subscribers, ``--k`` / 2 full seats: the machine carries what one
+run of the audience benchmark carries), measured over the same window: a shared machine's drift, which between two
+runs 25 s apart moves a publisher's figure by as much as the security costs, is the same for both publishers (two
+shows of one set-up at once differed by 5 % at most). Which one starts first alternates. ``--against signed,tls`` measures each part alone against a plain show (``bench_audience.PARTS``).
+``--in-turn`` runs the two one after the other instead (:func:`one_run`, :func:`benchmarks.bench_audience.run`),
+each with the whole audience: the frame ages (target p99 < 50 ms), the server's CPU per seat-message and the bytes
+per message as one show on the machine has them; its publisher figures carry the drift.
 
 Publisher CPU is the publisher process's CPU time (user + system, every thread: ``time.process_time``) over the
-measured window, as a share of one core and per rendered frame published in the window (``--frames packed``: its
-messages' CPU shared among the frames each holds; the figure compared: a loaded machine makes the engine skip
-frames, which lowers the share of a core without making a frame any cheaper).
-Reported per show: each set-up's median over the pairs with its spread (lowest to highest), the secure one's extra
-per frame over the plain median in microseconds and in per cent, and the median of the pairs' own ratios (each
-secure run against the plain run beside it, which cancels the machine's slower drifts), beside the target: at most
-10 % more publisher CPU. Also the frame age p50 / p99 (light subscribers and full seats; target p99 < 50 ms), the
-server's CPU per seat-message and the bytes per message. The load average is printed before every run: on a shared
-machine the figures are only as steady as that.
+measured window, per rendered frame published in it (``--frames packed``: its messages' CPU shared among the frames
+each holds) and as a share of one core. Reported per show: each set-up's median over the pairs with its spread
+(lowest to highest), the extra per frame over the plain median in microseconds and in per cent, and the median of
+the pairs' own ratios, beside the target: at most 10 % more publisher CPU. The load average is printed with every
+pair.
 
-Measured with ``--pairs 6`` on a shared 2-core machine (load average 0.3 to 1.4), the publisher on uvloop: with
-music 550 us of CPU a published frame plain (477-680) against 602 secure (534-728), +52 us: +9.5 % between the
-medians, +5.6 % the median of the pairs (+0.8 to +24.9 %) [target <= +10 %: met, narrowly]; motion only 397
-(344-508) against 490 (385-542) us, +93 us: +23.4 % and +17.3 % (+6.3 to +35.5 %) [missed]. Earlier runs of the
-show with music: +5.1, +6.4 and +4.5 % (before the live mix was made faster, a publisher of 690-820 us a frame);
-motion only +20.6 and +10.1 %. Frame age p99 secure 8.4 ms at the light subscribers and 25.3 ms at the full seats'
-Players (worst run 26.0) [target < 50 ms: met]; server 9.0 against 11.7 us a seat-frame; 624 against 692 bytes a
-frame with music. The extra was 31-52 us a frame with music and 48-103 us motion only over these runs; ``--frames
-packed`` (half the signatures and TLS records: +42 and +87 us) and ``--pin`` (+177 and +63 us) did not bring it
-down in their runs (one pair spreads by tens of us); function by function: ``benchmarks.profile_publisher``; the
-publish path alone: ``benchmarks.bench_audience_publish``.
+Measured at once on a shared 2-core machine (load average 0.8 to 2.6), the publisher on uvloop, six pairs: with
+music 580 us of CPU a published frame plain (552-629) against 676 secure (655-721), +96 us: +16.6 % between the
+medians, +15.8 % the median of the pairs (+10.8 to +22.8 %); motion only 440 (409-492) against 519 (480-613),
++79 us: +17.9 % and +18.1 % (+12.6 to +24.6 %) [target <= +10 %: missed, every pair]. Each part alone (four pairs):
+signed +63 us with music, +43 motion only; TLS +38 and +36 us. ``--frames packed`` (half the signatures and TLS
+records): +49 and +40 us a rendered frame, +7.0 and +10.9 % the median of the pairs. In turn (four pairs, load 0.6
+to 1.3) the same comparison gives less extra: with music 653 (645-676) against 698 (657-718) us, +45 us,
++6.8 % (medians), +8.1 % (pairs); motion only +49 us, +10.1 % and +8.3 %; earlier runs in turn +4.5 to +9.5 % with
+music: what runs beside the publisher differs (docs/audience.md, "What the security costs the publisher"). In turn,
+frame age p99 secure 8.9 ms at the light subscribers and 25.5 ms at the full seats' Players (worst run 25.8) [target
+< 50 ms: met]; server 10.8 against 13.5 us a seat-message; 624 against 692 bytes a message with music.
+Function by function: ``benchmarks.profile_publisher``; the publish path alone: ``benchmarks.bench_audience_publish``.
 """
 
 from __future__ import annotations
@@ -53,7 +58,8 @@ import threading
 import time
 from pathlib import Path
 
-from benchmarks.bench_audience import LOOPS, P99_TARGET_MS, run, secure_venue, summary
+from benchmarks.bench_audience import (LOOPS, P99_TARGET_MS, publisher_args, result, run, secure_venue, spawn,
+                                      summary, tell, wait_ready)
 
 PUBLISHER_TARGET = 0.10
 """The secure deployment may cost the publisher at most 10 % more CPU than the rehearsal (same show, same code)."""
@@ -62,6 +68,77 @@ PACK = 2
 """Rendered frames a message with ``--frames packed`` (``?frames=compact&pack=2``: one signature and one TLS record
 per two frames, the seats playing each frame one frame period later)."""
 SETUPS = ("plain", "secure")
+AGAINST = {"secure": ("both", "the venue's deployment: TLS, NKeys, permissions, signed"),
+           "signed": ("signed", "signed only: the show signed and checked, plain TCP, no authentication"),
+           "tls": ("tls", "TLS only: the venue's server (TLS, NKeys, permissions), the show unsigned")}
+"""What a plain publisher is measured against at once (``--against``): the venue's security whole, or one of its
+parts (``benchmarks.bench_audience.PARTS``)."""
+SETTLE_S = 1.5
+"""Seconds between every role being ready and the measured window (seats fetch the description)."""
+
+
+def start_show(setup: str, n: int, k: int, music: bool, loop: str, frames: str,
+               stack: contextlib.ExitStack) -> list:
+    """One show as ``setup`` (``plain`` or a key of :data:`AGAINST`) on a server of its own: ``n`` light
+    subscribers (connected first), ``k`` full seats and the publisher, every role ready and waiting for GO; the
+    processes (killed when ``stack`` closes), the publisher last."""
+    from hapmotion.audience.server import LocalNatsServer
+
+    parts = None if setup == "plain" else AGAINST[setup][0]
+    venue = None
+    if parts is not None:
+        venue = secure_venue(Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="hapmotion-venue-"))))
+    over_tls = parts in ("both", "tls")
+    server = stack.enter_context(LocalNatsServer(extra_args=("-c", str(Path(venue) / "nats-server.conf")))
+                                 if over_tls else LocalNatsServer())
+    url = server.url.replace("nats://", "tls://") if over_tls else server.url
+    procs: list = []
+
+    @stack.callback
+    def stop() -> None:
+        for proc in procs:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+
+    per_message = 1 if frames == "full" else PACK
+    procs.append(spawn("--role", "subscribers", "--url", url, "--n", str(n), "--subs-per-connection", "1",
+                       *(("--venue", venue) if over_tls else ())))
+    wait_ready(procs[0])  # every subscriber connected before the show starts (TLS handshakes are not timed)
+    roles = ("--venue", venue, "--parts", parts) if venue else ()
+    procs.append(spawn("--role", "seats", "--url", url, "--k", str(k), *roles))
+    procs.append(spawn("--role", "publisher", "--url", server.url, *publisher_args(FPS / per_message, frames), *roles,
+                       *(() if music else ("--no-music",)), "--loop", loop))
+    for proc in procs[1:]:
+        wait_ready(proc)
+    return procs
+
+
+def at_once(against: str, n: int, k: int, seconds: float, loop: str, music: bool, frames: str,
+            plain_first: bool) -> dict:
+    """A plain show and one as ``against`` (:data:`AGAINST`), each on a server of its own with ``n`` light
+    subscribers and ``k`` full seats, measured over the same window: the machine's state, whatever it is, is the
+    same for both publishers. Per set-up: the publisher's CPU per rendered frame and share of a core, frame ages."""
+    per_message = 1 if frames == "full" else PACK
+    order = ("plain", against) if plain_first else (against, "plain")
+    with contextlib.ExitStack() as stack:
+        shows = {setup: start_show(setup, n, k, music, loop, frames, stack) for setup in order}
+        time.sleep(SETTLE_S)
+        load = os.getloadavg()[0]
+        everyone = [proc for setup in order for proc in shows[setup]]
+        for proc in everyone:
+            tell(proc, "GO")
+        time.sleep(seconds)
+        for proc in everyone:
+            tell(proc, "STOP")
+        results = {setup: [result(proc) for proc in shows[setup]] for setup in order}
+    out = {"load": load}
+    for setup, (light, seats, pub) in results.items():
+        out[setup] = {"us_per_frame": pub["cpu_per_frame"] * 1e6 / per_message, "cpu": pub["cpu_per_s"],
+                      "loop": pub["loop"], "skipped": pub["skipped"], "errors": pub["errors"],
+                      "light_p99": light["age_p99_ms"], "seat_p99": seats["age_p99_ms"], "loss": light["loss"],
+                      "stale": seats["stale"], "tls": light["tls_connections"], "connections": light["connections"]}
+    return out
 
 
 def one_run(setup: str, n: int, k: int, seconds: float, loop: str = "default", music: bool = True,
@@ -96,10 +173,10 @@ def one_run(setup: str, n: int, k: int, seconds: float, loop: str = "default", m
 
 
 def pin_roles() -> tuple[int, set[int]]:
-    """Keep the publisher's process on the first CPU this process may use and every other process this harness
-    started (the server, the seats, the subscribers, and the harness itself) on the others, every thread of each,
-    for as long as the harness runs (``--pin``: the venue's publisher as if on a machine of its own). Looks for them
-    in /proc every 0.2 s (Linux). Returns (the publisher's CPU, the others')."""
+    """Keep the publishers' processes (one a show: two at once) on the first CPU this process may use and every other
+    process this harness started (the servers, the seats, the subscribers, and the harness itself) on the others,
+    every thread of each, for as long as the harness runs (``--pin``: the venue's publisher as if on a machine of its
+    own). Looks for them in /proc every 0.2 s (Linux). Returns (the publishers' CPU, the others')."""
     allowed = sorted(os.sched_getaffinity(0))
     mine, theirs = allowed[0], set(allowed[1:])
     me = os.getpid()
@@ -148,39 +225,10 @@ SHOWS = {"music": "the show with its music, as a concert plays it (bench_audienc
 """The shows measured: the audience benchmark's own (the recording and its song) and the same motion without music."""
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--pairs", type=int, default=4, help="plain/secure pairs, run interleaved")
-    ap.add_argument("--light", type=int, default=300, help="light subscribers (one TLS connection each when secure)")
-    ap.add_argument("--k", type=int, default=4, help="full seats")
-    ap.add_argument("--seconds", type=float, default=10.0, help="measured seconds per run")
-    ap.add_argument("--loop", choices=(*LOOPS, "both"), default="default",
-                    help="the publisher's event loop: as `hapmotion live` runs it (default: uvloop where installed), "
-                         "asyncio's, or both in turn (twice the runs a pair)")
-    ap.add_argument("--shows", choices=(*SHOWS, "both"), default="both",
-                    help="the show with its music, motion only, or both in turn (default)")
-    ap.add_argument("--pin", action="store_true",
-                    help="the publisher alone on one CPU, everything else on the others (a venue's publisher on a "
-                         "machine of its own)")
-    ap.add_argument("--frames", choices=("full", "packed"), default="full",
-                    help=f"today's full frames, one a message (default), or compact frames packed {PACK} a message")
-    a = ap.parse_args()
-    loops = LOOPS if a.loop == "both" else (a.loop,)
-    shows = tuple(SHOWS) if a.shows == "both" else (a.shows,)
-    pinned = ""
-    if a.pin:
-        if not hasattr(os, "sched_setaffinity") or len(os.sched_getaffinity(0)) < 2:
-            ap.error("--pin needs two CPUs this process may use and Linux's sched_setaffinity")
-        mine, theirs = pin_roles()
-        pinned = f" (publisher pinned to CPU {mine}, the rest to CPU {','.join(map(str, sorted(theirs)))})"
-    how = ("full frames, one a message" if a.frames == "full" else
-           f"compact frames packed {PACK} a message at {FPS / PACK:g} Hz (CPU per rendered frame, server per message)")
-    print(f"publisher CPU, rehearsal (plain) against venue (TLS, NKeys, permissions, signed): {a.pairs} pairs "
-          f"interleaved, {a.seconds:g} s each, N = {a.light} + {a.k} full seats, {FPS:g} fps as {how}; shows: "
-          f"{'; '.join(SHOWS[s] for s in shows)}; publisher loop {' and '.join(loops)}; {os.cpu_count()} cores "
-          f"shared with other work{pinned}, load average "
-          f"{os.getloadavg()[0]:.1f} at the start", flush=True)
-    kinds = [(show, lp) for show in shows for lp in loops]
+def in_turn(a: argparse.Namespace, kinds: list[tuple[str, str]]) -> None:
+    """``--in-turn``: each pair's plain and secure runs one after the other, each with the whole audience (N light
+    subscribers, k seats) on its server: the frame ages and the server's cost as one show has them; the publisher's
+    figures carry the machine's drift between the two runs."""
     runs: dict[tuple[str, str, str], list[dict]] = {(show, lp, s): [] for show, lp in kinds for s in SETUPS}
     for i in range(a.pairs):
         order = [(show, lp, s) for show, lp in kinds for s in SETUPS]
@@ -222,6 +270,96 @@ def main() -> None:
         worst = max(r[key] for r in runs[show, loop, "secure"] for key in ("light_p99", "seat_p99"))
         print(f"  secure frame age p99, worst run, {show}, on {label}: {worst:.1f} ms  [target < "
               f"{P99_TARGET_MS:g} ms: {'met' if worst < P99_TARGET_MS else 'missed'}]")
+
+
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--pairs", type=int, default=4, help="pairs of a plain show and a secure one, per show")
+    ap.add_argument("--in-turn", action="store_true",
+                    help="each pair's two runs one after the other, each with the whole audience (frame ages and "
+                         "server cost as one show has them), instead of the two shows at once (the publisher's cost)")
+    ap.add_argument("--against", default="secure",
+                    help="at once: what the plain publisher is measured against, comma-separated: secure (the "
+                         "venue's deployment), signed (signatures only), tls (TLS only)")
+    ap.add_argument("--light", type=int, default=300, help="light subscribers (one TLS connection each when secure)")
+    ap.add_argument("--k", type=int, default=4, help="full seats")
+    ap.add_argument("--seconds", type=float, default=10.0, help="measured seconds per run")
+    ap.add_argument("--loop", choices=(*LOOPS, "both"), default="default",
+                    help="the publisher's event loop: as `hapmotion live` runs it (default: uvloop where installed), "
+                         "asyncio's, or both in turn (twice the runs a pair)")
+    ap.add_argument("--shows", choices=(*SHOWS, "both"), default="both",
+                    help="the show with its music, motion only, or both in turn (default)")
+    ap.add_argument("--pin", action="store_true",
+                    help="the publishers alone on one CPU, everything else on the others (a venue's publisher on "
+                         "a machine of its own)")
+    ap.add_argument("--frames", choices=("full", "packed"), default="full",
+                    help=f"today's full frames, one a message (default), or compact frames packed {PACK} a message")
+    a = ap.parse_args()
+    against = a.against.split(",")
+    if any(x not in AGAINST for x in against):
+        ap.error(f"--against: expected some of {', '.join(AGAINST)}, comma-separated")
+    if a.in_turn and against != ["secure"]:
+        ap.error("--against is for the shows at once; --in-turn compares plain and secure")
+    loops = LOOPS if a.loop == "both" else (a.loop,)
+    shows = tuple(SHOWS) if a.shows == "both" else (a.shows,)
+    pinned = ""
+    if a.pin:
+        if not hasattr(os, "sched_setaffinity") or len(os.sched_getaffinity(0)) < 2:
+            ap.error("--pin needs two CPUs this process may use and Linux's sched_setaffinity")
+        mine, theirs = pin_roles()
+        pinned = f" (publishers pinned to CPU {mine}, the rest to CPU {','.join(map(str, sorted(theirs)))})"
+    how = ("full frames, one a message" if a.frames == "full" else
+           f"compact frames packed {PACK} a message at {FPS / PACK:g} Hz (CPU per rendered frame, server per message)")
+    how_pairs = (f"{a.pairs} pairs, the two runs of each in turn, {a.seconds:g} s each, N = {a.light} + {a.k} full "
+                 "seats" if a.in_turn else
+                 f"{a.pairs} pairs, the two shows of each at once (each on a server of its own with N = {a.light // 2} "
+                 f"+ {a.k // 2} full seats: the machine carries one run's audience), {a.seconds:g} s measured")
+    print(f"publisher CPU, rehearsal (plain) against "
+          f"{'; '.join(AGAINST[x][1] for x in against)}: {how_pairs}, {FPS:g} fps as {how}; shows: "
+          f"{'; '.join(SHOWS[s] for s in shows)}; publisher loop {' and '.join(loops)}; {os.cpu_count()} cores "
+          f"shared with other work{pinned}, load average "
+          f"{os.getloadavg()[0]:.1f} at the start", flush=True)
+    kinds = [(show, lp) for show in shows for lp in loops]
+    if a.in_turn:
+        in_turn(a, kinds)
+    else:
+        at_once_main(a, kinds, against)
+
+
+def at_once_main(a: argparse.Namespace, kinds: list[tuple[str, str]], against: list[str]) -> None:
+    """The default: each pair's plain and other show at once (:func:`at_once`), half the audience each."""
+    runs: dict[tuple[str, str, str], list[dict]] = {(show, lp, x): [] for show, lp in kinds for x in against}
+    for i in range(a.pairs):
+        for show, loop in kinds:
+            for x in against:
+                r = at_once(x, a.light // 2, a.k // 2, a.seconds, loop, show == "music", a.frames, i % 2 == 0)
+                runs[show, loop, x].append(r)
+                p, o = r["plain"], r[x]
+                print(f"  pair {i + 1} {show:6s} plain and {x} at once on {p['loop']} (load {r['load']:.1f}): "
+                      f"publisher {p['us_per_frame']:.0f} against {o['us_per_frame']:.0f} us a frame "
+                      f"({o['us_per_frame'] / p['us_per_frame'] - 1:+.1%}; {p['cpu'] * 100:.2f} against "
+                      f"{o['cpu'] * 100:.2f} % of a core; skipped {p['skipped']}/{o['skipped']}, errors "
+                      f"{p['errors']}/{o['errors']}); frame age p99 light {p['light_p99']:.1f} / {o['light_p99']:.1f} "
+                      f"ms, seats {p['seat_p99']:.1f} / {o['seat_p99']:.1f} ms (two shows on the machine); "
+                      f"{o['tls']} of {o['connections']} subscriber connections TLS", flush=True)
+    print(f"\nsummary, median (lowest-highest) of {a.pairs} pairs; load average {os.getloadavg()[0]:.1f} at the end")
+    for (show, loop, x), rs in runs.items():
+        plain = [r["plain"]["us_per_frame"] for r in rs]
+        other = [r[x]["us_per_frame"] for r in rs]
+        pairwise = [o / p - 1 for o, p in zip(other, plain)]
+        extra, paired = statistics.median(other) / statistics.median(plain) - 1, statistics.median(pairwise)
+        verdict = ""
+        if x == "secure":
+            met = extra <= PUBLISHER_TARGET and paired <= PUBLISHER_TARGET
+            verdict = (f"  [target <= +{PUBLISHER_TARGET * 100:.0f} %: {'met' if met else 'missed'}"
+                       f"{'' if loop == 'default' else '; not what hapmotion live runs'}]")
+        print(f"  publisher CPU a frame, {show}, on {rs[0]['plain']['loop']}: plain {spread(plain, 1, '.0f')} us, "
+              f"{x} {spread(other, 1, '.0f')} us: {statistics.median(other) - statistics.median(plain):+.0f} us, "
+              f"{extra * 100:+.1f} % (medians), {paired * 100:+.1f} % (median of the pairs; "
+              f"{min(pairwise) * 100:+.1f} to {max(pairwise) * 100:+.1f} %){verdict}")
+    print("  frame ages and the server's cost with one show on the machine: --in-turn, or bench_audience --secure")
 
 
 if __name__ == "__main__":

@@ -132,3 +132,18 @@ def test_the_load_generator_reads_a_frame_split_across_reads(cut):
     conn, marks, size = asyncio.run(scenario())
     assert conn.count == 2
     assert marks["bytes"] == size and marks["last"] == 5
+
+
+@pytest.mark.parametrize("parts, tls, signed", [("both", True, True), ("signed", False, True), ("tls", True, False)])
+def test_each_part_of_the_venue_s_security_is_measured_alone(tmp_path, parts, tls, signed):
+    """bench_audience_secure --against: 'signed' signs and checks the show over plain TCP without credentials,
+    'tls' connects as the venue (NKey, the run's CA) with the show unsigned, 'both' is the venue's deployment."""
+    (tmp_path / "venue").mkdir()
+    folder = bench.secure_venue(tmp_path / "venue")
+    publisher, seat = bench.security(folder, "publisher", parts), bench.security(folder, "seat", parts)
+    url = "nats://127.0.0.1:4222"
+    for who, nkey in ((publisher, "venue.nk"), (seat, "seat.nk")):
+        assert who.auth.wants_tls(url) is tls
+        assert who.auth.nkey == (str(Path(folder) / nkey) if tls else None)
+    assert publisher.signer("bench", "test").signed is signed
+    assert seat.trust("bench").public is not None if signed else seat.unsigned
