@@ -6,7 +6,7 @@
     python -m benchmarks.bench_audience_secure --in-turn        # one after the other, the whole audience each
     python -m benchmarks.bench_audience_secure --loop both      # also on asyncio's loop: twice as long
     python -m benchmarks.bench_audience_secure --frames packed  # two frames a message: half the signatures
-    python -m benchmarks.bench_audience_secure --pin            # the publishers alone on one CPU, the rest on others
+    python -m benchmarks.bench_audience_secure --in-turn --pin  # the publisher alone on one CPU, the rest on others
 
 The same show, the same code, as a rehearsal (unsigned, plain TCP, no authentication) and as a venue deploys it
 (the server configuration of ``hapmotion venue-setup`` with TLS required, NKeys and per-subject permissions, every
@@ -18,10 +18,12 @@ it is installed: ``hapmotion.live.event_loop``); ``--loop asyncio`` puts it on a
 takes the two in turn.
 
 By default each pair runs the plain show and the secure one **at once** (:func:`at_once`), each on a server of its
-own with half the audience (``--light`` / 2 light subscribers, ``--k`` / 2 full seats: the machine carries what one
-run of the audience benchmark carries), measured over the same window: a shared machine's drift, which between two
-runs 25 s apart moves a publisher's figure by as much as the security costs, is the same for both publishers (two
-shows of one set-up at once differed by 5 % at most). Which one starts first alternates. ``--against signed,tls`` measures each part alone against a plain show (``bench_audience.PARTS``).
+own with half the audience (``--light`` / 2 light subscribers, ``--k`` / 2 full seats: the machine carries the same
+audience as one run of the audience benchmark, and a second publisher and server), measured over the same window:
+a shared machine's drift, which between two runs 25 s apart moves a publisher's figure by as much as the security
+costs, is the same for both publishers. Which one starts first alternates. ``--against signed,tls`` measures each
+part alone against a plain show (``bench_audience.PARTS``); ``--base X --against X`` checks the instrument (an A/A
+pair: two shows of one set-up).
 ``--in-turn`` runs the two one after the other instead (:func:`one_run`, :func:`benchmarks.bench_audience.run`),
 each with the whole audience: the frame ages (target p99 < 50 ms), the server's CPU per seat-message and the bytes
 per message as one show on the machine has them; its publisher figures carry the drift.
@@ -35,15 +37,17 @@ pair.
 
 Measured at once on a shared 2-core machine (load average 0.8 to 2.6), the publisher on uvloop, six pairs: with
 music 580 us of CPU a published frame plain (552-629) against 676 secure (655-721), +96 us: +16.6 % between the
-medians, +15.8 % the median of the pairs (+10.8 to +22.8 %); motion only 440 (409-492) against 519 (480-613),
-+79 us: +17.9 % and +18.1 % (+12.6 to +24.6 %) [target <= +10 %: missed, every pair]. Each part alone (four pairs):
-signed +63 us with music, +43 motion only; TLS +38 and +36 us. ``--frames packed`` (half the signatures and TLS
-records): +49 and +40 us a rendered frame, +7.0 and +10.9 % the median of the pairs. In turn (four pairs, load 0.6
-to 1.3) the same comparison gives less extra: with music 653 (645-676) against 698 (657-718) us, +45 us,
-+6.8 % (medians), +8.1 % (pairs); motion only +49 us, +10.1 % and +8.3 %; earlier runs in turn +4.5 to +9.5 % with
-music: what runs beside the publisher differs (docs/audience.md, "What the security costs the publisher"). In turn,
-frame age p99 secure 8.9 ms at the light subscribers and 25.5 ms at the full seats' Players (worst run 25.8) [target
-< 50 ms: met]; server 10.8 against 13.5 us a seat-message; 624 against 692 bytes a message with music.
+medians, +15.8 % the median of the pairs (+10.8 to +22.8 %); motion only 440 (409-492) against 519 (480-613), +79 us:
++17.9 % and +18.1 % (+12.6 to +24.6 %) [target <= +10 %: missed, every pair]. Each part alone (four pairs):
+signed +63 us with music, +43 motion only; TLS +38 and +36 us (medians). Two shows of one set-up at once (``--base X
+--against X``, four pairs, music): +0.9 % (plain) and -1.2 % (secure) the median of the pairs (-8.1 to +5.6 %).
+``--frames packed`` (half the signatures and TLS records): +49 and +40 us a rendered frame, +7.0 and +10.9 % the
+median of the pairs. In turn (four pairs, load 0.6 to 1.5) the same comparison gave less extra: with music 653
+(645-676) against 698 (657-718) us, +45 us, +6.8 % (medians), +8.1 % (pairs); motion only +49 us, +10.1 % and +8.3 %;
+other runs in turn +4.5 to +13.1 % with music (what runs beside the publisher differs: docs/audience.md, "What
+the security costs the publisher"). In turn, frame age p99 secure 8.9 ms at the light subscribers and 25.5 ms at the
+full seats' Players (worst run 25.8) [target < 50 ms: met]; server 10.8 against 13.5 us a seat-message; 624 against
+692 bytes a message with music.
 Function by function: ``benchmarks.profile_publisher``; the publish path alone: ``benchmarks.bench_audience_publish``.
 """
 
@@ -68,23 +72,24 @@ PACK = 2
 """Rendered frames a message with ``--frames packed`` (``?frames=compact&pack=2``: one signature and one TLS record
 per two frames, the seats playing each frame one frame period later)."""
 SETUPS = ("plain", "secure")
-AGAINST = {"secure": ("both", "the venue's deployment: TLS, NKeys, permissions, signed"),
+AGAINST = {"plain": (None, "the rehearsal: unsigned, plain TCP, no authentication"),
+           "secure": ("both", "the venue's deployment: TLS, NKeys, permissions, signed"),
            "signed": ("signed", "signed only: the show signed and checked, plain TCP, no authentication"),
            "tls": ("tls", "TLS only: the venue's server (TLS, NKeys, permissions), the show unsigned")}
-"""What a plain publisher is measured against at once (``--against``): the venue's security whole, or one of its
-parts (``benchmarks.bench_audience.PARTS``)."""
+"""The set-ups of the shows at once (``--base``, ``--against``): the rehearsal, the venue's security whole, or one
+of its parts (``benchmarks.bench_audience.PARTS``); a set-up against itself checks the instrument (an A/A pair)."""
 SETTLE_S = 1.5
 """Seconds between every role being ready and the measured window (seats fetch the description)."""
 
 
 def start_show(setup: str, n: int, k: int, music: bool, loop: str, frames: str,
                stack: contextlib.ExitStack) -> list:
-    """One show as ``setup`` (``plain`` or a key of :data:`AGAINST`) on a server of its own: ``n`` light
+    """One show as ``setup`` (a key of :data:`AGAINST`) on a server of its own: ``n`` light
     subscribers (connected first), ``k`` full seats and the publisher, every role ready and waiting for GO; the
     processes (killed when ``stack`` closes), the publisher last."""
     from hapmotion.audience.server import LocalNatsServer
 
-    parts = None if setup == "plain" else AGAINST[setup][0]
+    parts = AGAINST[setup][0]
     venue = None
     if parts is not None:
         venue = secure_venue(Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="hapmotion-venue-"))))
@@ -114,27 +119,28 @@ def start_show(setup: str, n: int, k: int, music: bool, loop: str, frames: str,
     return procs
 
 
-def at_once(against: str, n: int, k: int, seconds: float, loop: str, music: bool, frames: str,
-            plain_first: bool) -> dict:
-    """A plain show and one as ``against`` (:data:`AGAINST`), each on a server of its own with ``n`` light
-    subscribers and ``k`` full seats, measured over the same window: the machine's state, whatever it is, is the
-    same for both publishers. Per set-up: the publisher's CPU per rendered frame and share of a core, frame ages."""
+def at_once(base: str, other: str, n: int, k: int, seconds: float, loop: str, music: bool, frames: str,
+            base_first: bool) -> dict:
+    """A show as ``base`` and one as ``other`` (keys of :data:`AGAINST`), each on a server of its own with ``n``
+    light subscribers and ``k`` full seats, measured over the same window: the machine's state, whatever it is, is
+    the same for both publishers. Per show (``base``, ``other``): the publisher's CPU per rendered frame and share of
+    a core, frame ages; and the load average."""
     per_message = 1 if frames == "full" else PACK
-    order = ("plain", against) if plain_first else (against, "plain")
+    order = (("base", base), ("other", other)) if base_first else (("other", other), ("base", base))
     with contextlib.ExitStack() as stack:
-        shows = {setup: start_show(setup, n, k, music, loop, frames, stack) for setup in order}
+        shows = {role: start_show(setup, n, k, music, loop, frames, stack) for role, setup in order}
         time.sleep(SETTLE_S)
         load = os.getloadavg()[0]
-        everyone = [proc for setup in order for proc in shows[setup]]
+        everyone = [proc for role, _ in order for proc in shows[role]]
         for proc in everyone:
             tell(proc, "GO")
         time.sleep(seconds)
         for proc in everyone:
             tell(proc, "STOP")
-        results = {setup: [result(proc) for proc in shows[setup]] for setup in order}
+        results = {role: [result(proc) for proc in shows[role]] for role, _ in order}
     out = {"load": load}
-    for setup, (light, seats, pub) in results.items():
-        out[setup] = {"us_per_frame": pub["cpu_per_frame"] * 1e6 / per_message, "cpu": pub["cpu_per_s"],
+    for role, (light, seats, pub) in results.items():
+        out[role] = {"us_per_frame": pub["cpu_per_frame"] * 1e6 / per_message, "cpu": pub["cpu_per_s"],
                       "loop": pub["loop"], "skipped": pub["skipped"], "errors": pub["errors"],
                       "light_p99": light["age_p99_ms"], "seat_p99": seats["age_p99_ms"], "loss": light["loss"],
                       "stale": seats["stale"], "tls": light["tls_connections"], "connections": light["connections"]}
@@ -272,19 +278,22 @@ def in_turn(a: argparse.Namespace, kinds: list[tuple[str, str]]) -> None:
               f"{P99_TARGET_MS:g} ms: {'met' if worst < P99_TARGET_MS else 'missed'}]")
 
 
-
-
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--pairs", type=int, default=4, help="pairs of a plain show and a secure one, per show")
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    ap.add_argument("--pairs", type=int, default=4, help="pairs of shows, per show and set-up")
     ap.add_argument("--in-turn", action="store_true",
                     help="each pair's two runs one after the other, each with the whole audience (frame ages and "
                          "server cost as one show has them), instead of the two shows at once (the publisher's cost)")
     ap.add_argument("--against", default="secure",
-                    help="at once: what the plain publisher is measured against, comma-separated: secure (the "
-                         "venue's deployment), signed (signatures only), tls (TLS only)")
-    ap.add_argument("--light", type=int, default=300, help="light subscribers (one TLS connection each when secure)")
-    ap.add_argument("--k", type=int, default=4, help="full seats")
+                    help="at once: what the base show is measured against, comma-separated: secure (the venue's "
+                         "deployment), signed (signatures only), tls (TLS only), plain (the rehearsal)")
+    ap.add_argument("--base", choices=tuple(AGAINST), default="plain",
+                    help="at once: the show the others are measured against (default: the rehearsal, plain); the "
+                         "same as --against checks the instrument")
+    ap.add_argument("--light", type=int, default=300,
+                    help="light subscribers (one TLS connection each when secure); at once, half on each show")
+    ap.add_argument("--k", type=int, default=4, help="full seats; at once, half on each show")
     ap.add_argument("--seconds", type=float, default=10.0, help="measured seconds per run")
     ap.add_argument("--loop", choices=(*LOOPS, "both"), default="default",
                     help="the publisher's event loop: as `hapmotion live` runs it (default: uvloop where installed), "
@@ -292,16 +301,22 @@ def main() -> None:
     ap.add_argument("--shows", choices=(*SHOWS, "both"), default="both",
                     help="the show with its music, motion only, or both in turn (default)")
     ap.add_argument("--pin", action="store_true",
-                    help="the publishers alone on one CPU, everything else on the others (a venue's publisher on "
-                         "a machine of its own)")
+                    help="with --in-turn: the publisher alone on one CPU, everything else on the others (a venue's "
+                         "publisher on a machine of its own)")
     ap.add_argument("--frames", choices=("full", "packed"), default="full",
                     help=f"today's full frames, one a message (default), or compact frames packed {PACK} a message")
     a = ap.parse_args()
-    against = a.against.split(",")
+    if a.pairs < 1 or a.seconds <= 0:
+        ap.error("--pairs and --seconds: expected at least one pair of a measured window longer than 0 s")
+    against = list(dict.fromkeys(a.against.split(",")))
     if any(x not in AGAINST for x in against):
         ap.error(f"--against: expected some of {', '.join(AGAINST)}, comma-separated")
-    if a.in_turn and against != ["secure"]:
-        ap.error("--against is for the shows at once; --in-turn compares plain and secure")
+    if a.in_turn and (against != ["secure"] or a.base != "plain"):
+        ap.error("--against and --base are for the shows at once; --in-turn compares plain and secure")
+    if not a.in_turn and (a.light < 2 or a.k < 2):
+        ap.error("the shows at once share --light and --k: give at least 2 of each")
+    if a.pin and not a.in_turn:
+        ap.error("--pin is for --in-turn (at once, the two publishers would share the one CPU)")
     loops = LOOPS if a.loop == "both" else (a.loop,)
     shows = tuple(SHOWS) if a.shows == "both" else (a.shows,)
     pinned = ""
@@ -309,14 +324,15 @@ def main() -> None:
         if not hasattr(os, "sched_setaffinity") or len(os.sched_getaffinity(0)) < 2:
             ap.error("--pin needs two CPUs this process may use and Linux's sched_setaffinity")
         mine, theirs = pin_roles()
-        pinned = f" (publishers pinned to CPU {mine}, the rest to CPU {','.join(map(str, sorted(theirs)))})"
+        pinned = f" (publisher pinned to CPU {mine}, the rest to CPU {','.join(map(str, sorted(theirs)))})"
     how = ("full frames, one a message" if a.frames == "full" else
            f"compact frames packed {PACK} a message at {FPS / PACK:g} Hz (CPU per rendered frame, server per message)")
     how_pairs = (f"{a.pairs} pairs, the two runs of each in turn, {a.seconds:g} s each, N = {a.light} + {a.k} full "
                  "seats" if a.in_turn else
                  f"{a.pairs} pairs, the two shows of each at once (each on a server of its own with N = {a.light // 2} "
                  f"+ {a.k // 2} full seats: the machine carries one run's audience), {a.seconds:g} s measured")
-    print(f"publisher CPU, rehearsal (plain) against "
+    base = "rehearsal (plain)" if a.in_turn else AGAINST[a.base][1]
+    print(f"publisher CPU, {base} against "
           f"{'; '.join(AGAINST[x][1] for x in against)}: {how_pairs}, {FPS:g} fps as {how}; shows: "
           f"{'; '.join(SHOWS[s] for s in shows)}; publisher loop {' and '.join(loops)}; {os.cpu_count()} cores "
           f"shared with other work{pinned}, load average "
@@ -329,34 +345,37 @@ def main() -> None:
 
 
 def at_once_main(a: argparse.Namespace, kinds: list[tuple[str, str]], against: list[str]) -> None:
-    """The default: each pair's plain and other show at once (:func:`at_once`), half the audience each."""
+    """The default: each pair's base show and other show at once (:func:`at_once`), half the audience each."""
+    base = a.base
     runs: dict[tuple[str, str, str], list[dict]] = {(show, lp, x): [] for show, lp in kinds for x in against}
     for i in range(a.pairs):
         for show, loop in kinds:
             for x in against:
-                r = at_once(x, a.light // 2, a.k // 2, a.seconds, loop, show == "music", a.frames, i % 2 == 0)
+                r = at_once(base, x, a.light // 2, a.k // 2, a.seconds, loop, show == "music", a.frames, i % 2 == 0)
                 runs[show, loop, x].append(r)
-                p, o = r["plain"], r[x]
-                print(f"  pair {i + 1} {show:6s} plain and {x} at once on {p['loop']} (load {r['load']:.1f}): "
-                      f"publisher {p['us_per_frame']:.0f} against {o['us_per_frame']:.0f} us a frame "
+                p, o = r["base"], r["other"]
+                print(f"  pair {i + 1} {show:6s} {base} and {x} at once on {p['loop']} (load {r['load']:.1f}): "
+                      f"publisher {p['us_per_frame']:.0f} against {o['us_per_frame']:.0f} us a frame of CPU "
                       f"({o['us_per_frame'] / p['us_per_frame'] - 1:+.1%}; {p['cpu'] * 100:.2f} against "
                       f"{o['cpu'] * 100:.2f} % of a core; skipped {p['skipped']}/{o['skipped']}, errors "
-                      f"{p['errors']}/{o['errors']}); frame age p99 light {p['light_p99']:.1f} / {o['light_p99']:.1f} "
-                      f"ms, seats {p['seat_p99']:.1f} / {o['seat_p99']:.1f} ms (two shows on the machine); "
-                      f"{o['tls']} of {o['connections']} subscriber connections TLS", flush=True)
+                      f"{p['errors']}/{o['errors']}); {base} / {x}: frame age p99 light {p['light_p99']:.1f} / "
+                      f"{o['light_p99']:.1f} ms, seats {p['seat_p99']:.1f} / {o['seat_p99']:.1f} ms (two shows on the "
+                      f"machine), TLS subscriber connections {p['tls']} of {p['connections']} / {o['tls']} of "
+                      f"{o['connections']}",
+                      flush=True)
     print(f"\nsummary, median (lowest-highest) of {a.pairs} pairs; load average {os.getloadavg()[0]:.1f} at the end")
     for (show, loop, x), rs in runs.items():
-        plain = [r["plain"]["us_per_frame"] for r in rs]
-        other = [r[x]["us_per_frame"] for r in rs]
-        pairwise = [o / p - 1 for o, p in zip(other, plain)]
-        extra, paired = statistics.median(other) / statistics.median(plain) - 1, statistics.median(pairwise)
+        first = [r["base"]["us_per_frame"] for r in rs]
+        other = [r["other"]["us_per_frame"] for r in rs]
+        pairwise = [o / p - 1 for o, p in zip(other, first)]
+        extra, paired = statistics.median(other) / statistics.median(first) - 1, statistics.median(pairwise)
         verdict = ""
-        if x == "secure":
+        if (base, x) == ("plain", "secure"):
             met = extra <= PUBLISHER_TARGET and paired <= PUBLISHER_TARGET
             verdict = (f"  [target <= +{PUBLISHER_TARGET * 100:.0f} %: {'met' if met else 'missed'}"
                        f"{'' if loop == 'default' else '; not what hapmotion live runs'}]")
-        print(f"  publisher CPU a frame, {show}, on {rs[0]['plain']['loop']}: plain {spread(plain, 1, '.0f')} us, "
-              f"{x} {spread(other, 1, '.0f')} us: {statistics.median(other) - statistics.median(plain):+.0f} us, "
+        print(f"  publisher CPU a frame, {show}, on {rs[0]['base']['loop']}: {base} {spread(first, 1, '.0f')} us, "
+              f"{x} {spread(other, 1, '.0f')} us: {statistics.median(other) - statistics.median(first):+.0f} us, "
               f"{extra * 100:+.1f} % (medians), {paired * 100:+.1f} % (median of the pairs; "
               f"{min(pairwise) * 100:+.1f} to {max(pairwise) * 100:+.1f} %){verdict}")
     print("  frame ages and the server's cost with one show on the machine: --in-turn, or bench_audience --secure")
