@@ -35,7 +35,7 @@ each holds) and as a share of one core. Reported per show: each set-up's median 
 the pairs' own ratios, beside the target: at most 10 % more publisher CPU. The load average is printed with every
 pair.
 
-Measured at once on a shared 2-core machine (load average 0.8 to 2.6), the publisher on uvloop, six pairs: with
+Measured at once on a shared 2-core machine (load average 0.7 to 2.9 over these runs), the publisher on uvloop, six pairs: with
 music 580 us of CPU a published frame plain (552-629) against 676 secure (655-721), +96 us: +16.6 % between the
 medians, +15.8 % the median of the pairs (+10.8 to +22.8 %); motion only 440 (409-492) against 519 (480-613), +79 us:
 +17.9 % and +18.1 % (+12.6 to +24.6 %) [target <= +10 %: missed, every pair]. Each part alone (four pairs):
