@@ -35,19 +35,19 @@ each holds) and as a share of one core. Reported per show: each set-up's median 
 the pairs' own ratios, beside the target: at most 10 % more publisher CPU. The load average is printed with every
 pair.
 
-Measured at once on a shared 2-core machine (load average 0.7 to 2.9 over these runs), the publisher on uvloop, six pairs: with
-music 580 us of CPU a published frame plain (552-629) against 676 secure (655-721), +96 us: +16.6 % between the
-medians, +15.8 % the median of the pairs (+10.8 to +22.8 %); motion only 440 (409-492) against 519 (480-613), +79 us:
-+17.9 % and +18.1 % (+12.6 to +24.6 %) [target <= +10 %: missed, every pair]. Each part alone (four pairs):
-signed +63 us with music, +43 motion only; TLS +38 and +36 us (medians). Two shows of one set-up at once (``--base X
---against X``, four pairs, music): +0.9 % (plain) and -1.2 % (secure) the median of the pairs (-8.1 to +5.6 %).
-``--frames packed`` (half the signatures and TLS records): +49 and +40 us a rendered frame, +7.0 and +10.9 % the
-median of the pairs. In turn (four pairs, load 0.6 to 1.5) the same comparison gave less extra: with music 653
-(645-676) against 698 (657-718) us, +45 us, +6.8 % (medians), +8.1 % (pairs); motion only +49 us, +10.1 % and +8.3 %;
-other runs in turn +4.5 to +13.1 % with music (what runs beside the publisher differs: docs/audience.md, "What
-the security costs the publisher"). In turn, frame age p99 secure 8.9 ms at the light subscribers and 25.5 ms at the
-full seats' Players (worst run 25.8) [target < 50 ms: met]; server 10.8 against 13.5 us a seat-message; 624 against
-692 bytes a message with music.
+Measured at once on a shared 2-core machine (load average 0.7 to 2.9 over these runs), the publisher on uvloop, six
+pairs: with music 580 us of CPU a published frame plain (552-629) against 676 secure (655-721), +96 us: +16.6 %
+between the medians, +15.8 % the median of the pairs (+10.8 to +22.8 %); motion only 440 (409-492) against 519
+(480-613), +79 us: +17.9 % and +18.1 % (+12.6 to +24.6 %) [target <= +10 %: missed, every pair]. Each part alone
+(four pairs): signed +63 us with music, +43 motion only; TLS +38 and +36 us (medians). Two shows of one set-up at
+once (``--base X --against X``, four pairs, music): +0.9 % (plain) and -1.2 % (secure) the median of the pairs (-8.1
+to +5.6 %). ``--frames packed`` (half the signatures and TLS records): +49 and +40 us a rendered frame, +7.0 and
++10.9 % the median of the pairs. In turn (four pairs, load 0.6 to 1.5) the same comparison gave less extra: with
+music 653 (645-676) against 698 (657-718) us, +45 us, +6.8 % (medians), +8.1 % (pairs); motion only +49 us, +10.1 %
+and +8.3 %; other runs in turn +4.5 to +13.1 % with music (what runs beside the publisher differs: docs/audience.md,
+"What the security costs the publisher"). In turn, frame age p99 secure 8.9 ms at the light subscribers and 25.5 ms
+at the full seats' Players (worst run 25.8) [target < 50 ms: met]; server 10.8 against 13.5 us a seat-message; 624
+against 692 bytes a message with music.
 Function by function: ``benchmarks.profile_publisher``; the publish path alone: ``benchmarks.bench_audience_publish``.
 """
 
@@ -82,11 +82,15 @@ SETTLE_S = 1.5
 """Seconds between every role being ready and the measured window (seats fetch the description)."""
 
 
-def start_show(setup: str, n: int, k: int, music: bool, loop: str, frames: str,
-               stack: contextlib.ExitStack) -> list:
-    """One show as ``setup`` (a key of :data:`AGAINST`) on a server of its own: ``n`` light
-    subscribers (connected first), ``k`` full seats and the publisher, every role ready and waiting for GO; the
-    processes (killed when ``stack`` closes), the publisher last."""
+def per_message(frames: str) -> int:
+    """Rendered frames a published message holds (``full``: one; ``packed``: :data:`PACK`)."""
+    return 1 if frames == "full" else PACK
+
+
+def server_for(setup: str, stack: contextlib.ExitStack):
+    """A nats-server for ``setup`` (a key of :data:`AGAINST`), stopped when ``stack`` closes: the venue's
+    configuration (TLS, NKeys, permissions) where the set-up has TLS, else a plain one. Returns the venue folder
+    (``None`` for the rehearsal), the server, and whether clients must speak TLS."""
     from hapmotion.audience.server import LocalNatsServer
 
     parts = AGAINST[setup][0]
@@ -96,6 +100,15 @@ def start_show(setup: str, n: int, k: int, music: bool, loop: str, frames: str,
     over_tls = parts in ("both", "tls")
     server = stack.enter_context(LocalNatsServer(extra_args=("-c", str(Path(venue) / "nats-server.conf")))
                                  if over_tls else LocalNatsServer())
+    return venue, server, over_tls
+
+
+def start_show(setup: str, n: int, k: int, music: bool, loop: str, frames: str,
+               stack: contextlib.ExitStack) -> list:
+    """One show as ``setup`` (a key of :data:`AGAINST`) on a server of its own: ``n`` light
+    subscribers (connected first), ``k`` full seats and the publisher, every role ready and waiting for GO; the
+    processes (killed when ``stack`` closes), the publisher last."""
+    venue, server, over_tls = server_for(setup, stack)
     url = server.url.replace("nats://", "tls://") if over_tls else server.url
     procs: list = []
 
@@ -106,14 +119,13 @@ def start_show(setup: str, n: int, k: int, music: bool, loop: str, frames: str,
                 proc.kill()
                 proc.wait()
 
-    per_message = 1 if frames == "full" else PACK
     procs.append(spawn("--role", "subscribers", "--url", url, "--n", str(n), "--subs-per-connection", "1",
                        *(("--venue", venue) if over_tls else ())))
     wait_ready(procs[0])  # every subscriber connected before the show starts (TLS handshakes are not timed)
-    roles = ("--venue", venue, "--parts", parts) if venue else ()
+    roles = ("--venue", venue, "--parts", AGAINST[setup][0]) if venue else ()
     procs.append(spawn("--role", "seats", "--url", url, "--k", str(k), *roles))
-    procs.append(spawn("--role", "publisher", "--url", server.url, *publisher_args(FPS / per_message, frames), *roles,
-                       *(() if music else ("--no-music",)), "--loop", loop))
+    procs.append(spawn("--role", "publisher", "--url", server.url, *publisher_args(FPS / per_message(frames), frames),
+                       *roles, *(() if music else ("--no-music",)), "--loop", loop))
     for proc in procs[1:]:
         wait_ready(proc)
     return procs
@@ -125,7 +137,6 @@ def at_once(base: str, other: str, n: int, k: int, seconds: float, loop: str, mu
     light subscribers and ``k`` full seats, measured over the same window: the machine's state, whatever it is, is
     the same for both publishers. Per show (``base``, ``other``): the publisher's CPU per rendered frame and share of
     a core, frame ages; and the load average."""
-    per_message = 1 if frames == "full" else PACK
     order = (("base", base), ("other", other)) if base_first else (("other", other), ("base", base))
     with contextlib.ExitStack() as stack:
         shows = {role: start_show(setup, n, k, music, loop, frames, stack) for role, setup in order}
@@ -140,7 +151,7 @@ def at_once(base: str, other: str, n: int, k: int, seconds: float, loop: str, mu
         results = {role: [result(proc) for proc in shows[role]] for role, _ in order}
     out = {"load": load}
     for role, (light, seats, pub) in results.items():
-        out[role] = {"us_per_frame": pub["cpu_per_frame"] * 1e6 / per_message, "cpu": pub["cpu_per_s"],
+        out[role] = {"us_per_frame": pub["cpu_per_frame"] * 1e6 / per_message(frames), "cpu": pub["cpu_per_s"],
                       "loop": pub["loop"], "skipped": pub["skipped"], "errors": pub["errors"],
                       "light_p99": light["age_p99_ms"], "seat_p99": seats["age_p99_ms"], "loss": light["loss"],
                       "stale": seats["stale"], "tls": light["tls_connections"], "connections": light["connections"]}
@@ -153,23 +164,15 @@ def one_run(setup: str, n: int, k: int, seconds: float, loop: str = "default", m
     (:data:`~benchmarks.bench_audience.LOOPS`) playing the show with its ``music`` or motion only, as ``frames``
     (``full``: one frame a message at 60 Hz; ``packed``: :data:`PACK` rendered frames a message): the publisher's
     CPU per rendered frame, ages, server cost, bytes."""
-    from hapmotion.audience.server import LocalNatsServer
-
+    rate = FPS / per_message(frames)
     with contextlib.ExitStack() as stack:
-        venue = None
-        if setup == "secure":
-            folder = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="hapmotion-venue-")))
-            venue = secure_venue(folder)
-            server = stack.enter_context(LocalNatsServer(extra_args=("-c", str(folder / "nats-server.conf"))))
-        else:
-            server = stack.enter_context(LocalNatsServer())
+        venue, server, _ = server_for(setup, stack)
         load = os.getloadavg()[0]
-        per_message = 1 if frames == "full" else PACK
-        r = run(n, k, seconds, [server], FPS / per_message, 1, venue, frames, music=music, loop=loop)
-    s = summary(r, n, FPS / per_message)
+        r = run(n, k, seconds, [server], rate, 1, venue, frames, music=music, loop=loop)
+    s = summary(r, n, rate)
     p, light, seats = r["publisher"], r["subscribers"][0], r["seats"]
     return {"setup": setup, "load": load, "cpu": p["cpu_per_s"],
-            "us_per_frame": p["cpu_per_frame"] * 1e6 / per_message,
+            "us_per_frame": p["cpu_per_frame"] * 1e6 / per_message(frames),
             "loop": p["loop"],
             "published": p["published"], "rendered": p["rendered"], "skipped": p["skipped"], "errors": p["errors"],
             "light_p50": light["age_p50_ms"], "light_p99": light["age_p99_ms"], "loss": light["loss"],
@@ -179,10 +182,10 @@ def one_run(setup: str, n: int, k: int, seconds: float, loop: str = "default", m
 
 
 def pin_roles() -> tuple[int, set[int]]:
-    """Keep the publishers' processes (one a show: two at once) on the first CPU this process may use and every other
-    process this harness started (the servers, the seats, the subscribers, and the harness itself) on the others,
-    every thread of each, for as long as the harness runs (``--pin``: the venue's publisher as if on a machine of its
-    own). Looks for them in /proc every 0.2 s (Linux). Returns (the publishers' CPU, the others')."""
+    """Keep the publisher's process on the first CPU this process may use and every other process this harness
+    started (the server, the seats, the subscribers, and the harness itself) on the others, every thread of each,
+    for as long as the harness runs (``--in-turn --pin``: the venue's publisher as if on a machine of its own). Looks
+    for them in /proc every 0.2 s (Linux). Returns (the publisher's CPU, the others')."""
     allowed = sorted(os.sched_getaffinity(0))
     mine, theirs = allowed[0], set(allowed[1:])
     me = os.getpid()

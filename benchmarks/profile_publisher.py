@@ -31,13 +31,12 @@ import io
 import logging
 import os
 import pstats
-import tempfile
 from pathlib import Path
 
 import hapmotion
-from benchmarks.bench_audience import BVH, security, secure_venue
+from benchmarks.bench_audience import BVH, security
+from benchmarks.bench_audience_secure import server_for
 from hapmotion.audience import publishing
-from hapmotion.audience.server import LocalNatsServer
 from hapmotion.live import ReplaySource, event_loop, live
 from hapmotion.show import Show
 
@@ -106,14 +105,7 @@ def main() -> None:
     for r in range(a.repeats):
         for setup in ("plain", "secure"):
             with contextlib.ExitStack() as stack:
-                venue = None
-                if setup == "secure":
-                    venue = secure_venue(Path(stack.enter_context(tempfile.TemporaryDirectory(
-                        prefix="hapmotion-venue-"))))
-                    server = stack.enter_context(LocalNatsServer(
-                        extra_args=("-c", str(Path(venue) / "nats-server.conf"))))
-                else:
-                    server = stack.enter_context(LocalNatsServer())
+                venue, server, _ = server_for(setup, stack)
                 stats = event_loop.run(profiled(server.url, venue), fast=True)
             s = {k: v / frames * 1e6 for k, v in shares(stats).items()}
             print(f"  repeat {r + 1} {setup:6s} (load {os.getloadavg()[0]:.1f}): every function {s['all']:6.1f} us "

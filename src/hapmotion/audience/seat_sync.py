@@ -427,8 +427,9 @@ class SeatSync:
             est = found = match(heard_db, t_heard, ref, first / RATE, held=self.tracker.offset_at(at), chroma=ch)
             if self.tracker.state.state == "searching":
                 est = self._unless_past_limit(est, heard_db, t_heard, hi)
-                missing = None if est is None else ~np.isfinite(ref[(first + np.arange(n)) / RATE >= 0.0]).all(axis=1)
-                if missing is not None and missing.any():
+            if est is not None and self.tracker.state.state == "searching":
+                missing = ~np.isfinite(ref[(first + np.arange(n)) / RATE >= 0.0]).all(axis=1)
+                if missing.any():
                     # part of the range was never received (the seat joined a running show): a repeat of the music
                     # (the bar before) could win over the true delay, which may lie in the part not received yet
                     est = None
